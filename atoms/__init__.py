@@ -1,0 +1,18 @@
+"""What MDLe atoms are made of: control laws, sensor functions, boundary estimators.
+
+:func:`default_registry` gathers every control law and sensor function mdle ships.
+The modules it reads declare specs only; numpy is imported on first use.
+"""
+
+from __future__ import annotations
+
+from atoms.registry import Registry
+
+__all__ = ["default_registry"]
+
+
+def default_registry() -> Registry:
+    """The registry of the built-in control laws and sensor functions."""
+    from atoms import laws, sensors
+
+    return Registry.from_modules(laws, sensors)

@@ -1,0 +1,95 @@
+"""Sensor functions for interrupts: ladar ranges, odometry, time, flags.
+
+Each is ``fn(args, ctx) -> float | bool``, declared with :func:`atoms.registry.sensor`.
+Ladar functions read the newest scan; with no scan (or no valid beam where asked) they
+answer the sensor's maximum range, so ``range(0 deg) < 1 m`` stays false rather than
+raising. numpy is imported on first use only.
+"""
+
+from __future__ import annotations
+
+import math
+
+from atoms.registry import BOOL, Args, Context, Param, sensor
+from mdle.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
+
+__all__ = ["range_", "min_range", "x", "y", "theta", "speed", "turn_rate", "t", "stalled",
+           "dist_to"]
+
+_NO_SCAN_RANGE = math.inf
+
+
+@sensor(Param("angle", ANGLE, doc="bearing from the heading, counter-clockwise positive"),
+        result=LENGTH, name="range")
+def range_(args: Args, ctx: Context) -> float:
+    """Range of the ladar beam nearest the bearing ``angle``; max range if it saw nothing."""
+    import numpy as np
+
+    scan = ctx.obs.scan
+    if scan is None:
+        return _NO_SCAN_RANGE
+    i = int(np.argmin(np.abs(scan.bearings - float(args["angle"]))))
+    return float(scan.ranges[i]) if scan.valid[i] else scan.max_range
+
+
+@sensor(Param("start", ANGLE, doc="one end of the sector"),
+        Param("end", ANGLE, doc="the other end of the sector"), result=LENGTH)
+def min_range(args: Args, ctx: Context) -> float:
+    """Smallest valid range over the beams whose bearings lie in the sector [start, end]."""
+    import numpy as np
+
+    scan = ctx.obs.scan
+    if scan is None:
+        return _NO_SCAN_RANGE
+    lo, hi = sorted((float(args["start"]), float(args["end"])))
+    sel = (scan.bearings >= lo - 1e-9) & (scan.bearings <= hi + 1e-9) & scan.valid
+    return float(np.min(scan.ranges, where=sel, initial=scan.max_range))
+
+
+@sensor(result=LENGTH)
+def x(args: Args, ctx: Context) -> float:
+    """Odometry x, metres."""
+    return ctx.obs.pose.x
+
+
+@sensor(result=LENGTH)
+def y(args: Args, ctx: Context) -> float:
+    """Odometry y, metres."""
+    return ctx.obs.pose.y
+
+
+@sensor(result=ANGLE)
+def theta(args: Args, ctx: Context) -> float:
+    """Odometry heading, radians in (-pi, pi]."""
+    return ctx.obs.pose.theta
+
+
+@sensor(result=SPEED)
+def speed(args: Args, ctx: Context) -> float:
+    """Measured forward speed, m/s."""
+    return ctx.obs.v
+
+
+@sensor(result=TURN_RATE)
+def turn_rate(args: Args, ctx: Context) -> float:
+    """Measured turn rate, rad/s."""
+    return ctx.obs.omega
+
+
+@sensor(result=TIME)
+def t(args: Args, ctx: Context) -> float:
+    """Local time of the element whose interrupt is being tested, seconds."""
+    return ctx.t
+
+
+@sensor(result=BOOL)
+def stalled(args: Args, ctx: Context) -> bool:
+    """True while the robot pushes against something and cannot move (Pioneer stall flag)."""
+    return ctx.obs.stalled
+
+
+@sensor(Param("x", LENGTH), Param("y", LENGTH), result=LENGTH)
+def dist_to(args: Args, ctx: Context) -> float:
+    """Distance from the robot (odometry) to the point (x, y), metres."""
+    p = ctx.obs.pose
+    return math.hypot(float(args["x"]) - p.x, float(args["y"]) - p.y)

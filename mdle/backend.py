@@ -1,0 +1,169 @@
+"""The seam between the runtime and a robot: Observation, Command, Backend.
+
+A backend is anything that can be observed and commanded: the embedded simulator
+(:mod:`sim`), a hardware driver (:mod:`mdle.drivers`), or a scripted replay in tests.
+The runtime knows nothing else about it. Everything here is SI: metres, seconds,
+radians, counter-clockwise positive, x forward and y left in the robot frame (REP-103).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
+
+if TYPE_CHECKING:  # numpy is only needed by those who build scans
+    import numpy as np
+
+__all__ = [
+    "Pose",
+    "Scan",
+    "Observation",
+    "Command",
+    "STOP",
+    "RobotLimits",
+    "ClockMode",
+    "Backend",
+]
+
+
+@dataclass(frozen=True)
+class Pose:
+    """A planar pose in the odometry (world) frame: metres and radians."""
+
+    x: float = 0.0
+    y: float = 0.0
+    theta: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Scan:
+    """One ladar scan in the robot frame.
+
+    Attributes
+    ----------
+    ranges : (N,) float array, metres
+        Range of each beam; beams with no return hold the sensor's ``max_range``.
+    bearings : (N,) float array, radians
+        Bearing of each beam from the robot's heading, increasing counter-clockwise;
+        index 0 is the robot's right (-pi/2 on an LMS-200), as the sensor delivers it.
+    valid : (N,) bool array
+        True where the beam saw a surface within range.
+    stamp : float, seconds
+        When the scan was taken, on the backend's clock.
+    max_range : float, metres
+        The sensor's maximum range.
+    tangents, curvatures : (N,) float arrays or None
+        Only from an *ideal* (oracle) ladar in simulation: the exact boundary tangent
+        direction at each hit, in the robot frame (radians, the boundary oriented with
+        the obstacle on its right, i.e. clockwise around an obstacle), and the signed
+        curvature there (1/m, negative on convex obstacles, control-law.md's
+        convention); NaN where the beam hit nothing. Real sensors leave them None and
+        the estimators in :mod:`atoms` compute both from the ranges.
+
+    The arrays must not be written to: a scan is shared by everything that reads it
+    during a tick.
+    """
+
+    ranges: "np.ndarray"
+    bearings: "np.ndarray"
+    valid: "np.ndarray"
+    stamp: float
+    max_range: float
+    tangents: "np.ndarray | None" = None
+    curvatures: "np.ndarray | None" = None
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What the robot knows at one tick. Immutable.
+
+    ``pose`` is odometry (it drifts on a real robot); ``v`` and ``omega`` the measured
+    speed (m/s) and turn rate (rad/s); ``scan`` the newest scan, which may be older than
+    ``time`` (compare ``scan.stamp``), or None when the robot has no ladar or none has
+    arrived yet. ``truth`` carries simulator ground truth (``clearance``, ``collided``,
+    true pose) for traces and tests; control laws must not read it.
+    """
+
+    time: float
+    pose: Pose
+    v: float = 0.0
+    omega: float = 0.0
+    scan: Scan | None = None
+    stalled: bool = False
+    motors_enabled: bool = True
+    battery: float | None = None
+    truth: dict[str, float | bool] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Command:
+    """A velocity command: forward speed ``v`` (m/s), turn rate ``omega`` (rad/s, CCW +)."""
+
+    v: float = 0.0
+    omega: float = 0.0
+
+
+STOP = Command(0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class RobotLimits:
+    """What a robot can do; backends clamp commands to it, control laws may read it.
+
+    Accelerations of ``inf`` mean an ideal robot that reaches any command at once.
+    """
+
+    max_speed: float
+    max_reverse_speed: float
+    max_turn_rate: float
+    max_accel: float = float("inf")
+    max_decel: float = float("inf")
+    max_turn_accel: float = float("inf")
+    radius: float = 0.0
+    """Radius of the disc that bounds the robot's body, metres (0 for a point robot)."""
+
+
+class ClockMode(enum.Enum):
+    """How a backend's time relates to the wall clock."""
+
+    SIMULATED = "simulated"
+    """Time advances only when the runtime calls :meth:`Backend.advance`; runs go as fast as
+    the CPU allows (or are paced to the wall clock by the runtime on request)."""
+    WALL = "wall"
+    """Time is the wall clock; data arrives at its own rate and the runtime paces ticks."""
+
+
+@runtime_checkable
+class Backend(Protocol):
+    """A robot the runtime can drive: simulated or real.
+
+    The runtime calls, each tick: :meth:`observe`, then :meth:`command`, then
+    :meth:`advance` with the tick length. A simulated backend integrates its physics
+    in ``advance``; a hardware backend waits there until the tick's wall-clock deadline
+    (never longer) and returns the lateness. :meth:`stop` and :meth:`close` must be safe
+    to call at any time, more than once, and from a ``finally`` block.
+    """
+
+    clock: ClockMode
+    limits: RobotLimits
+
+    def observe(self) -> Observation:
+        """The newest observation; raises BackendError if the robot is lost."""
+        ...
+
+    def command(self, cmd: Command) -> None:
+        """Set the velocity to hold until the next command (clamped to ``limits``)."""
+        ...
+
+    def advance(self, dt: float) -> float:
+        """Let ``dt`` seconds pass; returns the tick's lateness in seconds (0 in simulation)."""
+        ...
+
+    def stop(self) -> None:
+        """Command zero velocity now."""
+        ...
+
+    def close(self) -> None:
+        """Stop the robot and release the connection."""
+        ...

@@ -1,0 +1,143 @@
+"""Errors and diagnostics shared by every stage of mdle.
+
+Diagnostics are data (:class:`Diagnostic`), rendered by one function
+(:func:`render_diagnostic`) as ``file:line:col: severity: message``, the source line
+and a caret. Each stage raises its own :class:`MdleError` subclass; the CLI shows any
+``MdleError`` as diagnostics and treats every other exception as an internal error.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+__all__ = [
+    "Span",
+    "Severity",
+    "Diagnostic",
+    "MdleError",
+    "MdleSyntaxError",
+    "CheckError",
+    "WorldError",
+    "MdleRuntimeError",
+    "BackendError",
+    "render_diagnostic",
+]
+
+
+@dataclass(frozen=True)
+class Span:
+    """A place in a source file: 1-based line and column, end exclusive.
+
+    ``file`` is the path as the user named it (or ``<repl>``, ``<string>``).
+    """
+
+    file: str
+    line: int
+    column: int
+    end_line: int
+    end_column: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}"
+
+
+class Severity(enum.Enum):
+    """How serious a diagnostic is."""
+
+    ERROR = "error"
+    """The program cannot run."""
+    WARNING = "warning"
+    """The program runs, but probably not as meant (an unreachable element, say)."""
+    NOTE = "note"
+    """Extra context attached to another diagnostic (the other place of a clash)."""
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    """One message about one place: what is wrong, where, and what would help.
+
+    ``hint`` is a short suggestion (``did you mean `follow_boundary`?``); ``notes``
+    are further diagnostics pointing at related places.
+    """
+
+    span: Span | None
+    message: str
+    severity: Severity = Severity.ERROR
+    hint: str | None = None
+    notes: tuple["Diagnostic", ...] = ()
+
+
+class MdleError(Exception):
+    """Base of every error mdle reports to a user; carries one or more diagnostics."""
+
+    def __init__(self, diagnostics: Diagnostic | list[Diagnostic] | tuple[Diagnostic, ...] | str,
+                 sources: dict[str, str] | None = None):
+        #: File texts by name, so the CLI can show the source line under each diagnostic.
+        self.sources: dict[str, str] = dict(sources or {})
+        if isinstance(diagnostics, str):
+            diagnostics = Diagnostic(None, diagnostics)
+        if isinstance(diagnostics, Diagnostic):
+            diagnostics = (diagnostics,)
+        self.diagnostics: tuple[Diagnostic, ...] = tuple(diagnostics)
+        super().__init__("\n".join(_one_line(d) for d in self.diagnostics))
+
+
+class MdleSyntaxError(MdleError):
+    """The text is not MDLe: a token or construct the grammar does not allow."""
+
+
+class CheckError(MdleError):
+    """The program parses but is not valid: unknown names, wrong units, cycles..."""
+
+
+class WorldError(MdleError):
+    """A world file (YAML) is malformed or inconsistent."""
+
+
+class MdleRuntimeError(MdleError):
+    """A program failed while running (not a robot fault: see BackendError)."""
+
+
+class BackendError(MdleError):
+    """The robot or its connection failed: no answer, dropped link, stale data, refused."""
+
+
+def _one_line(d: Diagnostic) -> str:
+    where = f"{d.span}: " if d.span else ""
+    return f"{where}{d.severity.value}: {d.message}"
+
+
+def render_diagnostic(d: Diagnostic, sources: dict[str, str] | None = None) -> str:
+    """Render a diagnostic as plain text: header, source line, caret, hint, notes.
+
+    ``sources`` maps file names to their text; without the text, only the header and
+    hint are shown.
+
+    >>> s = Span("a.mdle", 1, 5, 1, 8)
+    >>> print(render_diagnostic(Diagnostic(s, "unknown name `foo`", hint="did you mean `go`?"),
+    ...                         {"a.mdle": "run foo"}))
+    a.mdle:1:5: error: unknown name `foo`
+        run foo
+            ^^^
+      hint: did you mean `go`?
+    """
+    lines = [_one_line(d)]
+    text = (sources or {}).get(d.span.file) if d.span else None
+    if d.span is not None and text is not None:
+        src_lines = text.splitlines()
+        if 1 <= d.span.line <= len(src_lines):
+            raw = src_lines[d.span.line - 1].replace("\t", " ")
+            shown = raw if len(raw) <= 160 else raw[:160] + " ..."
+            col = max(1, min(d.span.column, len(raw) + 1))
+            if d.span.end_line == d.span.line and d.span.end_column > col:
+                width = min(d.span.end_column - col, max(1, len(shown) - col + 1))
+            else:
+                width = 1
+            lines.append("    " + shown)
+            lines.append("    " + " " * (col - 1) + "^" * max(1, width))
+    if d.hint:
+        lines.append(f"  hint: {d.hint}")
+    for note in d.notes:
+        lines.extend("  " + ln for ln in render_diagnostic(note, sources).splitlines())
+    return "\n".join(lines)

@@ -1,0 +1,121 @@
+"""The checked program: the immutable form the runtime executes.
+
+The checker turns the syntax tree into these nodes: every name resolved, every call
+instantiated with its arguments (SI values), every interrupt compiled once into a
+closure, every scale applied. The runtime never looks at the syntax tree.
+
+An :data:`Element` is an :class:`AtomNode` (sigma = (U, xi, T)) or a
+:class:`StringNode` (((e1, ..., en), xi, T), a behavior, a plan or an anonymous
+nested element). Nesting has no fixed depth.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Union
+
+from atoms.registry import Args, Context, LawSpec
+from mdle.errors import Diagnostic, Span
+
+__all__ = [
+    "Interrupt",
+    "NEVER",
+    "AtomNode",
+    "StringNode",
+    "StringKind",
+    "Element",
+    "Program",
+    "INF",
+]
+
+INF = math.inf
+
+
+@dataclass(frozen=True)
+class Interrupt:
+    """A compiled interrupt xi: ``test(ctx)`` is true when the element must end.
+
+    ``source`` is the canonical text (for ``mdle show``, traces and messages);
+    ``never`` marks the interrupt that never fires, so the runtime can skip it.
+    """
+
+    test: Callable[[Context], bool]
+    source: str
+    never: bool = False
+
+
+def _never(ctx: Context) -> bool:
+    return False
+
+
+NEVER = Interrupt(_never, "never", never=True)
+
+
+class StringKind(enum.Enum):
+    """What a string of elements was declared as (it runs the same way in each case)."""
+
+    PLAN = "plan"
+    BEHAVIOR = "behavior"
+    GROUP = "group"
+    """An anonymous ``((...), xi, T)`` element written inside another."""
+
+
+@dataclass(frozen=True)
+class AtomNode:
+    """An atom sigma = (U, xi, T), instantiated and ready to run.
+
+    ``label`` names it in element paths (``patrol/cruise``): the atom's name, or the
+    control law's name for an atom written inline. ``args`` are the law's arguments in
+    SI (defaults filled in). ``scale`` is the scaled atom's alpha for the (v, omega)
+    channels; the timer already includes beta.
+    """
+
+    label: str
+    law: LawSpec
+    args: Args
+    interrupt: Interrupt = NEVER
+    timer: float = INF
+    scale: tuple[float, float] = (1.0, 1.0)
+    span: Span | None = None
+
+
+@dataclass(frozen=True)
+class StringNode:
+    """A string of elements with its own interrupt and timer: ((e1, ..., en), xi, T).
+
+    With ``repeat`` (``...`` in the source) the string starts again from its first
+    element after its last ends, until its own or an enclosing interrupt or timer ends
+    it.
+    """
+
+    label: str
+    elements: tuple["Element", ...]
+    interrupt: Interrupt = NEVER
+    timer: float = INF
+    repeat: bool = False
+    kind: StringKind = StringKind.GROUP
+    span: Span | None = None
+
+
+Element = Union[AtomNode, StringNode]
+
+
+@dataclass(frozen=True)
+class Program:
+    """A checked program: runnable elements by name, the entry, and where they came from.
+
+    ``elements`` holds every named definition that can run as it stands (atoms,
+    behaviors and plans whose parameters all have defaults), instantiated with those
+    defaults. ``entry`` is the ``run`` target, else ``main`` if defined, else None.
+    ``sources`` maps each file read (imports included) to its text, for diagnostics.
+    ``warnings`` are the checker's warnings (the program is valid).
+    """
+
+    elements: Mapping[str, Element]
+    entry: str | None
+    sources: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
+    warnings: tuple[Diagnostic, ...] = ()
