@@ -1,0 +1,146 @@
+"""What a run produces: events (starts and ends), terminations, per-tick samples, the result.
+
+These are plain frozen records. The scheduler makes them and hands them to observers
+(the trace writer, the live view); nothing here knows about JSON, rich or matplotlib.
+Times are seconds on the backend's clock (the observation time), poses are odometry.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from mdle.backend import Pose
+
+__all__ = ["Cause", "EventKind", "Event", "Termination", "Sample", "RunResult"]
+
+
+class Cause(enum.Enum):
+    """Why an element ended."""
+
+    INTERRUPT = "interrupt"
+    """Its own interrupt xi was true at a tick (possibly the tick it started: zero time)."""
+    TIMER = "timer"
+    """Its own timer T (beta-scaled, measured from its start) elapsed. When the timer and
+    the interrupt of one element both hold at the same tick, the timer is reported."""
+    COMPLETED = "completed"
+    """A string ended normally: its last element ended (never an atom's cause)."""
+    ENDED_BY_PARENT = "ended-by-parent"
+    """An enclosing element ended (interrupt, timer or abort) while this one was running."""
+    STOPPED = "stopped"
+    """The run was stopped from outside: Ctrl-C, ``--until``, :meth:`Scheduler.stop`."""
+    ERROR = "error"
+    """The run was aborted by an error: a failing control law or interrupt, a backend
+    fault (dropped connection), or the robot stalled or refusing to move for too long."""
+
+
+class EventKind(enum.Enum):
+    """Whether an event is an element starting or ending."""
+
+    START = "start"
+    """The element started; its local clock is 0 at :attr:`Event.time`."""
+    END = "end"
+    """The element ended; :attr:`Event.cause` says why."""
+
+
+@dataclass(frozen=True)
+class Event:
+    """An element started or ended (language.md rule 8).
+
+    ``path`` joins the labels from the entry down (``main/patrol/cruise``), ``level`` is
+    its depth (0 for the element the run started with), ``element`` its kind (``atom``,
+    ``plan``, ``behavior``, ``group``); ``cause`` is None for a start. ``pose`` is the
+    odometry pose at that tick.
+    """
+
+    time: float
+    kind: EventKind
+    path: str
+    level: int
+    element: str
+    pose: Pose
+    cause: Cause | None = None
+
+    @property
+    def label(self) -> str:
+        """The last label of the path (the element's own name)."""
+        return self.path.rpartition("/")[2]
+
+
+@dataclass(frozen=True)
+class Termination:
+    """How one element ended: which one (``path``, ``level``), ``cause`` and ``time`` (s)."""
+
+    path: str
+    level: int
+    cause: Cause
+    time: float
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One tick as the robot saw it, after the control was computed and sent.
+
+    ``x, y, theta`` odometry (m, rad), ``v, omega`` measured velocities (m/s, rad/s),
+    ``cmd_v, cmd_omega`` the command sent (after alpha scaling; zero when no atom runs),
+    ``path`` the active path ('' once the program has ended), ``lateness`` how late the
+    tick finished (s; 0 in simulation), ``scan_age`` how old the newest scan was (s, None
+    without a scan). ``diag`` holds the control law's diagnostics (front and side range,
+    tangent, curvature: whatever it put in ``ctx.cache["trace"]``). ``clearance`` and
+    ``collided`` are simulator truth, None when unknown.
+    """
+
+    time: float
+    x: float
+    y: float
+    theta: float
+    v: float
+    omega: float
+    cmd_v: float
+    cmd_omega: float
+    path: str
+    lateness: float = 0.0
+    scan_age: float | None = None
+    stalled: bool = False
+    diag: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
+    clearance: float | None = None
+    collided: bool | None = None
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """How a run ended.
+
+    ``termination`` is the record of the element the run started with; ``terminations``
+    holds one record per element that ran, in the order they ended. ``distance`` is the
+    odometry path length (m), ``duration`` the time from the first tick to the end (s),
+    ``min_clearance`` the smallest true clearance seen (m, None without ground truth),
+    ``collided`` whether the simulator reported a collision, ``fault`` the message of the
+    error or fault that aborted the run (None otherwise), ``max_lateness`` the worst tick
+    lateness (s).
+    """
+
+    termination: Termination
+    terminations: tuple[Termination, ...]
+    events: tuple[Event, ...]
+    ticks: int
+    duration: float
+    distance: float
+    min_clearance: float | None = None
+    collided: bool = False
+    fault: str | None = None
+    max_lateness: float = 0.0
+
+    @property
+    def cause(self) -> Cause:
+        """Why the run's element ended."""
+        return self.termination.cause
+
+    @property
+    def ok(self) -> bool:
+        """True when the program ended by itself (completion, its interrupt or timer) and
+        the robot did not collide."""
+        return (self.termination.cause in (Cause.COMPLETED, Cause.INTERRUPT, Cause.TIMER)
+                and not self.collided and self.fault is None)

@@ -1,0 +1,537 @@
+"""The tick loop: executes a checked element on a backend, exactly as language.md says.
+
+Each tick (rule 4): observe; test timers and interrupts from the outermost active element
+inwards, the outermost that fires ends with everything inside it (rule 3, innermost
+first, each with its END event); the element after it starts at once and is tested in the
+same tick (rule 5: zero-time elements get no control); then the innermost running atom
+computes its control, alpha-scaled, and the command is sent; then the backend advances.
+The robot is stopped whenever the run ends, whatever the cause (rule 7).
+
+Time is the backend's observation time only; the optional wall-clock pacing lives in
+:mod:`mdle.runtime.pacing`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+from atoms.registry import Context
+from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose
+from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
+from mdle.program import AtomNode, Element, StringNode
+from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample, Termination
+from mdle.runtime.observer import Observer
+from mdle.runtime.pacing import Pacer
+
+__all__ = ["Scheduler", "ActiveElement", "TIME_EPS", "DEFAULT_STALL_TIMEOUT"]
+
+#: Timers are compared with this tolerance (s), so that a 1 s timer at 10 Hz ends at the
+#: tick stamped 1.0 even when ten additions of 0.1 give 0.9999999999999999.
+TIME_EPS = 1e-9
+
+#: How long (s) the robot may stay stalled, or refuse to move, before the run is aborted.
+DEFAULT_STALL_TIMEOUT = 5.0
+
+_log = logging.getLogger(__name__)
+
+_EMPTY: MappingProxyType[str, float] = MappingProxyType({})
+
+
+@dataclass(frozen=True)
+class ActiveElement:
+    """One level of the running path, for live views and the REPL.
+
+    ``elapsed`` is the element's local time (s); ``remaining`` what is left of its own
+    timer (s, ``inf`` for none).
+    """
+
+    path: str
+    label: str
+    level: int
+    element: str
+    elapsed: float
+    remaining: float
+
+
+class _Slot:
+    """An element at one place in the tree, with everything a tick needs precomputed."""
+
+    __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "test",
+                 "source", "children", "repeat", "step", "start", "args", "alpha_v",
+                 "alpha_w", "law", "span")
+
+    def __init__(self, node: Element, path: str, label: str, level: int) -> None:
+        self.node = node
+        self.path = path
+        self.label = label
+        self.level = level
+        self.timer = float(node.timer)
+        self.test: Callable[[Context], bool] | None = (
+            None if node.interrupt.never else node.interrupt.test)
+        self.source = node.interrupt.source
+        self.span: Span | None = node.span
+        self.children: tuple[_Slot, ...] = ()
+        self.repeat = False
+        self.step: Any = None
+        self.start: Any = None
+        self.args: Any = None
+        self.alpha_v = 1.0
+        self.alpha_w = 1.0
+        self.law = ""
+        if isinstance(node, AtomNode):
+            self.is_atom = True
+            self.kind = "atom"
+            self.step = node.law.step
+            self.start = node.law.start
+            self.args = node.args
+            self.law = node.law.name
+            self.alpha_v, self.alpha_w = (float(a) for a in node.scale)
+        else:
+            self.is_atom = False
+            self.kind = node.kind.value
+            self.repeat = node.repeat
+            self.children = tuple(_child_slots(node, path, level + 1))
+
+
+def _child_slots(node: StringNode, path: str, level: int) -> list[_Slot]:
+    seen: dict[str, int] = {}
+    out = []
+    for child in node.elements:
+        n = seen[child.label] = seen.get(child.label, 0) + 1
+        label = child.label if n == 1 else f"{child.label}#{n}"
+        out.append(_Slot(child, f"{path}/{label}", label, level))
+    return out
+
+
+class _Frame:
+    """A running element: its slot, start time, position in its string, atom state."""
+
+    __slots__ = ("slot", "start", "index", "state", "pass_tick")
+
+    def __init__(self, slot: _Slot, start: float, tick: int) -> None:
+        self.slot = slot
+        self.start = start
+        self.index = 0
+        self.state: Any = None
+        self.pass_tick = tick
+
+
+class Scheduler:
+    """Runs one element on a backend, tick by tick.
+
+    Parameters
+    ----------
+    element : Element
+        The checked element to run (a plan, behavior, group or atom).
+    backend : Backend
+        The robot; the scheduler observes, commands, advances and finally stops it, but
+        never closes it (a supervisor may run the next element on it).
+    rate : float
+        Control rate, Hz (10 Hz is the Pioneer's 100 ms cycle).
+    observers : sequence of Observer
+        Told of the start, every event, every tick and the end.
+    until : float or None
+        Stop the run (cause STOPPED) once this many seconds have passed on the backend's
+        clock since the first tick.
+    realtime : bool
+        Pace a simulated backend to the wall clock (hardware backends pace themselves).
+    stall_timeout : float or None
+        Abort (cause ERROR) when the robot reports ``stalled``, or refuses a non-zero
+        command because its motors are disabled, for this many seconds in a row.
+
+    Use :meth:`tick` until it returns False, then read :attr:`result`; or call
+    :func:`mdle.runtime.run`. Only the scheduler starts and ends elements.
+    """
+
+    def __init__(self, element: Element, backend: Backend, rate: float = 10.0,
+                 observers: Sequence[Observer] = (), *, until: float | None = None,
+                 realtime: bool = False,
+                 stall_timeout: float | None = DEFAULT_STALL_TIMEOUT) -> None:
+        if not rate > 0.0 or not math.isfinite(rate):
+            raise ValueError(f"rate must be a positive number of Hz, got {rate!r}")
+        if until is not None and not until >= 0.0:
+            raise ValueError(f"until must be a non-negative number of seconds, got {until!r}")
+        self.element = element
+        self.backend = backend
+        self.rate = float(rate)
+        self.dt = 1.0 / self.rate
+        self.until = until
+        self.stall_timeout = stall_timeout
+        self.observers: tuple[Observer, ...] = tuple(observers)
+        self._root = _Slot(element, element.label, element.label, 0)
+        self._pacer = Pacer() if realtime and backend.clock is ClockMode.SIMULATED else None
+        self._stack: list[_Frame] = []
+        self._events: list[Event] = []
+        self._terminations: list[Termination] = []
+        self._ticks = 0
+        self._started = False
+        self._stop_requested = False
+        self._t0: float | None = None
+        self._obs: Observation | None = None
+        self._pose: Pose = Pose()
+        self._distance = 0.0
+        self._min_clearance: float | None = None
+        self._collided = False
+        self._max_lateness = 0.0
+        self._stall_since: float | None = None
+        self._last_cmd = STOP
+        self.result: RunResult | None = None
+
+    # ------------------------------------------------------------------ lifecycle API
+
+    def start(self) -> None:
+        """Tell the observers the run begins. The first :meth:`tick` starts the element.
+
+        Calling it is optional: the first tick does it.
+        """
+        if self._started:
+            return
+        self._started = True
+        for o in self.observers:
+            o.on_start(self)
+
+    def tick(self) -> bool:
+        """Run one tick; True while the program is still running afterwards.
+
+        Raises whatever aborted the run (MdleRuntimeError from a failing law or
+        interrupt, BackendError, KeyboardInterrupt...) after ending every element,
+        stopping the robot and telling the observers.
+        """
+        if self.result is not None:
+            return False
+        if not self._started:
+            self.start()
+        try:
+            return self._tick()
+        except BaseException as exc:
+            if self.result is None:
+                cause = Cause.STOPPED if isinstance(exc, KeyboardInterrupt) else Cause.ERROR
+                fault = None if cause is Cause.STOPPED else _describe(exc)
+                try:
+                    self._finish(cause, fault)
+                except Exception:  # keep the original error; the stop failure is logged
+                    _log.exception("could not stop the robot cleanly after: %s", fault)
+            raise
+
+    def stop(self, cause: Cause = Cause.STOPPED, fault: str | None = None) -> RunResult:
+        """End the run now: every active element ends with ``cause``, the robot stops."""
+        if self.result is None:
+            if not self._started:
+                self.start()
+            self._finish(cause, fault)
+        assert self.result is not None
+        return self.result
+
+    def request_stop(self) -> None:
+        """Ask the run to stop at the next tick (safe from a signal handler)."""
+        self._stop_requested = True
+
+    # ------------------------------------------------------------------ introspection API
+
+    @property
+    def running(self) -> bool:
+        """True until the run has ended."""
+        return self.result is None
+
+    @property
+    def ticks(self) -> int:
+        """Ticks run so far."""
+        return self._ticks
+
+    @property
+    def time(self) -> float | None:
+        """Backend time of the latest observation (s), None before the first tick."""
+        return None if self._obs is None else self._obs.time
+
+    @property
+    def elapsed(self) -> float:
+        """Seconds since the first tick, on the backend's clock."""
+        if self._obs is None or self._t0 is None:
+            return 0.0
+        return self._obs.time - self._t0
+
+    @property
+    def path(self) -> tuple[str, ...]:
+        """Labels of the active elements, outermost first (empty before and after the run)."""
+        return tuple(f.slot.label for f in self._stack)
+
+    @property
+    def path_str(self) -> str:
+        """The active path joined with ``/`` (``main/patrol/cruise``), '' when idle."""
+        return self._stack[-1].slot.path if self._stack else ""
+
+    @property
+    def active(self) -> tuple[ActiveElement, ...]:
+        """Each active level with its elapsed time and remaining timer."""
+        now = self.time or 0.0
+        return tuple(ActiveElement(f.slot.path, f.slot.label, f.slot.level, f.slot.kind,
+                                   now - f.start, f.slot.timer - (now - f.start))
+                     for f in self._stack)
+
+    @property
+    def events(self) -> tuple[Event, ...]:
+        """Every event so far."""
+        return tuple(self._events)
+
+    @property
+    def pose(self) -> Pose:
+        """Odometry pose at the latest observation."""
+        return self._pose
+
+    # ------------------------------------------------------------------ the tick
+
+    def _tick(self) -> bool:
+        if self._stop_requested:
+            self._finish(Cause.STOPPED, None)
+            return False
+        obs = self.backend.observe()
+        now = obs.time
+        prev = self._obs
+        self._obs = obs
+        pose = obs.pose
+        if prev is not None:
+            self._distance += math.hypot(pose.x - self._pose.x, pose.y - self._pose.y)
+        self._pose = pose
+        truth = obs.truth
+        if truth:
+            clearance = truth.get("clearance")
+            if clearance is not None and (self._min_clearance is None
+                                          or clearance < self._min_clearance):
+                self._min_clearance = float(clearance)
+            if truth.get("collided"):
+                self._collided = True
+
+        tick = self._ticks
+        self._ticks = tick + 1
+        ctx = Context(obs, 0.0, self.dt, self.backend.limits, {})
+        if self._t0 is None:
+            self._t0 = now
+            self._descend(self._root, now, ctx)
+        elif self.until is not None and now - self._t0 >= self.until - TIME_EPS:
+            self._finish(Cause.STOPPED, None)
+            return False
+        if self._stall_check(obs, now):
+            return False
+
+        self._settle(ctx, now, tick)
+
+        stack = self._stack
+        if stack and stack[-1].slot.is_atom:
+            frame = stack[-1]
+            slot = frame.slot
+            ctx.t = now - frame.start
+            try:
+                cmd = slot.step(slot.args, ctx, frame.state)
+            except MdleError:
+                raise
+            except Exception as exc:
+                raise _failure(f"control law `{slot.law}` of `{slot.path}` failed at "
+                               f"t = {ctx.t:.3f} s", slot.span, exc) from exc
+            if slot.alpha_v != 1.0 or slot.alpha_w != 1.0:
+                cmd = Command(cmd.v * slot.alpha_v, cmd.omega * slot.alpha_w)
+        else:
+            cmd = STOP
+        self.backend.command(cmd)
+        self._last_cmd = cmd
+
+        running = bool(stack)
+        lateness = 0.0
+        if running:
+            lateness = self.backend.advance(self.dt)
+            if self._pacer is not None:
+                lateness = max(lateness, self._pacer.wait(now + self.dt - self._t0))
+            if lateness > self._max_lateness:
+                self._max_lateness = lateness
+        if self.observers:
+            trace = ctx.cache.get("trace")
+            scan = obs.scan
+            sample = Sample(
+                now, pose.x, pose.y, pose.theta, obs.v, obs.omega, cmd.v, cmd.omega,
+                stack[-1].slot.path if stack else "", lateness,
+                None if scan is None else now - scan.stamp, obs.stalled,
+                MappingProxyType(dict(trace)) if trace else _EMPTY,
+                truth.get("clearance") if truth else None,  # type: ignore[arg-type]
+                truth.get("collided") if truth else None,  # type: ignore[arg-type]
+            )
+            for o in self.observers:
+                o.on_tick(sample)
+        if not running:
+            self._finish(None, None)
+        return running
+
+    def _settle(self, ctx: Context, now: float, tick: int) -> None:
+        """Test the active elements outermost first until none fires (rules 3-6)."""
+        stack = self._stack
+        level = 0
+        while True:
+            if level < len(stack):
+                frame = stack[level]
+                slot = frame.slot
+                t = now - frame.start
+                if t >= slot.timer - TIME_EPS:
+                    cause = Cause.TIMER
+                elif slot.test is not None and self._test(slot, ctx, t):
+                    cause = Cause.INTERRUPT
+                else:
+                    level += 1
+                    continue
+                self._end_from(level, cause, now)
+                level = self._next_child(now, ctx)
+                continue
+            # Every active element has been tested and none fired.
+            if not stack:
+                return
+            top = stack[-1]
+            slot = top.slot
+            if slot.is_atom:
+                return
+            # A string whose last element has ended (or an empty string).
+            if not slot.repeat:
+                self._end_from(len(stack) - 1, Cause.COMPLETED, now)
+                level = self._next_child(now, ctx)
+            elif slot.children and top.pass_tick != tick:
+                # Repeat; a pass that took no time waits for the next tick (rule 5).
+                top.index = 0
+                top.pass_tick = tick
+                level = len(stack)
+                self._descend(slot.children[0], now, ctx)
+            else:
+                return
+
+    def _test(self, slot: _Slot, ctx: Context, t: float) -> bool:
+        ctx.t = t
+        try:
+            return bool(slot.test(ctx))  # type: ignore[misc]
+        except MdleError:
+            raise
+        except Exception as exc:
+            raise _failure(f"interrupt `{slot.source}` of `{slot.path}` failed at "
+                           f"t = {t:.3f} s", slot.span, exc) from exc
+
+    def _next_child(self, now: float, ctx: Context) -> int:
+        """After the top of the stack was popped: start the next element of the parent.
+
+        Returns the level from which testing goes on.
+        """
+        stack = self._stack
+        if not stack:
+            return 0
+        parent = stack[-1]
+        parent.index += 1
+        children = parent.slot.children
+        level = len(stack)
+        if parent.index < len(children):
+            self._descend(children[parent.index], now, ctx)
+        return level
+
+    def _descend(self, slot: _Slot, now: float, ctx: Context) -> None:
+        """Start ``slot`` and, for a string, its first element, down to an atom."""
+        while True:
+            frame = _Frame(slot, now, self._ticks - 1)
+            self._stack.append(frame)
+            self._emit(Event(now, EventKind.START, slot.path, slot.level, slot.kind,
+                             self._pose))
+            if slot.is_atom:
+                if slot.start is not None:
+                    ctx.t = 0.0
+                    try:
+                        frame.state = slot.start(slot.args, ctx)
+                    except MdleError:
+                        raise
+                    except Exception as exc:
+                        raise _failure(f"control law `{slot.law}` of `{slot.path}` failed "
+                                       "to start", slot.span, exc) from exc
+                return
+            if not slot.children:
+                return
+            slot = slot.children[0]
+
+    def _end_from(self, level: int, cause: Cause, now: float) -> None:
+        """End the frames at ``level`` and below, innermost first (rule 3)."""
+        stack = self._stack
+        while len(stack) > level:
+            frame = stack.pop()
+            slot = frame.slot
+            c = cause if len(stack) == level else Cause.ENDED_BY_PARENT
+            frame.state = None  # per-atom state is dropped with the atom
+            self._terminations.append(Termination(slot.path, slot.level, c, now))
+            self._emit(Event(now, EventKind.END, slot.path, slot.level, slot.kind,
+                             self._pose, c))
+
+    def _emit(self, event: Event) -> None:
+        self._events.append(event)
+        for o in self.observers:
+            o.on_event(event)
+
+    def _stall_check(self, obs: Observation, now: float) -> bool:
+        """Abort when the robot has been stalled or refusing to move for too long."""
+        if self.stall_timeout is None:
+            return False
+        refusing = not obs.motors_enabled and (self._last_cmd.v != 0.0
+                                               or self._last_cmd.omega != 0.0)
+        if not (obs.stalled or refusing):
+            self._stall_since = None
+            return False
+        if self._stall_since is None:
+            self._stall_since = now
+            return False
+        if now - self._stall_since < self.stall_timeout - TIME_EPS:
+            return False
+        what = ("stalled" if obs.stalled else
+                "refused to move (motors disabled)")
+        self._finish(Cause.ERROR, f"the robot {what} for {now - self._stall_since:.1f} s "
+                                  f"at t = {now - (self._t0 or now):.1f} s")
+        return True
+
+    def _finish(self, cause: Cause | None, fault: str | None) -> None:
+        """End every active element with ``cause``, stop the robot, build the result.
+
+        ``cause`` None means the program ended by itself (the stack is already empty).
+        """
+        now = self._obs.time if self._obs is not None else 0.0
+        stack = self._stack
+        try:
+            if cause is not None:
+                while stack:
+                    frame = stack.pop()
+                    slot = frame.slot
+                    frame.state = None
+                    self._terminations.append(Termination(slot.path, slot.level, cause, now))
+                    self._emit(Event(now, EventKind.END, slot.path, slot.level, slot.kind,
+                                     self._pose, cause))
+        finally:
+            stack.clear()
+            try:
+                self.backend.stop()
+            finally:
+                root = next((t for t in reversed(self._terminations) if t.level == 0),
+                            Termination(self._root.path, 0, cause or Cause.STOPPED, now))
+                self.result = RunResult(
+                    termination=root,
+                    terminations=tuple(self._terminations),
+                    events=tuple(self._events),
+                    ticks=self._ticks,
+                    duration=now - self._t0 if self._t0 is not None else 0.0,
+                    distance=self._distance,
+                    min_clearance=self._min_clearance,
+                    collided=self._collided,
+                    fault=fault,
+                    max_lateness=self._max_lateness,
+                )
+                for o in self.observers:
+                    o.on_end(self.result)
+
+
+def _describe(exc: BaseException) -> str:
+    if isinstance(exc, MdleError):
+        return str(exc)
+    return f"{type(exc).__name__}: {exc}"
+
+
+def _failure(what: str, span: Span | None, exc: Exception) -> MdleRuntimeError:
+    return MdleRuntimeError(Diagnostic(span, f"{what}: {type(exc).__name__}: {exc}"))

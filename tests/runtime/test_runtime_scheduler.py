@@ -1,0 +1,280 @@
+"""The scheduler beyond the ordering rules: per-atom state, the tick's Context, faults,
+aborts, the robot stopped on every path out, observers and the supervisor API."""
+
+from __future__ import annotations
+
+import types
+
+import pytest
+
+from mdle.backend import ClockMode, Command, Pose, Scan
+from mdle.errors import BackendError, MdleRuntimeError
+from mdle.program import Program
+from mdle.runtime import (BaseObserver, Cause, Recorder, Scheduler, element_of, run,
+                          run_named)
+from mdle.runtime.scripted import ScriptedBackend
+
+
+def test_per_atom_state_is_made_at_start_and_dropped_at_end(ir):
+    made = []
+
+    def start(args, ctx):
+        state = types.SimpleNamespace(n=0, t_start=ctx.t, at=ctx.obs.time)
+        made.append(state)
+        return state
+
+    def step(args, ctx, state):
+        state.n += 1
+        return Command(float(state.n), 0.0)
+
+    law = ir.const_law("count", start=start, step=step)
+    a = ir.atom("a", law=law, timer=0.3)
+    r = ir.string("r", a, repeat=True, timer=0.6)
+    sch = Scheduler(ir.string("main", r), ScriptedBackend())
+    while sch.tick():
+        pass
+    # two runs of `a`, each with its own fresh state counting its own ticks
+    assert [(s.n, s.t_start, round(s.at, 9)) for s in made] == [(3, 0.0, 0.0), (3, 0.0, 0.3)]
+    assert [c.v for c in sch.backend.commanded()] == [1, 2, 3, 1, 2, 3, 0]
+
+
+def test_context_is_fresh_each_tick_with_local_time_per_element(ir):
+    seen = []
+
+    def probe(ctx):
+        seen.append(("xi", round(ctx.obs.time, 9), round(ctx.t, 9), dict(ctx.cache)))
+        ctx.cache["probe"] = ctx.obs.time
+        return False
+
+    def step(args, ctx, state):
+        seen.append(("U", round(ctx.obs.time, 9), round(ctx.t, 9), dict(ctx.cache)))
+        return Command()
+
+    from mdle.program import Interrupt
+
+    a = ir.atom("a", law=ir.const_law("a", step=step), when=Interrupt(probe, "probe"))
+    main = ir.string("main", ir.atom("w", timer=0.1), a, timer=0.25)
+    run(main, ScriptedBackend())
+    assert seen == [
+        ("xi", 0.1, 0.0, {}), ("U", 0.1, 0.0, {"probe": 0.1}),
+        ("xi", 0.2, 0.1, {}), ("U", 0.2, 0.1, {"probe": 0.2}),
+    ]
+
+
+def test_failing_control_law_stops_robot_and_names_the_element(ir):
+    def bad(args, ctx, state):
+        if ctx.t > 0.15:
+            raise ZeroDivisionError("division by zero")
+        return Command(1.0, 0.0)
+
+    main = ir.string("main", ir.string("p", ir.atom("a", law=ir.const_law("law_x", step=bad))))
+    backend = ScriptedBackend()
+    rec = Recorder()
+    with pytest.raises(MdleRuntimeError, match=r"control law `law_x` of `main/p/a` failed"):
+        run(main, backend, observers=[rec])
+    assert backend.stops and backend.held == Command()
+    assert rec.result is not None and rec.result.cause is Cause.ERROR
+    assert "ZeroDivisionError" in rec.result.fault
+    assert [t.cause for t in rec.result.terminations] == [Cause.ERROR] * 3
+
+
+def test_failing_interrupt_names_its_source(ir):
+    from mdle.program import Interrupt
+
+    def broken(ctx):
+        raise KeyError("beam")
+
+    main = ir.string("main", ir.atom("a", 1.0, when=Interrupt(broken, "range(0 deg) < 1 m")))
+    backend = ScriptedBackend()
+    with pytest.raises(MdleRuntimeError, match=r"interrupt `range\(0 deg\) < 1 m` of `main/a`"):
+        run(main, backend)
+    assert backend.stops
+
+
+def test_dropped_connection_aborts_with_error_and_stops(ir):
+    backend = ScriptedBackend(drop_at=0.35)
+    rec = Recorder()
+    with pytest.raises(BackendError, match="connection to the robot lost"):
+        run(ir.string("main", ir.atom("a", 1.0)), backend, observers=[rec])
+    assert rec.result.cause is Cause.ERROR and rec.result.ticks == 4
+    assert backend.stops == [pytest.approx(0.4)]
+
+
+def test_keyboard_interrupt_inside_a_tick_stops_robot(ir):
+    def ctrl_c(args, ctx, state):
+        if ctx.t >= 0.2:
+            raise KeyboardInterrupt
+        return Command(1.0, 0.0)
+
+    backend = ScriptedBackend()
+    rec = Recorder()
+    with pytest.raises(KeyboardInterrupt):
+        run(ir.string("main", ir.atom("a", law=ir.const_law("a", step=ctrl_c))), backend,
+            observers=[rec])
+    assert backend.stops and rec.result.cause is Cause.STOPPED and rec.result.fault is None
+
+
+def test_request_stop_ends_the_run_at_the_next_tick(ir):
+    backend = ScriptedBackend()
+    sch = Scheduler(ir.string("main", ir.atom("a", 1.0)), backend)
+    sch.tick()
+    sch.tick()
+    sch.request_stop()
+    assert not sch.tick()
+    assert sch.result.cause is Cause.STOPPED and sch.result.ticks == 2
+    assert len(backend.stops) == 1
+
+
+def test_stop_is_idempotent_and_works_before_any_tick(ir):
+    backend = ScriptedBackend()
+    sch = Scheduler(ir.atom("a", 1.0), backend)
+    first = sch.stop()
+    assert sch.stop() is first and first.ticks == 0 and first.cause is Cause.STOPPED
+    assert len(backend.stops) == 1
+
+
+def test_stalled_robot_aborts_after_the_stall_timeout(ir):
+    backend = ScriptedBackend(lambda t, k: {"stalled": t > 0.25})
+    result = run(ir.atom("push", 1.0), backend, stall_timeout=1.0)
+    assert result.cause is Cause.ERROR and "stalled" in result.fault
+    assert result.duration == pytest.approx(1.3)
+    assert backend.stops
+
+
+def test_a_stall_the_plan_handles_is_not_fatal(ir):
+    # the plan backs away when stalled: the stall lasts one tick
+    backend = ScriptedBackend(lambda t, k: {"stalled": 0.25 < t < 0.35})
+    main = ir.string("main", ir.atom("push", 1.0, when="__never__", timer=0.3),
+                     ir.atom("back", -1.0, timer=0.5))
+    result = run(main, backend, stall_timeout=0.2)
+    assert result.cause is Cause.COMPLETED and result.fault is None
+
+
+def test_robot_refusing_to_move_is_a_fault(ir):
+    backend = ScriptedBackend(motors_enabled=False)
+    result = run(ir.atom("go", 0.5), backend, stall_timeout=0.5)
+    assert result.cause is Cause.ERROR and "motors disabled" in result.fault
+    assert backend.pose == Pose()
+
+
+def test_idle_robot_with_motors_disabled_is_not_a_fault(ir):
+    result = run(ir.atom("wait", 0.0, timer=1.0), ScriptedBackend(motors_enabled=False),
+                 stall_timeout=0.5)
+    assert result.cause is Cause.TIMER and result.fault is None
+
+
+def test_result_measures_distance_clearance_collision_and_lateness(ir):
+    script = lambda t, k: {"truth": {"clearance": 1.0 - t, "collided": k == 3}}  # noqa: E731
+    backend = ScriptedBackend(script, lateness=lambda k: 0.01 * k, clock=ClockMode.WALL)
+    rec = Recorder()
+    result = run(ir.atom("a", 2.0, timer=0.5), backend, observers=[rec])
+    assert result.distance == pytest.approx(1.0)
+    assert result.min_clearance == pytest.approx(0.5)
+    assert result.collided and not result.ok
+    assert result.max_lateness == pytest.approx(0.04)
+    assert [s.lateness for s in rec.samples] == pytest.approx([0, 0.01, 0.02, 0.03, 0.04, 0])
+    assert [s.collided for s in rec.samples] == [False, False, False, True, False, False]
+
+
+def test_samples_carry_pose_command_path_and_law_diagnostics(ir):
+    def step(args, ctx, state):
+        ctx.cache["trace"] = {"front": 2.0 - ctx.t, "curvature": -1.0}
+        return Command(1.0, 0.5)
+
+    a = ir.atom("f", law=ir.const_law("f", step=step), timer=0.2, scale=(0.5, 1.0))
+    rec = Recorder()
+    run(ir.string("main", a), ScriptedBackend(), observers=[rec])
+    s0, s1, s2 = rec.samples
+    assert (s0.path, s0.cmd_v, s0.cmd_omega) == ("main/f", 0.5, 0.5)
+    assert dict(s1.diag) == {"front": pytest.approx(1.9), "curvature": -1.0}
+    assert s1.x > 0 and s1.theta == pytest.approx(0.05)
+    assert (s2.path, s2.cmd_v, dict(s2.diag)) == ("", 0.0, {})
+    assert s0.clearance is None and s0.collided is None and s0.scan_age is None
+
+
+def test_scan_older_than_the_tick_is_reported(ir):
+    import numpy as np
+
+    def scan(stamp):
+        b = np.linspace(-np.pi / 2, np.pi / 2, 5)
+        return Scan(np.full(5, 3.0), b, np.ones(5, bool), stamp, 8.0)
+
+    backend = ScriptedBackend(scan=scan, scan_period=0.2, scan_delay=0.05)
+    rec = Recorder()
+    run(ir.atom("a", timer=0.5), backend, observers=[rec])
+    assert [round(s.scan_age, 9) for s in rec.samples] == [0.05, 0.15, 0.05, 0.15, 0.05, 0.15]
+
+
+def test_observer_hooks_are_called_in_order(ir):
+    calls = []
+
+    class Log(BaseObserver):
+        def on_start(self, scheduler):
+            calls.append(("start", scheduler.path))
+
+        def on_event(self, event):
+            calls.append(("event", event.path))
+
+        def on_tick(self, sample):
+            calls.append(("tick", sample.path))
+
+        def on_end(self, result):
+            calls.append(("end", result.cause.value))
+
+    run(ir.atom("a", timer=0.1), ScriptedBackend(), observers=[Log()])
+    assert calls == [("start", ()), ("event", "a"), ("tick", "a"), ("event", "a"),
+                     ("tick", ""), ("end", "timer")]
+
+
+def test_supervisor_runs_named_elements_one_after_another(ir):
+    program = Program({"explore": ir.atom("explore", 1.0, when="wall"),
+                       "home": ir.atom("home", -1.0, timer=0.2)}, entry="explore")
+    backend = ScriptedBackend(lambda t, k: {"truth": {"wall": t > 0.45}})
+    first = run_named(program, None, backend)
+    assert first.termination == first.terminations[-1]
+    assert first.cause is Cause.INTERRUPT and backend.pose.x == pytest.approx(0.5)
+    second = run_named(program, "home", backend)
+    assert second.cause is Cause.TIMER
+    assert second.events[0].time == pytest.approx(0.5)
+    assert backend.pose.x == pytest.approx(0.3) and not backend.closed
+
+
+def test_element_of_explains_unknown_names(ir):
+    program = Program({"patrol": ir.atom("patrol")}, entry=None)
+    with pytest.raises(MdleRuntimeError, match="no runnable element named `patrl`") as err:
+        element_of(program, "patrl")
+    assert err.value.diagnostics[0].hint == "did you mean `patrol`?"
+    with pytest.raises(MdleRuntimeError, match="has no entry"):
+        element_of(program)
+
+
+def test_bad_rate_is_refused(ir):
+    with pytest.raises(ValueError, match="rate"):
+        Scheduler(ir.atom("a"), ScriptedBackend(), rate=0)
+
+
+def test_realtime_pacing_uses_an_injected_clock():
+    from mdle.runtime.pacing import Pacer
+
+    now = [100.0]
+    slept = []
+    pacer = Pacer(clock=lambda: now[0], sleep=slept.append)
+    assert pacer.wait(0.0) == 0.0
+    now[0] = 100.05
+    assert pacer.wait(0.1) == 0.0 and slept == [pytest.approx(0.05)]
+    now[0] = 100.3
+    assert pacer.wait(0.2) == pytest.approx(0.1)
+
+
+def test_scheduler_logic_never_reads_the_wall_clock():
+    import pathlib
+
+    import mdle.runtime as rt
+
+    pkg = pathlib.Path(rt.__file__).parent
+    for path in pkg.glob("*.py"):
+        text = path.read_text()
+        if path.name == "pacing.py":
+            continue
+        assert "time.time(" not in text and "monotonic" not in text and "import time" \
+            not in text, path.name
