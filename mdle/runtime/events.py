@@ -9,12 +9,15 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import MappingProxyType
+from typing import NamedTuple
 
 from mdle.backend import Pose
 
 __all__ = ["Cause", "EventKind", "Event", "Termination", "Sample", "RunResult"]
+
+_NO_DIAG: Mapping[str, float] = MappingProxyType({})
 
 
 class Cause(enum.Enum):
@@ -79,17 +82,20 @@ class Termination:
     time: float
 
 
-@dataclass(frozen=True)
-class Sample:
+class Sample(NamedTuple):
     """One tick as the robot saw it, after the control was computed and sent.
 
     ``x, y, theta`` odometry (m, rad), ``v, omega`` measured velocities (m/s, rad/s),
     ``cmd_v, cmd_omega`` the command sent (after alpha scaling; zero when no atom runs),
     ``path`` the active path ('' once the program has ended), ``lateness`` how late the
     tick finished (s; 0 in simulation), ``scan_age`` how old the newest scan was (s, None
-    without a scan). ``diag`` holds the control law's diagnostics (front and side range,
-    tangent, curvature: whatever it put in ``ctx.cache["trace"]``). ``clearance`` and
-    ``collided`` are simulator truth, None when unknown.
+    without a scan), ``stalled`` the robot's flag. ``diag`` holds the control law's
+    diagnostics (front and side range, tangent, curvature: whatever it put in
+    ``ctx.cache["trace"]``). ``clearance`` and ``collided`` are simulator truth, None
+    when unknown.
+
+    A named tuple rather than a frozen dataclass: one is made every tick, and a frozen
+    dataclass's ``__init__`` costs five times as much.
     """
 
     time: float
@@ -104,7 +110,7 @@ class Sample:
     lateness: float = 0.0
     scan_age: float | None = None
     stalled: bool = False
-    diag: Mapping[str, float] = field(default_factory=lambda: MappingProxyType({}))
+    diag: Mapping[str, float] = _NO_DIAG
     clearance: float | None = None
     collided: bool | None = None
 

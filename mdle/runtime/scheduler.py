@@ -315,8 +315,10 @@ class Scheduler:
         elif self.until is not None and now - self._t0 >= self.until - TIME_EPS:
             self._finish(Cause.STOPPED, None)
             return False
-        if self._stall_check(obs, now):
-            return False
+        if self.stall_timeout is not None and (obs.stalled or not obs.motors_enabled
+                                               or self._stall_since is not None):
+            if self._stall_check(obs, now):
+                return False
 
         self._settle(ctx, now, tick)
 

@@ -1,0 +1,304 @@
+"""Run traces as JSON lines: a writer (an observer of the scheduler) and a reader.
+
+One JSON object per line, each with a ``type``: one ``header`` (program, world, seed,
+versions), an ``event`` for every element start and end, a ``sample`` per tick, and an
+``end`` record with the run's result. Every record is flushed as it is written, so a
+crash or Ctrl-C loses nothing already recorded; the reader accepts a trace whose last
+line was cut short. Non-finite numbers (NaN, inf) are written as ``null`` so the file is
+strict JSON. The schema is documented in ``docs/trace.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import IO, TYPE_CHECKING, Any
+
+from mdle.errors import Diagnostic, MdleError, Span
+from mdle.runtime.events import Event, RunResult, Sample
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from mdle.runtime.scheduler import Scheduler
+
+__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "TraceWriter", "Trace", "TraceError", "read_trace",
+           "versions"]
+
+TRACE_FORMAT = "mdle-trace"
+TRACE_VERSION = 1
+
+
+class TraceError(MdleError):
+    """A trace file cannot be read: not JSON lines, not an mdle trace, or a newer version."""
+
+
+def versions() -> dict[str, str]:
+    """Versions of mdle, Python and the numeric libraries, for the trace header."""
+    from importlib import metadata
+
+    out = {"python": platform.python_version()}
+    for dist in ("mdle", "numpy", "shapely"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            pass
+    return out
+
+
+def _clean(value: Any) -> Any:
+    """JSON-safe copy: non-finite floats become None, tuples become lists."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Mapping):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if hasattr(value, "item"):  # numpy scalars
+        return _clean(value.item())
+    return value
+
+
+def _dumps(record: Mapping[str, Any]) -> str:
+    return json.dumps(_clean(record), allow_nan=False, separators=(",", ":"))
+
+
+class TraceWriter:
+    """Write a run's trace as JSON lines, flushing every record.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file to create (overwritten).
+    header : mapping
+        What the run is: ``program`` (file, element), ``world``, ``seed``, ``rate``,
+        ``backend``... Merged into the header record after ``format``, ``version`` and
+        ``versions``.
+
+    The writer is an observer: pass it to :func:`mdle.runtime.run` or a
+    :class:`~mdle.runtime.Scheduler`. :meth:`close` is called by ``on_end``; call it
+    yourself if the run never started.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], header: Mapping[str, Any] | None = None
+                 ) -> None:
+        self.path = os.fspath(path)
+        # unbuffered: each record is one write(2), in the OS before the next tick starts
+        self._file: IO[bytes] | None = open(self.path, "wb", buffering=0)
+        self._paths: dict[str, str] = {}
+        head: dict[str, Any] = {"type": "header", "format": TRACE_FORMAT,
+                                "version": TRACE_VERSION, "versions": versions()}
+        head.update(header or {})
+        self._write(_dumps(head))
+
+    def _write(self, line: str) -> None:
+        if self._file is not None:
+            self._file.write((line + "\n").encode())
+
+    def _quoted(self, path: str) -> str:
+        q = self._paths.get(path)
+        if q is None:
+            q = self._paths[path] = json.dumps(path)
+        return q
+
+    # ------------------------------------------------------------------ observer hooks
+
+    def on_start(self, scheduler: "Scheduler") -> None:
+        """Record the element and rate the run uses."""
+        self._write(_dumps({"type": "start", "element": scheduler.element.label,
+                            "rate": scheduler.rate, "until": scheduler.until}))
+
+    def on_event(self, event: Event) -> None:
+        """Write an ``event`` record."""
+        p = event.pose
+        self._write(_dumps({
+            "type": "event", "t": event.time, "kind": event.kind.value, "path": event.path,
+            "level": event.level, "element": event.element,
+            "cause": event.cause.value if event.cause is not None else None,
+            "x": p.x, "y": p.y, "theta": p.theta}))
+
+    def on_tick(self, sample: Sample) -> None:
+        """Write a ``sample`` record (a fast path formats finite floats directly)."""
+        s = sample
+        try:
+            line = self._sample_line(s)
+        except (TypeError, ValueError):  # a diagnostic that is not a number
+            line = _dumps(_sample_dict(s))
+        self._write(line)
+
+    def _sample_line(self, s: Sample) -> str:
+        """The sample as one JSON line (floats formatted directly, fast)."""
+        # time keeps every digit (hardware clocks may be large); the rest 9 significant
+        line = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,'
+                '"omega":%.9g,"cmd_v":%.9g,"cmd_omega":%.9g,"path":%s,"lateness":%.9g,'
+                '"stalled":%s'
+                % (float(s.time), s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega,
+                   self._quoted(s.path), s.lateness, "true" if s.stalled else "false"))
+        if s.scan_age is not None:
+            line += ',"scan_age":%.9g' % s.scan_age
+        if s.clearance is not None:
+            line += ',"clearance":%.9g' % s.clearance
+        if s.collided is not None:
+            line += ',"collided":%s' % ("true" if s.collided else "false")
+        if s.diag:
+            line += ',"diag":{%s}' % ",".join(['%s:%.9g' % (self._quoted(k), v)
+                                               for k, v in s.diag.items()])
+        line += "}"
+        if "nan" in line or "inf" in line or "NaN" in line or "Infinity" in line:
+            line = _dumps(_sample_dict(s))  # rare: non-finite values (or such a path)
+        return line
+
+    def on_end(self, result: RunResult) -> None:
+        """Write the ``end`` record and close the file."""
+        t = result.termination
+        self._write(_dumps({
+            "type": "end", "path": t.path, "cause": t.cause.value, "t": t.time,
+            "ticks": result.ticks, "duration": result.duration, "distance": result.distance,
+            "min_clearance": result.min_clearance, "collided": result.collided,
+            "fault": result.fault, "max_lateness": result.max_lateness,
+            "terminations": [{"path": x.path, "level": x.level, "cause": x.cause.value,
+                              "t": x.time} for x in result.terminations]}))
+        self.close()
+
+    def close(self) -> None:
+        """Flush and close the file (safe to call more than once)."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+    def __enter__(self) -> "TraceWriter":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _sample_dict(s: Sample) -> dict[str, Any]:
+    d: dict[str, Any] = {"type": "sample", "t": s.time, "x": s.x, "y": s.y, "theta": s.theta,
+                         "v": s.v, "omega": s.omega, "cmd_v": s.cmd_v,
+                         "cmd_omega": s.cmd_omega, "path": s.path, "lateness": s.lateness,
+                         "stalled": bool(s.stalled)}
+    if s.scan_age is not None:
+        d["scan_age"] = s.scan_age
+    if s.clearance is not None:
+        d["clearance"] = s.clearance
+    if s.collided is not None:
+        d["collided"] = bool(s.collided)
+    if s.diag:
+        d["diag"] = dict(s.diag)
+    return d
+
+
+@dataclass(frozen=True)
+class Trace:
+    """A trace read back: the header, the event and sample records, and the end record.
+
+    ``end`` is None when the run was cut off before it could be written (a crash);
+    ``truncated`` is True when the last line was incomplete.
+    """
+
+    path: str
+    header: Mapping[str, Any]
+    events: tuple[Mapping[str, Any], ...]
+    samples: tuple[Mapping[str, Any], ...]
+    end: Mapping[str, Any] | None = None
+    truncated: bool = False
+    extra: tuple[Mapping[str, Any], ...] = field(default=())
+
+    def column(self, name: str) -> "np.ndarray":
+        """A sample field as a float array, shape (len(samples),); missing or null is NaN.
+
+        ``diag.NAME`` reads a control-law diagnostic (``diag.curvature``).
+        """
+        import numpy as np
+
+        if name.startswith("diag."):
+            key = name[5:]
+            vals = [(s.get("diag") or {}).get(key) for s in self.samples]
+        else:
+            vals = [s.get(name) for s in self.samples]
+        return np.array([np.nan if v is None else float(v) for v in vals], dtype=float)
+
+    def paths(self) -> list[str]:
+        """The active path of each sample."""
+        return [str(s.get("path", "")) for s in self.samples]
+
+    def diag_names(self) -> list[str]:
+        """Every diagnostic name any sample carries, sorted."""
+        names: set[str] = set()
+        for s in self.samples:
+            names.update(s.get("diag") or ())
+        return sorted(names)
+
+
+def _records(path: str) -> Iterator[tuple[int, str]]:
+    with open(path, encoding="utf-8") as f:
+        for n, line in enumerate(f, 1):
+            yield n, line
+
+
+def read_trace(path: str | os.PathLike[str]) -> Trace:
+    """Read a trace written by :class:`TraceWriter`.
+
+    Raises
+    ------
+    TraceError
+        The file is missing, is not an mdle trace, has a newer version, or has a bad line
+        other than a cut-off last line (the message names the file and line).
+    """
+    path = os.fspath(path)
+    header: dict[str, Any] | None = None
+    events: list[Mapping[str, Any]] = []
+    samples: list[Mapping[str, Any]] = []
+    extra: list[Mapping[str, Any]] = []
+    end: Mapping[str, Any] | None = None
+    truncated = False
+    bad: tuple[int, str] | None = None
+    try:
+        for n, line in _records(path):
+            if bad is not None:  # a bad line that was not the last one
+                raise _error(path, bad[0], bad[1])
+            if not line.strip():
+                continue
+            try:
+                rec = json.loads(line)
+            except json.JSONDecodeError as exc:
+                if line.endswith("\n"):
+                    raise _error(path, n, f"not JSON ({exc.msg})") from None
+                bad = (n, f"not JSON ({exc.msg})")
+                continue
+            if not isinstance(rec, dict) or "type" not in rec:
+                raise _error(path, n, "a record must be a JSON object with a `type`")
+            kind = rec["type"]
+            if header is None:
+                if kind != "header" or rec.get("format") != TRACE_FORMAT:
+                    raise _error(path, n, f"not an mdle trace (the first record must be a "
+                                          f"`header` with format `{TRACE_FORMAT}`)")
+                if int(rec.get("version", 0)) > TRACE_VERSION:
+                    raise _error(path, n, f"trace version {rec['version']} is newer than "
+                                          f"this mdle reads ({TRACE_VERSION})")
+                header = rec
+            elif kind == "sample":
+                samples.append(rec)
+            elif kind == "event":
+                events.append(rec)
+            elif kind == "end":
+                end = rec
+            else:
+                extra.append(rec)
+    except OSError as exc:
+        raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: {exc.strerror}")) \
+            from None
+    if bad is not None:
+        truncated = True
+    if header is None:
+        raise _error(path, 1, "empty file: not an mdle trace")
+    return Trace(path, header, tuple(events), tuple(samples), end, truncated, tuple(extra))
+
+
+def _error(path: str, line: int, message: str) -> TraceError:
+    return TraceError(Diagnostic(Span(path, line, 1, line, 1), message))
