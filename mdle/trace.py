@@ -144,6 +144,9 @@ class TraceWriter:
             line += ',"clearance":%.9g' % s.clearance
         if s.collided is not None:
             line += ',"collided":%s' % ("true" if s.collided else "false")
+        if s.true_x is not None:
+            line += ',"true_x":%.9g,"true_y":%.9g,"true_theta":%.9g' % (
+                s.true_x, s.true_y, s.true_theta)
         if s.diag:
             line += ',"diag":{%s}' % ",".join(['%s:%.9g' % (self._quoted(k), v)
                                                for k, v in s.diag.items()])
@@ -188,6 +191,8 @@ def _sample_dict(s: Sample) -> dict[str, Any]:
         d["clearance"] = s.clearance
     if s.collided is not None:
         d["collided"] = bool(s.collided)
+    if s.true_x is not None:
+        d.update(true_x=s.true_x, true_y=s.true_y, true_theta=s.true_theta)
     if s.diag:
         d["diag"] = dict(s.diag)
     return d

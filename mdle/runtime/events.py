@@ -91,8 +91,8 @@ class Sample(NamedTuple):
     tick finished (s; 0 in simulation), ``scan_age`` how old the newest scan was (s, None
     without a scan), ``stalled`` the robot's flag. ``diag`` holds the control law's
     diagnostics (front and side range, tangent, curvature: whatever it put in
-    ``ctx.cache["trace"]``). ``clearance`` and ``collided`` are simulator truth, None
-    when unknown.
+    ``ctx.cache["trace"]``). ``clearance``, ``collided`` and the true pose
+    ``true_x, true_y, true_theta`` are simulator truth, None when unknown.
 
     A named tuple rather than a frozen dataclass: one is made every tick, and a frozen
     dataclass's ``__init__`` costs five times as much.
@@ -113,6 +113,9 @@ class Sample(NamedTuple):
     diag: Mapping[str, float] = _NO_DIAG
     clearance: float | None = None
     collided: bool | None = None
+    true_x: float | None = None
+    true_y: float | None = None
+    true_theta: float | None = None
 
 
 @dataclass(frozen=True)

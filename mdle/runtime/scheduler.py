@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
@@ -357,8 +357,7 @@ class Scheduler:
                 stack[-1].slot.path if stack else "", lateness,
                 None if scan is None else now - scan.stamp, obs.stalled,
                 MappingProxyType(dict(trace)) if trace else _EMPTY,
-                truth.get("clearance") if truth else None,  # type: ignore[arg-type]
-                truth.get("collided") if truth else None,  # type: ignore[arg-type]
+                *(_truth_fields(truth) if truth else _NO_TRUTH),
             )
             for o in self.observers:
                 o.on_tick(sample)
@@ -527,6 +526,15 @@ class Scheduler:
                 )
                 for o in self.observers:
                     o.on_end(self.result)
+
+
+_NO_TRUTH = (None, None, None, None, None)
+
+
+def _truth_fields(truth: Mapping[str, Any]) -> tuple[Any, ...]:
+    """(clearance, collided, x, y, theta) from an observation's ground truth."""
+    return (truth.get("clearance"), truth.get("collided"), truth.get("x"), truth.get("y"),
+            truth.get("theta"))
 
 
 def _describe(exc: BaseException) -> str:

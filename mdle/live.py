@@ -1,0 +1,215 @@
+"""What ``mdle run`` shows while a plan runs, and the summary after it.
+
+On a terminal, a rich live panel: the running path (plan > behavior > atom) with each
+level's elapsed time and remaining timer, the pose, speed and turn rate, and the last
+events; then a summary table. Off a terminal (a pipe, a log file, CI), plain lines with
+no control codes: one per event, then the summary. The view is an observer of the
+scheduler and only reads what the scheduler hands it.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections import Counter, deque
+from typing import IO, TYPE_CHECKING, Any
+
+from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample
+from mdle.runtime.observer import BaseObserver
+
+if TYPE_CHECKING:
+    from mdle.runtime.scheduler import ActiveElement, Scheduler
+
+__all__ = ["LiveView", "summary_rows", "format_event"]
+
+#: Live panel refreshes per second of wall time (the run itself may go much faster).
+REFRESH_HZ = 10.0
+
+
+def _secs(t: float) -> str:
+    if math.isinf(t):
+        return "inf"
+    return f"{t:.1f} s" if abs(t) < 120 else f"{t / 60:.1f} min"
+
+
+def format_event(e: Event, t0: float = 0.0) -> str:
+    """One plain line for an event: time, start/end, path, cause, pose."""
+    p = e.pose
+    what = "start" if e.kind is EventKind.START else "end  "
+    cause = f"  {e.cause.value}" if e.cause is not None else ""
+    return (f"{e.time - t0:8.2f} s  {what} {e.path}{cause}  "
+            f"(x {p.x:.2f} m, y {p.y:.2f} m, heading {math.degrees(p.theta):.0f} deg)")
+
+
+def summary_rows(result: RunResult, wall_seconds: float | None = None) -> list[tuple[str, str]]:
+    """The summary as (label, value) rows, shared by the rich table and the plain lines."""
+    t = result.termination
+    rows = [("ended", f"{t.path}: {t.cause.value} at {_secs(result.duration)}")]
+    if result.fault:
+        rows.append(("fault", result.fault))
+    rows.append(("distance travelled", f"{result.distance:.2f} m"))
+    if result.min_clearance is not None:
+        rows.append(("minimum clearance", f"{result.min_clearance:.3f} m"))
+    rows.append(("collided", "YES" if result.collided else "no"))
+    rows.append(("ticks", str(result.ticks)))
+    if result.max_lateness > 0:
+        rows.append(("worst tick lateness", f"{result.max_lateness * 1e3:.1f} ms"))
+    if wall_seconds is not None and wall_seconds > 0:
+        rows.append(("real-time factor", f"{result.duration / wall_seconds:.1f}x"))
+    return rows
+
+
+def _element_rows(result: RunResult) -> list[tuple[str, str, str]]:
+    """Each element path that ran, how many times it ran and how those runs ended."""
+    ends: dict[str, Counter[Cause]] = {}
+    for term in result.terminations:
+        ends.setdefault(term.path, Counter())[term.cause] += 1
+    # in the order they first started: outermost first, then depth first
+    order = list(dict.fromkeys(e.path for e in result.events
+                               if e.kind is EventKind.START and e.path in ends))
+    rows = []
+    for path in order:
+        counts = ends[path]
+        n = sum(counts.values())
+        how = ", ".join(f"{c.value}" + (f" x{k}" if k > 1 else "") for c, k in counts.items())
+        rows.append((path, str(n), how))
+    return rows
+
+
+class LiveView(BaseObserver):
+    """A live view of a run on a terminal, plain event lines elsewhere.
+
+    Parameters
+    ----------
+    stream : text stream
+        Where to write (standard output by default).
+    plain : bool or None
+        Force plain lines (True) or the rich panel (False); None picks the panel only
+        when ``stream`` is a terminal.
+    events : int
+        How many recent events the panel keeps.
+    """
+
+    def __init__(self, stream: IO[str] | None = None, plain: bool | None = None,
+                 events: int = 8) -> None:
+        self.stream = stream or sys.stdout
+        self.plain = (not self.stream.isatty()) if plain is None else plain
+        self._events: deque[str] = deque(maxlen=events)
+        self._scheduler: Scheduler | None = None
+        self._live: Any = None
+        self._sample: Sample | None = None
+        self._t0: float | None = None
+        self._wall0 = 0.0
+        self._next_refresh = 0.0
+        self.wall_seconds: float | None = None
+
+    # ------------------------------------------------------------------ observer hooks
+
+    def on_start(self, scheduler: "Scheduler") -> None:
+        """Open the live panel (terminal only)."""
+        self._scheduler = scheduler
+        self._wall0 = time.monotonic()
+        if not self.plain:
+            from rich.console import Console
+            from rich.live import Live
+
+            console = Console(file=self.stream)
+            self._live = Live(self._panel(), console=console, auto_refresh=False,
+                              transient=True)
+            self._live.start()
+
+    def on_event(self, event: Event) -> None:
+        """Print (plain) or remember (panel) the event."""
+        if self._t0 is None:
+            self._t0 = event.time
+        line = format_event(event, self._t0)
+        if self.plain:
+            print(line, file=self.stream)
+        else:
+            self._events.append(line)
+
+    def on_tick(self, sample: Sample) -> None:
+        """Refresh the panel at most :data:`REFRESH_HZ` times a second."""
+        self._sample = sample
+        if self._live is None:
+            return
+        now = time.monotonic()
+        if now >= self._next_refresh:
+            self._next_refresh = now + 1.0 / REFRESH_HZ
+            self._live.update(self._panel(), refresh=True)
+
+    def on_end(self, result: RunResult) -> None:
+        """Close the panel and print the summary."""
+        self.wall_seconds = time.monotonic() - self._wall0
+        if self._live is not None:
+            self._live.stop()
+            self._live = None
+        self.print_summary(result)
+
+    # ------------------------------------------------------------------ rendering
+
+    def print_summary(self, result: RunResult) -> None:
+        """The summary table (rich on a terminal, plain lines otherwise)."""
+        rows = summary_rows(result, self.wall_seconds)
+        elements = _element_rows(result)
+        if self.plain:
+            out = self.stream
+            print("elements run:", file=out)
+            for path, n, how in elements:
+                print(f"  {path}  ran {n}x  ended: {how}", file=out)
+            for label, value in rows:
+                print(f"{label}: {value}", file=out)
+            out.flush()
+            return
+        from rich.console import Console
+        from rich.table import Table
+
+        console = Console(file=self.stream)
+        table = Table(title="elements run", title_justify="left")
+        table.add_column("element")
+        table.add_column("runs", justify="right")
+        table.add_column("ended by")
+        for path, n, how in elements:
+            table.add_row(path, n, how)
+        console.print(table)
+        facts = Table(show_header=False, box=None)
+        facts.add_column(style="bold")
+        facts.add_column()
+        for label, value in rows:
+            style = "bold red" if (label == "collided" and value == "YES") or \
+                label == "fault" else ""
+            facts.add_row(label, value, style=style)
+        console.print(facts)
+
+    def _levels(self) -> "tuple[ActiveElement, ...]":
+        return self._scheduler.active if self._scheduler is not None else ()
+
+    def _panel(self) -> Any:
+        from rich.console import Group
+        from rich.panel import Panel
+        from rich.table import Table
+        from rich.text import Text
+
+        levels = Table(show_header=True, box=None, pad_edge=False)
+        levels.add_column("running")
+        levels.add_column("kind", style="dim")
+        levels.add_column("elapsed", justify="right")
+        levels.add_column("timer left", justify="right")
+        for a in self._levels():
+            levels.add_row("  " * a.level + a.label, a.element, _secs(a.elapsed),
+                           _secs(max(a.remaining, 0.0)))
+        s = self._sample
+        if s is None:
+            state = Text("waiting for the first tick")
+        else:
+            t = s.time - (self._t0 if self._t0 is not None else s.time)
+            state = Text(f"t {t:7.2f} s   x {s.x:6.2f} m   y {s.y:6.2f} m   heading "
+                         f"{math.degrees(s.theta):6.1f} deg   v {s.v:5.2f} m/s   "
+                         f"omega {math.degrees(s.omega):6.1f} deg/s")
+            if s.clearance is not None:
+                state.append(f"   clearance {s.clearance:.2f} m")
+            if s.collided:
+                state.append("   COLLIDED", style="bold red")
+        events = Text("\n".join(self._events) or "(no events yet)", style="dim")
+        return Panel(Group(levels, state, events), title="mdle run", title_align="left")

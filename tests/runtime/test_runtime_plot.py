@@ -1,0 +1,104 @@
+"""Plots from traces: the path with obstacles or detected boundary, curvature vs distance."""
+
+from __future__ import annotations
+
+import math
+import types
+
+import pytest
+
+from mdle.backend import Command
+from mdle.plot import PlotError, boundary_points, plot_trace, trace_figure
+from mdle.runtime import run
+from mdle.runtime.scripted import ScriptedBackend
+from mdle.trace import TraceWriter, read_trace
+
+
+def _wall_follower(ir):
+    """An atom driving an arc that records a side range and curvature like follow_boundary."""
+
+    def step(args, ctx, state):
+        ctx.cache["trace"] = {"side_hit": 1.0, "side_range": 0.5,
+                              "side_curvature": -1.0 if ctx.t > 1.0 else 0.0}
+        return Command(0.5, 0.3 if ctx.t > 1.0 else 0.0)
+
+    return ir.atom("follow", law=ir.const_law("follow_boundary", step=step), timer=3.0)
+
+
+def _traced(ir, tmp_path, element, backend=None, truth=False):
+    path = tmp_path / "run.jsonl"
+    if backend is None:
+        script = (lambda t, k: {"truth": {"x": 0.5 * t, "y": 0.01, "theta": 0.0,
+                                          "clearance": 0.4, "collided": False}}) if truth else ()
+        backend = ScriptedBackend(script)
+    run(element, backend, observers=[TraceWriter(path, {"program": {"element": element.label},
+                                                        "world": {"name": "test"}})])
+    return path
+
+
+def test_boundary_points_lie_beside_the_path(ir, tmp_path):
+    path = _traced(ir, tmp_path, _wall_follower(ir))
+    pts = boundary_points(read_trace(path))
+    # first second: driving along +x, the boundary 0.5 m to the right (y = -0.5)
+    assert pts.shape[1] == 2 and len(pts) >= 10
+    assert pts[:10, 1] == pytest.approx([-0.5] * 10)
+    assert pts[:10, 0] == pytest.approx([0.05 * i for i in range(10)])
+
+
+@pytest.mark.parametrize("ext", ["png", "svg", "pdf"])
+def test_plot_is_written_in_each_format(ir, tmp_path, ext):
+    trace = _traced(ir, tmp_path, ir.string("main", ir.atom("go", 1.0, timer=1.0),
+                                            _wall_follower(ir)))
+    out = tmp_path / f"plot.{ext}"
+    assert plot_trace(trace, out) == str(out)
+    data = out.read_bytes()
+    assert len(data) > 2000
+    magic = {"png": b"\x89PNG", "svg": b"<?xml", "pdf": b"%PDF"}[ext]
+    assert data.startswith(magic)
+
+
+def test_figure_has_curvature_panel_when_the_law_measured_it(ir, tmp_path):
+    fig = trace_figure(read_trace(_traced(ir, tmp_path, _wall_follower(ir))))
+    path_ax, curv_ax = fig.axes
+    assert curv_ax.get_xlabel() == "distance travelled (m)"
+    dist, kappa = curv_ax.lines[0].get_data()
+    assert dist[-1] == pytest.approx(1.5, abs=0.06) and min(kappa) == -1.0
+    labels = path_ax.get_legend_handles_labels()[1]
+    assert "atom follow" in labels and "detected boundary" in labels
+
+
+def test_figure_without_curvature_has_one_panel_and_marks_events(ir, tmp_path):
+    main = ir.string("main", ir.atom("go", 1.0, when="hit"), ir.atom("spin", 0, 1.0, timer=0.5))
+    trace = _traced(ir, tmp_path, main, ScriptedBackend(ir.signals(30, hit=[5])))
+    fig = trace_figure(read_trace(trace))
+    assert len(fig.axes) == 1
+    labels = fig.axes[0].get_legend_handles_labels()[1]
+    assert {"atom go", "atom spin", "end: interrupt", "end: timer", "end: completed",
+            "start"} <= set(labels)
+
+
+def test_world_obstacles_are_drawn_and_truth_is_used(ir, tmp_path):
+    import shapely
+
+    geometry = shapely.GeometryCollection([shapely.box(0, -1, 3, -0.6),
+                                           shapely.LineString([(0, 1), (3, 1)])])
+    world = types.SimpleNamespace(geometry=geometry, bounds=(-0.5, -1.5, 3.5, 1.5), name="w")
+    trace = _traced(ir, tmp_path, ir.atom("go", 1.0, timer=1.0), truth=True)
+    fig = trace_figure(read_trace(trace), world)
+    ax = fig.axes[0]
+    assert len(ax.patches) == 1  # the box
+    path_line = ax.collections[0].get_segments()
+    assert path_line[0][0][1] == pytest.approx(0.01)  # true y, not odometry's 0
+    x0, x1 = ax.get_xlim()
+    assert x0 <= -0.5 and x1 >= 3.5
+
+
+def test_plot_errors_are_clear(ir, tmp_path):
+    trace = _traced(ir, tmp_path, ir.atom("go", 1.0, timer=0.2))
+    with pytest.raises(PlotError, match=r"must end in \.png, \.svg or \.pdf"):
+        plot_trace(trace, tmp_path / "plot.gif")
+    empty = tmp_path / "empty.jsonl"
+    empty.write_text(trace.read_text().splitlines()[0] + "\n")
+    with pytest.raises(PlotError, match="no samples"):
+        plot_trace(empty, tmp_path / "x.png")
+    assert not math.isnan(read_trace(trace).column("x")[0])
