@@ -1,0 +1,871 @@
+"""The checker: syntax tree to the runnable program of :mod:`mdle.program`.
+
+It resolves every name against the namespace (definitions, control laws, sensor
+functions), binds arguments to parameters (arity, keywords, symbols, dimensions),
+classifies each tuple by where it stands, compiles interrupts into closures
+(:mod:`mdle.conditions`), evaluates timers, and warns about elements that can never be
+reached. Errors are collected, not raised one at a time: :func:`check_program` raises
+one :class:`~mdle.errors.CheckError` with all of them.
+
+How a tuple ``(a, b, c)`` in an element position is read:
+
+* ``a`` is a control law (``go(0.3 m/s)``, ``stop``): an atom (U, xi, T);
+* ``a`` is a number, a parameter or ``[av, aw]``: a scaled atom (alpha, beta, sigma);
+* ``a`` is a parenthesised string or a named element: an element ((a...), xi, T).
+
+A definition with parameters is checked once on its own (parameters without a
+default may be anything) and again for each distinct use with arguments, so a
+dimension that only a call fixes is still checked; results are cached per arguments.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+from atoms.registry import BOOL, REQUIRED, LawSpec, Registry, SensorSpec
+from mdle import conditions as cond
+from mdle import syntax as st
+from mdle.dimensions import Quantity, Symbol, Value, dim_example, dim_words, fits, unit_for
+from mdle.errors import CheckError, Diagnostic, Severity, Span
+from mdle.format import format_expr
+from mdle.program import INF, AtomNode, Element, Interrupt, Program, StringKind, StringNode
+from mdle.resolve import Namespace, build_namespace, find_cycles
+from mdle.units import NONE, TIME, Dim
+
+__all__ = ["Checker", "check_program", "MAX_NESTING", "never_ends"]
+
+#: Deepest nesting of elements and interrupts, counting through named definitions.
+MAX_NESTING = 120
+
+Env = Mapping[str, Value]
+_EMPTY: Env = MappingProxyType({})
+_UNKNOWN = Quantity(math.nan, None)
+
+
+class _Abort(Exception):
+    """Stops a branch of the check after its error has been reported."""
+
+
+@dataclass(frozen=True)
+class _Slot:
+    """A parameter as the binder sees it: law, sensor function or definition parameter."""
+
+    name: str
+    dim: Dim | None  # None: any dimension (a definition parameter without a numeric default)
+    default: Any  # a Value, or REQUIRED
+    choices: tuple[str, ...] = ()
+    symbol: bool = False  # takes a symbol (a law parameter with choices, or a symbol default)
+
+
+def _kind_name(target: object) -> str:
+    if isinstance(target, LawSpec):
+        return "a control law"
+    if isinstance(target, SensorSpec):
+        return "a sensor function"
+    if isinstance(target, st.Definition):
+        return {"atom": "an atom", "behavior": "a behavior", "plan": "a plan",
+                "interrupt": "an interrupt"}[target.kind.value]
+    return "a parameter"
+
+
+def _own_never(e: Element) -> bool:
+    return e.interrupt.never and math.isinf(e.timer)
+
+
+def never_ends(e: Element) -> bool:
+    """Whether an element can only be ended by an enclosing interrupt or timer.
+
+    That is: its own interrupt never fires, its timer is ``inf``, and it is an atom, a
+    repeated string, or a string holding an element that never ends.
+    """
+    if not _own_never(e):
+        return False
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        if isinstance(x, AtomNode) or x.repeat:
+            return True
+        stack.extend(c for c in x.elements if _own_never(c))
+    return False
+
+
+class Checker:
+    """Checks definitions and compiles elements against one namespace.
+
+    Diagnostics accumulate in :attr:`errors` and :attr:`warnings`; each public method
+    returns None for a part that has errors (after reporting them).
+    """
+
+    def __init__(self, ns: Namespace) -> None:
+        self.ns = ns
+        self.errors: list[Diagnostic] = []
+        self.warnings: list[Diagnostic] = []
+        self._seen: set[tuple[Span | None, str]] = set()
+        self._notes: list[Diagnostic] = []
+        self._depth = 0
+        self._cache: dict[tuple[Any, ...], Any] = {}
+        self.broken: set[str] = set()
+
+    # ------------------------------------------------------------------ diagnostics
+
+    def error(self, span: Span | None, message: str, hint: str | None = None,
+              notes: Sequence[Diagnostic] = ()) -> None:
+        """Record an error once (the same place and message may be met by several uses)."""
+        key = (span, message)
+        if key in self._seen:
+            return
+        self._seen.add(key)
+        self.errors.append(Diagnostic(span, message, Severity.ERROR, hint,
+                                      tuple(notes) + tuple(self._notes[-1:])))
+
+    def warn(self, span: Span | None, message: str, hint: str | None = None) -> None:
+        """Record a warning once."""
+        key = (span, "w:" + message)
+        if key in self._seen:
+            return
+        self._seen.add(key)
+        self.warnings.append(Diagnostic(span, message, Severity.WARNING, hint))
+
+    @contextmanager
+    def _nest(self, span: Span) -> Iterator[None]:
+        self._depth += 1
+        try:
+            if self._depth > MAX_NESTING:
+                self.error(span, f"elements and interrupts nest more than {MAX_NESTING} levels "
+                           "deep here (counting through named definitions)",
+                           hint="flatten the plan: fewer levels of behaviors inside behaviors")
+                raise _Abort
+            yield
+        finally:
+            self._depth -= 1
+
+    def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
+        close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.6)
+        self.error(span, f"unknown {what} `{name}`",
+                   hint=f"did you mean `{close[0]}`?" if close else None)
+
+    # ------------------------------------------------------------------ fixed values
+
+    def value(self, expr: st.Expr, env: Env) -> Value:
+        """A fixed value: numbers with units, parameters, arithmetic; a bare unknown name is
+        a symbol (its use decides whether that is right). Raises _Abort after an error."""
+        with self._nest(expr.span):
+            if isinstance(expr, st.Number):
+                return Quantity(expr.value, expr.dim, bare=not expr.unit)
+            if isinstance(expr, st.Name):
+                if expr.name in env:
+                    return env[expr.name]
+                target = self.ns.lookup(expr.name)
+                if target is not None:
+                    self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
+                               f"{_kind_name(target)}",
+                               hint="arguments and timers are fixed when an element starts; "
+                                    "sensor readings belong in interrupts")
+                    raise _Abort
+                return Symbol(expr.name)
+            if isinstance(expr, st.Inf):
+                return Quantity(INF, None)
+            if isinstance(expr, st.Group) and len(expr.items) == 1 and not expr.repeat:
+                return self.value(expr.items[0], env)
+            if isinstance(expr, st.Unary) and expr.op in "+-":
+                q = self._number(expr.operand, env)
+                return q if expr.op == "+" else Quantity(-q.value, q.dim, q.bare)
+            if isinstance(expr, st.Binary) and expr.op in ("+", "-", "*", "/"):
+                a, b = self._number(expr.left, env), self._number(expr.right, env)
+                if expr.op in "+-":
+                    if not (fits(a, b.dim) and fits(b, a.dim)):
+                        self.error(expr.op_span, f"cannot {'add' if expr.op == '+' else 'subtract'}"
+                                   f" {dim_words(b.dim)} and {dim_words(a.dim)}")
+                        raise _Abort
+                    dim = a.dim if not a.zero else b.dim
+                    v = a.value + b.value if expr.op == "+" else a.value - b.value
+                    return Quantity(v, dim, a.bare and b.bare)
+                dim = None if a.dim is None or b.dim is None else (
+                    a.dim * b.dim if expr.op == "*" else a.dim / b.dim)
+                if expr.op == "*":
+                    return Quantity(a.value * b.value, dim, a.bare and b.bare)
+                if b.value == 0:
+                    self.error(expr.span, "division by zero")
+                    raise _Abort
+                return Quantity(a.value / b.value, dim, a.bare and b.bare)
+            self.error(expr.span, f"expected a fixed value such as `1 m` or `10 s`, "
+                       f"found `{_short(expr)}`")
+            raise _Abort
+
+    def _number(self, expr: st.Expr, env: Env) -> Quantity:
+        v = self.value(expr, env)
+        if isinstance(v, Symbol):
+            pool = [*env, *self.ns.names()]
+            self._unknown(v.name, expr.span, "name", pool)
+            raise _Abort
+        return v
+
+    def timer(self, expr: st.Expr, env: Env) -> float:
+        """A timer in seconds: `inf`, a time, or a plain number (seconds)."""
+        if isinstance(expr, st.Never):
+            self.error(expr.span, "expected a timer such as `10 s` or `inf`, found `never`",
+                       hint="`never` is the interrupt that never fires; the timer that never "
+                            "expires is `inf`")
+            raise _Abort
+        if isinstance(expr, (st.Binary, st.Unary)) and expr.op in (
+                "and", "or", "xor", "not", "<", "<=", ">", ">=", "==", "!="):
+            self.error(expr.span, "expected a timer such as `10 s` or `inf`, found a condition",
+                       hint="an element is (…, interrupt, timer): the condition goes second")
+            raise _Abort
+        q = self._number(expr, env)
+        if not (q.dim is None or q.dim == TIME or q.dim == NONE or q.zero):
+            self.error(expr.span, f"expected a timer such as `10 s` or `inf`, found "
+                       f"{dim_words(q.dim)} (`{_short(expr)}`)")
+            raise _Abort
+        if q.value < 0:
+            self.error(expr.span, "a timer cannot be negative")
+            raise _Abort
+        return q.value
+
+    # ------------------------------------------------------------------ arguments
+
+    def bind(self, callee: str, slots: Sequence[_Slot], args: Sequence[st.Argument],
+             env: Env, span: Span) -> dict[str, Value]:
+        """Bind call arguments to parameters; checks arity, keywords, symbols, dimensions."""
+        bound: dict[str, Value] = {}
+        given: dict[str, st.Argument] = {}
+        names = [s.name for s in slots]
+        ok = True
+        positional_done = False
+        for i, a in enumerate(args):
+            if a.name is None:
+                if positional_done:
+                    self.error(a.span, "a positional argument cannot follow a keyword argument")
+                    ok = False
+                    continue
+                if i >= len(slots):
+                    takes = (f"takes {len(slots)} argument{'s' * (len(slots) != 1)}"
+                             + (f" ({', '.join(names)})" if names else ""))
+                    self.error(a.span, f"too many arguments: `{callee}` {takes}, "
+                               f"found {len(args)}")
+                    ok = False
+                    break
+                slot = slots[i]
+            else:
+                positional_done = True
+                found = next((s for s in slots if s.name == a.name), None)
+                if found is None:
+                    close = difflib.get_close_matches(a.name, names, n=1)
+                    hint = (f"did you mean `{close[0]}`?" if close else
+                            f"`{callee}` takes {', '.join(f'`{n}`' for n in names)}" if names
+                            else f"`{callee}` takes no arguments")
+                    self.error(a.span, f"`{callee}` has no parameter `{a.name}`", hint=hint)
+                    ok = False
+                    continue
+                slot = found
+            if slot.name in given:
+                self.error(a.span, f"`{slot.name}` of `{callee}` is given twice",
+                           notes=(Diagnostic(given[slot.name].span, "first given here",
+                                             Severity.NOTE),))
+                ok = False
+                continue
+            given[slot.name] = a
+            try:
+                bound[slot.name] = self._argument(callee, slot, a.value, env)
+            except _Abort:
+                ok = False
+        for s in slots:
+            if s.name not in bound and s.name not in given:
+                if s.default is REQUIRED:
+                    self.error(span, f"`{callee}` needs `{s.name}`"
+                               + ("" if s.symbol else f" ({dim_example(s.dim)})"),
+                               hint=f"write it as `{callee}({s.name} = ...)`")
+                    ok = False
+                else:
+                    bound[s.name] = s.default
+        if not ok:
+            raise _Abort
+        return bound
+
+    def _argument(self, callee: str, slot: _Slot, expr: st.Expr, env: Env) -> Value:
+        v = self.value(expr, env)
+        if slot.choices:
+            if not isinstance(v, Symbol) or v.name not in slot.choices:
+                options = " or ".join(f"`{c}`" for c in slot.choices)
+                got = v.name if isinstance(v, Symbol) else _short(expr)
+                close = difflib.get_close_matches(got, list(slot.choices), n=1)
+                self.error(expr.span, f"`{slot.name}` of `{callee}` is one of {options}, "
+                           f"found `{got}`", hint=f"did you mean `{close[0]}`?" if close else None)
+                raise _Abort
+            return v
+        if isinstance(v, Symbol):
+            if slot.symbol:
+                return v
+            pool = [*env, *self.ns.names()]
+            self._unknown(v.name, expr.span, "name", pool)
+            raise _Abort
+        if slot.symbol:
+            self.error(expr.span, f"`{slot.name}` of `{callee}` takes a symbol such as `right`, "
+                       f"found {dim_words(v.dim)}")
+            raise _Abort
+        if not fits(v, slot.dim):
+            assert slot.dim is not None
+            if v.dim == NONE and unit_for(slot.dim):
+                hint = f"add a unit: `{_short(expr)} {unit_for(slot.dim)}`"
+            else:
+                hint = None
+            self.error(expr.span, f"`{slot.name}` of `{callee}` is {dim_example(slot.dim)}, "
+                       f"found {dim_words(v.dim)} (`{_short(expr)}`)", hint=hint)
+            raise _Abort
+        return v
+
+    def _slots_of_spec(self, spec: LawSpec | SensorSpec) -> list[_Slot]:
+        return [_Slot(p.name, None if p.choices else p.dim,
+                      REQUIRED if p.default is REQUIRED else (
+                          Symbol(p.default) if isinstance(p.default, str) else
+                          Quantity(float(p.default), p.dim)),
+                      tuple(p.choices), bool(p.choices)) for p in spec.params]
+
+    def slots_of(self, d: st.Definition) -> list[_Slot]:
+        """The parameters of a definition; a parameter's dimension is its default's."""
+        key = ("slots", d.name, id(d))
+        if key in self._cache:
+            return self._cache[key]  # type: ignore[no-any-return]
+        slots: list[_Slot] = []
+        seen: dict[str, st.Param] = {}
+        for p in d.param_list:
+            if p.name in seen:
+                self.error(p.span, f"parameter `{p.name}` of `{d.name}` is declared twice")
+                continue
+            seen[p.name] = p
+            if p.default is None:
+                slots.append(_Slot(p.name, None, REQUIRED))
+                continue
+            try:
+                v = self.value(p.default, _EMPTY)
+            except _Abort:
+                slots.append(_Slot(p.name, None, REQUIRED))
+                continue
+            if isinstance(v, Symbol):
+                slots.append(_Slot(p.name, None, v, symbol=True))
+            else:
+                slots.append(_Slot(p.name, None if v.bare else v.dim, v))
+        self._cache[key] = slots
+        return slots
+
+    @staticmethod
+    def _plain(values: Mapping[str, Value]) -> dict[str, float | str]:
+        return {k: (v.name if isinstance(v, Symbol) else v.value) for k, v in values.items()}
+
+    # ------------------------------------------------------------------ interrupts
+
+    def condition(self, expr: st.Expr, env: Env) -> cond.Typed:
+        """Type and compile an interrupt expression (or a part of one)."""
+        with self._nest(expr.span):
+            return self._condition(expr, env)
+
+    def _condition(self, expr: st.Expr, env: Env) -> cond.Typed:
+        if isinstance(expr, st.Number):
+            return cond.constant(None if (not expr.unit and expr.value == 0) else expr.dim,
+                                 expr.value)
+        if isinstance(expr, st.Never):
+            return cond.constant(BOOL, False)
+        if isinstance(expr, st.Inf):
+            self.error(expr.span, "`inf` is the timer that never expires; the interrupt that "
+                       "never fires is `never`")
+            raise _Abort
+        if isinstance(expr, st.Group):
+            if len(expr.items) == 1 and not expr.repeat:
+                return self.condition(expr.items[0], env)
+            self.error(expr.span, "expected an interrupt such as `stalled` or "
+                       "`range(0 deg) < 1 m`, found a tuple")
+            raise _Abort
+        if isinstance(expr, st.Vector):
+            self.error(expr.span, "`[...]` is only the per-channel scale of a scaled atom")
+            raise _Abort
+        if isinstance(expr, (st.Name, st.Call)):
+            return self._reading(expr, env)
+        if isinstance(expr, st.Unary):
+            a = self.condition(expr.operand, env)
+            if expr.op == "not":
+                if not a.is_bool:
+                    self.error(expr.operand.span, f"`not` needs a condition, found "
+                               f"{dim_words(a.dim)}")
+                    raise _Abort
+            elif a.is_bool:
+                self.error(expr.span, f"`{expr.op}` needs a number, found a condition")
+                raise _Abort
+            return cond.negate(expr.op, a)
+        assert isinstance(expr, st.Binary)
+        a = self.condition(expr.left, env)
+        b = self.condition(expr.right, env)
+        op = expr.op
+        if op in ("and", "or", "xor"):
+            for side, t in ((expr.left, a), (expr.right, b)):
+                if not t.is_bool:
+                    self.error(side.span, f"`{op}` joins conditions, but this is "
+                               f"{dim_words(t.dim)}",
+                               hint="compare it with something: `range(0 deg) < 1 m`")
+                    raise _Abort
+            return cond.logic(op, a, b)
+        for side, t in ((expr.left, a), (expr.right, b)):
+            if t.is_bool:
+                self.error(side.span, f"`{op}` needs numbers, found a condition")
+                raise _Abort
+        if op in ("<", "<=", ">", ">=", "==", "!="):
+            if not _same_dim(a, b):
+                self.error(expr.op_span, f"cannot compare {dim_words(a.dim)} with "
+                           f"{dim_words(b.dim)}", hint=_unit_hint(expr, a, b))
+                raise _Abort
+            return cond.compare(op, a, b)
+        if op in ("+", "-"):
+            if not _same_dim(a, b):
+                self.error(expr.op_span, f"cannot {'add' if op == '+' else 'subtract'} "
+                           f"{dim_words(b.dim)} and {dim_words(a.dim)}",
+                           hint=_unit_hint(expr, a, b))
+                raise _Abort
+            return cond.arith(op, a, b, a.dim if a.dim is not None else b.dim)
+        kind = None if a.dim is None or b.dim is None else (
+            a.dim * b.dim if op == "*" else a.dim / b.dim)
+        return cond.arith(op, a, b, kind)
+
+    def _reading(self, expr: st.Name | st.Call, env: Env) -> cond.Typed:
+        name = expr.name
+        args = expr.args if isinstance(expr, st.Call) else ()
+        if isinstance(expr, st.Name) and name in env:
+            v = env[name]
+            if isinstance(v, Symbol):
+                self.error(expr.span, f"`{name}` is the symbol `{v.name}` here; an interrupt "
+                           "needs a condition or a number")
+                raise _Abort
+            return cond.constant(None if v.zero else v.dim, v.value)
+        target = self.ns.lookup(name)
+        if isinstance(target, SensorSpec):
+            bound = self.bind(name, self._slots_of_spec(target), args, env, expr.span)
+            return cond.sensor_reading(target, MappingProxyType(self._plain(bound)))
+        if isinstance(target, st.Definition) and target.kind is st.DefKind.INTERRUPT:
+            if name in self.broken:
+                raise _Abort
+            slots = self.slots_of(target)
+            bound = self.bind(name, slots, args, env, expr.span)
+            return self._interrupt_body(target, bound, expr.span if args else None)
+        if target is None:
+            pool = [*env, *self.ns.definitions, *self.ns.registry.sensors, "never"]
+            self._unknown(name, getattr(expr, "name_span", expr.span), "name", pool)
+            raise _Abort
+        self.error(expr.span, f"expected an interrupt such as `stalled` or `range(0 deg) < 1 m`; "
+                   f"`{name}` is {_kind_name(target)}",
+                   hint=("to run elements one after another, put them in a string with its own "
+                         "interrupt and timer: `((a, b), never, inf)`")
+                   if isinstance(target, st.Definition) else None)
+        raise _Abort
+
+    def _interrupt_body(self, d: st.Definition, bound: Mapping[str, Value],
+                        call: Span | None) -> cond.Typed:
+        key = ("interrupt", d.name, _freeze(bound))
+        if key in self._cache:
+            return self._cache[key]  # type: ignore[no-any-return]
+        if call is not None:
+            self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
+        try:
+            t = self.condition(d.body, MappingProxyType(dict(bound)))
+        finally:
+            if call is not None:
+                self._notes.pop()
+        if not t.is_bool:
+            self.error(d.body.span, f"an interrupt is a condition such as `range(0 deg) < 1 m`; "
+                       f"`{d.name}` is {dim_words(t.dim)}")
+            raise _Abort
+        self._cache[key] = t
+        return t
+
+    def interrupt(self, expr: st.Expr, env: Env) -> Interrupt:
+        """The compiled interrupt of an element."""
+        t = self.condition(expr, env)
+        if not t.is_bool:
+            self.error(expr.span, "expected an interrupt such as `stalled` or "
+                       f"`range(0 deg) < 1 m`, found {dim_words(t.dim)}",
+                       hint="compare it with something, as in `range(0 deg) < 1 m`")
+            raise _Abort
+        return cond.to_interrupt(t, format_expr(expr))
+
+    # ------------------------------------------------------------------ elements
+
+    def element(self, expr: st.Expr, env: Env) -> Element:
+        """Compile an expression standing where an element is expected."""
+        with self._nest(expr.span):
+            return self._element(expr, env)
+
+    def _element(self, expr: st.Expr, env: Env) -> Element:
+        if isinstance(expr, (st.Name, st.Call)):
+            return self._named_element(expr, env)
+        if isinstance(expr, st.Group):
+            if expr.repeat:
+                self.error(expr.span, "`...` repeats the string of a behavior or plan; here it "
+                           "stands for an element",
+                           hint="write the repeated string with its interrupt and timer: "
+                                "`((a, b)..., x > 10 m, inf)`")
+                raise _Abort
+            if len(expr.items) == 1:
+                return self.element(expr.items[0], env)
+            return self._triple(expr, env)
+        self.error(expr.span, "expected an element: an atom such as `(go(0.3 m/s), stalled, "
+                   f"10 s)`, a named atom, behavior or plan, found `{_short(expr)}`")
+        raise _Abort
+
+    def _named_element(self, expr: st.Name | st.Call, env: Env) -> Element:
+        name = expr.name
+        span = getattr(expr, "name_span", expr.span)
+        if isinstance(expr, st.Name) and name in env:
+            self.error(expr.span, f"`{name}` is a parameter, not an element")
+            raise _Abort
+        target = self.ns.lookup(name)
+        if isinstance(target, st.Definition) and target.kind is not st.DefKind.INTERRUPT:
+            if name in self.broken:
+                raise _Abort
+            args = expr.args if isinstance(expr, st.Call) else ()
+            bound = self.bind(name, self.slots_of(target), args, env, expr.span)
+            return self.instance(target, bound, expr.span if args else None)
+        if isinstance(target, LawSpec):
+            self.error(expr.span, f"`{name}` is a control law; an atom needs an interrupt and a "
+                       "timer too", hint=f"write `({_short(expr)}, never, 10 s)`")
+            raise _Abort
+        if target is not None:
+            self.error(expr.span, f"expected an element (an atom, behavior or plan); `{name}` is "
+                       f"{_kind_name(target)}")
+            raise _Abort
+        pool = [n for n, d in self.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
+        pool += list(self.ns.registry.laws)
+        close = difflib.get_close_matches(name, pool, n=1, cutoff=0.6)
+        self.error(span, f"unknown name `{name}`: not a control law, atom, behavior or plan",
+                   hint=f"did you mean `{close[0]}`?" if close else None)
+        raise _Abort
+
+    def _triple(self, expr: st.Group, env: Env) -> Element:
+        head = expr.items[0]
+        n = len(expr.items)
+        kind = self._head_kind(head, env)
+        if n != 3:
+            what = {"atom": "an atom is (control law, interrupt, timer)",
+                    "scaled": "a scaled atom is (alpha, beta, atom)",
+                    "string": "an element is ((elements), interrupt, timer)"}[kind]
+            if n == 2 and kind != "scaled":
+                self.error(_after(expr), "expected a timer such as `10 s` or `inf` after the "
+                           f"interrupt: {what}", hint="add `, inf` to run until the interrupt "
+                                                      "fires")
+            elif n == 2:
+                self.error(expr.span, f"{what}; this has 2 parts")
+            else:
+                self.error(expr.items[3].span, f"{what}; this has {n} parts",
+                           hint="to run elements one after another, wrap them in a string: "
+                                "`((a, b, c, d), never, inf)`" if kind == "string" else None)
+            raise _Abort
+        if kind == "atom":
+            return self._atom(expr, env)
+        if kind == "scaled":
+            return self._scaled(expr, env)
+        return self.string(expr, env, "group", StringKind.GROUP)
+
+    def _head_kind(self, head: st.Expr, env: Env) -> str:
+        while isinstance(head, st.Group) and len(head.items) == 1 and not head.repeat:
+            inner = head.items[0]
+            if not isinstance(inner, (st.Name, st.Call)):
+                head = inner
+                continue
+            return "string"  # `((cruise), never, 10 s)`: a string of one element
+        if isinstance(head, st.Group):
+            return "string"
+        if isinstance(head, (st.Name, st.Call)):
+            if isinstance(head, st.Name) and head.name in env:
+                return "scaled"
+            if isinstance(self.ns.lookup(head.name), LawSpec):
+                return "atom"
+            return "string"
+        return "scaled"
+
+    def _atom(self, expr: st.Group, env: Env) -> AtomNode:
+        u, xi, timer = expr.items
+        assert isinstance(u, (st.Name, st.Call))
+        law = self.ns.lookup(u.name)
+        assert isinstance(law, LawSpec)
+        failed = False
+        try:
+            args = self.bind(u.name, self._slots_of_spec(law), u.args if isinstance(u, st.Call)
+                             else (), env, u.span)
+        except _Abort:
+            failed = True
+        try:
+            interrupt = self.interrupt(xi, env)
+        except _Abort:
+            failed = True
+        try:
+            t = self.timer(timer, env)
+        except _Abort:
+            failed = True
+        if failed:
+            raise _Abort
+        return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
+                        (1.0, 1.0), expr.span)
+
+    def _scaled(self, expr: st.Group, env: Env) -> AtomNode:
+        alpha_e, beta_e, sigma_e = expr.items
+        failed = False
+        alpha = (1.0, 1.0)
+        try:
+            if isinstance(alpha_e, st.Vector):
+                if len(alpha_e.items) != 2:
+                    self.error(alpha_e.span, "a per-channel scale is `[alpha_v, alpha_omega]`: two "
+                               f"factors, found {len(alpha_e.items)}")
+                    raise _Abort
+                alpha = (self._factor(alpha_e.items[0], env, "alpha_v"),
+                         self._factor(alpha_e.items[1], env, "alpha_omega"))
+            else:
+                a = self._factor(alpha_e, env, "alpha")
+                alpha = (a, a)
+        except _Abort:
+            failed = True
+        beta = 1.0
+        try:
+            beta = self._factor(beta_e, env, "beta")
+            if not beta > 0:
+                self.error(beta_e.span, "beta scales the timer and must be positive")
+                failed = True
+        except _Abort:
+            failed = True
+        try:
+            sigma = self.element(sigma_e, env)
+        except _Abort:
+            raise _Abort from None
+        if not isinstance(sigma, AtomNode):
+            self.error(sigma_e.span, f"only atoms can be scaled; `{_short(sigma_e)}` is a string "
+                       "of elements", hint="scale each of its atoms instead")
+            raise _Abort
+        if failed:
+            raise _Abort
+        return dataclasses.replace(sigma, timer=sigma.timer * beta,
+                                   scale=(sigma.scale[0] * alpha[0], sigma.scale[1] * alpha[1]),
+                                   span=expr.span)
+
+    def _factor(self, expr: st.Expr, env: Env, what: str) -> float:
+        q = self._number(expr, env)
+        if not (q.dim is None or q.dim == NONE or q.zero):
+            self.error(expr.span, f"{what} is a plain number such as `0.5`, found "
+                       f"{dim_words(q.dim)}")
+            raise _Abort
+        return q.value
+
+    def string(self, expr: st.Group, env: Env, label: str, kind: StringKind) -> StringNode:
+        """A string element ((e1, ..., en), xi, T); the first item may be one element."""
+        head, xi, timer = expr.items
+        repeat = False
+        items: tuple[st.Expr, ...]
+        if isinstance(head, st.Group) and len(head.items) > 1 and \
+                self._head_kind(head.items[0], env) in ("atom", "scaled"):
+            # `((go(1 m/s), never, 5 s)..., x > 1 m, inf)`: a law or a number cannot be an
+            # element, so the tuple is one atom, not a string of three elements.
+            items, repeat = (dataclasses.replace(head, repeat=False),), head.repeat
+        elif isinstance(head, st.Group):
+            items, repeat = head.items, head.repeat
+        else:
+            items = (head,)
+        elements: list[Element] = []
+        failed = False
+        for item in items:
+            try:
+                elements.append(self.element(item, env))
+            except _Abort:
+                failed = True
+        try:
+            interrupt = self.interrupt(xi, env)
+        except _Abort:
+            failed = True
+        try:
+            t = self.timer(timer, env)
+        except _Abort:
+            failed = True
+        if failed:
+            raise _Abort
+        for i in range(len(elements) - 1):
+            if never_ends(elements[i]):
+                self.warn(items[i + 1].span,
+                          f"`{_short(items[i + 1])}` is never reached: `{_short(items[i])}` "
+                          "before it never ends (its interrupt is `never` and its timer `inf`)",
+                          hint="give the element before it an interrupt or a finite timer")
+                break
+        return StringNode(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
+
+    def instance(self, d: st.Definition, bound: Mapping[str, Value],
+                 call: Span | None = None) -> Element:
+        """The element a definition makes with these parameter values (cached)."""
+        key = ("element", d.name, _freeze(bound))
+        if key in self._cache:
+            return self._cache[key]  # type: ignore[no-any-return]
+        env = MappingProxyType(dict(bound))
+        if call is not None:
+            self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
+        try:
+            with self._nest(d.span):
+                result = self._definition_body(d, env)
+        finally:
+            if call is not None:
+                self._notes.pop()
+        self._cache[key] = result
+        return result
+
+    def _definition_body(self, d: st.Definition, env: Env) -> Element:
+        body = d.body
+        while isinstance(body, st.Group) and len(body.items) == 1 and not body.repeat:
+            body = body.items[0]
+        if d.kind is st.DefKind.ATOM:
+            e = self.element(body, env)
+            if not isinstance(e, AtomNode):
+                self.error(d.body.span, f"`{d.name}` is declared an atom but is a string of "
+                           "elements", hint=f"declare it with `behavior {d.name} = ...`")
+                raise _Abort
+            return dataclasses.replace(e, label=d.name, span=d.span)
+        kind = StringKind.PLAN if d.kind is st.DefKind.PLAN else StringKind.BEHAVIOR
+        if isinstance(body, st.Group) and len(body.items) == 3 and \
+                self._head_kind(body.items[0], env) == "string":
+            return self.string(body, env, d.name, kind)
+        e = self.element(body, env)  # reports what is wrong with the body, if anything
+        if isinstance(e, StringNode):
+            return dataclasses.replace(e, label=d.name, kind=kind, span=d.span)
+        self.error(d.body.span, f"`{d.name}` is declared a {d.kind.value} but is an atom: "
+                   f"a {d.kind.value} is ((elements), interrupt, timer)",
+                   hint=f"declare it with `atom {d.name} = ...`, or write "
+                        f"`(({_short(d.body)}), never, inf)`")
+        raise _Abort
+
+    # ------------------------------------------------------------------ whole programs
+
+    def check_definition(self, d: st.Definition) -> Element | None:
+        """Check a definition on its own; returns its element if it can run as it stands."""
+        if d.name in self.broken:
+            return None
+        slots = self.slots_of(d)
+        runnable = all(s.default is not REQUIRED for s in slots)
+        bound = {s.name: (_UNKNOWN if s.default is REQUIRED else s.default) for s in slots}
+        try:
+            if d.kind is st.DefKind.INTERRUPT:
+                self._interrupt_body(d, bound, None)
+                return None
+            e = self.instance(d, bound)
+        except _Abort:
+            return None
+        return e if runnable else None
+
+
+def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
+    return tuple(sorted((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare))
+                        for k, v in bound.items()))
+
+
+def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
+    return a.dim is None or b.dim is None or a.dim == b.dim
+
+
+def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
+    for side, t, other in ((expr.right, b, a), (expr.left, a, b)):
+        if isinstance(side, st.Number) and not side.unit and other.dim is not None:
+            unit = unit_for(other.dim)
+            if unit:
+                return f"add a unit: `{side.text} {unit}`"
+    return None
+
+
+def _short(expr: st.Expr) -> str:
+    text = format_expr(expr)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _after(expr: st.Group) -> Span:
+    s = expr.span
+    return Span(s.file, s.end_line, max(1, s.end_column - 1), s.end_line, s.end_column)
+
+
+def check_program(modules: Sequence[st.Module], registry: Registry, *,
+                  sources: Mapping[str, str] | None = None, main: st.Module | None = None,
+                  replace: bool = False) -> Program:
+    """Check the modules of a program (the main file last) and build its :class:`Program`.
+
+    Parameters
+    ----------
+    modules : sequence of Module
+        Every file of the program, imports first, each once.
+    registry : Registry
+        The control laws and sensor functions names resolve to.
+    sources : mapping, optional
+        File texts by name (kept in the program and the error, for messages).
+    main : Module, optional
+        The file whose ``run`` names the entry (default: the last module).
+    replace : bool
+        Later definitions replace earlier ones of the same name (the REPL).
+
+    Raises
+    ------
+    CheckError
+        With every error found (warnings are in ``Program.warnings``).
+    """
+    srcs = dict(sources or {})
+    checker, errors = _checker(modules, registry, replace)
+    main = main if main is not None else (modules[-1] if modules else None)
+    try:
+        elements: dict[str, Element] = {}
+        for d in checker.ns.definitions.values():
+            e = checker.check_definition(d)
+            if e is not None:
+                elements[d.name] = e
+        entry = _entry(checker, main, elements)
+    except RecursionError:  # a last guard: the nesting limits should prevent this
+        checker.error(None, "the program nests too deeply to check")
+        entry = None
+    errors.extend(checker.errors)
+    if errors:
+        raise CheckError(_ordered(errors), srcs)
+    return Program(MappingProxyType(elements), entry, MappingProxyType(srcs),
+                   tuple(_ordered(checker.warnings)))
+
+
+def _checker(modules: Sequence[st.Module], registry: Registry,
+             replace: bool) -> tuple[Checker, list[Diagnostic]]:
+    defs = [d for m in modules for d in m.definitions]
+    ns, errors = build_namespace(defs, registry, replace=replace)
+    broken, cycle_errors = find_cycles(ns)
+    checker = Checker(ns)
+    checker.broken = broken
+    return checker, errors + cycle_errors
+
+
+def _entry(checker: Checker, main: st.Module | None, elements: Mapping[str, Element]) -> str | None:
+    runs = [s for s in main.statements if isinstance(s, st.Run)] if main else []
+    if len(runs) > 1:
+        checker.error(runs[1].span, f"`run` is given twice: {runs[0].span} and {runs[1].span}",
+                      notes=(Diagnostic(runs[0].span, "first `run` here", Severity.NOTE),))
+    if not runs:
+        return "main" if "main" in elements else None
+    run = runs[-1]
+    target = checker.ns.lookup(run.name)
+    if isinstance(target, st.Definition) and target.kind is not st.DefKind.INTERRUPT:
+        if run.name in elements:
+            return run.name
+        missing = [s.name for s in checker.slots_of(target) if s.default is REQUIRED]
+        if missing:
+            checker.error(run.name_span, f"`{run.name}` cannot run as it stands: it needs "
+                          + ", ".join(f"`{m}`" for m in missing),
+                          hint="give those parameters defaults, or define a plan that calls "
+                               f"`{run.name}(...)` with arguments")
+        return None
+    if target is None:
+        pool = [n for n, d in checker.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
+        checker._unknown(run.name, run.name_span, "element", pool)
+    else:
+        checker.error(run.name_span, f"`run` takes an atom, behavior or plan; `{run.name}` is "
+                      f"{_kind_name(target)}")
+    return None
+
+
+def _ordered(diags: list[Diagnostic]) -> list[Diagnostic]:
+    return sorted(diags, key=lambda d: (d.span.file, d.span.line, d.span.column)
+                  if d.span else ("", 0, 0))

@@ -1,0 +1,196 @@
+"""Files to checked programs: reading, imports, and the whole check.
+
+``import "other.mdle"`` names a file relative to the importing file (relative to the
+current directory for text that comes from no file). Every file is read once however
+many files import it; an import cycle is an error naming the chain. Syntax errors of
+every file are reported together, then the check errors.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+from atoms.registry import Registry
+from mdle import syntax as st
+from mdle.compile import check_program
+from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
+from mdle.parser import parse_module
+from mdle.program import Program
+
+__all__ = ["load_program", "load_text", "load_modules", "read_source", "Loaded"]
+
+
+def read_source(path: str | os.PathLike[str], shown: str | None = None,
+                span: Span | None = None) -> str:
+    """The text of a plan file (UTF-8, an optional BOM dropped).
+
+    Raises
+    ------
+    MdleError
+        A CheckError if the file cannot be read, a MdleSyntaxError if it is not text.
+    """
+    name = shown if shown is not None else os.fspath(path)
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+    except FileNotFoundError:
+        raise CheckError(Diagnostic(span, f"cannot read `{name}`: no such file")) from None
+    except IsADirectoryError:
+        raise CheckError(Diagnostic(span, f"cannot read `{name}`: it is a directory")) from None
+    except OSError as err:
+        raise CheckError(Diagnostic(span, f"cannot read `{name}`: {err.strerror or err}")) from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = data[:err.start].count(b"\n") + 1
+        col = err.start - (data.rfind(b"\n", 0, err.start) + 1) + 1
+        raise MdleSyntaxError(Diagnostic(
+            Span(name, line, col, line, col + 1),
+            f"`{name}` is not UTF-8 text (byte 0x{data[err.start]:02x} at offset {err.start})",
+            hint="MDLe plans are plain text files; is this a binary file?")) from None
+
+
+@dataclass(frozen=True)
+class Loaded:
+    """The files of a program: modules in dependency order (imports first), their texts."""
+
+    modules: tuple[st.Module, ...]
+    sources: dict[str, str]
+    main: st.Module | None
+
+
+def _imports(module: st.Module) -> Iterator[st.Import]:
+    return (s for s in module.statements if isinstance(s, st.Import))
+
+
+def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
+    """Parse a text and every file it imports, transitively.
+
+    Raises
+    ------
+    MdleError
+        With the diagnostics of every file (syntax errors, missing files, import cycles).
+    """
+    sources: dict[str, str] = {file: text}
+    diagnostics: list[Diagnostic] = []
+    syntax_failed = False
+
+    def parse(src: str, name: str) -> st.Module | None:
+        nonlocal syntax_failed
+        try:
+            return parse_module(src, name)
+        except MdleError as err:
+            syntax_failed = syntax_failed or isinstance(err, MdleSyntaxError)
+            diagnostics.extend(err.diagnostics)
+            return None
+
+    root_dir = base_dir if base_dir is not None else (
+        os.path.dirname(os.path.abspath(file)) if not file.startswith("<") else os.getcwd())
+    main = parse(text, file)
+    order: list[st.Module] = []
+    if main is None:
+        raise _error(diagnostics, sources, syntax_failed)
+    root_key = os.path.realpath(file) if not file.startswith("<") else file
+    state: dict[str, int] = {root_key: 1}  # 1: being loaded (on the path), 2: done
+    path: list[tuple[str, str]] = [(root_key, file)]
+    stack: list[tuple[st.Module, str, Iterator[st.Import]]] = [(main, root_dir, _imports(main))]
+    while stack:
+        module, folder, todo = stack[-1]
+        imp = next(todo, None)
+        if imp is None:
+            stack.pop()
+            key, _ = path.pop()
+            state[key] = 2
+            order.append(module)
+            continue
+        target = os.path.join(folder, imp.path)
+        key = os.path.realpath(target)
+        shown = os.path.normpath(os.path.join(os.path.dirname(module.file), imp.path)) \
+            if not module.file.startswith("<") else os.path.normpath(imp.path)
+        if state.get(key) == 1:
+            chain = [s for k, s in path[[k for k, _ in path].index(key):]] + [shown]
+            diagnostics.append(Diagnostic(imp.span, "import cycle: " + " \u2192 ".join(chain),
+                                          hint="move the shared definitions into a file that "
+                                               "both import"))
+            continue
+        if state.get(key) == 2:
+            continue
+        if not imp.path:
+            diagnostics.append(Diagnostic(imp.span, "`import` needs a file name"))
+            continue
+        try:
+            src = read_source(target, shown, imp.span)
+        except MdleError as err:
+            diags = err.diagnostics
+            if diags and diags[0].span is imp.span:
+                diags = (Diagnostic(imp.span, diags[0].message.replace(
+                    f"cannot read `{shown}`", f"cannot import `{imp.path}`"),
+                    hint=f"looked for {os.path.abspath(target)} (imports are relative to the "
+                         "importing file)"),)
+            syntax_failed = syntax_failed or isinstance(err, MdleSyntaxError)
+            diagnostics.extend(diags)
+            state[key] = 2
+            continue
+        sources[shown] = src
+        sub = parse(src, shown)
+        if sub is None:
+            state[key] = 2
+            continue
+        state[key] = 1
+        path.append((key, shown))
+        stack.append((sub, os.path.dirname(target), _imports(sub)))
+    if diagnostics:
+        raise _error(diagnostics, sources, syntax_failed)
+    return Loaded(tuple(order), sources, main)
+
+
+def _error(diags: list[Diagnostic], sources: dict[str, str], syntax: bool) -> MdleError:
+    cls = MdleSyntaxError if syntax else CheckError
+    return cls(diags, sources)
+
+
+def load_text(text: str, file: str = "<string>", registry: Registry | None = None) -> Program:
+    """Parse and check a program given as text.
+
+    Parameters
+    ----------
+    text : str
+        The program.
+    file : str
+        The name messages show; imports are relative to its folder (to the current
+        directory for names such as ``<string>``).
+    registry : Registry, optional
+        Control laws and sensor functions; ``atoms.default_registry()`` when None.
+
+    Raises
+    ------
+    MdleError
+        MdleSyntaxError or CheckError, with ``.sources`` filled.
+    """
+    if registry is None:
+        from atoms import default_registry
+
+        registry = default_registry()
+    loaded = load_modules(text, file)
+    return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main)
+
+
+def load_program(path: str | os.PathLike[str], registry: Registry | None = None) -> Program:
+    """Read, parse, resolve imports and check a plan file.
+
+    ``registry=None`` means ``atoms.default_registry()``.
+
+    Raises
+    ------
+    MdleError
+        MdleSyntaxError or CheckError (with ``.sources`` filled) on any error.
+    """
+    name = os.fspath(path)
+    text = read_source(name)
+    try:
+        return load_text(text, name, registry)
+    except RecursionError:  # a last guard; the nesting limits should make it unreachable
+        raise CheckError(Diagnostic(Span(name, 1, 1, 1, 2), "the program nests too deeply",
+                                    Severity.ERROR), {name: text}) from None

@@ -1,0 +1,592 @@
+"""Text to syntax tree: the lark LALR parser of ``grammar/mdle.lark``.
+
+The grammar is read once through :mod:`importlib.resources` (it ships inside the
+package as ``mdle.grammar``), and the analysed parser is cached in a per-user file
+(``$XDG_CACHE_HOME/mdle``, else ``~/.cache/mdle``), so ``mdle check`` does not rebuild
+the LALR tables at every start. The tree is built during parsing by lark's LALR
+callbacks (no recursion, so 1 MB of parentheses cannot exhaust the stack); a nesting
+limit of :data:`MAX_DEPTH` keeps the later recursive stages safe.
+
+Syntax errors become :class:`~mdle.errors.MdleSyntaxError` with file, line, column,
+the source line, a caret, what was expected in words and a hint; after an error the
+parser resynchronises at the next line that starts with a statement keyword, so
+several errors in one file are reported together.
+"""
+
+from __future__ import annotations
+
+import contextvars
+import difflib
+import functools
+import hashlib
+import importlib.resources
+import math
+import os
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from lark import Lark, Token, Transformer, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from mdle import syntax as st
+from mdle.errors import Diagnostic, MdleSyntaxError, Severity, Span
+from mdle.syntax_errors import (
+    EXAMPLES,
+    KEYWORDS,
+    Label,
+    character_hint,
+    describe_expected,
+    describe_token,
+)
+from mdle.units import NONE, UNITS, unit_value
+
+__all__ = ["parse_module", "parse_expression", "MAX_DEPTH", "MAX_ERRORS", "lark_parser"]
+
+#: Deepest nesting of parentheses and operators accepted in one expression.
+MAX_DEPTH = 100
+#: Syntax errors reported per file before giving up.
+MAX_ERRORS = 20
+
+_NUMBER = re.compile(r"((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)[ \t]*(.*)", re.S)
+_STATEMENT_LINE = re.compile(r"^[ \t]*(?:import|run|atom|behavior|plan|interrupt)(?![A-Za-z0-9_])",
+                             re.M)
+
+
+# --------------------------------------------------------------------------------------
+# Building the parser (once per process; the analysed tables are cached on disk)
+
+
+def _cache_file(grammar: str) -> str | None:
+    """A per-user cache file for the analysed grammar, or None if there is nowhere to write."""
+    import lark
+
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    key = hashlib.sha256(f"{grammar}{lark.__version__}".encode()).hexdigest()[:16]
+    folder = Path(base) / "mdle"
+    try:
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        if not os.access(folder, os.W_OK):
+            return None
+    except OSError:
+        return None
+    return str(folder / f"grammar-{key}.lark-cache")
+
+
+@functools.lru_cache(maxsize=1)
+def lark_parser() -> Lark:
+    """The LALR parser of ``mdle.lark``, built once per process (tables cached per user)."""
+    grammar = importlib.resources.files("mdle.grammar").joinpath("mdle.lark").read_text("utf-8")
+    options: dict[str, Any] = dict(parser="lalr", lexer="contextual", propagate_positions=True,
+                                   start=["start", "expr_start"], maybe_placeholders=True,
+                                   transformer=_Build(),
+                                   lexer_callbacks={"COMMENT": _on_comment, "LPAR": _on_open,
+                                                    "LSQB": _on_open, "RPAR": _on_close,
+                                                    "RSQB": _on_close})
+    cache = _cache_file(grammar)
+    try:
+        return Lark(grammar, cache=cache or False, **options)
+    except OSError:  # an unreadable or unwritable cache: build without it
+        return Lark(grammar, **options)
+
+
+# --------------------------------------------------------------------------------------
+# Per-parse state (file name, comments, unit errors, nesting depth), scoped to one call
+
+
+@dataclass
+class _State:
+    file: str
+    comments: list[st.Comment] = field(default_factory=list)
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    depth: dict[int, int] = field(default_factory=dict)
+    open_brackets: int = 0
+
+
+_STATE: contextvars.ContextVar[_State] = contextvars.ContextVar("mdle_parse_state")
+
+
+class _TooDeep(Exception):
+    def __init__(self, span: Span) -> None:
+        super().__init__("too deep")
+        self.span = span
+
+
+def _on_comment(token: Token) -> None:
+    state = _STATE.get(None)
+    if state is not None:
+        state.comments.append(st.Comment(str(token), _token_span(state.file, token)))
+
+
+def _on_open(token: Token) -> Token:
+    # Refuse deep nesting as soon as it is lexed: 1 MB of `(` fails in microseconds.
+    state = _STATE.get(None)
+    if state is not None:
+        state.open_brackets += 1
+        if state.open_brackets > MAX_DEPTH:
+            raise _TooDeep(_token_span(state.file, token))
+    return token
+
+
+def _on_close(token: Token) -> Token:
+    state = _STATE.get(None)
+    if state is not None and state.open_brackets > 0:
+        state.open_brackets -= 1
+    return token
+
+
+def _token_span(file: str, tok: Token) -> Span:
+    return Span(file, tok.line or 0, tok.column or 0, tok.end_line or 0, tok.end_column or 0)
+
+
+def _start(file: str, part: Any) -> tuple[int, int]:
+    if isinstance(part, Token):
+        return part.line or 0, part.column or 0
+    span = part.span
+    return span.line, span.column
+
+
+def _end(file: str, part: Any) -> tuple[int, int]:
+    if isinstance(part, Token):
+        return part.end_line or 0, part.end_column or 0
+    span = part.span
+    return span.end_line, span.end_column
+
+
+def _over(file: str, first: Any, last: Any) -> Span:
+    """The span from the start of ``first`` to the end of ``last`` (tokens or nodes)."""
+    line, col = _start(file, first)
+    end_line, end_col = _end(file, last)
+    return Span(file, line, col, end_line, end_col)
+
+
+# --------------------------------------------------------------------------------------
+# The tree builder: lark LALR callbacks, one per rule alias, called as rules reduce
+
+
+def _deeper(state: _State, node: Any, parts: Any) -> Any:
+    depth = 1 + max((state.depth.get(id(p), 1) for p in parts), default=0)
+    if depth > MAX_DEPTH:
+        raise _TooDeep(node.span)
+    if depth > 1:
+        state.depth[id(node)] = depth
+    return node
+
+
+@v_args(inline=True)
+class _Build(Transformer):  # type: ignore[type-arg]
+    """Builds :mod:`mdle.syntax` nodes as the LALR parser reduces each rule."""
+
+    def start(self, *statements: st.Statement) -> tuple[st.Statement, ...]:
+        return statements
+
+    def expr_start(self, expr: st.Expr) -> st.Expr:
+        return expr
+
+    def import_stmt(self, kw: Token, path: Token) -> st.Import:
+        return st.Import(str(path)[1:-1], _over(_STATE.get().file, kw, path))
+
+    def run_stmt(self, kw: Token, name: Token) -> st.Run:
+        file = _STATE.get().file
+        _not_keyword(name)
+        return st.Run(str(name), _over(file, kw, name), _token_span(file, name))
+
+    def definition(self, kw: Token, name: Token, params: list[st.Param] | None,
+                   body: st.Expr) -> st.Definition:
+        file = _STATE.get().file
+        _not_keyword(name)
+        return st.Definition(st.DefKind(str(kw)), str(name),
+                             None if params is None else tuple(params[1:-1]), body,
+                             _over(file, kw, body), _token_span(file, name))
+
+    def params(self, *parts: Any) -> list[Any]:
+        return list(parts)  # (LPAR, params..., RPAR): the brackets are dropped by `definition`
+
+    def param(self, name: Token, default: st.Expr | None = None) -> st.Param:
+        file = _STATE.get().file
+        _not_keyword(name)
+        return st.Param(str(name), default, _over(file, name, default if default else name))
+
+    def number(self, tok: Token) -> st.Number:
+        state = _STATE.get()
+        span = _token_span(state.file, tok)
+        m = _NUMBER.fullmatch(str(tok))
+        assert m is not None  # the token's own pattern guarantees the shape
+        text, unit = m.group(1), re.sub(r"[ \t]", "", m.group(2))
+        value = float(text)
+        if not math.isfinite(value):
+            state.diagnostics.append(Diagnostic(span, f"the number `{text}` is too large"))
+            return st.Number(0.0, NONE, text, unit, span)
+        if not unit:
+            return st.Number(value, NONE, text, "", span)
+        try:
+            factor, dim = unit_value(unit)
+        except KeyError:
+            state.diagnostics.append(_unknown_unit(unit, span))
+            return st.Number(value, NONE, text, unit, span)
+        return st.Number(value * factor, dim, text, unit, span)
+
+    def name(self, tok: Token) -> st.Name:
+        _not_keyword(tok)
+        return st.Name(str(tok), _token_span(_STATE.get().file, tok))
+
+    def never(self, tok: Token) -> st.Never:
+        return st.Never(_token_span(_STATE.get().file, tok))
+
+    def inf(self, tok: Token) -> st.Inf:
+        return st.Inf(_token_span(_STATE.get().file, tok))
+
+    def call(self, name: Token, lpar: Token, args: list[st.Argument] | None,
+             rpar: Token) -> st.Call:
+        state = _STATE.get()
+        _not_keyword(name)
+        args = args or []
+        node = st.Call(str(name), tuple(args), _over(state.file, name, rpar),
+                       _token_span(state.file, name))
+        return _deeper(state, node, [a.value for a in args])
+
+    def arguments(self, *args: Any) -> list[st.Argument]:
+        return [a if isinstance(a, st.Argument) else st.Argument(None, a, a.span) for a in args]
+
+    def keyword(self, name: Token, value: st.Expr) -> st.Argument:
+        _not_keyword(name)
+        return st.Argument(str(name), value, _over(_STATE.get().file, name, value))
+
+    def unary(self, op: Token, operand: st.Expr) -> st.Unary:
+        state = _STATE.get()
+        return _deeper(state, st.Unary(str(op), operand, _over(state.file, op, operand)),
+                       (operand,))
+
+    def binary(self, left: st.Expr, op: Token, right: st.Expr) -> st.Binary:
+        state = _STATE.get()
+        node = st.Binary(str(op), left, right, _over(state.file, left, right),
+                         _token_span(state.file, op))
+        return _deeper(state, node, (left, right))
+
+    def group(self, lpar: Token, *parts: Any) -> st.Group:
+        state = _STATE.get()
+        *items, rpar, ellipsis = parts
+        node = st.Group(tuple(items), ellipsis is not None,
+                        _over(state.file, lpar, ellipsis if ellipsis is not None else rpar))
+        return _deeper(state, node, items)
+
+    def vector(self, lsqb: Token, *parts: Any) -> st.Vector:
+        state = _STATE.get()
+        *items, rsqb = parts
+        return _deeper(state, st.Vector(tuple(items), _over(state.file, lsqb, rsqb)), items)
+
+
+def _not_keyword(tok: Token) -> None:
+    # The contextual lexer reads a keyword as a NAME where only a name can stand
+    # (`atom run = ...`); keywords stay reserved everywhere.
+    word = str(tok)
+    if word in KEYWORDS:
+        state = _STATE.get()
+        state.diagnostics.append(Diagnostic(
+            _token_span(state.file, tok), f"`{word}` is a keyword of MDLe and cannot be used as a name",
+            hint=f"pick another name, such as `{word}_1`"))
+
+
+def _unknown_unit(unit: str, span: Span) -> Diagnostic:
+    known = sorted(UNITS)
+    parts = unit.split("/")
+    bad = next((p for p in parts if p not in UNITS), unit)
+    close = difflib.get_close_matches(bad, known, n=1)
+    hint = (f"did you mean `{close[0]}`? " if close else "") + \
+        f"units are {', '.join(known)} and quotients such as m/s, deg/s"
+    if bad in ("x", "y", "v", "t") or len(parts) == 1 and bad not in UNITS and not close:
+        hint += "; to multiply, write `*`"
+    return Diagnostic(span, f"unknown unit `{bad}`", hint=hint)
+
+
+# --------------------------------------------------------------------------------------
+# Public entry points
+
+
+def parse_module(text: str, file: str = "<string>") -> st.Module:
+    """Parse a whole file of MDLe.
+
+    Parameters
+    ----------
+    text : str
+        The source text.
+    file : str
+        The name diagnostics show (the path as the user wrote it).
+
+    Returns
+    -------
+    Module
+        The statements in order, with the comments (for the formatter).
+
+    Raises
+    ------
+    MdleSyntaxError
+        Every syntax error found (up to :data:`MAX_ERRORS`), and every unknown unit.
+    """
+    statements, comments, diagnostics = _parse_with_recovery(text, file)
+    if diagnostics:
+        raise MdleSyntaxError(_sorted(diagnostics), {file: text})
+    return st.Module(file, tuple(statements), tuple(comments))
+
+
+def parse_expression(text: str, file: str = "<repl>") -> st.Expr:
+    """Parse one expression: a bare element such as ``cruise`` or ``(go(1 m/s), never, 2 s)``.
+
+    Raises
+    ------
+    MdleSyntaxError
+        If the text is not one expression.
+    """
+    state = _State(file)
+    token = _STATE.set(state)
+    try:
+        expr = lark_parser().parse(text, start="expr_start")
+    except UnexpectedInput as err:
+        raise MdleSyntaxError(_describe(err, text, file, "expr_start"), {file: text}) from None
+    except _TooDeep as err:
+        raise MdleSyntaxError(_too_deep(err.span), {file: text}) from None
+    finally:
+        _STATE.reset(token)
+    if state.diagnostics:
+        raise MdleSyntaxError(_sorted(state.diagnostics), {file: text})
+    return expr  # type: ignore[no-any-return]
+
+
+def _sorted(diags: list[Diagnostic]) -> list[Diagnostic]:
+    seen: set[tuple[Any, str]] = set()
+    out = []
+    for d in sorted(diags, key=lambda d: (d.span.line, d.span.column) if d.span else (0, 0)):
+        key = (d.span, d.message)
+        if key not in seen:
+            seen.add(key)
+            out.append(d)
+    return out
+
+
+def _too_deep(span: Span) -> Diagnostic:
+    return Diagnostic(span, f"this nests more than {MAX_DEPTH} levels deep",
+                      hint="split it into named definitions")
+
+
+def _parse_with_recovery(text: str, file: str
+                         ) -> tuple[list[st.Statement], list[st.Comment], list[Diagnostic]]:
+    """Parse; after a syntax error, blank out what came before and resume at the next
+    line that starts with a statement keyword (positions stay exact)."""
+    parser = lark_parser()
+    diagnostics: list[Diagnostic] = []
+    comments: list[st.Comment] = []
+    statements: list[st.Statement] = []
+    source = text
+    errors = 0
+    while True:
+        state = _State(file)
+        token = _STATE.set(state)
+        resume_at: int | None = None
+        try:
+            statements = list(parser.parse(source, start="start"))
+        except UnexpectedInput as err:
+            diagnostics.append(_describe(err, text, file, "start", source))
+            errors += 1
+            resume_at = _resume_offset(source, err)
+        except _TooDeep as err:
+            diagnostics.append(_too_deep(err.span))
+            errors += 1
+            resume_at = _resume_offset(source, None, err.span)
+        finally:
+            _STATE.reset(token)
+        comments.extend(state.comments)
+        diagnostics.extend(state.diagnostics)
+        if resume_at is None or errors >= MAX_ERRORS:
+            break
+        # Keep newlines so every later line and column is where it was.
+        source = re.sub(r"[^\n]", " ", text[:resume_at]) + text[resume_at:]
+    if diagnostics:
+        statements = []
+    comments.sort(key=lambda c: (c.span.line, c.span.column))
+    unique = {(c.span.line, c.span.column): c for c in comments}
+    return statements, list(unique.values()), diagnostics
+
+
+def _error_offset(source: str, err: UnexpectedInput | None, span: Span | None) -> int:
+    if err is not None:
+        if isinstance(err, UnexpectedEOF):
+            return len(source)
+        if isinstance(err, UnexpectedToken) and err.token.type == "$END":
+            return len(source)
+        pos = getattr(err, "pos_in_stream", None)
+        if pos is None and isinstance(err, UnexpectedToken):
+            pos = err.token.start_pos
+        return int(pos) if pos is not None and pos >= 0 else len(source)
+    assert span is not None
+    return _offset_of(source, span.end_line, span.end_column)
+
+
+def _offset_of(text: str, line: int, column: int) -> int:
+    offset = 0
+    for _ in range(line - 1):
+        nl = text.find("\n", offset)
+        if nl < 0:
+            return len(text)
+        offset = nl + 1
+    return min(len(text), offset + column - 1)
+
+
+def _resume_offset(source: str, err: UnexpectedInput | None, span: Span | None = None) -> int | None:
+    at = _error_offset(source, err, span)
+    line_end = source.find("\n", at)
+    if line_end < 0:
+        return None
+    m = _STATEMENT_LINE.search(source, line_end)
+    return m.start() if m else None
+
+
+# --------------------------------------------------------------------------------------
+# Syntax errors in words
+
+
+def _example_parse(start: str) -> Any:
+    def parse(snippet: str) -> Any:
+        token = _STATE.set(_State("<example>"))
+        try:
+            return lark_parser().parse(snippet, start=start)
+        finally:
+            _STATE.reset(token)
+    return parse
+
+
+def _end_span(text: str, file: str) -> Span:
+    lines = text.split("\n")
+    # Point just after the last non-blank character.
+    for i in range(len(lines) - 1, -1, -1):
+        if lines[i].strip():
+            col = len(lines[i].rstrip()) + 1
+            return Span(file, i + 1, col, i + 1, col + 1)
+    return Span(file, 1, 1, 1, 2)
+
+
+def _unclosed(text: str, file: str) -> Span | None:
+    """Where the innermost `(` or `[` still open at the end of the text was opened."""
+    stack: list[Token] = []
+    try:
+        for tok in lark_parser().lex(text, dont_ignore=False):
+            if tok.type in ("LPAR", "LSQB"):
+                stack.append(tok)
+            elif tok.type in ("RPAR", "RSQB") and stack:
+                stack.pop()
+    except UnexpectedInput:
+        return None
+    return _token_span(file, stack[-1]) if stack else None
+
+
+def _describe(err: UnexpectedInput, text: str, file: str, start: str,
+              source: str | None = None) -> Diagnostic:
+    """Turn a lark error into a diagnostic: where, what, what was expected, a hint."""
+    source = text if source is None else source
+    if isinstance(err, UnexpectedCharacters):
+        span = Span(file, err.line, err.column, err.line, err.column + 1)
+        char = source[err.pos_in_stream] if 0 <= err.pos_in_stream < len(source) else ""
+        what, hint = character_hint(char)
+        if char == '"':
+            return Diagnostic(span, "unterminated file name: the closing `\"` is missing on this "
+                              "line", hint=hint)
+        return Diagnostic(span, f"unexpected {what}", hint=hint)
+
+    at_end = isinstance(err, UnexpectedEOF) or (
+        isinstance(err, UnexpectedToken) and err.token.type == "$END")
+    if at_end:
+        span = _end_span(source, file)
+        found = "the end of the file"
+    else:
+        tok = err.token  # type: ignore[attr-defined]
+        span = _token_span(file, tok)
+        found = describe_token(tok.type, str(tok))
+    expected = set(getattr(err, "expected", None) or getattr(err, "accepts", None) or ())
+    if isinstance(err, UnexpectedToken) and err.accepts:
+        expected = set(err.accepts)
+    expected.discard("$END") if not at_end else None
+
+    # A keyword where a name was expected: say so directly.
+    if not at_end and "NAME" in expected and str(err.token) in KEYWORDS:  # type: ignore[attr-defined]
+        word = str(err.token)  # type: ignore[attr-defined]
+        return Diagnostic(span, f"`{word}` is a keyword of MDLe and cannot be used as a name",
+                          hint=f"pick another name, such as `{word}_1`")
+
+    label = _label(err, source, start)
+    notes: tuple[Diagnostic, ...] = ()
+    if at_end:
+        opened = _unclosed(source, file)
+        if opened is not None:
+            notes = (Diagnostic(opened, "this `(` is not closed", Severity.NOTE),)
+            label = label if label is not None and "parenthes" in label.message else Label(
+                "unbalanced parentheses: the file ends before a `(` is closed",
+                "add the missing `)`")
+    expected_words = describe_expected(expected)
+    if label is not None:
+        message = f"{label.message} (found {found})"
+        hint = label.hint or f"expected {expected_words}"
+    else:
+        message = "unexpected end of the file" if at_end else f"unexpected {found}"
+        hint = f"expected {expected_words}"
+    if found.startswith("the name") and "NAME" not in expected:
+        close = _close_keyword(str(err.token), expected)  # type: ignore[attr-defined]
+        if close:
+            hint = f"did you mean `{close}`?"
+    return Diagnostic(span, message, hint=hint, notes=notes)
+
+
+def _label(err: UnexpectedInput, source: str, start: str) -> Label | None:
+    """The label of the bad snippet that fails like this error, if any.
+
+    lark compares parser states including the stack depth, and the examples are lone
+    statements; so the failing statement is parsed again alone (what precedes it
+    blanked out) and that error is matched. An expression (REPL) is matched as the
+    body of a definition.
+    """
+    probe: UnexpectedInput | None = err
+    if start == "expr_start":
+        probe = _fail(_example_parse("start"), "atom a = " + source)
+    else:
+        stack = getattr(getattr(err, "state", None), "value_stack", None) or []
+        first = next((i for i, v in enumerate(stack) if isinstance(v, Token)
+                      and v.type in ("ATOM", "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN")),
+                     None)
+        if first is not None and first > 0 and stack[first].start_pos is not None:
+            at = stack[first].start_pos
+            probe = _fail(_example_parse("start"), re.sub(r"[^\n]", " ", source[:at]) + source[at:])
+    if probe is None or getattr(probe, "state", None) is None:
+        return None
+    try:
+        return probe.match_examples(_example_parse("start"), EXAMPLES,  # type: ignore[no-any-return]
+                                    token_type_match_fallback=True)
+    except Exception:  # matching is a nicety; never let it hide the real error
+        return None
+
+
+def _fail(parse: Any, text: str) -> UnexpectedInput | None:
+    try:
+        parse(text)
+    except UnexpectedInput as err:
+        return err
+    except _TooDeep:
+        return None
+    return None
+
+
+def _close_keyword(word: str, expected: set[str]) -> str | None:
+    candidates = [t.lower() for t in expected if t.lower() in KEYWORDS]
+    match = difflib.get_close_matches(word, candidates, n=1, cutoff=0.7)
+    return match[0] if match else None
+
+
+def iter_tokens(text: str) -> Iterator[Token]:
+    """The tokens of a text (comments and whitespace skipped); stops at the first bad character."""
+    token = _STATE.set(_State("<lex>"))
+    try:
+        yield from lark_parser().lex(text, dont_ignore=False)
+    except UnexpectedInput:
+        return
+    finally:
+        _STATE.reset(token)
+

@@ -1,0 +1,121 @@
+"""Names: the one namespace of a program, clashes, and recursive definitions.
+
+Every file of a program (the main file and its imports) shares one namespace. A name
+defined twice is an error naming both places; a definition may not take the name of a
+control law or sensor function, nor be defined in terms of itself (directly or
+through others). The walks here use explicit stacks, so a 10,000-definition chain
+cannot exhaust Python's recursion limit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+from atoms.registry import LawSpec, Registry, SensorSpec
+from mdle import syntax as st
+from mdle.errors import Diagnostic, Severity
+
+__all__ = ["Namespace", "build_namespace", "references", "find_cycles"]
+
+
+@dataclass(frozen=True)
+class Namespace:
+    """Definitions by name, over the registry of control laws and sensor functions."""
+
+    definitions: Mapping[str, st.Definition]
+    registry: Registry
+
+    def lookup(self, name: str) -> st.Definition | LawSpec | SensorSpec | None:
+        """What a name refers to: a definition, a control law, a sensor function or nothing."""
+        found = self.definitions.get(name)
+        if found is not None:
+            return found
+        return self.registry.laws.get(name) or self.registry.sensors.get(name)
+
+    def names(self) -> list[str]:
+        """Every name a plan may use: definitions, control laws, sensor functions."""
+        return sorted({*self.definitions, *self.registry.laws, *self.registry.sensors})
+
+
+def build_namespace(definitions: Iterable[st.Definition], registry: Registry, *,
+                    replace: bool = False) -> tuple[Namespace, list[Diagnostic]]:
+    """Gather definitions into one namespace.
+
+    With ``replace`` (the REPL), a later definition replaces an earlier one of the same
+    name; otherwise that is an error naming both places.
+    """
+    defs: dict[str, st.Definition] = {}
+    errors: list[Diagnostic] = []
+    for d in definitions:
+        kind = ("control law" if d.name in registry.laws else
+                "sensor function" if d.name in registry.sensors else None)
+        if kind is not None:
+            errors.append(Diagnostic(
+                d.name_span, f"`{d.name}` is already a {kind}; a definition cannot take its name",
+                hint=f"pick another name, such as `my_{d.name}`"))
+            continue
+        prior = defs.get(d.name)
+        if prior is not None and not replace:
+            if prior is d:
+                continue  # the same file reached twice through imports
+            errors.append(Diagnostic(
+                d.name_span,
+                f"`{d.name}` is defined twice: {prior.name_span} and {d.name_span}",
+                notes=(Diagnostic(prior.name_span, f"`{d.name}` is first defined here",
+                                  Severity.NOTE),)))
+            continue
+        defs[d.name] = d
+    return Namespace(MappingProxyType(defs), registry), errors
+
+
+def references(definition: st.Definition, names: Mapping[str, st.Definition]) -> list[st.Name | st.Call]:
+    """The uses of other definitions in a definition's body and defaults (parameters shadow)."""
+    shadow = {p.name for p in definition.param_list}
+    found: list[st.Name | st.Call] = []
+    stack: list[st.Expr] = [definition.body]
+    stack.extend(p.default for p in definition.param_list if p.default is not None)
+    while stack:
+        e = stack.pop()
+        if isinstance(e, (st.Name, st.Call)) and e.name in names and e.name not in shadow:
+            found.append(e)
+        stack.extend(st.children(e))
+    return found
+
+
+def find_cycles(ns: Namespace) -> tuple[set[str], list[Diagnostic]]:
+    """Definitions defined in terms of themselves; one error per cycle, at each member."""
+    defs = ns.definitions
+    edges = {name: [(r.name, r) for r in references(d, defs)] for name, d in defs.items()}
+    color: dict[str, int] = {}  # 1: on the current path, 2: done
+    in_cycle: set[str] = set()
+    errors: list[Diagnostic] = []
+    for root in defs:
+        if color.get(root):
+            continue
+        path: list[str] = [root]
+        iters = [iter(edges[root])]
+        color[root] = 1
+        while iters:
+            nxt = next(iters[-1], None)
+            if nxt is None:
+                color[path.pop()] = 2
+                iters.pop()
+                continue
+            target, use = nxt
+            c = color.get(target)
+            if c == 1:
+                cycle = path[path.index(target):] + [target]
+                if not set(cycle[:-1]) & in_cycle:
+                    route = " \u2192 ".join(cycle)
+                    errors.append(Diagnostic(
+                        use.span, f"`{target}` is defined in terms of itself: {route}",
+                        hint="MDLe elements cannot contain themselves; to repeat a string, "
+                             "write `...` after it, as in `((a, b)..., never, inf)`"))
+                in_cycle.update(cycle)
+            elif c is None:
+                color[target] = 1
+                path.append(target)
+                iters.append(iter(edges[target]))
+    return in_cycle, errors

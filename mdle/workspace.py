@@ -1,0 +1,166 @@
+"""The REPL's incremental view of a program: definitions added one input at a time.
+
+A :class:`Workspace` holds every definition entered so far (and those of loaded
+files). Unlike a file, it lets a later definition replace an earlier one of the same
+name, so a user can fix ``cruise`` and carry on. Every change is checked as a whole
+before it is kept: on an error the workspace is left exactly as it was.
+"""
+
+from __future__ import annotations
+
+import os
+
+from atoms.registry import Registry
+from mdle import syntax as st
+from mdle.compile import _Abort, _checker, check_program
+from mdle.errors import CheckError, Diagnostic
+from mdle.format import format_statement
+from mdle.loader import load_modules, read_source
+from mdle.parser import iter_tokens, parse_expression
+from mdle.program import Element, Program
+from mdle.resolve import build_namespace
+
+__all__ = ["Workspace"]
+
+_CONTINUES = {"_EQUALS", "COMPARE", "ADD_OP", "MUL_OP", "AND", "OR", "XOR", "NOT", "ATOM",
+              "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN"}
+
+
+class Workspace:
+    """Definitions entered so far, checked together.
+
+    Parameters
+    ----------
+    registry : Registry, optional
+        Control laws and sensor functions; ``atoms.default_registry()`` when None.
+    """
+
+    def __init__(self, registry: Registry | None = None) -> None:
+        if registry is None:
+            from atoms import default_registry
+
+            registry = default_registry()
+        self.registry = registry
+        self._defs: dict[str, st.Definition] = {}
+        self._sources: dict[str, str] = {}
+        self._entry: str | None = None
+        self._warnings: tuple[Diagnostic, ...] = ()
+
+    # ------------------------------------------------------------------ changes
+
+    def define(self, text: str, file: str = "<repl>") -> tuple[Diagnostic, ...]:
+        """Add (or replace) the definitions in ``text``; imports are relative to the current
+        directory. Returns the new warnings.
+
+        Raises
+        ------
+        MdleError
+            On any error; the workspace is then unchanged.
+        """
+        loaded = load_modules(text, file, base_dir=os.getcwd())
+        return self._merge(loaded.modules, dict(loaded.sources), loaded.main)
+
+    def load(self, path: str | os.PathLike[str]) -> tuple[Diagnostic, ...]:
+        """Add the definitions of a file and its imports; returns the new warnings.
+
+        Raises
+        ------
+        MdleError
+            On any error; the workspace is then unchanged.
+        """
+        name = os.fspath(path)
+        loaded = load_modules(read_source(name), name)
+        return self._merge(loaded.modules, loaded.sources, loaded.main)
+
+    def _merge(self, modules: tuple[st.Module, ...], sources: dict[str, str],
+               main: st.Module | None) -> tuple[Diagnostic, ...]:
+        # Within one input, the rules of a file hold (a name defined twice is an error).
+        fresh = [d for m in modules for d in m.definitions]
+        _, clashes = build_namespace(fresh, self.registry)
+        all_sources = {**self._sources, **sources}
+        if clashes:
+            raise CheckError(clashes, all_sources)
+        defs = dict(self._defs)
+        for d in fresh:
+            defs.pop(d.name, None)
+            defs[d.name] = d
+        runs = [s for s in (main.statements if main else ()) if isinstance(s, st.Run)]
+        entry_module = st.Module("<workspace>", (*defs.values(), *runs[-1:]))
+        program = check_program([entry_module], self.registry, sources=all_sources)
+        if runs:
+            self._entry = program.entry
+        old = {(w.span, w.message) for w in self._warnings}
+        self._defs, self._sources, self._warnings = defs, all_sources, program.warnings
+        return tuple(w for w in program.warnings if (w.span, w.message) not in old)
+
+    # ------------------------------------------------------------------ queries
+
+    def element(self, text: str) -> Element:
+        """Compile a bare element (``cruise``, ``(go(0.3 m/s), stalled, 10 s)``, ``patrol``).
+
+        Raises
+        ------
+        MdleError
+            MdleSyntaxError or CheckError.
+        """
+        expr = parse_expression(text, "<repl>")
+        sources = {**self._sources, "<repl>": text}
+        checker, errors = _checker([st.Module("<workspace>", tuple(self._defs.values()))],
+                                   self.registry, False)
+        element: Element | None = None
+        try:
+            element = checker.element(expr, {})
+        except _Abort:
+            pass
+        except RecursionError:
+            checker.error(expr.span, "this element nests too deeply to check")
+        errors = errors + checker.errors
+        if errors or element is None:
+            raise CheckError(errors or [Diagnostic(expr.span, "not an element")], sources)
+        return element
+
+    def is_complete(self, text: str) -> bool:
+        """Whether the REPL has a whole input: brackets balanced and the text does not end
+        in the middle of a statement (after `=`, an operator, a comma or a keyword)."""
+        depth = 0
+        last = None
+        for tok in iter_tokens(text):
+            if tok.type in ("LPAR", "LSQB"):
+                depth += 1
+            elif tok.type in ("RPAR", "RSQB"):
+                depth -= 1
+            last = tok
+        if depth > 0:
+            return False
+        if last is None:
+            return True
+        return last.type not in _CONTINUES and not text.rstrip().endswith(",")
+
+    def names(self) -> list[str]:
+        """The names defined so far, sorted."""
+        return sorted(self._defs)
+
+    def definition(self, name: str) -> st.Definition | None:
+        """The definition of ``name``, or None."""
+        return self._defs.get(name)
+
+    def format(self) -> str:
+        """Every definition so far in canonical form (as ``mdle fmt`` prints them)."""
+        lines = [format_statement(d) for d in self._defs.values()]
+        if self._entry:
+            lines.append(f"run {self._entry}")
+        return "\n".join(lines) + ("\n" if lines else "")
+
+    def program(self) -> Program:
+        """The checked program of every definition so far."""
+        runs: tuple[st.Statement, ...] = ()
+        if self._entry:
+            runs = (st.Run(self._entry),)
+        module = st.Module("<workspace>", (*self._defs.values(), *runs))
+        return check_program([module], self.registry, sources=self._sources)
+
+    @property
+    def warnings(self) -> tuple[Diagnostic, ...]:
+        """The warnings of the definitions as they stand."""
+        return self._warnings
+
