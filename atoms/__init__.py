@@ -13,6 +13,6 @@ __all__ = ["default_registry"]
 
 def default_registry() -> Registry:
     """The registry of the built-in control laws and sensor functions."""
-    from atoms import laws, sensors
+    from atoms import boundary, follow, laws, motion, sensors
 
-    return Registry.from_modules(laws, sensors)
+    return Registry.from_modules(laws, sensors, boundary, follow, motion)

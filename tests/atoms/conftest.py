@@ -7,6 +7,7 @@ robot's right), maximum range 10 m, beams with no return at max range and ``vali
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,3 +95,131 @@ def raycast() -> object:
 
     return types.SimpleNamespace(circle=cast_circle, line=cast_line, scan=make_scan,
                                  bearings=BEARINGS, max_range=MAX_RANGE, catalogue=CATALOGUE)
+
+
+# ---- a tiny exact world for closed-loop tests of the law (no simulator needed) --------------
+
+class Shape:
+    """An obstacle as a shapely geometry with exact ray hits (range, tangent, curvature).
+
+    Polygons are given counter-clockwise; tangents returned are oriented with the obstacle on
+    the right (clockwise), curvature signed so convex is negative, as control-law.md wants.
+    """
+
+    def __init__(self, kind: str, **kw: Any) -> None:
+        import shapely
+
+        self.kind = kind
+        self.kw = kw
+        if kind == "circle":
+            self.geom = shapely.Point(*kw["center"]).buffer(kw["radius"], quad_segs=256)
+        else:
+            self.geom = shapely.Polygon(kw["vertices"])
+        shapely.prepare(self.geom)
+
+    def cast(self, x: float, y: float, theta: float, bearings: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Ranges (inf: miss), robot-frame tangent angles and curvatures per beam."""
+        ang = theta + bearings
+        d = np.stack((np.cos(ang), np.sin(ang)), axis=1)
+        if self.kind == "circle":
+            c = np.asarray(self.kw["center"], float) - (x, y)
+            rad = self.kw["radius"]
+            b = d @ c
+            disc = b * b - (c @ c - rad * rad)
+            r = b - np.sqrt(np.where(disc >= 0, disc, 0.0))
+            r = np.where((disc >= 0) & (r > 0), r, np.inf)
+            h = np.array([x, y]) + d * np.where(np.isfinite(r), r, 0.0)[:, None]
+            n = (h - np.asarray(self.kw["center"])) / rad
+            tang = np.arctan2(-n[:, 0], n[:, 1])
+            kap = np.full(r.shape, -1.0 / rad)
+        else:
+            v = np.asarray(self.kw["vertices"], float)
+            a, bb = v, np.roll(v, -1, axis=0)
+            e = bb - a                                              # (S, 2), CCW edges
+            w = a - (x, y)
+            den = d[:, None, 0] * e[None, :, 1] - d[:, None, 1] * e[None, :, 0]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = (w[None, :, 0] * e[None, :, 1] - w[None, :, 1] * e[None, :, 0]) / den
+                s = (w[None, :, 0] * d[:, None, 1] - w[None, :, 1] * d[:, None, 0]) / den
+            ok = (den != 0) & (t > 1e-9) & (s >= 0) & (s <= 1)
+            t = np.where(ok, t, np.inf)
+            j = np.argmin(t, axis=1)
+            r = t[np.arange(len(j)), j]
+            tang = np.arctan2(-e[j, 1], -e[j, 0])                   # reversed CCW edge
+            kap = np.zeros(r.shape)
+        rel = np.arctan2(np.sin(tang - theta), np.cos(tang - theta))
+        hit = np.isfinite(r)
+        return r, np.where(hit, rel, np.nan), np.where(hit, kap, np.nan)
+
+    def clearance(self, x: float, y: float) -> float:
+        import shapely
+
+        p = shapely.Point(x, y)
+        dist = float(self.geom.exterior.distance(p))
+        return -dist if self.geom.contains(p) else dist
+
+
+def oracle_scan(shape: Shape, x: float, y: float, theta: float, *, exact: bool = True,
+                noise: float = 0.0, rng: np.random.Generator | None = None) -> Scan:
+    """A 181-beam scan of ``shape`` from the pose; exact adds oracle tangents/curvatures."""
+    r, tang, kap = shape.cast(x, y, theta, BEARINGS)
+    if noise > 0 and rng is not None:
+        r = r * (1.0 + rng.normal(0.0, noise, r.shape))
+    valid = np.isfinite(r) & (r < MAX_RANGE)
+    return Scan(np.where(valid, r, MAX_RANGE), BEARINGS, valid, 0.0, MAX_RANGE,
+                tang if exact else None, kap if exact else None)
+
+
+@dataclass
+class LoopResult:
+    """Trajectory of a closed-loop run: times, poses and true clearance per step."""
+
+    t: np.ndarray
+    xy: np.ndarray
+    clearance: np.ndarray
+    modes: list[float]
+
+
+def closed_loop(shape: Shape, args: dict[str, Any], pose: tuple[float, float, float], *,
+                duration: float, dt: float, exact: bool = True, noise: float = 0.0,
+                seed: int = 0, umax: float = 3.0, radius: float = 0.0) -> LoopResult:
+    """Run the real ``follow_boundary`` atom against ``shape`` with exact unicycle arcs."""
+    from atoms.follow import follow_boundary, start_follow
+    from atoms.registry import Context
+    from mdle.backend import Observation, Pose, RobotLimits
+
+    limits = RobotLimits(1.0, 0.0, umax, radius=radius)
+    rng = np.random.default_rng(seed)
+    x, y, th = pose
+    ts, xs, cl, modes = [], [], [], []
+    state = None
+    for i in range(int(round(duration / dt))):
+        t = i * dt
+        obs = Observation(t, Pose(x, y, th), scan=oracle_scan(shape, x, y, th, exact=exact,
+                                                              noise=noise, rng=rng))
+        ctx = Context(obs, t, dt, limits)
+        if state is None:
+            state = start_follow(args, ctx)
+        cmd = follow_boundary(args, ctx, state)
+        v, u = cmd.v, max(-umax, min(umax, cmd.omega))
+        if abs(u) > 1e-9:
+            x += v / u * (np.sin(th + u * dt) - np.sin(th))
+            y += v / u * (np.cos(th) - np.cos(th + u * dt))
+        else:
+            x += v * dt * np.cos(th)
+            y += v * dt * np.sin(th)
+        th = float(np.arctan2(np.sin(th + u * dt), np.cos(th + u * dt)))
+        ts.append(t + dt)
+        xs.append((x, y))
+        cl.append(shape.clearance(x, y))
+        modes.append(ctx.cache["trace"]["mode"])
+    return LoopResult(np.array(ts), np.array(xs), np.array(cl), modes)
+
+
+@pytest.fixture
+def world2d() -> object:
+    """Exact shapes and the closed-loop runner for law tests."""
+    import types
+
+    return types.SimpleNamespace(Shape=Shape, scan=oracle_scan, run=closed_loop)

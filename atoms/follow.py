@@ -1,0 +1,120 @@
+"""The seed paper's steering atom: ``follow_boundary(side, rc, v, ...)``.
+
+Constant speed ``v``; the turn rate comes from the curvature-based CLF law of control-law.md
+(:mod:`atoms.steering`) fed by the boundary view of this tick (:mod:`atoms.boundary`), with every
+safeguard there (grazing-ray rejection, curvature clamps, front-range blend, front floor,
+corner mode with odometry memory, saturation at the robot's turn-rate limit) and a full-scan
+safety layer on top. Left-side following mirrors the law. Per-atom state (the corner memory
+and the curvature filter) is made when the atom starts.
+
+Each tick writes ``ctx.cache["trace"]``: front/side range (m), tangent (rad) and curvature (1/m)
+in the side's convention (see :mod:`atoms.boundary`), hit flags, the mode (0 follow, 1 corner),
+the law's turn rate, whether the safety layer overrode it and the predicted clearance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from atoms.boundary import SIDES, Side, cached_view, parse_side
+from atoms.registry import Args, Context, Param, control_law
+from mdle.backend import Command
+from mdle.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
+
+if TYPE_CHECKING:
+    from atoms.steering import Gains, Memory
+
+__all__ = ["follow_boundary", "FollowState", "start_follow", "scan_points_cached"]
+
+
+@dataclass
+class FollowState:
+    """Per-atom state of ``follow_boundary``: the side, the gains and the law's memory."""
+
+    side: Side
+    gains: "Gains"
+    memory: "Memory"
+
+
+def start_follow(args: Args, ctx: Context) -> FollowState:
+    """Make the per-atom state when a ``follow_boundary`` atom starts."""
+    from atoms.steering import Gains, Memory
+
+    umax = min(float(args["umax"]), ctx.limits.max_turn_rate)
+    gains = Gains(mu=float(args["mu"]), kf=float(args["kf"]), umax=umax, tau=float(args["tau"]))
+    return FollowState(parse_side(args["side"]), gains, Memory())
+
+
+def scan_points_cached(ctx: Context) -> Any:
+    """Robot-frame points (M, 2) of this tick's valid beams, computed once per tick."""
+    pts = ctx.cache.get("scan_points")
+    if pts is None:
+        import numpy as np
+
+        from atoms.estimators import scan_points
+
+        scan = ctx.obs.scan
+        if scan is None:
+            pts = np.zeros((0, 2))
+        else:
+            p = scan_points(scan.ranges, scan.bearings, scan.valid)
+            pts = p[np.isfinite(p[:, 0])]
+        ctx.cache["scan_points"] = pts
+    return pts
+
+
+@control_law(
+    Param("side", default="right", choices=SIDES, doc="side the boundary is on: right or left"),
+    Param("rc", LENGTH, 0.5, doc="distance to keep from the boundary"),
+    Param("v", SPEED, 0.3, doc="constant forward speed"),
+    Param("mu", NONE, 4.0, doc="damping of the heading terms, 1/s"),
+    Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2"),
+    Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)"),
+    Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)"),
+    Param("margin", LENGTH, 0.05, doc="clearance the safety layer keeps ahead (0: off)"),
+    Param("lookahead", TIME, 0.5, doc="how far ahead the safety layer checks the arc"),
+    start=start_follow,
+)
+def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Command:
+    """Follow a boundary at distance rc on one side at constant speed (the paper's atom)."""
+    from atoms import steering
+
+    if state is None:  # run without start (a bare call): make the state now
+        state = start_follow(args, ctx)
+    g = state.gains
+    v = float(args["v"])
+    rc = float(args["rc"])
+    view = cached_view(ctx, state.side)
+    pose = ctx.obs.pose
+    left = state.side is Side.LEFT
+    law_pose = (pose.x, -pose.y, -pose.theta) if left else (pose.x, pose.y, pose.theta)
+    u = steering.step(view.front, view.side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
+                      g.umax, filter_kappa=not view.exact)
+    if left:
+        u = -u
+    u_law = u
+    clearance = math.inf
+    margin = float(args["margin"])
+    if margin > 0 and v > 0:
+        u, clearance = steering.safety_filter(scan_points_cached(ctx), v, u, g.umax,
+                                              ctx.limits.radius, margin,
+                                              float(args["lookahead"]))
+    sgn = -1.0 if left else 1.0
+    f, s = view.front, view.side
+    ctx.cache["trace"] = {
+        "front_hit": float(f.hit),
+        "front_range": f.r if f.hit else 0.0,
+        "front_tangent": sgn * f.beta if f.hit else 0.0,
+        "front_curvature": sgn * f.kappa if f.hit else 0.0,
+        "side_hit": float(s.hit),
+        "side_range": s.r if s.hit else 0.0,
+        "side_tangent": sgn * s.beta if s.hit else 0.0,
+        "side_curvature": sgn * s.kappa if s.hit else 0.0,
+        "mode": 1.0 if state.memory.mode == steering.CORNER else 0.0,
+        "u_law": u_law,
+        "safety": float(u != u_law),
+        "predicted_clearance": clearance if math.isfinite(clearance) else -1.0,
+    }
+    return Command(v, u)

@@ -1,0 +1,400 @@
+"""The curvature-based boundary-following law (control-law.md), as plain numeric functions.
+
+Everything is written for **right-hand** following (obstacle on the robot's right); left-hand
+following mirrors its inputs and negates the turn rate (see :mod:`atoms.boundary` and
+:mod:`atoms.follow`). Conventions, from control-law.md section 2:
+
+* a :class:`Ray` carries the range ``r`` (m), the angle ``beta = phi - theta`` of the boundary's
+  tangent relative to the heading (rad; tangents oriented with the obstacle on their right) and
+  the signed curvature ``kappa`` (1/m; convex obstacles negative);
+* a front hit from free space has ``sin(beta) > 0``, a side hit ``cos(beta) > 0``;
+* the turn rate ``u`` is counter-clockwise positive.
+
+The pieces:
+
+* :func:`clf_law`: the CLF split law (curvature feedforward ``-B/A`` plus damping of the angle
+  terms), with the concave clamps;
+* :func:`follow_law`: grazing-ray rejection, the front-range gate with its linear blend, and the
+  front floor (a soft emergency left turn);
+* :func:`corner_law`: circling a remembered vertex (corner mode);
+* :func:`step`: one tick with the corner-mode state machine and odometry memory;
+* :func:`safety_filter`: the full-scan safety layer (the two rays are blind to the left and
+  between them): the commanded arc is checked against every scan point and, if it comes too
+  close, replaced by the admissible turn rate nearest to it.
+
+>>> g = Gains()
+>>> side = Ray(True, 0.5, 0.0, -1.0)            # on a circle of radius 1, rc = 0.5 away
+>>> round(follow_law(MISS, side, 1.0, 0.5, g), 6)  # offset-curve rate v k / (1 - k rc)
+-0.666667
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import numpy as np
+
+__all__ = [
+    "Ray",
+    "MISS",
+    "Gains",
+    "Memory",
+    "f_gain",
+    "clf_law",
+    "follow_law",
+    "corner_law",
+    "step",
+    "safety_filter",
+    "wrap",
+    "FOLLOW",
+    "CORNER",
+]
+
+FOLLOW = "follow"
+CORNER = "corner"
+
+
+def wrap(a: float) -> float:
+    """Angle wrapped to (-pi, pi]."""
+    return math.atan2(math.sin(a), math.cos(a))
+
+
+@dataclass(frozen=True)
+class Ray:
+    """What one ray of the law sees: hit flag, range (m), tangent angle from the heading (rad,
+    obstacle-on-right orientation) and signed curvature (1/m, convex negative)."""
+
+    hit: bool
+    r: float = math.nan
+    beta: float = 0.0
+    kappa: float = 0.0
+
+
+#: A ray that saw nothing (the paper's virtual boundary takes over).
+MISS = Ray(False)
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Gains and safeguard thresholds of the law (control-law.md section 5). SI units; the
+    thresholds marked "x rc" are multiples of the following distance ``rc``.
+
+    Attributes
+    ----------
+    mu : float, 1/s
+        Damping of the angle terms (zeta = mu / (4 sqrt(2 kf)) on a straight wall).
+    kf : float, 1/m^2
+        Slope of ``f(z) = kf (z - rc)``, clipped at ``+-fmax`` (1/m).
+    umax : float, rad/s
+        Turn-rate saturation.
+    s_min, c_min : float
+        Grazing rejection: a front hit needs ``sin(beta) > s_min``, a side hit ``cos(beta) > c_min``.
+    a0_min, a0_max : float
+        Clamp of the front ray's rotation gain ``a0 = 1 - k0 r0 / sin b0``.
+    conc_margin, d_min : float
+        Concave clamps: ``1 - ks rs / cos bs >= conc_margin`` and ``D >= d_min``.
+    eps_a : float
+        Tikhonov regulariser of ``-B/A`` when the front ray hits.
+    front_gate, blend : float
+        Front hits count up to ``front_gate`` x rc; the front law is blended in linearly over the
+        last ``blend`` fraction of that range.
+    floor_hard, floor_soft : float, x rc
+        Front floor: full left turn once the margin to the turning envelope is below
+        ``floor_hard``, none above ``floor_soft``.
+    corner_reach, corner_jump : float, x rc
+        Corner mode starts only if the last side range was below ``corner_reach`` and the side
+        ray is lost (a miss or a range jump above ``corner_jump``) ...
+    corner_turn_jump : float, rad
+        ... or the side tangent turned clockwise by more than this in the world frame.
+    corner_exit_angle, corner_exit_range : float, rad and x rc
+        Corner mode ends when the side ray is back with ``|bs| <`` exit angle and
+        ``|rs - d| <`` exit range (d: distance to the remembered vertex) ...
+    corner_max_turn : float, rad
+        ... or after turning this much (or when the front ray hits).
+    tau : float, s
+        Low-pass time constant for estimated side curvature (0: none; exact data need none).
+    kappa_reset : float, m
+        The filter restarts when the side range jumps more than this.
+    """
+
+    mu: float = 4.0
+    kf: float = 0.5
+    fmax: float = 2.0
+    umax: float = 3.0
+    s_min: float = 0.05
+    c_min: float = 0.05
+    a0_min: float = 0.5
+    a0_max: float = 10.0
+    conc_margin: float = 0.2
+    d_min: float = 0.1
+    eps_a: float = 0.05
+    front_gate: float = 3.0
+    blend: float = 0.4
+    floor_hard: float = 0.5
+    floor_soft: float = 1.5
+    corner_reach: float = 2.0
+    corner_jump: float = 0.5
+    corner_turn_jump: float = math.radians(20.0)
+    corner_exit_angle: float = math.radians(10.0)
+    corner_exit_range: float = 0.25
+    corner_max_turn: float = 1.9 * math.pi
+    tau: float = 0.2
+    kappa_reset: float = 0.3
+
+
+@dataclass
+class Memory:
+    """Per-atom state of the law: the mode, the corner memory and the curvature filter.
+
+    Made when the atom starts, dropped when it ends (never shared between atoms).
+    """
+
+    mode: str = FOLLOW
+    last_side: tuple[float, float, float, float, float] | None = None
+    """(rs, world tangent angle, world x, world y, time) of the last valid side hit."""
+    corner: tuple[float, float] = (0.0, 0.0)
+    turned: float = 0.0
+    kappa: float | None = None
+    last_rs: float = math.nan
+    time: float = 0.0
+    extra: dict[str, float] = field(default_factory=dict)
+
+
+def f_gain(z: float, rc: float, g: Gains) -> float:
+    """The CLF's distance term ``f(z) = clip(kf (z - rc), -fmax, fmax)`` (1/m)."""
+    return min(max(g.kf * (z - rc), -g.fmax), g.fmax)
+
+
+def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -> float:
+    """The CLF split law for already-validated rays (pass :data:`MISS` for a missing one).
+
+    With the front missing this is the exact closed form
+    ``u = v (ks - 2 f cos(bs/2)) / D + mu (1 - ks rs / cos bs) sin(bs/2)``,
+    for which ``dV/dt = -mu sin^2(bs/2) as D / cos bs <= 0``; with a front hit the feedforward
+    is the regularised ``-B A / (A^2 + eps^2)``. Returns the turn rate, rad/s, within +-umax.
+    """
+    if front.hit:
+        b0 = front.beta
+        a0 = min(max(1.0 - front.kappa * front.r / math.sin(b0), g.a0_min), g.a0_max)
+    else:
+        b0, a0 = 0.0, 0.0
+    if side.hit:
+        bs, rs = side.beta, side.r
+        cb = math.cos(bs)
+        ks = min(side.kappa, (1.0 - g.conc_margin) * cb / rs)
+        as_ = 1.0 - ks * rs / cb
+        f = f_gain(rs, rc, g)
+    else:
+        bs, rs, cb, ks, as_, f = 0.0, rc, 1.0, 0.0, 0.0, 0.0
+    tb = math.sin(bs) / cb
+    s1 = math.sin(b0 / 2.0)
+    s2 = math.sin((b0 - bs) / 2.0)  # not wrapped: V uses quarter angles
+    a_th = -a0 * s1 + s2 * (as_ - a0)
+    a = a_th - f * rs * tb
+    if front.hit:
+        b = -v * (s2 * ks / cb + f * tb)
+        u_ff = -b * a / (a * a + g.eps_a * g.eps_a)
+    else:
+        ch = math.cos(bs / 2.0)
+        d = max(cb - ks * rs + 2.0 * f * rs * ch, g.d_min)
+        u_ff = v * (ks - 2.0 * f * ch) / d
+    damp = -a_th / max(1.0, a0) if a * a_th > 0 else -a / max(1.0, abs(a))
+    return min(max(u_ff + g.mu * damp, -umax), umax)
+
+
+def _valid_front(front: Ray, rc: float, g: Gains) -> Ray:
+    if not front.hit or not math.isfinite(front.r):
+        return MISS
+    b0 = wrap(front.beta)
+    if math.sin(b0) <= g.s_min or front.r > g.front_gate * rc:
+        return MISS
+    return Ray(True, front.r, b0, front.kappa)
+
+
+def _valid_side(side: Ray, g: Gains) -> Ray:
+    if not side.hit or not math.isfinite(side.r) or side.r <= 0:
+        return MISS
+    bs = wrap(side.beta)
+    if math.cos(bs) <= g.c_min:
+        return MISS
+    return Ray(True, side.r, bs, side.kappa)
+
+
+def follow_law(front: Ray, side: Ray, v: float, rc: float, g: Gains,
+               umax: float | None = None) -> float:
+    """Grazing rejection, the front gate and blend, the CLF law and the front floor.
+
+    Parameters
+    ----------
+    front, side : Ray
+        Raw rays (right-hand convention); grazing hits and far front hits count as misses.
+    v : float, m/s
+    rc : float, m
+    g : Gains
+    umax : float, rad/s, optional (default ``g.umax``)
+
+    Returns
+    -------
+    float, rad/s
+    """
+    umax = g.umax if umax is None else umax
+    front = _valid_front(front, rc, g)
+    side = _valid_side(side, g)
+    return _blend_and_floor(front, side, v, rc, g, umax)
+
+
+def _blend_and_floor(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -> float:
+    if not front.hit:
+        return clf_law(MISS, side, v, rc, g, umax)
+    gate = g.front_gate * rc
+    w = min(max((gate - front.r) / (g.blend * gate), 0.0), 1.0)
+    u = clf_law(front, side, v, rc, g, umax) if w >= 1.0 else \
+        (1.0 - w) * clf_law(MISS, side, v, rc, g, umax) + w * clf_law(front, side, v, rc, g, umax)
+    # front floor: margin from the robot's tightest left-turn circle to the boundary's tangent
+    radius = v / umax if umax > 0 else math.inf
+    margin = front.r * math.sin(front.beta) - radius * (1.0 - math.cos(front.beta))
+    soft, hard = g.floor_soft * rc, g.floor_hard * rc
+    floor = umax * min(max((soft - margin) / (soft - hard), 0.0), 1.0)
+    return max(u, floor) if floor > 0 else u
+
+
+def corner_law(d: float, e: float, v: float, rc: float, g: Gains, umax: float) -> float:
+    """Circle a point at distance ``d`` (m) seen at ``e = bearing + pi/2`` (rad, 0 when it is
+    straight to the right): ``u = -v cos(e)/d - 2 v f(d) cos(e/2) + mu sin(e/2)``, for which
+    ``V_c = 4 sin^2(e/4) + g(d)`` has ``dV_c/dt = -mu sin^2(e/2)``."""
+    d = max(d, 1e-3)
+    u = -v * math.cos(e) / d - 2.0 * v * f_gain(d, rc, g) * math.cos(e / 2.0) \
+        + g.mu * math.sin(e / 2.0)
+    return min(max(u, -umax), umax)
+
+
+def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: float,
+         mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
+         filter_kappa: bool = True) -> float:
+    """One tick of right-hand following with the corner mode and the curvature filter.
+
+    Parameters
+    ----------
+    front, side : Ray
+        Raw rays in the right-hand convention.
+    pose : (x, y, theta)
+        Odometry pose (m, m, rad), in the right-hand frame (mirrored for left following).
+    t, dt : float, s
+        Time since the atom started, and the tick length.
+    mem : Memory
+        Per-atom state, updated in place.
+    v, rc : float
+        Speed (m/s) and following distance (m).
+    g : Gains
+    umax : float, rad/s, optional
+    filter_kappa : bool
+        Low-pass the side curvature (for estimates from a noisy scan).
+
+    Returns
+    -------
+    float
+        Turn rate u, rad/s, within +-umax. ``mem.mode`` tells which law produced it.
+    """
+    umax = g.umax if umax is None else umax
+    x, y, theta = pose
+    front = _valid_front(front, rc, g)
+    side = _valid_side(side, g)
+    if side.hit and filter_kappa and g.tau > 0:
+        jump = not math.isfinite(mem.last_rs) or abs(side.r - mem.last_rs) > g.kappa_reset
+        if mem.kappa is None or jump:
+            mem.kappa = side.kappa
+        else:
+            mem.kappa += (side.kappa - mem.kappa) * min(1.0, dt / g.tau)
+        side = Ray(True, side.r, side.beta, mem.kappa)
+    mem.last_rs = side.r if side.hit else math.nan
+    mem.time = t
+
+    last = mem.last_side
+    if mem.mode == FOLLOW and not front.hit and last is not None \
+            and last[0] < g.corner_reach * rc:
+        lost = (not side.hit or side.r - last[0] > g.corner_jump * rc
+                or wrap(theta + side.beta - last[1]) < -g.corner_turn_jump)
+        if lost:
+            mem.mode = CORNER
+            mem.corner = (last[2], last[3])
+            mem.turned = 0.0
+    if mem.mode == CORNER:
+        cx, cy = mem.corner
+        d = math.hypot(cx - x, cy - y)
+        e = wrap(math.atan2(cy - y, cx - x) - theta + math.pi / 2.0)
+        back = side.hit and abs(side.beta) < g.corner_exit_angle \
+            and abs(side.r - d) < g.corner_exit_range * rc
+        if front.hit or mem.turned > g.corner_max_turn or back:
+            mem.mode = FOLLOW
+            if not back and not front.hit:
+                mem.last_side = None  # gave up circling: do not circle the same point again
+        else:
+            u = corner_law(d, e, v, rc, g, umax)
+            mem.turned += abs(u) * dt
+            return u
+    if side.hit:
+        ang = theta - math.pi / 2.0
+        mem.last_side = (side.r, theta + side.beta, x + side.r * math.cos(ang),
+                         y + side.r * math.sin(ang), t)
+    return _blend_and_floor(front, side, v, rc, g, umax)
+
+
+def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius: float,
+                  margin: float, lookahead: float, candidates: int = 25,
+                  samples: int = 8) -> tuple[float, float]:
+    """The full-scan safety layer: keep ``u`` unless its arc comes too close to any scan point.
+
+    The arc the robot drives at ``(v, u)`` over ``lookahead`` seconds is sampled and its
+    clearance (distance to the nearest scan point minus the body ``radius``) computed. If it
+    is at least ``margin`` the command stands. Otherwise the turn rate is replaced by the
+    admissible one (clearance >= margin) nearest to ``u`` among ``candidates`` rates spread
+    over +-umax, or, if none is admissible, by the one with the most clearance.
+
+    Parameters
+    ----------
+    points : (M, 2) float array, metres
+        Robot-frame scan points (valid beams only).
+    v, u : float
+        The law's speed (m/s) and turn rate (rad/s).
+    umax : float, rad/s
+    radius, margin : float, metres
+    lookahead : float, seconds
+    candidates, samples : int
+
+    Returns
+    -------
+    (u, clearance)
+        The turn rate to command and the predicted clearance of the law's own arc (m).
+    """
+    import numpy as np
+
+    if points.shape[0] == 0 or v <= 0 or lookahead <= 0:
+        return u, math.inf
+    length = v * lookahead
+    near = points[(points * points).sum(1) < (length + radius + margin + 0.05) ** 2]
+    if near.shape[0] == 0:
+        return u, math.inf
+    rates = np.concatenate(([u], np.linspace(-umax, umax, candidates)))
+    s = np.linspace(length / samples, length, samples)
+    c = rates / v                                               # (K,) curvature of each arc
+    th = c[:, None] * s[None, :]                                # (K, S)
+    straight = np.abs(c) < 1e-9
+    cs = np.where(straight, 1.0, c)[:, None]
+    ax = np.where(straight[:, None], s[None, :], np.sin(th) / cs)
+    ay = np.where(straight[:, None], 0.0, (1.0 - np.cos(th)) / cs)
+    dx = ax[..., None] - near[:, 0]
+    dy = ay[..., None] - near[:, 1]
+    clear = np.sqrt((dx * dx + dy * dy).min(axis=(1, 2))) - radius  # (K,)
+    own = float(clear[0])
+    if own >= margin:
+        return u, own
+    ok = clear[1:] >= margin
+    if ok.any():
+        pick = np.flatnonzero(ok)[np.argmin(np.abs(rates[1:][ok] - u))]
+        return float(rates[1 + pick]), own
+    return float(rates[int(np.argmax(clear))]), own
+
+

@@ -1,0 +1,146 @@
+"""The steering law: sign conventions, target-set behaviour, safeguards, closed loops."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from atoms import steering as S
+
+G = S.Gains()
+ARGS = dict(side="right", rc=0.5, v=1.0, mu=4.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.05,
+            lookahead=0.5)
+
+
+@pytest.mark.parametrize("kappa", [-2.0, -1.0, -0.25, 0.0, 0.3, 0.7])
+@pytest.mark.parametrize("rc", [0.5, 1.0])
+def test_on_the_target_set_u_is_the_offset_curve_rate(kappa: float, rc: float) -> None:
+    side = S.Ray(True, rc, 0.0, kappa)
+    u = S.follow_law(S.MISS, side, 1.0, rc, G, umax=100.0)
+    assert u == pytest.approx(kappa / (1.0 - kappa * rc), rel=1e-12, abs=1e-12)
+
+
+def test_concave_side_curvature_is_clamped() -> None:
+    # kappa rs >= 1: the offset curve does not exist; the clamp keeps 1 - k rs >= 0.2
+    u = S.follow_law(S.MISS, S.Ray(True, 0.5, 0.0, 5.0), 1.0, 0.5, G, umax=100.0)
+    kc = 0.8 / 0.5
+    assert u == pytest.approx(kc / (1 - kc * 0.5))
+
+
+def test_clf_decreases_along_the_law_when_the_front_misses() -> None:
+    """dV/dt = A u + B <= 0 (control-law.md section 2) over random side states."""
+    rng = np.random.default_rng(3)
+    v, rc = 1.0, 0.5
+    for _ in range(2000):
+        bs = rng.uniform(-1.4, 1.4)
+        rs = rng.uniform(0.1, 2.0)
+        ks = rng.uniform(-3.0, 1.0)
+        u = S.clf_law(S.MISS, S.Ray(True, rs, bs, ks), v, rc, G, 1e9)
+        ks_c = min(ks, 0.8 * math.cos(bs) / rs)
+        f = S.f_gain(rs, rc, G)
+        as_ = 1 - ks_c * rs / math.cos(bs)
+        s2 = math.sin(-bs / 2)
+        a = s2 * as_ - f * rs * math.tan(bs)
+        b = -v * (s2 * ks_c / math.cos(bs) + f * math.tan(bs))
+        d = math.cos(bs) - ks_c * rs + 2 * f * rs * math.cos(bs / 2)
+        if d < G.d_min:
+            continue  # the D clamp changes the feedforward there by design
+        assert a * u + b <= 1e-9
+
+
+@pytest.mark.parametrize("b0", [0.3, 1.0, math.pi / 2, 2.5])
+def test_an_obstacle_ahead_turns_the_robot_left(b0: float) -> None:
+    front = S.Ray(True, 1.0, b0, 0.0)
+    assert S.follow_law(front, S.MISS, 1.0, 0.5, G) > 0
+
+
+def test_front_floor_turns_fully_left_close_to_a_wall() -> None:
+    front = S.Ray(True, 0.3, math.pi / 2, 0.0)   # wall 0.3 m ahead, square on
+    side = S.Ray(True, 0.5, 0.0, -1.0)           # even with the side asking for a right turn
+    assert S.follow_law(front, side, 1.0, 0.5, G) == pytest.approx(G.umax)
+
+
+def test_grazing_and_far_front_hits_count_as_misses() -> None:
+    side = S.Ray(True, 0.6, 0.1, 0.0)
+    base = S.follow_law(S.MISS, side, 1.0, 0.5, G)
+    assert S.follow_law(S.Ray(True, 1.0, 0.01, 0.0), side, 1.0, 0.5, G) == base   # grazing
+    assert S.follow_law(S.Ray(True, 5.0, 1.5, 0.0), side, 1.0, 0.5, G) == base    # beyond 3 rc
+    assert S.follow_law(S.MISS, S.Ray(True, 0.5, 1.55, 0.0), 1.0, 0.5, G) == 0.0  # side grazing
+
+
+def test_front_blend_is_continuous_at_the_gate() -> None:
+    side = S.Ray(True, 0.6, 0.1, -0.5)
+    gate = G.front_gate * 0.5
+    inside = S.follow_law(S.Ray(True, gate - 1e-9, 1.2, 0.0), side, 1.0, 0.5, G)
+    outside = S.follow_law(S.Ray(True, gate + 1e-9, 1.2, 0.0), side, 1.0, 0.5, G)
+    assert inside == pytest.approx(outside, abs=1e-6)
+
+
+def test_saturation_at_the_given_limit() -> None:
+    u = S.follow_law(S.MISS, S.Ray(True, 5.0, 1.2, -3.0), 1.0, 0.5, G, umax=0.7)
+    assert abs(u) <= 0.7
+
+
+def test_corner_mode_starts_when_the_side_ray_is_lost_and_circles_the_vertex() -> None:
+    mem = S.Memory()
+    side = S.Ray(True, 0.5, 0.0, 0.0)
+    S.step(S.MISS, side, (0.0, 0.0, 0.0), 0.0, 0.01, mem, 1.0, 0.5, G)
+    assert mem.mode == S.FOLLOW and mem.last_side is not None
+    u = S.step(S.MISS, S.MISS, (0.01, 0.0, 0.0), 0.01, 0.01, mem, 1.0, 0.5, G)
+    assert mem.mode == S.CORNER
+    assert mem.corner == pytest.approx((0.0, -0.5))
+    assert u < 0  # circling a vertex on the right turns right
+    # a front hit ends the corner mode
+    S.step(S.Ray(True, 1.0, 1.2, 0.0), S.MISS, (0.02, 0.0, 0.0), 0.02, 0.01, mem, 1.0, 0.5, G)
+    assert mem.mode == S.FOLLOW
+
+
+def test_corner_law_on_the_circle_is_the_circling_rate() -> None:
+    assert S.corner_law(0.5, 0.0, 1.0, 0.5, G, 10.0) == pytest.approx(-2.0)
+
+
+def test_safety_filter_keeps_a_clear_arc_and_replaces_a_blocked_one() -> None:
+    far = np.array([[5.0, 5.0]])
+    assert S.safety_filter(far, 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (0.2, math.inf)
+    post = np.array([[0.35, 0.02]])  # a thin post just left of straight ahead
+    u, own = S.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5)
+    assert own < 0.05
+    assert u != 0.0
+    # the chosen arc really clears the post
+    th = u * np.linspace(0.0, 0.5, 200)
+    path = np.stack((np.sin(th) / u, (1 - np.cos(th)) / u), axis=1)
+    assert np.min(np.hypot(*(path - post[0]).T)) >= 0.05
+
+
+# ---- closed loops on exact shapes (tests/atoms/conftest.py), real atom, no simulator --------
+
+def _steady(res: Any, rc: float, t0: float) -> tuple[float, float]:
+    half = res.t >= t0
+    return float(res.clearance.min()), float(np.mean(np.abs(res.clearance[half] - rc)))
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_closed_loop_circle_exact_rays(world2d: Any, side: str) -> None:
+    shape = world2d.Shape("circle", center=(0.0, 0.0), radius=2.0)
+    y0 = 0.3 if side == "right" else -0.3
+    res = world2d.run(shape, {**ARGS, "side": side, "rc": 1.0}, (-8.0, y0, 0.0),
+                      duration=50.0, dt=0.01)
+    worst, err = _steady(res, 1.0, 25.0)
+    assert worst > 0.4
+    assert err < 0.02
+    # it goes round the obstacle the right way: clockwise for right, counter-clockwise for left
+    ang = np.unwrap(np.arctan2(res.xy[:, 1], res.xy[:, 0]))
+    assert (ang[-1] - ang[len(ang) // 2]) * (1 if side == "left" else -1) > 2.0
+
+
+def test_closed_loop_square_noisy_scan_uses_corner_mode(world2d: Any) -> None:
+    shape = world2d.Shape("poly", vertices=[(-2, -2), (2, -2), (2, 2), (-2, 2)])
+    res = world2d.run(shape, ARGS, (-8.0, 0.3, 0.0), duration=50.0, dt=0.02, exact=False,
+                      noise=0.008, seed=1)
+    worst, err = _steady(res, 0.5, 25.0)
+    assert worst > 0.2
+    assert err < 0.08
+    assert 0.02 < np.mean(res.modes) < 0.4
