@@ -1,0 +1,229 @@
+"""``mdle run``: run a plan in the embedded simulator or on a robot.
+
+Exit codes: 0 the program ran to its end (or to ``--until``), 1 plan or world errors
+(shown as ``mdle check`` shows them) and robot or connection faults, 3 the robot
+collided or stalled fatally, 130 Ctrl-C (143 SIGTERM): the robot is stopped and the
+trace flushed in every case.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from mdle.cli import output
+
+__all__ = ["add_parser", "run", "world_beside"]
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register ``mdle run``."""
+    p = subparsers.add_parser(
+        "run", help="run a plan in the simulator or on a robot",
+        description="Run an MDLe plan: in the embedded simulator by default, or on a "
+                    "Pioneer with --backend pioneer. Shows a live view on a terminal; writes "
+                    "a JSON lines trace and a plot on request.",
+        epilog="Exit codes: 0 done, 1 errors in the plan or world (or a robot fault), "
+               "3 collided or stalled, 130 interrupted.")
+    p.add_argument("plan", metavar="PLAN.mdle", help="the plan file")
+    p.add_argument("--world", metavar="NAME|FILE",
+                   help="simulated world: a reference world name or a YAML file (default: "
+                        "PLAN.world.yaml or PLAN.yaml beside the plan, else the default world)")
+    p.add_argument("--plan", dest="element", metavar="NAME",
+                   help="element to run (default: the file's `run` target, else `main`)")
+    p.add_argument("--seed", type=int, help="random seed of the simulation (default: the world's)")
+    p.add_argument("--until", type=_seconds, metavar="SECONDS",
+                   help="stop after this many seconds of (simulated) time")
+    p.add_argument("--realtime", action="store_true",
+                   help="pace the simulation to the wall clock")
+    p.add_argument("--rate", type=_hertz, default=10.0, metavar="HZ",
+                   help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle)")
+    p.add_argument("--trace", metavar="FILE.jsonl", help="write the run's trace (JSON lines)")
+    p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
+    p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
+    p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
+                   help="where to run (default: sim)")
+    p.add_argument("--connect", metavar="URL",
+                   help="robot connection for --backend pioneer (tcp://host:port, "
+                        "serial:///dev/ttyS0)")
+    p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
+    p.add_argument("--robot", metavar="PROFILE",
+                   help="robot profile in simulation (pioneer2dx, ideal; default: the world's)")
+    p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
+                   help="simulated ladar: a noisy scan (default) or exact oracle geometry")
+    p.set_defaults(handler=run)
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be zero or more seconds, got {text!r}")
+    return value
+
+
+def _hertz(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a rate in Hz, got {text!r}") from None
+    if not 0 < value <= 1000:
+        raise argparse.ArgumentTypeError(f"the rate must be in (0, 1000] Hz, got {text!r}")
+    return value
+
+
+def world_beside(plan: str | os.PathLike[str]) -> Path | None:
+    """The world file that goes with a plan: ``x.world.yaml`` or ``x.yaml`` beside ``x.mdle``."""
+    p = Path(plan)
+    for candidate in (p.with_suffix(".world.yaml"), p.with_suffix(".yaml")):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+class _Signals:
+    """SIGINT/SIGTERM ask the scheduler to stop at the next tick; a second one forces it."""
+
+    def __init__(self) -> None:
+        self.received: int | None = None
+        self._old: dict[int, Any] = {}
+        self.scheduler: Any = None
+
+    def __enter__(self) -> "_Signals":
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            try:
+                self._old[sig] = signal.signal(sig, self._handle)
+            except ValueError:  # not the main thread: leave the defaults
+                pass
+        return self
+
+    def _handle(self, signum: int, frame: Any) -> None:
+        if self.received is not None or self.scheduler is None:
+            self.received = signum
+            raise KeyboardInterrupt  # second signal: stop now (the scheduler stops the robot)
+        self.received = signum
+        self.scheduler.request_stop()
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+
+    @property
+    def exit_code(self) -> int:
+        return 128 + (self.received or signal.SIGINT)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the plan; returns the exit code."""
+    from mdle.errors import Diagnostic, MdleError
+    from mdle.loader import load_program
+    from mdle.runtime import Scheduler, element_of
+
+    program = load_program(args.plan)
+    if program.warnings and not args.quiet:
+        output.print_diagnostics(program.warnings, program.sources)
+    element = element_of(program, args.element)
+
+    header: dict[str, Any] = {
+        "program": {"file": os.path.abspath(args.plan), "element": element.label,
+                    "entry": program.entry},
+        "rate": args.rate, "until": args.until, "backend": args.backend,
+        "argv": sys.argv[1:],
+    }
+    backend, world = _open_backend(args, header)
+    observers: list[Any] = []
+    trace_path = args.trace
+    tmpdir = None
+    try:
+        if args.plot and not trace_path:
+            tmpdir = tempfile.TemporaryDirectory(prefix="mdle-")
+            trace_path = os.path.join(tmpdir.name, "run.jsonl")
+        if trace_path:
+            from mdle.trace import TraceWriter
+
+            try:
+                observers.append(TraceWriter(trace_path, header))
+            except OSError as exc:
+                raise MdleError(Diagnostic(None, f"cannot write the trace `{trace_path}`: "
+                                                 f"{exc.strerror}")) from None
+        if not args.quiet:
+            from mdle.live import LiveView
+
+            observers.append(LiveView())
+        scheduler = Scheduler(element, backend, args.rate, observers, until=args.until,
+                              realtime=args.realtime)
+        with _Signals() as signals:
+            signals.scheduler = scheduler
+            try:
+                scheduler.start()
+                while scheduler.tick():
+                    pass
+            except KeyboardInterrupt:
+                pass  # a second Ctrl-C: the tick already stopped the robot and told observers
+        result = scheduler.result
+        assert result is not None
+        if args.plot:
+            from mdle.plot import plot_trace
+
+            plot_trace(trace_path, args.plot, world=world)
+            if not args.quiet:
+                print(f"plot written to {args.plot}")
+        if signals.received is not None:
+            print("interrupted: robot stopped" + (f", trace in {args.trace}" if args.trace
+                                                  else ""), file=sys.stderr)
+            return signals.exit_code
+        if result.collided or result.fault:
+            why = "collided" if result.collided else result.fault
+            print(f"mdle run: {why}", file=sys.stderr)
+            return output.EXIT_COLLISION
+        return output.EXIT_OK
+    finally:
+        for o in observers:
+            close = getattr(o, "close", None)
+            if close is not None:
+                close()
+        backend.close()
+        if tmpdir is not None:
+            tmpdir.cleanup()
+
+
+def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any, Any]:
+    """The backend the options ask for and its world (None on hardware).
+
+    Fills the header's world, seed and robot.
+    """
+    from mdle.errors import Diagnostic, MdleError
+
+    if args.backend == "pioneer":
+        if not args.connect:
+            raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
+                                       hint="e.g. --connect tcp://localhost:8101 or "
+                                            "--connect serial:///dev/ttyS0"))
+        from mdle.drivers import open_backend
+
+        header.update(connect=args.connect, laser=args.laser)
+        return open_backend("pioneer", args.connect, args.laser, rate=args.rate), None
+    import sim
+
+    spec: str | os.PathLike[str] | None = args.world
+    if spec is None:
+        spec = world_beside(args.plan)
+    if spec is None:
+        spec = sim.DEFAULT_WORLD
+    world = sim.load_world(spec)
+    spec_text = os.path.abspath(spec) if os.path.exists(spec) else str(spec)
+    header["world"] = {"name": world.name, "spec": spec_text}
+    header["seed"] = args.seed if args.seed is not None else world.seed
+    header["robot"] = args.robot
+    header["sensing"] = args.sensing
+    kwargs: dict[str, Any] = {"seed": args.seed, "sensing": args.sensing}
+    if args.robot:
+        kwargs["robot"] = args.robot
+    return sim.SimBackend(world, **kwargs), world
