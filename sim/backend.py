@@ -1,0 +1,266 @@
+"""SimBackend: the embedded simulator behind :class:`mdle.backend.Backend`.
+
+Time advances only in :meth:`SimBackend.advance`, which integrates the held command
+exactly (arcs, with the profile's acceleration limits), sweeps the body so it never
+passes through an obstacle (on contact it stops and raises ``stalled``, as a Pioneer
+does, and records a :class:`SimEvent`), takes ladar scans at the ladar's own instants
+(``k / rate``), and updates odometry (with the profile's seeded drift, if any).
+
+>>> import math
+>>> from sim.world import World
+>>> from sim.shapes import Rectangle
+>>> from mdle.backend import Command, Pose
+>>> world = World("wall", obstacles=(Rectangle((3.0, 0.0), (0.1, 4.0)),))
+>>> sim = SimBackend(world, robot="ideal", ladar="lms200-ideal")
+>>> sim.command(Command(1.0, 0.0))
+>>> for _ in range(40):
+...     _ = sim.advance(0.1)
+>>> obs = sim.observe()
+>>> obs.stalled, obs.truth["collided"], round(obs.pose.x, 3)
+(True, True, 2.95)
+>>> [e.kind for e in sim.events]
+['collision']
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
+from mdle.errors import BackendError, WorldError
+from sim.collision import Collider
+from sim.ladar import Ladar, LadarProfile, ladar_profile
+from sim.robot import Phase, RobotProfile, integrate, plan_phases, robot_profile
+from sim.world import World
+
+__all__ = ["SimBackend", "SimEvent", "SENSING_MODES"]
+
+SENSING_MODES = ("scan", "exact")
+_TAU = 2.0 * math.pi
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % _TAU - math.pi
+
+
+@dataclass(frozen=True)
+class SimEvent:
+    """Something the simulator noticed: ``kind`` ``"collision"`` (the body touched an
+    obstacle and stalled), at sim ``time`` (s), true position (m), obstacle index and label."""
+
+    kind: str
+    time: float
+    x: float
+    y: float
+    obstacle: int
+    label: str
+
+
+class SimBackend:
+    """A simulated robot in a :class:`sim.world.World` (``clock = ClockMode.SIMULATED``).
+
+    Parameters
+    ----------
+    world : World
+    seed : int, optional
+        Seed of every random draw (ladar noise, odometry drift); default the world's.
+    robot : str, optional
+        A robot profile name (``pioneer2dx``, ``ideal``); default the world's profile.
+    ladar : str, optional
+        A ladar profile name (``lms200``, ``lms200-ideal``); default the world's.
+    sensing : {"scan", "exact"}
+        ``exact`` makes the ladar an oracle: noise-free ranges plus ``Scan.tangents``
+        and ``Scan.curvatures``, and a fresh scan at every observation.
+
+    Raises
+    ------
+    WorldError
+        Unknown profile, or the robot's body overlaps an obstacle at the start pose.
+    BackendError
+        Unknown sensing mode.
+    """
+
+    clock: ClockMode = ClockMode.SIMULATED
+
+    def __init__(self, world: World, *, seed: int | None = None, robot: str | None = None,
+                 ladar: str | None = None, sensing: str = "scan") -> None:
+        if sensing not in SENSING_MODES:
+            raise BackendError(f"unknown sensing mode `{sensing}` (one of: "
+                               f"{', '.join(SENSING_MODES)})")
+        self.world = world
+        self.seed = world.seed if seed is None else int(seed)
+        self.profile: RobotProfile = world.robot if robot is None else robot_profile(robot)
+        self.ladar_profile: LadarProfile = (world.ladar if ladar is None
+                                            else ladar_profile(ladar))
+        self.sensing = sensing
+        self.limits: RobotLimits = self.profile.limits
+        self._collider = Collider(world.parts, self.profile.radius)
+        self._oracle = sensing == "exact"
+        self.events: list[SimEvent] = []
+        self.reset()
+
+    # ------------------------------------------------------------------ lifecycle
+    def reset(self, pose: Pose | None = None) -> None:
+        """Put the robot back at ``pose`` (default the world's start), time 0, fresh seed."""
+        pose = self.world.start_pose if pose is None else pose
+        clear, owner = self._collider.clearance(pose.x, pose.y)
+        if clear < 0 or self.world.inside((pose.x, pose.y)):
+            raise WorldError(f"world `{self.world.name}`: the robot ({self.profile.name}, "
+                             f"radius {self.profile.radius} m) at ({pose.x:g}, {pose.y:g}) "
+                             f"overlaps obstacles[{owner}]")
+        ss = np.random.SeedSequence(self.seed)
+        ladar_seq, odo_seq = ss.spawn(2)
+        self._odo_rng = np.random.default_rng(odo_seq)
+        self._ladar = Ladar(self.ladar_profile, np.random.default_rng(ladar_seq),
+                            mount=self.profile.ladar_mount, oracle=self._oracle)
+        self._t = 0.0
+        self._x, self._y, self._th = pose.x, pose.y, pose.theta
+        self._ox, self._oy, self._oth = pose.x, pose.y, pose.theta
+        self._v = self._w = 0.0
+        self._cmd = STOP
+        self._stalled = False
+        self._collided = False
+        self._clear = (clear, owner)
+        self.events = []
+        rate = self._ladar.profile.rate
+        self._period = 0.0 if (self._oracle or rate <= 0) else 1.0 / rate
+        self._scan_k = 0
+        self._scan: Scan = self._take_scan(self._x, self._y, self._th, 0.0)
+
+    def close(self) -> None:
+        """Stop the robot (nothing to release)."""
+        self.stop()
+
+    def stop(self) -> None:
+        """Command zero velocity (the robot decelerates at its limits)."""
+        self._cmd = STOP
+
+    # ------------------------------------------------------------------ protocol
+    def observe(self) -> Observation:
+        """Odometry pose, measured velocities, newest scan, flags and ground truth."""
+        return Observation(
+            time=self._t,
+            pose=Pose(self._ox, self._oy, _wrap(self._oth)),
+            v=self._v,
+            omega=self._w,
+            scan=self._scan,
+            stalled=self._stalled,
+            motors_enabled=True,
+            truth={"x": self._x, "y": self._y, "theta": _wrap(self._th),
+                   "clearance": self._clear[0], "collided": self._collided},
+        )
+
+    def command(self, cmd: Command) -> None:
+        """Hold ``cmd`` (clamped to the limits) until the next command."""
+        lim = self.limits
+        v = min(max(float(cmd.v), -lim.max_reverse_speed), lim.max_speed)
+        w = min(max(float(cmd.omega), -lim.max_turn_rate), lim.max_turn_rate)
+        if not (math.isfinite(v) and math.isfinite(w)):
+            raise BackendError(f"command is not finite: v={cmd.v}, omega={cmd.omega}")
+        self._cmd = Command(v, w)
+
+    def advance(self, dt: float) -> float:
+        """Let ``dt`` seconds of simulated time pass; returns 0 (never late)."""
+        if not (dt >= 0.0 and math.isfinite(dt)):
+            raise BackendError(f"advance(dt) needs a finite dt >= 0, got {dt}")
+        if dt == 0.0:
+            return 0.0
+        t0, t1 = self._t, self._t + dt
+        # The last ladar instant inside (t0, t1], if any.
+        scan_at = None
+        if self._period == 0.0:
+            scan_at = t1
+        else:
+            k = math.floor(t1 / self._period + 1e-9)
+            if k > self._scan_k:
+                scan_at = max(t0, k * self._period)
+                self._scan_k = k
+        x0, y0, th0 = self._x, self._y, self._th
+        phases, v_end, w_end = plan_phases(self._v, self._w, self._cmd.v, self._cmd.omega, dt,
+                                           self.profile)
+        x, y, th = x0, y0, th0
+        clear = self._clear
+        t = t0
+        contact = False
+        scanned = scan_at is None
+        if not scanned and scan_at <= t0 + 1e-12:
+            self._scan, scanned = self._take_scan(x, y, th, scan_at), True
+        for ph in phases:
+            pieces = [ph]
+            if not scanned and t < scan_at < t + ph.duration:
+                cut = scan_at - t
+                pieces = [Phase(cut, ph.v0, ph.a_v, ph.w0, ph.a_w),
+                          Phase(ph.duration - cut, ph.v_at(cut), ph.a_v, ph.w_at(cut), ph.a_w)]
+            for piece in pieces:
+                r = self._collider.sweep(x, y, th, piece, clear)
+                x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
+                if r.contact:
+                    contact = True
+                    break
+                t += piece.duration
+                if not scanned and t >= scan_at - 1e-12:
+                    self._scan, scanned = self._take_scan(x, y, th, scan_at), True
+            if contact:
+                break
+        if contact:
+            self._v = self._w = 0.0
+            if not self._stalled:
+                obs_i = clear[1]
+                label = ""
+                if 0 <= obs_i < len(self.world.obstacles):
+                    o = self.world.obstacles[obs_i]
+                    label = o.name or o.kind
+                self.events.append(SimEvent("collision", t, x, y, obs_i, label))
+            self._stalled = self._collided = True
+            if not scanned:  # the robot rests at the contact point until the scan instant
+                self._scan = self._take_scan(x, y, th, scan_at)
+        else:
+            self._v, self._w = v_end, w_end
+            self._stalled = False
+        self._x, self._y, self._th, self._clear = x, y, th, clear
+        self._t = t1
+        self._update_odometry(x0, y0, th0)
+        return 0.0
+
+    # ------------------------------------------------------------------ extras
+    @property
+    def time(self) -> float:
+        """Simulated time, seconds."""
+        return self._t
+
+    @property
+    def true_pose(self) -> Pose:
+        """The robot's true pose (theta wrapped to [-pi, pi))."""
+        return Pose(self._x, self._y, _wrap(self._th))
+
+    # ------------------------------------------------------------------ internals
+    def _take_scan(self, x: float, y: float, th: float, stamp: float) -> Scan:
+        lad = self._ladar
+        ox, oy = lad.origin(x, y, th)
+        angles = lad.world_angles(th)
+        hits = self.world.caster.cast(np.array((ox, oy)), angles, lad.profile.max_range,
+                                      detail=self._oracle)
+        return lad.measure(hits, th, stamp)
+
+    def _update_odometry(self, x0: float, y0: float, th0: float) -> None:
+        noise = self.profile.odometry
+        if not noise.enabled:
+            self._ox, self._oy, self._oth = self._x, self._y, self._th
+            return
+        c, s = math.cos(th0), math.sin(th0)
+        dx, dy = self._x - x0, self._y - y0
+        fx, fy = c * dx + s * dy, -s * dx + c * dy      # motion in the old robot frame
+        dth = self._th - th0
+        ds = math.hypot(fx, fy)
+        e_d, e_t, e_k = self._odo_rng.standard_normal(3)
+        if ds > 0:
+            scale = (ds + noise.distance * math.sqrt(ds) * e_d) / ds
+            fx, fy = fx * scale, fy * scale
+        dth += noise.turn * math.sqrt(abs(dth)) * e_t + noise.drift * math.sqrt(ds) * e_k
+        oc, os_ = math.cos(self._oth), math.sin(self._oth)
+        self._ox += oc * fx - os_ * fy
+        self._oy += os_ * fx + oc * fy
+        self._oth += dth

@@ -1,0 +1,67 @@
+"""The reference worlds shipped in ``sim/worlds/*.yaml``, loadable by name.
+
+>>> "corridor" in list_worlds() and "ellipse" in list_worlds()
+True
+>>> load_world("ellipse").name
+'ellipse'
+"""
+
+from __future__ import annotations
+
+import os
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+from mdle.errors import WorldError
+from sim.world import World
+from sim.world_yaml import parse_world, read_world
+
+__all__ = ["load_world", "list_worlds", "world_descriptions", "DEFAULT_WORLD"]
+
+#: The world a newcomer's first ``mdle run`` uses.
+DEFAULT_WORLD = "default"
+
+
+def _folder() -> "resources.abc.Traversable":
+    return resources.files("sim").joinpath("worlds")
+
+
+def list_worlds() -> list[str]:
+    """Names of the reference worlds, sorted."""
+    return sorted(p.name[:-5] for p in _folder().iterdir() if p.name.endswith(".yaml"))
+
+
+@lru_cache(maxsize=None)
+def _reference(name: str) -> World:
+    entry = _folder().joinpath(f"{name}.yaml")
+    text = entry.read_text(encoding="utf-8")
+    return parse_world(text, file=f"sim/worlds/{name}.yaml", default_name=name)
+
+
+def load_world(spec: "str | os.PathLike[str]") -> World:
+    """A reference world by name (``corridor``, ``ellipse``, ...) or a YAML file by path.
+
+    Raises
+    ------
+    WorldError
+        Unknown name, unreadable file, or an invalid world (file, key path, problem).
+    """
+    text = os.fspath(spec)
+    if text in list_worlds():
+        return _reference(text)
+    looks_like_path = text.endswith((".yaml", ".yml")) or os.sep in text or "/" in text
+    if looks_like_path or Path(text).exists():
+        return read_world(text)
+    import difflib
+
+    names = list_worlds()
+    close = difflib.get_close_matches(text, names, n=1)
+    hint = f" (did you mean `{close[0]}`?)" if close else ""
+    raise WorldError(f"unknown world `{text}`{hint}; reference worlds: {', '.join(names)}; "
+                     "or give the path of a .yaml world file")
+
+
+def world_descriptions() -> list[tuple[str, str]]:
+    """(name, one-line description) of every reference world."""
+    return [(n, _reference(n).description) for n in list_worlds()]

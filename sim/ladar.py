@@ -1,0 +1,178 @@
+"""The SICK LMS-200 ladar model: beams, range limit, noise, resolution, rate, oracle mode.
+
+A :class:`LadarProfile` is plain data; a :class:`Ladar` owns the random generator and
+the preallocated noise buffer and turns ray-cast ground truth into a
+:class:`mdle.backend.Scan`. Beams: ``beams`` bearings evenly over ``fov``, index 0 at
+``-fov/2`` (the robot's right), counter-clockwise. A beam that sees nothing within
+``max_range`` is flagged invalid and reported at ``max_range``.
+
+Noise models (``noise``):
+
+* ``relative`` (default, sigma 0.008): Gaussian error with standard deviation
+  ``sigma * range``, the paper's "relative range error typically below 0.8 %";
+* ``absolute``: Gaussian error with standard deviation ``sigma`` metres (the
+  LMS-200 data sheet quotes a statistical error of about 5 mm, 1 sigma, in mm mode);
+* ``none``: exact ranges.
+
+Noisy ranges are then rounded to ``resolution`` (the LMS-200 mm mode: 1 mm) and
+clipped to ``[0, max_range]``.
+
+>>> p = LADAR_PROFILES["lms200"]
+>>> b = p.bearings()
+>>> len(b), round(math.degrees(b[0]), 9), round(math.degrees(b[90]), 9)
+(181, -90.0, 0.0)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from mdle.backend import Scan
+from mdle.errors import WorldError
+from sim.raycast import RayHits
+
+__all__ = ["NOISE_MODELS", "LadarProfile", "LADAR_PROFILES", "ladar_profile", "Ladar"]
+
+NOISE_MODELS = ("relative", "absolute", "none")
+
+
+@dataclass(frozen=True)
+class LadarProfile:
+    """A planar ladar (SI units).
+
+    Attributes
+    ----------
+    name : str
+    beams : int
+    fov : float, radians
+        Angle from the first beam to the last.
+    max_range : float, metres
+    noise : str
+        One of :data:`NOISE_MODELS`.
+    sigma : float
+        Relative (fraction of the range) or absolute (metres), per ``noise``.
+    resolution : float, metres
+        Range quantum (0: none).
+    rate : float, Hz
+        Scans per second; 0 means a fresh scan at every observation.
+    source : str
+        Where the numbers come from.
+    """
+
+    name: str
+    beams: int = 181
+    fov: float = math.pi
+    max_range: float = 10.0
+    noise: str = "relative"
+    sigma: float = 0.008
+    resolution: float = 0.001
+    rate: float = 10.0
+    source: str = ""
+
+    def bearings(self) -> np.ndarray:
+        """(beams,) bearings in the ladar frame, radians, from ``-fov/2`` to ``+fov/2``."""
+        return np.linspace(-self.fov / 2.0, self.fov / 2.0, self.beams)
+
+    def with_overrides(self, **changes: Any) -> "LadarProfile":
+        """A copy with some fields replaced (values already in SI)."""
+        return replace(self, **changes)
+
+    @property
+    def noise_free(self) -> "LadarProfile":
+        """The same ladar without noise or quantisation."""
+        return replace(self, noise="none", sigma=0.0, resolution=0.0)
+
+
+#: SICK LMS-200 as in the paper: 180 degrees at 1 degree (181 readings), 10 m, relative
+#: error below 0.8 %. Range resolution 1 mm (mm mode). Rate 10 Hz: a 181-value telegram
+#: takes about 97 ms at 38,400 baud, the usual RS-232 setting on a Pioneer
+#: (shared/hardware/sick-lms200.md).
+LMS200 = LadarProfile(
+    name="lms200",
+    source="paper (Sensor used); shared/hardware/sick-lms200.md (timing at 38400 baud)",
+)
+LMS200_IDEAL = replace(LMS200.noise_free, name="lms200-ideal")
+
+LADAR_PROFILES: dict[str, LadarProfile] = {p.name: p for p in (LMS200, LMS200_IDEAL)}
+
+
+def ladar_profile(name: str) -> LadarProfile:
+    """The named ladar profile; raises WorldError listing the known names."""
+    try:
+        return LADAR_PROFILES[name]
+    except KeyError:
+        known = ", ".join(sorted(LADAR_PROFILES))
+        raise WorldError(f"unknown ladar profile `{name}` (known: {known})") from None
+
+
+class Ladar:
+    """A ladar instance: turns ground-truth ray hits into scans, with seeded noise.
+
+    Parameters
+    ----------
+    profile : LadarProfile
+    rng : numpy.random.Generator
+        The only source of randomness (noise draws).
+    mount : (x, y, theta)
+        Ladar pose in the robot frame (m, m, rad).
+    oracle : bool
+        Exact ranges, no noise, and ``Scan.tangents`` / ``Scan.curvatures`` filled.
+    """
+
+    def __init__(self, profile: LadarProfile, rng: np.random.Generator,
+                 mount: tuple[float, float, float] = (0.0, 0.0, 0.0), oracle: bool = False):
+        self.profile = profile.noise_free if oracle else profile
+        self.oracle = oracle
+        self.rng = rng
+        self.mount = mount
+        bearings = self.profile.bearings() + mount[2]
+        bearings.setflags(write=False)
+        self.bearings = bearings
+        self._noise = np.empty(self.profile.beams)
+        self._angles = np.empty(self.profile.beams)
+
+    def origin(self, x: float, y: float, th: float) -> tuple[float, float]:
+        """World position of the ladar on a robot at ``(x, y, th)``."""
+        mx, my, _ = self.mount
+        c, s = math.cos(th), math.sin(th)
+        return x + c * mx - s * my, y + s * mx + c * my
+
+    def world_angles(self, th: float) -> np.ndarray:
+        """Beam directions in the world frame for heading ``th`` (reused buffer)."""
+        return np.add(self.bearings, th, out=self._angles)
+
+    def measure(self, hits: RayHits, heading: float, stamp: float) -> Scan:
+        """Turn the ground truth of one fan of rays into a scan.
+
+        ``hits`` must come from rays cast along :meth:`world_angles` (with ``detail`` in
+        oracle mode); ``heading`` is the robot's true heading (for the oracle's tangents).
+        """
+        p = self.profile
+        valid = hits.hit & (hits.ranges <= p.max_range)
+        ranges = np.where(valid, hits.ranges, p.max_range)
+        if p.noise != "none" and p.sigma > 0:
+            noise = self.rng.standard_normal(out=self._noise)
+            noise *= p.sigma
+            if p.noise == "relative":
+                noise *= ranges
+            noise[~valid] = 0.0
+            ranges += noise
+        if p.resolution > 0:
+            np.round(ranges / p.resolution, out=ranges)
+            ranges *= p.resolution
+        np.clip(ranges, 0.0, p.max_range, out=ranges)
+        tangents = curvatures = None
+        if self.oracle and hits.tangents is not None and hits.curvatures is not None:
+            tangents = np.where(valid, np.mod(hits.tangents - heading + math.pi, 2 * math.pi)
+                                - math.pi, math.nan)
+            curvatures = np.where(valid, hits.curvatures, math.nan)
+            tangents.setflags(write=False)
+            curvatures.setflags(write=False)
+        ranges.setflags(write=False)
+        valid.setflags(write=False)
+        return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
+                    max_range=p.max_range, tangents=tangents, curvatures=curvatures)

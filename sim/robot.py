@@ -1,0 +1,239 @@
+"""Robot profiles and unicycle kinematics integrated exactly, with acceleration limits.
+
+A step of length ``dt`` under a held command is split into at most three *phases*
+where the speed ``v`` and the turn rate ``omega`` each either ramp linearly (at the
+profile's acceleration) or hold. A phase with both held is an exact circular arc; a
+phase with a ramp is integrated by Gauss-Legendre quadrature on sub-pieces of at most
+0.25 rad of turning, accurate to machine precision for any tick length.
+
+>>> p = Phase(duration=math.pi, v0=1.0, a_v=0.0, w0=1.0, a_w=0.0)
+>>> x, y, th = integrate(0.0, 0.0, 0.0, p, math.pi)   # half a unit circle
+>>> round(x, 12) + 0.0, round(y, 12), round(th, 12)
+(0.0, 2.0, 3.14159265359)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from mdle.backend import RobotLimits
+from mdle.errors import WorldError
+
+__all__ = [
+    "OdometryNoise",
+    "RobotProfile",
+    "ROBOT_PROFILES",
+    "robot_profile",
+    "Phase",
+    "plan_phases",
+    "integrate",
+]
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
+_MAX_TURN_PER_PIECE = 0.25  # rad: keeps the quadrature error far below 1e-12
+
+
+@dataclass(frozen=True)
+class OdometryNoise:
+    """Seeded odometry error, drawn per step and accumulated (all zero: perfect odometry).
+
+    Standard deviations grow with the square root of the motion: ``distance`` (m per
+    sqrt(m) travelled), ``turn`` (rad per sqrt(rad) turned) and ``drift`` (heading error,
+    rad per sqrt(m) travelled).
+    """
+
+    distance: float = 0.0
+    turn: float = 0.0
+    drift: float = 0.0
+
+    @property
+    def enabled(self) -> bool:
+        """True when any error term is non-zero."""
+        return self.distance > 0 or self.turn > 0 or self.drift > 0
+
+
+@dataclass(frozen=True)
+class RobotProfile:
+    """A robot's body, limits, ladar mount and odometry model (SI units).
+
+    Attributes
+    ----------
+    name : str
+    radius : float, metres
+        Radius of the disc taken as the body, centred on the rotation centre.
+    max_speed, max_reverse_speed : float, m/s
+    max_turn_rate : float, rad/s
+    max_accel, max_decel : float, m/s^2 (``inf``: reaches any speed at once)
+    max_turn_accel : float, rad/s^2
+    ladar_mount : (x, y, theta)
+        Ladar origin in the robot frame (m, m, rad).
+    odometry : OdometryNoise
+    source : str
+        Where the numbers come from.
+    """
+
+    name: str
+    radius: float
+    max_speed: float
+    max_reverse_speed: float
+    max_turn_rate: float
+    max_accel: float = math.inf
+    max_decel: float = math.inf
+    max_turn_accel: float = math.inf
+    ladar_mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    odometry: OdometryNoise = field(default_factory=OdometryNoise)
+    source: str = ""
+
+    @property
+    def limits(self) -> RobotLimits:
+        """The backend-facing limits."""
+        return RobotLimits(max_speed=self.max_speed, max_reverse_speed=self.max_reverse_speed,
+                           max_turn_rate=self.max_turn_rate, max_accel=self.max_accel,
+                           max_decel=self.max_decel, max_turn_accel=self.max_turn_accel,
+                           radius=self.radius)
+
+    def with_overrides(self, **changes: Any) -> "RobotProfile":
+        """A copy with some fields replaced (values already in SI)."""
+        return replace(self, **changes)
+
+
+#: Pioneer 2-DX. Body radius, absolute speed limits and laser mount from ARIA's robot
+#: parameter file ``params/p2dx.p`` (RobotRadius 250 mm, MaxVelocity 2200 mm/s,
+#: MaxRVelocity 500 deg/s, LaserX 17 mm, LaserY 8 mm). Translational acceleration
+#: 300 mm/s^2 as the Pioneer simulator ramps (shared/hardware/pioneer-arcos.md: 0 -> 90
+#: -> 180 -> 200 mm/s over three 100 ms cycles); deceleration taken equal. Rotational
+#: acceleration 100 deg/s^2 is the ARCOS firmware's usual default (not verified against
+#: a robot's FLASH settings: override it in the world file if yours differ).
+PIONEER2DX = RobotProfile(
+    name="pioneer2dx",
+    radius=0.25,
+    max_speed=2.2,
+    max_reverse_speed=2.2,
+    max_turn_rate=math.radians(500.0),
+    max_accel=0.3,
+    max_decel=0.3,
+    max_turn_accel=math.radians(100.0),
+    ladar_mount=(0.017, 0.008, 0.0),
+    source="ARIA params/p2dx.p; shared/hardware/pioneer-arcos.md (simulator ramp); "
+           "ARCOS default rotational acceleration",
+)
+
+#: The paper's Matlab robot: a point unicycle at unit speed, |omega| <= 3 rad/s
+#: (control-law.md, section 0), reaching any command at once.
+IDEAL = RobotProfile(
+    name="ideal",
+    radius=0.0,
+    max_speed=1.0,
+    max_reverse_speed=1.0,
+    max_turn_rate=3.0,
+    source="paper's simulations; control-law.md (umax = 3 rad/s)",
+)
+
+ROBOT_PROFILES: dict[str, RobotProfile] = {p.name: p for p in (PIONEER2DX, IDEAL)}
+
+
+def robot_profile(name: str) -> RobotProfile:
+    """The named robot profile; raises WorldError listing the known names."""
+    try:
+        return ROBOT_PROFILES[name]
+    except KeyError:
+        known = ", ".join(sorted(ROBOT_PROFILES))
+        raise WorldError(f"unknown robot profile `{name}` (known: {known})") from None
+
+
+@dataclass(frozen=True)
+class Phase:
+    """A stretch of motion with linear speed and turn-rate profiles.
+
+    ``v(t) = v0 + a_v t`` (m/s), ``omega(t) = w0 + a_w t`` (rad/s), ``0 <= t <= duration``.
+    """
+
+    duration: float
+    v0: float
+    a_v: float
+    w0: float
+    a_w: float
+
+    def v_at(self, t: float) -> float:
+        """Speed at time ``t`` into the phase."""
+        return self.v0 + self.a_v * t
+
+    def w_at(self, t: float) -> float:
+        """Turn rate at time ``t`` into the phase."""
+        return self.w0 + self.a_w * t
+
+    @property
+    def max_abs_v(self) -> float:
+        """Largest |v| over the phase (v is linear, so at an end)."""
+        return max(abs(self.v0), abs(self.v_at(self.duration)))
+
+
+def _ramp(cur: float, target: float, accel: float, decel: float) -> tuple[float, float]:
+    """(rate, time to reach) for one axis; slowing down uses ``decel``."""
+    diff = target - cur
+    if diff == 0.0:
+        return 0.0, 0.0
+    rate = decel if cur * diff < 0 else accel
+    if not math.isfinite(rate):
+        return math.inf, 0.0
+    return math.copysign(rate, diff), abs(diff) / rate
+
+
+def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
+                profile: RobotProfile) -> tuple[list[Phase], float, float]:
+    """Split ``dt`` seconds under command ``(v_cmd, w_cmd)`` into phases.
+
+    Returns the phases and the speed and turn rate at the end.
+    Infinite accelerations jump to the command at the start.
+    """
+    av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel)
+    aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_accel)
+    if math.isinf(av):
+        v, av, tv = v_cmd, 0.0, 0.0
+    if math.isinf(aw):
+        w, aw, tw = w_cmd, 0.0, 0.0
+    cuts = sorted({0.0, dt, *(t for t in (tv, tw) if 0.0 < t < dt)})
+    phases = []
+    for t0, t1 in zip(cuts[:-1], cuts[1:]):
+        a_v = av if t0 < tv else 0.0
+        a_w = aw if t0 < tw else 0.0
+        v0 = v_cmd if t0 >= tv and tv > 0 else v + av * t0
+        w0 = w_cmd if t0 >= tw and tw > 0 else w + aw * t0
+        phases.append(Phase(t1 - t0, v0, a_v, w0, a_w))
+    v_end = v_cmd if tv <= dt else v + av * dt
+    w_end = w_cmd if tw <= dt else w + aw * dt
+    return phases, v_end, w_end
+
+
+def _sinc(x: float) -> float:
+    if abs(x) < 1e-4:
+        return 1.0 - x * x / 6.0
+    return math.sin(x) / x
+
+
+def integrate(x: float, y: float, th: float, phase: Phase, tau: float
+              ) -> tuple[float, float, float]:
+    """Pose after ``tau`` seconds of ``phase`` from ``(x, y, th)`` (exact)."""
+    if tau <= 0.0:
+        return x, y, th
+    if phase.a_v == 0.0 and phase.a_w == 0.0:
+        dth = phase.w0 * tau
+        chord = phase.v0 * tau * _sinc(dth / 2.0)
+        mid = th + dth / 2.0
+        return x + chord * math.cos(mid), y + chord * math.sin(mid), th + dth
+    # Ramp: theta(t) is quadratic; integrate v cos(theta), v sin(theta) piecewise.
+    turn = abs(phase.w0) * tau + 0.5 * abs(phase.a_w) * tau * tau
+    pieces = max(1, int(math.ceil(turn / _MAX_TURN_PER_PIECE)))
+    edges = np.linspace(0.0, tau, pieces + 1)
+    half = (edges[1:] - edges[:-1])[:, None] / 2.0
+    t = (edges[:-1, None] + half) + half * _GL_X[None, :]
+    theta = th + phase.w0 * t + 0.5 * phase.a_w * t * t
+    v = phase.v0 + phase.a_v * t
+    wts = half * _GL_W[None, :]
+    dx = float(np.sum(wts * v * np.cos(theta)))
+    dy = float(np.sum(wts * v * np.sin(theta)))
+    return x + dx, y + dy, th + phase.w0 * tau + 0.5 * phase.a_w * tau * tau

@@ -1,0 +1,449 @@
+"""World files: YAML (metres and degrees) to a validated :class:`sim.world.World`.
+
+Loading validates everything and reports the first problem as a
+:class:`mdle.errors.WorldError` naming the file, the line and column, and the key path
+(``obstacles[3].points``) with what was wrong. Only ``yaml`` safe loading is used.
+The format is documented in ``docs/worlds.md``.
+
+>>> w = parse_world('''
+... name: demo
+... start: {x: 0, y: 0, theta: 90}
+... obstacles:
+...   - {type: circle, center: [3, 0], radius: 1}
+... ''')
+>>> w.name, round(w.start_pose.theta, 6), type(w.obstacles[0]).__name__
+('demo', 1.570796, 'Circle')
+>>> parse_world("obstacles:\\n  - {type: circle, center: [3, 0]}\\n", file="bad.yaml")
+Traceback (most recent call last):
+  ...
+mdle.errors.WorldError: bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, radius)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mdle.backend import Pose
+from mdle.errors import Diagnostic, Span, WorldError
+
+__all__ = ["parse_world", "read_world", "OBSTACLE_TYPES"]
+
+#: Keys each obstacle type requires and allows (besides ``type`` and ``name``).
+OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "polygon": (("points",), ()),
+    "rectangle": (("center", "size"), ("angle",)),
+    "circle": (("center", "radius"), ()),
+    "ellipse": (("center", "axes"), ("angle",)),
+    "wall": (("points",), ("thickness", "closed")),
+    "arc": (("center", "radius", "start", "end"), ("thickness",)),
+    "curve": (("points",), ("thickness", "closed", "spacing")),
+}
+_TOP_KEYS = ("name", "description", "seed", "start", "robot", "ladar", "extent", "obstacles")
+_ROBOT_KEYS = ("profile", "radius", "max_speed", "max_reverse_speed", "max_turn_rate",
+               "max_accel", "max_decel", "max_turn_accel", "ladar_mount", "odometry")
+_LADAR_KEYS = ("profile", "beams", "fov", "max_range", "noise", "sigma", "resolution", "rate")
+_ODOM_KEYS = ("distance", "turn", "drift")
+_DEFAULT_WALL_THICKNESS = 0.1
+
+
+@dataclass
+class _Doc:
+    """The YAML text, its file name, and where each key path starts."""
+
+    file: str
+    text: str
+    marks: dict[str, tuple[int, int, int]] = field(default_factory=dict)
+
+    def fail(self, path: str, problem: str) -> WorldError:
+        where = self.marks.get(path)
+        probe = path
+        while where is None and probe:   # fall back to the nearest enclosing key
+            probe = probe.rpartition(".")[0] if "." in probe else (
+                probe.rpartition("[")[0] if "[" in probe else "")
+            where = self.marks.get(probe)
+        span = None
+        if where is not None:
+            line, col, width = where
+            span = Span(self.file, line, col, line, col + max(1, width))
+        elif self.file:
+            span = Span(self.file, 1, 1, 1, 1)
+        msg = f"{path}: {problem}" if path else problem
+        return WorldError(Diagnostic(span, msg), sources={self.file: self.text})
+
+
+def _to_python(node: Any, path: str, doc: _Doc, loader: Any) -> Any:
+    """Convert a composed YAML node to Python values, recording each path's position."""
+    import yaml
+
+    m = node.start_mark
+    width = (node.end_mark.index - m.index) if node.end_mark.line == m.line else 1
+    doc.marks[path] = (m.line + 1, m.column + 1, width)
+    if isinstance(node, yaml.MappingNode):
+        out: dict[str, Any] = {}
+        for knode, vnode in node.value:
+            key = loader.construct_object(knode, deep=True)
+            if not isinstance(key, str):
+                km = knode.start_mark
+                doc.marks[path + ".?"] = (km.line + 1, km.column + 1, 1)
+                raise doc.fail(path + ".?", f"keys must be names, got {key!r}")
+            sub = f"{path}.{key}" if path else key
+            if key in out:
+                km = knode.start_mark
+                doc.marks[sub] = (km.line + 1, km.column + 1, len(key))
+                raise doc.fail(sub, "key given twice")
+            out[key] = _to_python(vnode, sub, doc, loader)
+            km = knode.start_mark
+            doc.marks.setdefault(sub + "#key", (km.line + 1, km.column + 1, len(key)))
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        return [_to_python(v, f"{path}[{i}]", doc, loader) for i, v in enumerate(node.value)]
+    return loader.construct_object(node, deep=True)
+
+
+# ---------------------------------------------------------------- value checkers
+def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False
+            ) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise doc.fail(path, f"expected a number, got {_show(v)}")
+    x = float(v)
+    if not math.isfinite(x):
+        raise doc.fail(path, f"expected a finite number, got {v}")
+    if positive and x <= 0:
+        raise doc.fail(path, f"must be positive, got {v}")
+    if nonneg and x < 0:
+        raise doc.fail(path, f"must not be negative, got {v}")
+    return x
+
+
+def _integer(doc: _Doc, path: str, v: Any, *, minimum: int = 0) -> int:
+    if isinstance(v, bool) or not isinstance(v, int):
+        raise doc.fail(path, f"expected a whole number, got {_show(v)}")
+    if v < minimum:
+        raise doc.fail(path, f"must be at least {minimum}, got {v}")
+    return int(v)
+
+
+def _boolean(doc: _Doc, path: str, v: Any) -> bool:
+    if not isinstance(v, bool):
+        raise doc.fail(path, f"expected true or false, got {_show(v)}")
+    return v
+
+
+def _string(doc: _Doc, path: str, v: Any) -> str:
+    if not isinstance(v, str):
+        raise doc.fail(path, f"expected text, got {_show(v)}")
+    return v
+
+
+def _point(doc: _Doc, path: str, v: Any) -> tuple[float, float]:
+    if not isinstance(v, list) or len(v) != 2:
+        raise doc.fail(path, f"expected a point [x, y] in metres, got {_show(v)}")
+    return (_number(doc, f"{path}[0]", v[0]), _number(doc, f"{path}[1]", v[1]))
+
+
+def _points(doc: _Doc, path: str, v: Any, minimum: int, what: str) -> tuple[tuple[float, float], ...]:
+    if not isinstance(v, list):
+        raise doc.fail(path, f"expected a list of [x, y] points, got {_show(v)}")
+    if len(v) < minimum:
+        raise doc.fail(path, f"{what} needs at least {minimum} points, got {len(v)}")
+    pts = tuple(_point(doc, f"{path}[{i}]", p) for i, p in enumerate(v))
+    for i in range(1, len(pts)):
+        if pts[i] == pts[i - 1]:
+            raise doc.fail(f"{path}[{i}]", f"repeats the previous point {list(pts[i])}")
+    return pts
+
+
+def _show(v: Any) -> str:
+    if isinstance(v, dict):
+        return "a mapping"
+    if isinstance(v, list):
+        return f"a list of {len(v)}"
+    if v is None:
+        return "nothing"
+    return repr(v)
+
+
+def _mapping(doc: _Doc, path: str, v: Any, allowed: tuple[str, ...], what: str) -> dict[str, Any]:
+    if not isinstance(v, dict):
+        raise doc.fail(path, f"expected a mapping ({what}), got {_show(v)}")
+    for k in v:
+        if k not in allowed:
+            sub = f"{path}.{k}" if path else k
+            doc.marks[sub] = doc.marks.get(sub + "#key", doc.marks.get(sub, (1, 1, 1)))
+            hint = _closest(k, allowed)
+            raise doc.fail(sub, f"unknown key `{k}`" + (f" (did you mean `{hint}`?)" if hint
+                                                       else f"; allowed: {', '.join(allowed)}"))
+    return v
+
+
+def _closest(word: str, options: tuple[str, ...]) -> str | None:
+    import difflib
+
+    m = difflib.get_close_matches(word, options, n=1, cutoff=0.6)
+    return m[0] if m else None
+
+
+# ---------------------------------------------------------------- sections
+def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
+    from sim import shapes
+
+    if not isinstance(v, dict):
+        raise doc.fail(path, f"expected a mapping with a `type`, got {_show(v)}")
+    kind = v.get("type")
+    if kind is None:
+        raise doc.fail(path, f"missing key `type` (one of: {', '.join(OBSTACLE_TYPES)})")
+    if kind not in OBSTACLE_TYPES:
+        hint = _closest(str(kind), tuple(OBSTACLE_TYPES))
+        raise doc.fail(f"{path}.type", f"unknown obstacle type {kind!r}"
+                       + (f" (did you mean `{hint}`?)" if hint else "")
+                       + f"; one of: {', '.join(OBSTACLE_TYPES)}")
+    required, optional = OBSTACLE_TYPES[kind]
+    _mapping(doc, path, v, ("type", "name", *required, *optional), f"a {kind}")
+    for key in required:
+        if key not in v:
+            raise doc.fail(path, f"missing key `{key}` (a {kind} needs {', '.join(required)})")
+    name = _string(doc, f"{path}.name", v["name"]) if "name" in v else ""
+    P = lambda key: f"{path}.{key}"  # noqa: E731
+
+    if kind == "polygon":
+        pts = _points(doc, P("points"), v["points"], 3, "a polygon")
+        shape: Any = shapes.Polygon(pts, name)
+        g = shape.geometry()
+        if not g.is_valid or g.area <= 0:
+            raise doc.fail(P("points"), "the polygon crosses itself or has no area")
+        return shape
+    if kind == "rectangle":
+        c = _point(doc, P("center"), v["center"])
+        size = v["size"]
+        if not isinstance(size, list) or len(size) != 2:
+            raise doc.fail(P("size"), f"expected [width, height] in metres, got {_show(size)}")
+        w = _number(doc, P("size") + "[0]", size[0], positive=True)
+        h = _number(doc, P("size") + "[1]", size[1], positive=True)
+        ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0)))
+        return shapes.Rectangle(c, (w, h), ang, name)
+    if kind == "circle":
+        return shapes.Circle(_point(doc, P("center"), v["center"]),
+                             _number(doc, P("radius"), v["radius"], positive=True), name)
+    if kind == "ellipse":
+        c = _point(doc, P("center"), v["center"])
+        ax = v["axes"]
+        if not isinstance(ax, list) or len(ax) != 2:
+            raise doc.fail(P("axes"), f"expected semi-axes [a, b] in metres, got {_show(ax)}")
+        a = _number(doc, P("axes") + "[0]", ax[0], positive=True)
+        b = _number(doc, P("axes") + "[1]", ax[1], positive=True)
+        ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0)))
+        return shapes.Ellipse(c, (a, b), ang, name)
+    if kind == "wall":
+        closed = _boolean(doc, P("closed"), v.get("closed", False))
+        pts = _points(doc, P("points"), v["points"], 3 if closed else 2,
+                      "a closed wall" if closed else "a wall")
+        t = _number(doc, P("thickness"), v.get("thickness", _DEFAULT_WALL_THICKNESS),
+                    positive=True)
+        shape = shapes.Wall(pts, t, closed, name)
+        if shape.geometry().is_empty:
+            raise doc.fail(P("points"), "the wall has no area")
+        return shape
+    if kind == "arc":
+        c = _point(doc, P("center"), v["center"])
+        r = _number(doc, P("radius"), v["radius"], positive=True)
+        a0 = math.radians(_number(doc, P("start"), v["start"]))
+        a1 = math.radians(_number(doc, P("end"), v["end"]))
+        t = _number(doc, P("thickness"), v.get("thickness", _DEFAULT_WALL_THICKNESS),
+                    positive=True)
+        if t >= 2 * r:
+            raise doc.fail(P("thickness"), f"must be less than twice the radius ({2 * r} m)")
+        if abs(a1 - a0) < 1e-12:
+            raise doc.fail(P("end"), "must differ from `start` (the arc runs counter-clockwise "
+                           "from start to end)")
+        return shapes.Arc(c, r, a0, a1, t, name)
+    # curve
+    closed = _boolean(doc, P("closed"), v.get("closed", False))
+    pts = _points(doc, P("points"), v["points"], 3 if closed else 2,
+                  "a closed curve" if closed else "a curve")
+    if "thickness" in v:
+        t: float | None = _number(doc, P("thickness"), v["thickness"], positive=True)
+    elif closed:
+        t = None
+    else:
+        raise doc.fail(path, "missing key `thickness` (an open curve is a wall and needs one)")
+    spacing = _number(doc, P("spacing"), v.get("spacing", 0.05), positive=True)
+    shape = shapes.Curve(pts, t, closed, spacing, name)
+    g = shape.geometry()
+    if not g.is_valid or g.area <= 0:
+        raise doc.fail(P("points"), "the curve crosses itself (or its thickness folds it)")
+    return shape
+
+
+def _robot(doc: _Doc, path: str, v: Any) -> Any:
+    from sim.robot import OdometryNoise, robot_profile
+
+    if isinstance(v, str):
+        return _named(doc, path, v, robot_profile)
+    m = _mapping(doc, path, v, _ROBOT_KEYS, "a profile name, or `profile` and overrides")
+    base = _named(doc, f"{path}.profile", m.get("profile", "pioneer2dx"), robot_profile)
+    ch: dict[str, Any] = {}
+    for key in ("radius",):
+        if key in m:
+            ch[key] = _number(doc, f"{path}.{key}", m[key], nonneg=True)
+    for key in ("max_speed", "max_reverse_speed", "max_accel", "max_decel"):
+        if key in m:
+            ch[key] = _number(doc, f"{path}.{key}", m[key], positive=True)
+    for key in ("max_turn_rate", "max_turn_accel"):
+        if key in m:
+            ch[key] = math.radians(_number(doc, f"{path}.{key}", m[key], positive=True))
+    if "ladar_mount" in m:
+        lm = m["ladar_mount"]
+        if not isinstance(lm, list) or len(lm) != 3:
+            raise doc.fail(f"{path}.ladar_mount", f"expected [x, y, theta] (m, m, deg), got "
+                           f"{_show(lm)}")
+        ch["ladar_mount"] = (_number(doc, f"{path}.ladar_mount[0]", lm[0]),
+                             _number(doc, f"{path}.ladar_mount[1]", lm[1]),
+                             math.radians(_number(doc, f"{path}.ladar_mount[2]", lm[2])))
+    if "odometry" in m:
+        o = _mapping(doc, f"{path}.odometry", m["odometry"], _ODOM_KEYS, "odometry noise")
+        vals = {k: _number(doc, f"{path}.odometry.{k}", o.get(k, 0.0), nonneg=True)
+                for k in _ODOM_KEYS}
+        ch["odometry"] = OdometryNoise(distance=vals["distance"],
+                                       turn=vals["turn"] * math.sqrt(math.pi / 180.0),
+                                       drift=math.radians(vals["drift"]))
+    return base.with_overrides(**ch)
+
+
+def _ladar(doc: _Doc, path: str, v: Any) -> Any:
+    from sim.ladar import NOISE_MODELS, ladar_profile
+
+    if isinstance(v, str):
+        return _named(doc, path, v, ladar_profile)
+    m = _mapping(doc, path, v, _LADAR_KEYS, "a profile name, or `profile` and overrides")
+    base = _named(doc, f"{path}.profile", m.get("profile", "lms200"), ladar_profile)
+    ch: dict[str, Any] = {}
+    if "beams" in m:
+        ch["beams"] = _integer(doc, f"{path}.beams", m["beams"], minimum=1)
+    if "fov" in m:
+        fov = _number(doc, f"{path}.fov", m["fov"], positive=True)
+        if fov > 360:
+            raise doc.fail(f"{path}.fov", f"must be at most 360 degrees, got {m['fov']}")
+        ch["fov"] = math.radians(fov)
+    if "max_range" in m:
+        ch["max_range"] = _number(doc, f"{path}.max_range", m["max_range"], positive=True)
+    if "noise" in m:
+        if m["noise"] not in NOISE_MODELS:
+            raise doc.fail(f"{path}.noise", f"unknown noise model {m['noise']!r}; one of: "
+                           f"{', '.join(NOISE_MODELS)}")
+        ch["noise"] = m["noise"]
+    for key in ("sigma", "resolution", "rate"):
+        if key in m:
+            ch[key] = _number(doc, f"{path}.{key}", m[key], nonneg=True)
+    return base.with_overrides(**ch)
+
+
+def _named(doc: _Doc, path: str, v: Any, lookup: Callable[[str], Any]) -> Any:
+    name = _string(doc, path, v)
+    try:
+        return lookup(name)
+    except WorldError as err:
+        raise doc.fail(path, err.diagnostics[0].message) from None
+
+
+def _start(doc: _Doc, path: str, v: Any) -> Pose:
+    if isinstance(v, list):
+        if len(v) != 3:
+            raise doc.fail(path, f"expected [x, y, theta] (m, m, deg), got {_show(v)}")
+        x, y, th = (_number(doc, f"{path}[{i}]", v[i]) for i in range(3))
+    else:
+        m = _mapping(doc, path, v, ("x", "y", "theta"), "x, y in metres, theta in degrees")
+        for key in ("x", "y"):
+            if key not in m:
+                raise doc.fail(path, f"missing key `{key}`")
+        x = _number(doc, f"{path}.x", m["x"])
+        y = _number(doc, f"{path}.y", m["y"])
+        th = _number(doc, f"{path}.theta", m.get("theta", 0.0))
+    return Pose(x, y, math.radians(th))
+
+
+def parse_world(text: str, file: str = "<string>", default_name: str = "world") -> Any:
+    """Parse and validate world YAML text; returns a :class:`sim.world.World`.
+
+    Raises
+    ------
+    WorldError
+        With the file, line, column, key path and problem of the first error found.
+    """
+    import yaml
+
+    from sim.ladar import LMS200
+    from sim.robot import PIONEER2DX
+    from sim.world import World
+
+    doc = _Doc(file, text)
+    try:
+        loader = yaml.SafeLoader(text)
+        try:
+            node = loader.get_single_node()
+            data = {} if node is None else _to_python(node, "", doc, loader)
+        finally:
+            loader.dispose()
+    except yaml.MarkedYAMLError as err:
+        mark = err.problem_mark or err.context_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
+        doc.marks["<yaml>"] = (line, col, 1)
+        problem = err.problem or err.context or "malformed YAML"
+        raise doc.fail("<yaml>", f"not valid YAML: {problem}") from None
+    except yaml.YAMLError as err:
+        raise doc.fail("", f"not valid YAML: {err}") from None
+    if data is None:
+        data = {}
+    top = _mapping(doc, "", data, _TOP_KEYS, "a world")
+    name = _string(doc, "name", top["name"]) if "name" in top else default_name
+    description = _string(doc, "description", top.get("description", ""))
+    seed = _integer(doc, "seed", top["seed"]) if "seed" in top else 0
+    start = _start(doc, "start", top["start"]) if "start" in top else Pose()
+    robot = _robot(doc, "robot", top["robot"]) if "robot" in top else PIONEER2DX
+    ladar = _ladar(doc, "ladar", top["ladar"]) if "ladar" in top else LMS200
+    extent = None
+    if "extent" in top:
+        e = top["extent"]
+        if not isinstance(e, list) or len(e) != 4:
+            raise doc.fail("extent", f"expected [xmin, ymin, xmax, ymax] in metres, got {_show(e)}")
+        ex = tuple(_number(doc, f"extent[{i}]", e[i]) for i in range(4))
+        if ex[2] <= ex[0] or ex[3] <= ex[1]:
+            raise doc.fail("extent", "xmax and ymax must exceed xmin and ymin")
+        extent = (ex[0], ex[1], ex[2], ex[3])
+    obs_raw = top.get("obstacles", [])
+    if obs_raw is None:
+        obs_raw = []
+    if not isinstance(obs_raw, list):
+        raise doc.fail("obstacles", f"expected a list of obstacles, got {_show(obs_raw)}")
+    obstacles = tuple(_obstacle(doc, f"obstacles[{i}]", o) for i, o in enumerate(obs_raw))
+    world = World(name=name, obstacles=obstacles, start_pose=start, seed=seed, robot=robot,
+                  ladar=ladar, description=description,
+                  source=None if file.startswith("<") else file, extent=extent)
+    clearance = world.clearance((start.x, start.y), robot.radius) if obstacles else math.inf
+    if clearance < 0:
+        near = world.nearest_boundary((start.x, start.y)).obstacle
+        what = _describe(obstacles[near], near)
+        raise doc.fail("start", f"the robot ({robot.name}, radius {robot.radius} m) at "
+                       f"({start.x:g}, {start.y:g}) overlaps {what}")
+    return world
+
+
+def _describe(shape: Any, index: int) -> str:
+    label = f"obstacles[{index}] ({shape.kind}"
+    return label + (f" `{shape.name}`)" if shape.name else ")")
+
+
+def read_world(path: str | os.PathLike[str]) -> Any:
+    """Read and validate a world file; raises WorldError if unreadable or invalid."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise WorldError(f"world file not found: {p}") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise WorldError(f"cannot read world file {p}: {err}") from None
+    return parse_world(text, file=str(path), default_name=p.stem)
