@@ -180,8 +180,9 @@ def run(args: argparse.Namespace) -> int:
                                                   else ""), file=sys.stderr)
             return signals.exit_code
         if result.collided or result.fault:
-            why = "collided" if result.collided else result.fault
-            print(f"mdle run: {why}", file=sys.stderr)
+            why = [w for w in ("the robot collided" if result.collided else None,
+                               result.fault) if w]
+            print(f"mdle run: {'; '.join(why)}", file=sys.stderr)
             return output.EXIT_COLLISION
         return output.EXIT_OK
     finally:

@@ -312,15 +312,16 @@ class Scheduler:
         if self._t0 is None:
             self._t0 = now
             self._descend(self._root, now, ctx)
-        elif self.until is not None and now - self._t0 >= self.until - TIME_EPS:
-            self._finish(Cause.STOPPED, None)
-            return False
-        if self.stall_timeout is not None and (obs.stalled or not obs.motors_enabled
-                                               or self._stall_since is not None):
-            if self._stall_check(obs, now):
-                return False
-
-        self._settle(ctx, now, tick)
+        fault = None
+        if self.until is not None and now - self._t0 >= self.until - TIME_EPS:
+            self._end_from(0, Cause.STOPPED, now, all_levels=True)
+        elif self.stall_timeout is not None and (obs.stalled or not obs.motors_enabled
+                                                 or self._stall_since is not None):
+            fault = self._stall_check(obs, now)
+            if fault is not None:
+                self._end_from(0, Cause.ERROR, now, all_levels=True)
+        if self._stack:
+            self._settle(ctx, now, tick)
 
         stack = self._stack
         if stack and stack[-1].slot.is_atom:
@@ -362,7 +363,7 @@ class Scheduler:
             for o in self.observers:
                 o.on_tick(sample)
         if not running:
-            self._finish(None, None)
+            self._finish(None, fault)
         return running
 
     def _settle(self, ctx: Context, now: float, tick: int) -> None:
@@ -452,13 +453,18 @@ class Scheduler:
                 return
             slot = slot.children[0]
 
-    def _end_from(self, level: int, cause: Cause, now: float) -> None:
-        """End the frames at ``level`` and below, innermost first (rule 3)."""
+    def _end_from(self, level: int, cause: Cause, now: float, all_levels: bool = False
+                  ) -> None:
+        """End the frames at ``level`` and below, innermost first (rule 3).
+
+        The frame at ``level`` ends with ``cause``, those inside it are ended by their
+        parent; with ``all_levels`` (an abort) every one of them ends with ``cause``.
+        """
         stack = self._stack
         while len(stack) > level:
             frame = stack.pop()
             slot = frame.slot
-            c = cause if len(stack) == level else Cause.ENDED_BY_PARENT
+            c = cause if all_levels or len(stack) == level else Cause.ENDED_BY_PARENT
             frame.state = None  # per-atom state is dropped with the atom
             self._terminations.append(Termination(slot.path, slot.level, c, now))
             self._emit(Event(now, EventKind.END, slot.path, slot.level, slot.kind,
@@ -469,25 +475,23 @@ class Scheduler:
         for o in self.observers:
             o.on_event(event)
 
-    def _stall_check(self, obs: Observation, now: float) -> bool:
-        """Abort when the robot has been stalled or refusing to move for too long."""
-        if self.stall_timeout is None:
-            return False
+    def _stall_check(self, obs: Observation, now: float) -> str | None:
+        """The fault when the robot has been stalled or refusing to move for too long."""
+        assert self.stall_timeout is not None
         refusing = not obs.motors_enabled and (self._last_cmd.v != 0.0
                                                or self._last_cmd.omega != 0.0)
         if not (obs.stalled or refusing):
             self._stall_since = None
-            return False
+            return None
         if self._stall_since is None:
             self._stall_since = now
-            return False
+            return None
         if now - self._stall_since < self.stall_timeout - TIME_EPS:
-            return False
-        what = ("stalled" if obs.stalled else
-                "refused to move (motors disabled)")
-        self._finish(Cause.ERROR, f"the robot {what} for {now - self._stall_since:.1f} s "
-                                  f"at t = {now - (self._t0 or now):.1f} s")
-        return True
+            return None
+        what = "stalled" if obs.stalled else "refused to move (motors disabled)"
+        t0 = self._t0 if self._t0 is not None else now
+        return (f"the robot {what} for {now - self._stall_since:.1f} s "
+                f"(since t = {self._stall_since - t0:.1f} s)")
 
     def _finish(self, cause: Cause | None, fault: str | None) -> None:
         """End every active element with ``cause``, stop the robot, build the result.

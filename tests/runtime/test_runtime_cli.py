@@ -1,0 +1,170 @@
+"""`mdle run` and `mdle plot` end to end: the installed command in a subprocess, the
+embedded simulator, traces that parse, plots that are written, exit codes, Ctrl-C."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from mdle.trace import read_trace
+
+FOLLOW = """\
+interrupt blocked(d = 0.5 m) = range(0 deg) < d
+atom cruise = (go(0.5 m/s), blocked(1.5 m), 30 s)
+atom follow = (follow_boundary(side = right, rc = 1 m, v = 0.5 m/s), never, 6 s)
+plan main = ((cruise, follow), stalled, 2 min)
+"""
+
+RAM = "plan main = ((go(0.5 m/s), never, 60 s), never, inf)\n"
+
+SPIN = """\
+atom spin = (turn(20 deg/s), never, inf)
+plan main = ((spin), never, inf)
+run main
+"""
+
+
+def _mdle() -> list[str]:
+    exe = Path(sys.executable).with_name("mdle")
+    if exe.exists():
+        return [str(exe)]
+    found = shutil.which("mdle")
+    assert found, "the `mdle` command is not installed"
+    return [found]
+
+
+def mdle(*args: str, cwd: Path | None = None, timeout: float = 120
+         ) -> subprocess.CompletedProcess[str]:
+    env = dict(os.environ, MPLBACKEND="Agg")
+    return subprocess.run([*_mdle(), *args], capture_output=True, text=True, cwd=cwd,
+                          timeout=timeout, env=env)
+
+
+@pytest.fixture
+def plan(tmp_path):
+    def write(text: str, name: str = "plan.mdle") -> Path:
+        p = tmp_path / name
+        p.write_text(text)
+        return p
+
+    return write
+
+
+def test_run_writes_trace_and_plot_and_summary(plan, tmp_path):
+    trace, png = tmp_path / "t.jsonl", tmp_path / "p.png"
+    res = mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "--trace", str(trace),
+               "--plot", str(png))
+    assert res.returncode == 0, res.stderr
+    assert "\x1b" not in res.stdout  # off a terminal: plain lines, no control codes
+    assert "start main/cruise" in res.stdout and "end   main/cruise  interrupt" in res.stdout
+    assert "elements run:" in res.stdout and "distance travelled:" in res.stdout
+    t = read_trace(trace)
+    assert t.header["world"]["name"] == "ellipse" and t.header["seed"] == 0
+    assert t.header["program"]["element"] == "main"
+    assert t.end["cause"] == "completed" and not t.end["collided"]
+    assert [(e["path"], e["cause"]) for e in t.events if e["kind"] == "end"] == [
+        ("main/cruise", "interrupt"), ("main/follow", "timer"), ("main", "completed")]
+    assert {"side_range", "side_curvature"} <= set(t.diag_names())
+    assert all("clearance" in s and "true_x" in s for s in t.samples)
+    assert png.read_bytes().startswith(b"\x89PNG")
+
+
+def test_world_beside_the_plan_is_used(plan, tmp_path):
+    import sim
+
+    world_file = Path(sim.__file__).parent / "worlds" / "ellipse.yaml"
+    shutil.copy(world_file, tmp_path / "plan.world.yaml")
+    trace = tmp_path / "t.jsonl"
+    res = mdle("run", str(plan(FOLLOW)), "--quiet", "--until", "2", "--trace", str(trace))
+    assert res.returncode == 0, res.stderr
+    assert res.stdout == ""
+    head = read_trace(trace).header
+    assert head["world"]["spec"] == str(tmp_path / "plan.world.yaml")
+    assert read_trace(trace).end["cause"] == "stopped"
+
+
+def test_default_world_when_none_is_given(plan, tmp_path):
+    trace = tmp_path / "t.jsonl"
+    res = mdle("run", str(plan(SPIN)), "-q", "--until", "1", "--trace", str(trace))
+    assert res.returncode == 0, res.stderr
+    t = read_trace(trace)
+    assert t.header["world"]["spec"] == "default" and len(t.samples) == 11
+
+
+def test_plan_errors_exit_1_with_check_style_messages(plan):
+    p = plan("plan main = ((cruise), never, inf)\n")
+    res = mdle("run", str(p))
+    assert res.returncode == 1
+    assert f"{p}:1:" in res.stderr and "error:" in res.stderr and "cruise" in res.stderr
+
+
+def test_unknown_element_and_world_exit_1(plan):
+    p = plan(FOLLOW)
+    res = mdle("run", str(p), "--plan", "cruse")
+    assert res.returncode == 1 and "did you mean `cruise`" in res.stderr
+    res = mdle("run", str(p), "--world", "elipse")
+    assert res.returncode == 1 and "ellipse" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_pioneer_backend_needs_a_connection(plan):
+    res = mdle("run", str(plan(FOLLOW)), "--backend", "pioneer")
+    assert res.returncode == 1 and "--connect" in res.stderr
+
+
+def test_collision_exits_3(plan, tmp_path):
+    trace = tmp_path / "t.jsonl"
+    res = mdle("run", str(plan(RAM)), "--world", "ellipse", "--trace", str(trace), "-q")
+    assert res.returncode == 3
+    assert "collided" in res.stderr
+    assert read_trace(trace).end["collided"] is True
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_signal_stops_the_robot_and_leaves_a_valid_trace(plan, tmp_path, sig, code):
+    trace = tmp_path / "t.jsonl"
+    env = dict(os.environ, MPLBACKEND="Agg")
+    proc = subprocess.Popen([*_mdle(), "run", str(plan(SPIN)), "--world", "empty",
+                             "--realtime", "--trace", str(trace)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:  # wait until the run is under way
+            if trace.exists() and trace.read_text().count('"type":"sample"') >= 3:
+                break
+            time.sleep(0.05)
+        else:
+            pytest.fail("the run never started")
+        proc.send_signal(sig)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == code, err
+    assert "robot stopped" in err
+    lines = trace.read_text().splitlines()
+    records = [json.loads(line) for line in lines]  # complete, strict JSON lines
+    assert records[-1]["type"] == "end" and records[-1]["cause"] == "stopped"
+    assert records[-2]["type"] == "event" and records[-2]["cause"] == "stopped"
+    assert "elements run:" in out
+
+
+def test_plot_command_writes_svg_and_reports_errors(plan, tmp_path):
+    trace = tmp_path / "t.jsonl"
+    assert mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "-q", "--until", "5",
+                "--trace", str(trace)).returncode == 0
+    svg = tmp_path / "p.svg"
+    res = mdle("plot", str(trace), "-o", str(svg))
+    assert res.returncode == 0, res.stderr
+    assert svg.read_text().lstrip().startswith("<?xml")
+    res = mdle("plot", str(trace), "-o", str(tmp_path / "p.gif"))
+    assert res.returncode == 1 and ".png, .svg or .pdf" in res.stderr
+    res = mdle("plot", str(tmp_path / "missing.jsonl"), "-o", str(svg))
+    assert res.returncode == 1 and "cannot read trace" in res.stderr
