@@ -72,7 +72,7 @@ class _Doc:
             span = Span(self.file, line, col, line, col + max(1, width))
         elif self.file:
             span = Span(self.file, 1, 1, 1, 1)
-        msg = f"{path}: {problem}" if path else problem
+        msg = f"{path}: {problem}" if path and not path.startswith("<") else problem
         return WorldError(Diagnostic(span, msg), sources={self.file: self.text})
 
 
