@@ -36,20 +36,22 @@ class TrivialBackend:
         self._k = 0
 
     def observe(self) -> Observation:
+        """The next prepared observation."""
         return self._obs[self._k]
 
     def command(self, cmd: Command) -> None:
-        pass
+        """Ignore the command."""
 
     def advance(self, dt: float) -> float:
+        """Move to the next observation."""
         self._k += 1
         return 0.0
 
     def stop(self) -> None:
-        pass
+        """Nothing to stop."""
 
     def close(self) -> None:
-        pass
+        """Nothing to close."""
 
 
 def _false(ctx: Context) -> bool:
@@ -97,6 +99,7 @@ def measure(ticks: int, trace: bool) -> float:
 
 
 def main() -> None:
+    """Print the figures."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ticks", type=int, default=100_000)
     parser.add_argument("--repeat", type=int, default=5)
@@ -107,7 +110,8 @@ def main() -> None:
     print(f"  trivial backend alone: {base * 1e6:6.2f} us/tick (subtracted below)")
     for trace in (False, True):
         best = min(measure(args.ticks, trace) for _ in range(args.repeat)) - base
-        label = "interpreter, trace record written" if trace else "interpreter, no observers        "
+        label = ("interpreter, trace record written" if trace
+                 else "interpreter, no observers        ")
         verdict = "ok" if best <= 10e-6 else "OVER the 10 us target"
         print(f"  {label}: {best * 1e6:6.2f} us/tick  ({verdict})")
 

@@ -149,7 +149,7 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
 
     colours = [f"C{i}" for i in range(10)]
     for i, (label, seg) in enumerate(_segments_by_atom(x, y, trace.paths()).items()):
-        ax.add_collection(LineCollection(seg, colors=colours[i % 10], lw=2.0, zorder=3,
+        ax.add_collection(LineCollection(list(seg), colors=colours[i % 10], lw=2.0, zorder=3,
                                          label=f"atom {label}"))
     ax.plot([x[0]], [y[0]], marker=(3, 0, math.degrees(trace.column("theta")[0]) - 90),
             ms=11, color="k", ls="none", zorder=5, label="start")

@@ -144,7 +144,7 @@ class TraceWriter:
             line += ',"clearance":%.9g' % s.clearance
         if s.collided is not None:
             line += ',"collided":%s' % ("true" if s.collided else "false")
-        if s.true_x is not None:
+        if s.true_x is not None and s.true_y is not None and s.true_theta is not None:
             line += ',"true_x":%.9g,"true_y":%.9g,"true_theta":%.9g' % (
                 s.true_x, s.true_y, s.true_theta)
         if s.diag:

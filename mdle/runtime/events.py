@@ -149,7 +149,9 @@ class RunResult:
 
     @property
     def ok(self) -> bool:
-        """True when the program ended by itself (completion, its interrupt or timer) and
-        the robot did not collide."""
+        """True when the program ended by itself and the robot did not collide.
+
+        Ending by itself means completion, or its own interrupt or timer.
+        """
         return (self.termination.cause in (Cause.COMPLETED, Cause.INTERRUPT, Cause.TIMER)
                 and not self.collided and self.fault is None)

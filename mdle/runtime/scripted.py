@@ -25,6 +25,8 @@ __all__ = ["ScriptedBackend", "Script", "IDEAL_LIMITS"]
 IDEAL_LIMITS = RobotLimits(max_speed=math.inf, max_reverse_speed=math.inf,
                            max_turn_rate=math.inf)
 
+_ORIGIN = Pose()
+
 #: Per-tick overrides of Observation fields: a sequence indexed by tick (ticks past its end
 #: get no override), or a function ``(time, tick) -> mapping``. Keys are Observation field
 #: names (``stalled``, ``truth``, ``pose``, ``scan``, ...).
@@ -71,7 +73,7 @@ class ScriptedBackend:
         Everything :meth:`observe` returned.
     """
 
-    def __init__(self, script: Script = (), *, start_time: float = 0.0, pose: Pose = Pose(),
+    def __init__(self, script: Script = (), *, start_time: float = 0.0, pose: Pose = _ORIGIN,
                  limits: RobotLimits = IDEAL_LIMITS,
                  scan: Callable[[float], Scan] | None = None,
                  scan_period: float | None = None, scan_delay: float = 0.0,

@@ -1,5 +1,8 @@
-"""`mdle run` and `mdle plot` end to end: the installed command in a subprocess, the
-embedded simulator, traces that parse, plots that are written, exit codes, Ctrl-C."""
+"""`mdle run` and `mdle plot` end to end.
+
+The installed command in a subprocess, the embedded simulator, traces that parse, plots
+that are written, exit codes, Ctrl-C.
+"""
 
 from __future__ import annotations
 

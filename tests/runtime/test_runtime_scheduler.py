@@ -1,5 +1,8 @@
-"""The scheduler beyond the ordering rules: per-atom state, the tick's Context, faults,
-aborts, the robot stopped on every path out, observers and the supervisor API."""
+"""The scheduler beyond the ordering rules.
+
+Per-atom state, the tick's Context, faults, aborts, the robot stopped on every path out,
+observers and the supervisor API.
+"""
 
 from __future__ import annotations
 
