@@ -32,7 +32,8 @@ from typing import Any
 from atoms.registry import BOOL, REQUIRED, LawSpec, Registry, SensorSpec
 from mdle import conditions as cond
 from mdle import syntax as st
-from mdle.dimensions import Quantity, Symbol, Value, dim_example, dim_words, fits, unit_for
+from mdle.dimensions import (Quantity, Symbol, Value, dim_example, dim_words, fits,
+                             show_value, unit_for)
 from mdle.errors import CheckError, Diagnostic, Severity, Span
 from mdle.format import format_expr
 from mdle.program import INF, AtomNode, Element, Interrupt, Program, StringKind, StringNode
@@ -489,7 +490,9 @@ class Checker:
                        f"`range(0 deg) < 1 m`, found {dim_words(t.dim)}",
                        hint="compare it with something, as in `range(0 deg) < 1 m`")
             raise _Abort
-        return cond.to_interrupt(t, format_expr(expr))
+        shown = {k: show_value(v) for k, v in env.items()
+                 if not (isinstance(v, Quantity) and math.isnan(v.value))}
+        return cond.to_interrupt(t, format_expr(expr, shown))
 
     # ------------------------------------------------------------------ elements
 

@@ -102,4 +102,6 @@ def show_value(value: Value) -> str:
         return "?"
     if value.dim is None or value.dim == NONE:
         return f"{value.value:g}"
-    return f"{value.value:g} {value.dim.symbol()}"
+    if value.dim in (ANGLE, TURN_RATE):  # angles read better in degrees
+        return f"{math.degrees(value.value):.6g} deg" + ("/s" if value.dim == TURN_RATE else "")
+    return f"{value.value:.6g} {value.dim.symbol()}"

@@ -19,7 +19,7 @@ formatting is idempotent.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from mdle import syntax as st
 
@@ -37,8 +37,11 @@ def format_source(text: str, file: str = "<string>") -> str:
     return format_module(parse_module(text, file))
 
 
-def format_expr(expr: st.Expr) -> str:
-    """An expression on one line (interrupt sources in traces and ``mdle show`` use this)."""
+def format_expr(expr: st.Expr, names: Mapping[str, str] | None = None) -> str:
+    """An expression on one line (interrupt sources in traces and ``mdle show`` use this).
+
+    ``names`` replaces names by texts (the checker shows a parameter's value this way).
+    """
     parts: list[str] = []
     stack: list[st.Expr | str] = [expr]
     # Iterative, so formatting never meets the recursion limit.
@@ -49,7 +52,7 @@ def format_expr(expr: st.Expr) -> str:
         elif isinstance(e, st.Number):
             parts.append(_number(e))
         elif isinstance(e, st.Name):
-            parts.append(e.name)
+            parts.append(names.get(e.name, e.name) if names else e.name)
         elif isinstance(e, st.Never):
             parts.append("never")
         elif isinstance(e, st.Inf):

@@ -79,7 +79,7 @@ def _cache_file(grammar: str) -> str | None:
 def lark_parser() -> Lark:
     """The LALR parser of ``mdle.lark``, built once per process (tables cached per user)."""
     grammar = importlib.resources.files("mdle.grammar").joinpath("mdle.lark").read_text("utf-8")
-    options: dict[str, Any] = dict(parser="lalr", lexer="contextual", propagate_positions=True,
+    options: dict[str, Any] = dict(parser="lalr", lexer="basic", propagate_positions=True,
                                    start=["start", "expr_start"], maybe_placeholders=True,
                                    transformer=_Build(),
                                    lexer_callbacks={"COMMENT": _on_comment, "LPAR": _on_open,
@@ -293,7 +293,7 @@ def _unknown_unit(unit: str, span: Span) -> Diagnostic:
     known = sorted(UNITS)
     parts = unit.split("/")
     bad = next((p for p in parts if p not in UNITS), unit)
-    close = difflib.get_close_matches(bad, known, n=1)
+    close = difflib.get_close_matches(bad, known, n=1, cutoff=0.5)
     hint = (f"did you mean `{close[0]}`? " if close else "") + \
         f"units are {', '.join(known)} and quotients such as m/s, deg/s"
     if bad in ("x", "y", "v", "t") or len(parts) == 1 and bad not in UNITS and not close:
@@ -433,8 +433,16 @@ def _offset_of(text: str, line: int, column: int) -> int:
     return min(len(text), offset + column - 1)
 
 
+_STATEMENT_TOKENS = frozenset({"ATOM", "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN"})
+
+
 def _resume_offset(source: str, err: UnexpectedInput | None, span: Span | None = None) -> int | None:
     at = _error_offset(source, err, span)
+    tok = getattr(err, "token", None)
+    if isinstance(err, UnexpectedToken) and tok is not None and tok.type in _STATEMENT_TOKENS \
+            and tok.start_pos is not None and tok.start_pos > 0 \
+            and not source[source.rfind("\n", 0, tok.start_pos) + 1:tok.start_pos].strip():
+        return int(tok.start_pos)  # the statement that interrupted the broken one is fine
     line_end = source.find("\n", at)
     if line_end < 0:
         return None
@@ -502,14 +510,23 @@ def _describe(err: UnexpectedInput, text: str, file: str, start: str,
         tok = err.token  # type: ignore[attr-defined]
         span = _token_span(file, tok)
         found = describe_token(tok.type, str(tok))
+        stack = getattr(getattr(err, "state", None), "value_stack", None) or []
+        if tok.type in _STATEMENT_TOKENS and stack:
+            # The next statement began before this one was complete: point just after
+            # the last thing this one has, where the missing part belongs.
+            line, col = _end(file, stack[-1])
+            if line:
+                span = Span(file, line, col, line, col + 1)
     expected = set(getattr(err, "expected", None) or getattr(err, "accepts", None) or ())
     if isinstance(err, UnexpectedToken) and err.accepts:
         expected = set(err.accepts)
     expected.discard("$END") if not at_end else None
 
     # A keyword where a name was expected: say so directly.
-    if not at_end and "NAME" in expected and str(err.token) in KEYWORDS:  # type: ignore[attr-defined]
+    if not at_end and "NAME" in expected and "NUMBER" not in expected and \
+            str(err.token) in KEYWORDS:  # type: ignore[attr-defined]
         word = str(err.token)  # type: ignore[attr-defined]
+        span = _token_span(file, err.token)  # type: ignore[attr-defined]
         return Diagnostic(span, f"`{word}` is a keyword of MDLe and cannot be used as a name",
                           hint=f"pick another name, such as `{word}_1`")
 
@@ -557,11 +574,44 @@ def _label(err: UnexpectedInput, source: str, start: str) -> Label | None:
             probe = _fail(_example_parse("start"), re.sub(r"[^\n]", " ", source[:at]) + source[at:])
     if probe is None or getattr(probe, "state", None) is None:
         return None
-    try:
-        return probe.match_examples(_example_parse("start"), EXAMPLES,  # type: ignore[no-any-return]
-                                    token_type_match_fallback=True)
-    except Exception:  # matching is a nicety; never let it hide the real error
-        return None
+    return _match(probe)
+
+
+@functools.lru_cache(maxsize=1)
+def _example_errors() -> tuple[tuple[Label, UnexpectedInput], ...]:
+    parse = _example_parse("start")
+    out = []
+    for label, snippets in EXAMPLES.items():
+        for snippet in snippets:
+            err = _fail(parse, snippet)
+            if err is not None and getattr(err, "state", None) is not None:
+                out.append((label, err))
+    return tuple(out)
+
+
+def _match(err: UnexpectedInput) -> Label | None:
+    """``UnexpectedInput.match_examples`` with its rules (same parser state and accepted
+    set; an exact token first, then the same token type, then the state alone), over
+    example errors computed once. (lark 1.3's own version can raise a TypeError while
+    formatting a debug message when two examples share a state.)"""
+    same_type: Label | None = None
+    same_state: Label | None = None
+    token = getattr(err, "token", None)
+    for label, ex in _example_errors():
+        if ex.state != err.state:
+            continue
+        if isinstance(err, UnexpectedToken) and isinstance(ex, UnexpectedToken) and \
+                ex.accepts != err.accepts:
+            continue
+        ex_token = getattr(ex, "token", None)
+        if token is not None and ex_token is not None:
+            if ex_token == token and ex_token.type == token.type:
+                return label
+            if ex_token.type == token.type and same_type is None:
+                same_type = label
+        if same_state is None:
+            same_state = label
+    return same_type or same_state
 
 
 def _fail(parse: Any, text: str) -> UnexpectedInput | None:

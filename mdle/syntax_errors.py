@@ -67,6 +67,8 @@ _UNCLOSED = Label("unbalanced parentheses: the file ends before a `(` is closed"
                   "add the missing `)`")
 _EXTRA_CLOSE = Label("unbalanced parentheses: this `)` has no matching `(`",
                      "remove it, or add the `(` it closes")
+_CLOSED_EARLY = Label("the definition is already complete before this: a `)` closes it too early",
+                      "check the parentheses: an element is ((elements), interrupt, timer)")
 _MISSING_COMMA = Label("two parts side by side: a comma or an operator is missing between them",
                        "parts of a tuple are separated by `,`; conditions are joined with "
                        "`and`, `or`, `xor`")
@@ -105,7 +107,6 @@ EXAMPLES: dict[Label, list[str]] = {
         "atom a = (go(1 m/s), never, 1 s) 1 s",
         "run a b",
         'import "a.mdle" b',
-        "atom a = stalled = 1",
     ],
     _UNCLOSED: [
         "atom a = (go(1 m/s), never, 1 s",
@@ -113,7 +114,6 @@ EXAMPLES: dict[Label, list[str]] = {
         "atom a = (go(1 m/s",
         "atom a = (go(1 m/s),",
         "atom a = (go(v = 1 m/s",
-        "atom a = (go(v = 1 m/s), never, 1 s)...",
         "behavior b = ([1, 2",
         "behavior b = ([1, 2,",
         "atom a(v = 1 m/s",
@@ -125,6 +125,12 @@ EXAMPLES: dict[Label, list[str]] = {
         "atom a = stalled)",
         "atom a = go())",
         "interrupt i = x > 1 m)",
+    ],
+    _CLOSED_EARLY: [
+        "atom a = (go(1 m/s), never, 1 s), b",
+        "atom a = b, c",
+        "atom a = (b, never, 1 s), never, 1 s)",
+        "interrupt i = x > 1 m, 2",
     ],
     _MISSING_COMMA: [
         "atom a = (go(1 m/s) never, 1 s)",
@@ -162,7 +168,6 @@ EXAMPLES: dict[Label, list[str]] = {
         "atom (go(1 m/s), never, 1 s)",
         "atom",
         "behavior 1 = b",
-        "atom atom",
     ],
     _IMPORT: [
         "import common.mdle",
