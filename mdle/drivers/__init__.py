@@ -13,3 +13,122 @@
 from __future__ import annotations
 
 __all__ = ["open_backend", "BACKEND_KINDS"]
+
+from typing import TYPE_CHECKING
+
+from mdle.errors import BackendError
+
+if TYPE_CHECKING:
+    from mdle.backend import Backend, RobotLimits
+
+#: The kinds :func:`open_backend` knows.
+BACKEND_KINDS: tuple[str, ...] = ("pioneer",)
+
+_CONNECT_TIMEOUT = 5.0
+
+
+def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: float = 10.0,
+                 limits: "RobotLimits | None" = None, options: object | None = None,
+                 laser_options: object | None = None) -> "Backend":
+    """Connect to a robot and return it as a wall-clock backend.
+
+    Parameters
+    ----------
+    kind : str
+        ``"pioneer"``: an ARCOS robot or MobileSim/AMRISim.
+    connect : str
+        ``tcp://HOST:PORT`` (simulators; port 8101 by default) or
+        ``serial:///dev/ttyUSB0?baud=9600`` (a robot; without ``baud`` the driver probes
+        9600 then 115200). Query options: ``model=p3dx`` (force a model's parameters)
+        and any :class:`~mdle.drivers.arcos.RobotParams` field, e.g. ``dist_conv=0.485``.
+    laser : str or None
+        ``sim`` (the simulators' laser over the robot connection; ``sim?max_range=8``
+        sets the no-return range in metres), ``lms200:///dev/ttyUSB1?baud=38400``
+        (a SICK LMS-200 on its own serial line) or None (no laser).
+    rate : float
+        The control rate the runtime ticks at, Hz.
+    limits : RobotLimits or None
+        Clamp commands to these; None takes the model's.
+    options, laser_options : PioneerOptions, Lms200Options or None
+        Timeouts and choices (tests shorten them).
+
+    Returns
+    -------
+    Backend
+        A :class:`~mdle.drivers.pioneer.PioneerBackend` (``clock = ClockMode.WALL``);
+        close it when done (it also stops the robot on SIGTERM and at exit).
+
+    Raises
+    ------
+    BackendError
+        Unknown kind, malformed URL, nothing answering, missing pyserial, ...
+    """
+    from dataclasses import fields, replace
+
+    from mdle.drivers.arcos import RobotParams
+    from mdle.drivers.lms200_driver import Lms200Driver, Lms200Options
+    from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
+    from mdle.drivers.transport import open_transport, parse_url
+
+    if kind not in BACKEND_KINDS:
+        raise BackendError(f"unknown hardware backend `{kind}`; known: "
+                           f"{', '.join(BACKEND_KINDS)}")
+    robot = parse_url(connect)
+    if robot.scheme not in ("tcp", "serial"):
+        raise BackendError(f"--connect `{connect}`: a Pioneer is reached at tcp://HOST:PORT "
+                           f"(MobileSim/AMRISim) or serial:///dev/DEVICE?baud=9600 (a robot)")
+    opt = options if isinstance(options, PioneerOptions) else PioneerOptions(
+        handle_sigterm=True)
+    robot_opts = dict(robot.options)
+    model = robot_opts.pop("model", None)
+    known = {f.name for f in fields(RobotParams)}
+    overrides = []
+    for key, raw in robot_opts.items():
+        if key not in known:
+            raise BackendError(f"--connect `{connect}`: unknown option `{key}`; known: model, "
+                               f"{', '.join(sorted(known))}")
+        try:
+            overrides.append((key, float(raw)))
+        except ValueError:
+            raise BackendError(f"--connect `{connect}`: `{key}` must be a number, "
+                               f"got `{raw}`") from None
+    opt = replace(opt, model=model or opt.model,
+                  param_overrides=tuple(overrides) or opt.param_overrides)
+    if robot.scheme == "serial" and not opt.bauds:
+        opt = replace(opt, bauds=(robot.baud,) if robot.baud else (9600, 115200))
+
+    laser_source = None
+    sim_laser = False
+    if laser is not None:
+        lep = parse_url(laser)
+        if lep.scheme == "sim":
+            sim_laser = True
+            extra = dict(lep.options)
+            if "max_range" in extra:
+                try:
+                    opt = replace(opt, laser_max_range_mm=int(float(extra.pop("max_range"))
+                                                              * 1000))
+                except ValueError:
+                    raise BackendError(f"--laser `{laser}`: max_range must be metres") from None
+            if extra:
+                raise BackendError(f"--laser `{laser}`: unknown option(s) "
+                                   f"{', '.join(sorted(extra))}; known: max_range")
+        elif lep.scheme == "lms200":
+            if lep.options:
+                raise BackendError(f"--laser `{laser}`: unknown option(s) "
+                                   f"{', '.join(sorted(lep.options))}; known: baud")
+            lopt = laser_options if isinstance(laser_options, Lms200Options) else Lms200Options()
+            if lep.baud is not None:
+                lopt = replace(lopt, baud=lep.baud)
+            laser_source = Lms200Driver(open_transport(lep, baud=9600), lopt)
+        else:
+            raise BackendError(f"--laser `{laser}`: expected `sim` or "
+                               f"lms200:///dev/DEVICE?baud=38400")
+    try:
+        transport = open_transport(robot, connect_timeout=_CONNECT_TIMEOUT)
+        return PioneerBackend(transport, laser="sim" if sim_laser else laser_source,
+                              limits=limits, rate=rate, options=opt)
+    except BaseException:
+        if laser_source is not None:
+            laser_source.close()
+        raise

@@ -1,0 +1,537 @@
+"""A Pioneer robot (ARCOS firmware, or MobileSim/AMRISim) as an mdle backend.
+
+:class:`PioneerBackend` implements :class:`mdle.backend.Backend` on the wall clock. The
+connection is synchronised (SYNC0, SYNC1, SYNC2 with retries, per baud rate on serial
+lines), opened, and the motors enabled; then a reader thread owns the incoming stream:
+it decodes SIPs into odometry, reassembles the simulators' laser scans, sends a PULSE
+whenever nothing else was sent for ``keepalive`` seconds (the firmware stops the motors
+after 2 s of silence) and, as a dead-man switch, stops the robot itself if the runtime
+has not commanded it for ``command_timeout`` seconds. The runtime's calls only read the
+newest data and write commands, so none of them blocks for longer than a tick.
+
+Safety: every way out stops the robot. :meth:`PioneerBackend.close` (idempotent, safe
+from ``finally`` blocks and signal handlers) sends STOP, zero velocities and CLOSE;
+stale data or a lost connection raise :class:`~mdle.errors.BackendError` after a
+best-effort stop; the runtime stops the robot at the end of every run.
+"""
+
+from __future__ import annotations
+
+import atexit
+import math
+import signal
+import threading
+import time
+import weakref
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
+
+from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
+from mdle.drivers import arcos, arcos_laser
+from mdle.drivers.arcos import Cmd, OdometryState, PacketReader, RobotParams, SyncInfo
+from mdle.drivers.transport import Transport, TransportClosed
+from mdle.errors import BackendError
+
+__all__ = ["PioneerOptions", "ScanSource", "PioneerBackend", "limits_from_params"]
+
+
+@dataclass(frozen=True)
+class PioneerOptions:
+    """Timeouts and choices of a :class:`PioneerBackend` (seconds unless stated).
+
+    The defaults suit a robot or simulator on a local link; tests shorten them.
+    """
+
+    sync_timeout: float = 0.5
+    """How long to wait for each SYNC reply."""
+    sync_retries: int = 4
+    """Handshake attempts per baud rate before giving up."""
+    first_sip_timeout: float = 2.0
+    """How long after OPEN the first SIP may take."""
+    sip_timeout: float = 0.5
+    """The newest SIP may be this old (SIPs come every 0.1 s); beyond it the run ends."""
+    first_scan_timeout: float = 3.0
+    """How long the first laser scan may take after the connection is up."""
+    max_scan_age: float = 0.5
+    """The newest laser scan may be this old; beyond it the run ends."""
+    keepalive: float = 0.4
+    """Send a PULSE when nothing was sent for this long (the firmware watchdog is 2 s)."""
+    command_timeout: float = 1.0
+    """Dead-man switch: stop the robot when no command came for this long."""
+    poll: float = 0.02
+    """The reader thread's read timeout (bounds its reaction time)."""
+    laser_mode: int = 1
+    """Simulator laser packets: 1 for 0x60, 2 for the extended 0x61."""
+    laser_max_range_mm: int = 32000
+    """The simulator laser's no-return value."""
+    laser_fov_deg: float = 180.0
+    model: str | None = None
+    """Use this model's parameters whatever SYNC2 reports."""
+    param_overrides: tuple[tuple[str, float], ...] = ()
+    """Conversion factors or limits to override (RobotParams field, value)."""
+    bauds: tuple[int, ...] = ()
+    """Serial rates to try in turn (empty: the transport's current rate)."""
+    handle_sigterm: bool = False
+    """Turn SIGTERM into SystemExit while connected, so ``finally`` blocks stop the robot."""
+
+
+class ScanSource(Protocol):
+    """A laser delivering scans on its own (e.g. :class:`~mdle.drivers.lms200_driver.
+    Lms200Driver`). Stamps are ``time.monotonic()`` seconds."""
+
+    def latest(self) -> Scan | None:
+        """The newest complete scan, or None before the first."""
+        ...
+
+    def failure(self) -> str | None:
+        """Why the laser stopped delivering (None while it works)."""
+        ...
+
+    def close(self) -> None:
+        """Stop the laser and release its line (idempotent)."""
+        ...
+
+
+def limits_from_params(p: RobotParams) -> RobotLimits:
+    """The :class:`RobotLimits` a model's parameters describe."""
+    return RobotLimits(max_speed=p.max_speed, max_reverse_speed=p.max_reverse_speed,
+                       max_turn_rate=p.max_turn_rate, max_accel=p.max_accel,
+                       max_decel=p.max_decel, max_turn_accel=p.max_turn_accel,
+                       radius=p.radius)
+
+
+_STOP_PACKETS = arcos.encode_command(Cmd.VEL, 0) + arcos.encode_command(Cmd.RVEL, 0)
+_PULSE = arcos.encode_command(Cmd.PULSE)
+
+
+@dataclass
+class _Shared:
+    """What the reader thread publishes; replaced whole under the lock."""
+
+    odometry: OdometryState | None = None
+    sip_stamp: float = -math.inf
+    scan: Scan | None = None
+    failure: str | None = None
+    sips: int = 0
+    scans: int = 0
+    bad_packets: int = 0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class PioneerBackend:
+    """A Pioneer over an ARCOS connection, as a wall-clock :class:`~mdle.backend.Backend`.
+
+    Parameters
+    ----------
+    transport : Transport
+        An open byte stream to the robot (TCP for the simulators, serial for a robot).
+        The backend owns it from now on and closes it.
+    laser : "sim", ScanSource or None
+        ``"sim"``: the simulators' laser packets over this connection; a ScanSource: a
+        laser on its own line (owned and closed by the backend); None: no laser.
+    limits : RobotLimits or None
+        Limits to clamp commands to; None takes them from the model's parameters.
+    rate : float
+        The control rate (Hz) the runtime will tick at; widens the dead-man and
+        scan-age limits when ticks are long.
+    options : PioneerOptions
+
+    Raises
+    ------
+    BackendError
+        Nothing answered the handshake, no SIP or no scan arrived: the message names
+        the connection and what was missing. The transport is closed.
+
+    Notes
+    -----
+    Units at the edge: SIP positions (model units) become metres, headings radians,
+    wheel speeds m/s; commands go out as VEL (mm/s) and RVEL (whole deg/s).
+    """
+
+    clock: ClockMode = ClockMode.WALL
+
+    def __init__(self, transport: Transport, *, laser: "str | ScanSource | None" = None,
+                 limits: RobotLimits | None = None, rate: float = 10.0,
+                 options: PioneerOptions | None = None) -> None:
+        self._transport = transport
+        self._opt = opt = options or PioneerOptions()
+        if rate <= 0 or (isinstance(laser, str) and laser != "sim"):
+            transport.close()
+            raise BackendError(f"the control rate must be positive, got {rate} Hz"
+                               if rate <= 0 else
+                               f"unknown laser `{laser}` (use `sim` or a laser driver)")
+        self.rate = rate
+        self._command_timeout = max(opt.command_timeout, 3.0 / rate)
+        self._max_scan_age = max(opt.max_scan_age, 2.0 / rate)
+        self._sim_laser = laser == "sim"
+        self._laser_source: ScanSource | None = None if isinstance(laser, str) or laser is None \
+            else laser
+        self._lock = threading.Lock()
+        self._write_lock = threading.RLock()
+        self._lost = threading.Event()
+        self._halt = threading.Event()
+        self._shared = _Shared()
+        self._closed = False
+        self._thread: threading.Thread | None = None
+        self._last_write = -math.inf
+        self._last_command = -math.inf
+        self._moving = False
+        self._tick_start: float | None = None
+        self._t0 = time.monotonic()
+        self._assembler = arcos_laser.ScanAssembler(opt.laser_max_range_mm, opt.laser_fov_deg)
+        self._old_sigterm: Any = None
+        self.deadman_stops = 0
+        """How often the dead-man switch stopped the robot (runtime silent too long)."""
+        try:
+            self.info = self._handshake()
+            model = opt.model or self.info.subtype
+            try:
+                self.params = arcos.robot_params(model, dict(opt.param_overrides))
+            except ValueError as exc:
+                raise BackendError(str(exc)) from None
+            self.limits: RobotLimits = limits or limits_from_params(self.params)
+            self._odometer = arcos.Odometer(self.params)
+            self._write(arcos.encode_command(Cmd.OPEN))
+            self._write(_PULSE + arcos.encode_command(Cmd.ENABLE, 1))
+            if self._sim_laser:
+                self._write(arcos_laser.enable_command(opt.laser_mode, 0))
+            self._thread = threading.Thread(target=self._run, name="mdle-pioneer-reader",
+                                            daemon=True)
+            self._thread.start()
+            self._await_first_data()
+        except BaseException:
+            self._shutdown(send=not self._lost.is_set())
+            raise
+        self._register_exit_hooks()
+
+    # ------------------------------------------------------------------ Backend API
+
+    def observe(self) -> Observation:
+        """The newest odometry and scan; raises BackendError if the robot or laser is lost
+        or their data are older than the limits (the robot is stopped first)."""
+        now = time.monotonic()
+        if self._tick_start is None:
+            self._tick_start = now
+        with self._lock:
+            s = self._shared
+            odo, sip_stamp, failure, scan = s.odometry, s.sip_stamp, s.failure, s.scan
+        if failure is not None:
+            self._abort(f"lost the robot ({self._transport.description}): {failure}")
+        if odo is None or now - sip_stamp > self._opt.sip_timeout:
+            self._abort(f"the robot sent no data for {now - sip_stamp:.2f} s (limit "
+                        f"{self._opt.sip_timeout:.2f} s) on {self._transport.description}")
+        assert odo is not None
+        if self._laser_source is not None:
+            why = self._laser_source.failure()
+            if why is not None:
+                self._abort(f"lost the laser: {why}")
+            scan = self._laser_source.latest()
+        if self._sim_laser or self._laser_source is not None:
+            age = math.inf if scan is None else now - scan.stamp
+            if age > self._max_scan_age:
+                self._abort(f"the newest laser scan is {age:.2f} s old (limit "
+                            f"{self._max_scan_age:.2f} s): the laser stopped sending")
+        if scan is not None:
+            scan = replace(scan, stamp=scan.stamp - self._t0)
+        return Observation(time=now - self._t0, pose=Pose(odo.x, odo.y, odo.theta), v=odo.v,
+                           omega=odo.omega, scan=scan, stalled=odo.stalled,
+                           motors_enabled=odo.motors_enabled, battery=odo.battery)
+
+    def command(self, cmd: Command) -> None:
+        """Send VEL (mm/s) and RVEL (deg/s), clamped to :attr:`limits`."""
+        if self._closed:
+            raise BackendError("the Pioneer connection is closed")
+        self._raise_if_lost()
+        if not (math.isfinite(cmd.v) and math.isfinite(cmd.omega)):
+            self._abort(f"refusing a non-finite command (v = {cmd.v}, omega = {cmd.omega})")
+        lim = self.limits
+        v = min(max(cmd.v, -lim.max_reverse_speed), lim.max_speed)
+        w = min(max(cmd.omega, -lim.max_turn_rate), lim.max_turn_rate)
+        mm = int(round(v * 1000.0))
+        deg = int(round(math.degrees(w)))
+        packet = arcos.encode_command(Cmd.VEL, mm) + arcos.encode_command(Cmd.RVEL, deg)
+        self._last_command = time.monotonic()
+        self._moving = mm != 0 or deg != 0
+        self._send_or_abort(packet)
+
+    def advance(self, dt: float) -> float:
+        """Wait until this tick's wall-clock deadline (never longer); return the lateness.
+
+        Ticks are laid on a fixed grid from the first observation, so the rate does not
+        drift; after a tick later than a whole period the grid restarts from now. The
+        wait ends early if the connection is lost (the next observe reports it).
+        """
+        now = time.monotonic()
+        start = self._tick_start if self._tick_start is not None else now
+        deadline = start + dt
+        if deadline > now:
+            self._lost.wait(deadline - now)
+            now = time.monotonic()
+        lateness = max(0.0, now - deadline)
+        self._tick_start = deadline if lateness < dt else now
+        return lateness
+
+    def stop(self) -> None:
+        """Command zero velocity now (best effort: never raises)."""
+        self._moving = False
+        self._tick_start = None
+        if self._closed or self._lost.is_set():
+            return
+        try:
+            self._write(_STOP_PACKETS)
+        except TransportClosed:
+            pass
+
+    def close(self) -> None:
+        """Stop the robot, close the ARCOS session and release everything (idempotent)."""
+        if self._closed:
+            return
+        self._closed = True
+        self._shutdown(send=True)
+
+    def __enter__(self) -> "PioneerBackend":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ introspection
+
+    @property
+    def stats(self) -> dict[str, int]:
+        """Counters: SIPs and scans received, packets rejected, dead-man stops."""
+        with self._lock:
+            s = self._shared
+            return {"sips": s.sips, "scans": s.scans, "bad_packets": s.bad_packets,
+                    "rejected": int(s.extra.get("rejected", 0)),
+                    "deadman_stops": self.deadman_stops}
+
+    # ------------------------------------------------------------------ connection
+
+    def _handshake(self) -> SyncInfo:
+        opt = self._opt
+        bauds: Sequence[int | None] = opt.bauds or (None,)
+        attempts = 0
+        last = "no reply to SYNC0"
+        for baud in bauds:
+            if baud is not None:
+                self._transport.set_baud(baud)
+            for _ in range(max(1, opt.sync_retries)):
+                attempts += 1
+                info, last = self._sync_once()
+                if info is not None:
+                    return info
+        raise BackendError(
+            f"no answer from a Pioneer on {self._transport.description} after {attempts} "
+            f"handshake attempt(s) ({last}): check that the robot is switched on, the cable "
+            f"and port (or the simulator's host and port) are right, and that no other "
+            f"program holds the connection")
+
+    def _sync_once(self) -> tuple[SyncInfo | None, str]:
+        reader = PacketReader()
+        for step in (Cmd.SYNC0, Cmd.SYNC1, Cmd.SYNC2):
+            try:
+                self._transport.write(arcos.encode_command(step))
+            except TransportClosed as exc:
+                raise BackendError(f"the connection to the robot failed during the "
+                                   f"handshake: {exc}") from None
+            deadline = time.monotonic() + self._opt.sync_timeout
+            reply = None
+            while reply is None:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return None, f"no reply to SYNC{int(step)}"
+                try:
+                    data = self._transport.read(min(remaining, 0.05))
+                except TransportClosed as exc:
+                    raise BackendError(f"the robot closed the connection during the "
+                                       f"handshake: {exc}") from None
+                for body in reader.feed(data):
+                    if body[0] in arcos.SIP_IDS:
+                        # a session left open: close it and start again
+                        self._transport.write(arcos.encode_command(Cmd.CLOSE))
+                        return None, "found an open session; closed it"
+                    if body[0] == step:
+                        reply = body
+                        break
+        assert reply is not None
+        return arcos.parse_sync2(reply[1:]), ""
+
+    def _await_first_data(self) -> None:
+        opt = self._opt
+        deadline = time.monotonic() + opt.first_sip_timeout
+        while True:
+            with self._lock:
+                got, failure = self._shared.odometry is not None, self._shared.failure
+            if failure is not None:
+                raise BackendError(f"lost the robot right after connecting: {failure}")
+            if got:
+                break
+            if time.monotonic() > deadline:
+                raise BackendError(f"the robot on {self._transport.description} answered the "
+                                   f"handshake but sent no SIP within {opt.first_sip_timeout} s")
+            time.sleep(0.01)
+        if not (self._sim_laser or self._laser_source is not None):
+            return
+        deadline = time.monotonic() + opt.first_scan_timeout
+        while True:
+            if self._sim_laser:
+                with self._lock:
+                    scan = self._shared.scan
+            else:
+                assert self._laser_source is not None
+                why = self._laser_source.failure()
+                if why is not None:
+                    raise BackendError(f"the laser failed: {why}")
+                scan = self._laser_source.latest()
+            if scan is not None:
+                return
+            if time.monotonic() > deadline:
+                where = ("the simulator sent no laser packets (does its robot model have a "
+                         "laser?)" if self._sim_laser else "the laser delivered no scan")
+                raise BackendError(f"no laser scan within {opt.first_scan_timeout} s: {where}")
+            time.sleep(0.01)
+
+    # ------------------------------------------------------------------ reader thread
+
+    def _run(self) -> None:
+        """Read, decode, publish; keep the link alive; never raises."""
+        reader = PacketReader()
+        opt = self._opt
+        while not self._halt.is_set():
+            try:
+                data = self._transport.read(opt.poll)
+            except TransportClosed as exc:
+                self._fail(str(exc))
+                return
+            except Exception as exc:  # a transport bug must not kill the robot silently
+                self._fail(f"reading failed: {exc!r}")
+                return
+            if data:
+                now = time.monotonic()
+                for body in reader.feed(data):
+                    try:
+                        self._handle(body, now)
+                    except Exception:  # malformed content behind a valid checksum
+                        with self._lock:
+                            self._shared.bad_packets += 1
+                with self._lock:
+                    self._shared.extra["rejected"] = reader.rejected
+            try:
+                self._housekeeping(time.monotonic())
+            except TransportClosed as exc:
+                self._fail(str(exc))
+                return
+
+    def _handle(self, body: bytes, now: float) -> None:
+        kind = body[0]
+        if kind in arcos.SIP_IDS:
+            state = self._odometer.update(arcos.decode_sip(body))
+            with self._lock:
+                self._shared.odometry = state
+                self._shared.sip_stamp = now
+                self._shared.sips += 1
+        elif kind in arcos_laser.LASER_IDS and self._sim_laser:
+            done = self._assembler.add(arcos_laser.decode_laser_packet(body), now)
+            if done is not None:
+                scan = Scan(done.ranges, done.bearings, done.valid, done.started,
+                            done.max_range)
+                with self._lock:
+                    self._shared.scan = scan
+                    self._shared.scans += 1
+
+    def _housekeeping(self, now: float) -> None:
+        if self._moving and now - self._last_command > self._command_timeout:
+            # the runtime went quiet while the robot moves: stop it ourselves
+            self._moving = False
+            self.deadman_stops += 1
+            self._write(_STOP_PACKETS)
+        elif now - self._last_write >= self._opt.keepalive:
+            self._write(_PULSE)
+
+    def _fail(self, why: str) -> None:
+        with self._lock:
+            if self._shared.failure is None:
+                self._shared.failure = why
+        self._lost.set()
+
+    # ------------------------------------------------------------------ helpers
+
+    def _write(self, data: bytes) -> None:
+        with self._write_lock:
+            self._transport.write(data)
+            self._last_write = time.monotonic()
+
+    def _send_or_abort(self, data: bytes) -> None:
+        try:
+            self._write(data)
+        except TransportClosed as exc:
+            self._fail(str(exc))
+            self._abort(f"lost the robot ({self._transport.description}): {exc}")
+
+    def _raise_if_lost(self) -> None:
+        with self._lock:
+            failure = self._shared.failure
+        if failure is not None:
+            self._abort(f"lost the robot ({self._transport.description}): {failure}")
+
+    def _abort(self, message: str) -> None:
+        self.stop()
+        raise BackendError(message)
+
+    def _shutdown(self, send: bool) -> None:
+        """Stop, close the session and release the line; swallows every I/O error."""
+        if send:
+            try:
+                self._write(arcos.encode_command(Cmd.STOP) + _STOP_PACKETS)
+                if self._sim_laser:
+                    self._write(arcos_laser.enable_command(0, 0))
+                self._write(arcos.encode_command(Cmd.CLOSE))
+            except (TransportClosed, OSError):
+                pass
+        self._halt.set()
+        thread = self._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout=1.0)
+        try:
+            self._transport.close()
+        except Exception:
+            pass
+        if self._laser_source is not None:
+            try:
+                self._laser_source.close()
+            except Exception:
+                pass
+        self._restore_sigterm()
+        hook = getattr(self, "_atexit", None)
+        if hook is not None:
+            atexit.unregister(hook)
+
+    def _register_exit_hooks(self) -> None:
+        ref = weakref.ref(self)
+
+        def _close_at_exit() -> None:
+            backend = ref()
+            if backend is not None:
+                backend.close()
+
+        self._atexit = _close_at_exit
+        atexit.register(_close_at_exit)
+        if (self._opt.handle_sigterm
+                and threading.current_thread() is threading.main_thread()):
+            self._old_sigterm = signal.signal(signal.SIGTERM, _sigterm_to_exit)
+
+    def _restore_sigterm(self) -> None:
+        old, self._old_sigterm = self._old_sigterm, None
+        if old is not None and threading.current_thread() is threading.main_thread():
+            try:
+                signal.signal(signal.SIGTERM, old)
+            except (ValueError, TypeError):
+                pass
+
+
+def _sigterm_to_exit(signum: int, frame: object) -> None:
+    """SIGTERM as SystemExit(143): ``finally`` blocks run and the robot is stopped."""
+    raise SystemExit(128 + signum)
+

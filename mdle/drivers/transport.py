@@ -1,0 +1,283 @@
+"""Byte streams to robots and sensors: TCP sockets and serial lines, named by URLs.
+
+URLs ``mdle run`` accepts:
+
+* ``tcp://HOST:PORT``: a TCP connection (MobileSim/AMRISim listen on 8101, the default).
+* ``serial:///dev/ttyUSB0?baud=9600``: a serial line (``serial://COM3`` on Windows);
+  without ``baud`` the robot driver probes the usual rates.
+* ``lms200:///dev/ttyUSB1?baud=38400``: a SICK LMS-200 on its own serial line; ``baud``
+  is the rate to run at (the driver finds the scanner's current rate and switches).
+* ``sim``: the Pioneer simulators' laser, delivered over the robot connection.
+
+Any other query parameter is kept in :attr:`Endpoint.options` for the driver (for
+example ``tcp://localhost:8101?model=p3dx`` or ``sim?max_range=8``). Serial lines need
+pyserial (``pip install 'mdle[serial]'``), imported only when a serial URL is opened.
+"""
+
+from __future__ import annotations
+
+import select
+import socket
+import sys
+import urllib.parse
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from mdle.errors import BackendError
+
+__all__ = [
+    "Endpoint",
+    "parse_url",
+    "Transport",
+    "TransportClosed",
+    "TcpTransport",
+    "SerialTransport",
+    "open_transport",
+    "DEFAULT_TCP_PORT",
+]
+
+DEFAULT_TCP_PORT = 8101
+_SCHEMES = ("tcp", "serial", "lms200", "sim")
+
+
+@dataclass(frozen=True)
+class Endpoint:
+    """A parsed connection URL.
+
+    ``scheme`` is ``tcp``, ``serial``, ``lms200`` or ``sim``; ``host``/``port`` for TCP;
+    ``path`` (device) and ``baud`` (None: not given) for serial lines; ``options`` the
+    other query parameters as strings.
+    """
+
+    scheme: str
+    url: str
+    host: str = ""
+    port: int = 0
+    path: str = ""
+    baud: int | None = None
+    options: dict[str, str] = field(default_factory=dict)
+
+
+def parse_url(url: str) -> Endpoint:
+    """Parse a connection URL; raises BackendError naming the URL and what is wrong.
+
+    >>> parse_url("tcp://localhost:8101").port
+    8101
+    >>> parse_url("serial:///dev/ttyUSB0?baud=9600").baud
+    9600
+    """
+    text = url.strip()
+    if text == "sim" or text.startswith("sim?"):
+        query = text[4:]
+        return Endpoint("sim", text, options=_options(text, query))
+    parts = urllib.parse.urlsplit(text)
+    scheme = parts.scheme.lower()
+    if scheme not in _SCHEMES or "://" not in text:
+        raise BackendError(f"cannot use connection `{url}`: expected tcp://HOST:PORT, "
+                           f"serial:///dev/DEVICE?baud=N, lms200:///dev/DEVICE?baud=N or sim")
+    options = _options(text, parts.query)
+    baud = None
+    if "baud" in options:
+        raw = options.pop("baud")
+        try:
+            baud = int(raw)
+        except ValueError:
+            raise BackendError(f"cannot use connection `{url}`: baud `{raw}` is not a "
+                               f"whole number") from None
+        if baud <= 0:
+            raise BackendError(f"cannot use connection `{url}`: baud must be positive")
+    if scheme == "tcp":
+        if not parts.hostname:
+            raise BackendError(f"cannot use connection `{url}`: no host (tcp://HOST:PORT)")
+        try:
+            port = parts.port or DEFAULT_TCP_PORT
+        except ValueError:
+            raise BackendError(f"cannot use connection `{url}`: the port is not a number "
+                               f"in 1..65535") from None
+        return Endpoint("tcp", text, host=parts.hostname, port=port, options=options)
+    # serial:///dev/ttyUSB0 has an empty netloc; serial://COM3 keeps the device there
+    path = (parts.netloc + parts.path) if parts.netloc else parts.path
+    if not path:
+        raise BackendError(f"cannot use connection `{url}`: no device "
+                           f"(e.g. {scheme}:///dev/ttyUSB0)")
+    return Endpoint(scheme, text, path=path, baud=baud, options=options)
+
+
+def _options(url: str, query: str) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for key, value in urllib.parse.parse_qsl(query, keep_blank_values=True):
+        if key in out:
+            raise BackendError(f"cannot use connection `{url}`: `{key}` given twice")
+        out[key] = value
+    return out
+
+
+class TransportClosed(Exception):
+    """The stream ended or failed; the message says how."""
+
+
+class Transport(Protocol):
+    """A bidirectional byte stream. ``read`` may run in one thread while ``write`` runs
+    in another."""
+
+    description: str
+
+    def read(self, timeout: float) -> bytes:
+        """Bytes available within ``timeout`` seconds (``b""`` if none); raises
+        TransportClosed when the stream has ended."""
+        ...
+
+    def write(self, data: bytes) -> None:
+        """Send all of ``data``; raises TransportClosed on failure."""
+        ...
+
+    def set_baud(self, baud: int) -> None:
+        """Change the line rate (serial lines only)."""
+        ...
+
+    def close(self) -> None:
+        """Release the stream (idempotent)."""
+        ...
+
+
+class TcpTransport:
+    """A TCP connection (plain socket); writes time out after ``write_timeout`` s."""
+
+    def __init__(self, host: str, port: int, *, connect_timeout: float = 5.0,
+                 write_timeout: float = 1.0) -> None:
+        self.description = f"tcp://{host}:{port}"
+        try:
+            self._sock = socket.create_connection((host, port), timeout=connect_timeout)
+        except OSError as exc:
+            raise BackendError(f"cannot connect to {self.description}: "
+                               f"{exc.strerror or exc} (is the robot or MobileSim/AMRISim "
+                               f"running and listening there?)") from None
+        self._sock.settimeout(write_timeout)
+        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._closed = False
+
+    def read(self, timeout: float) -> bytes:
+        if self._closed:
+            raise TransportClosed("connection closed")
+        try:
+            ready, _, _ = select.select([self._sock], [], [], max(0.0, timeout))
+            if not ready:
+                return b""
+            data = self._sock.recv(65536)
+        except (OSError, ValueError) as exc:
+            raise TransportClosed(f"{self.description}: {exc}") from None
+        if not data:
+            raise TransportClosed(f"{self.description} closed the connection")
+        return data
+
+    def write(self, data: bytes) -> None:
+        if self._closed:
+            raise TransportClosed("connection closed")
+        try:
+            self._sock.sendall(data)
+        except OSError as exc:
+            raise TransportClosed(f"{self.description}: {exc}") from None
+
+    def set_baud(self, baud: int) -> None:
+        """A TCP stream has no line rate: nothing to do."""
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._sock.shutdown(socket.SHUT_RDWR)
+        except OSError:
+            pass
+        self._sock.close()
+
+
+def _import_serial() -> Any:
+    try:
+        import serial
+    except ImportError:
+        raise BackendError("serial lines need pyserial, which is not installed: "
+                           "run `pip install 'mdle[serial]'` (or `pip install pyserial`)"
+                           ) from None
+    return serial
+
+
+class SerialTransport:
+    """A serial line through pyserial (8N1, no flow control)."""
+
+    def __init__(self, path: str, baud: int = 9600, *, write_timeout: float = 1.0) -> None:
+        serial = _import_serial()
+        self.description = f"{path} at {baud} baud"
+        self._path = path
+        errors: list[type[BaseException]] = [serial.SerialException, OSError, ValueError,
+                                             TypeError]
+        try:  # pyserial lets termios.error (not an OSError) through from tcdrain and friends
+            import termios
+
+            errors.append(termios.error)
+        except ImportError:
+            pass
+        self._errors = tuple(errors)
+        try:
+            self._ser = serial.Serial(path, baud, timeout=0, write_timeout=write_timeout)
+        except self._errors as exc:
+            raise BackendError(f"cannot open serial line {path}: {exc}") from None
+        # select() works on serial file descriptors on POSIX; elsewhere poll with a timeout
+        self._selectable = sys.platform != "win32"
+        self._closed = False
+
+    def read(self, timeout: float) -> bytes:
+        if self._closed:
+            raise TransportClosed("serial line closed")
+        try:
+            if self._selectable:
+                ready, _, _ = select.select([self._ser.fileno()], [], [], max(0.0, timeout))
+                if not ready:
+                    return b""
+                return bytes(self._ser.read(max(1, self._ser.in_waiting)))
+            waiting = self._ser.in_waiting
+            if waiting:
+                return bytes(self._ser.read(waiting))
+            self._ser.timeout = timeout
+            data = bytes(self._ser.read(1))
+            self._ser.timeout = 0
+            return data
+        except self._errors as exc:
+            raise TransportClosed(f"{self._path}: {exc}") from None
+
+    def write(self, data: bytes) -> None:
+        if self._closed:
+            raise TransportClosed("serial line closed")
+        try:
+            self._ser.write(data)
+            self._ser.flush()
+        except self._errors as exc:
+            raise TransportClosed(f"{self._path}: {exc}") from None
+
+    def set_baud(self, baud: int) -> None:
+        try:
+            self._ser.reset_input_buffer()
+            self._ser.baudrate = baud
+        except self._errors as exc:
+            raise TransportClosed(f"{self._path}: cannot set {baud} baud: {exc}") from None
+        self.description = f"{self._path} at {baud} baud"
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._ser.close()
+        except self._errors:
+            pass
+
+
+def open_transport(endpoint: Endpoint, *, baud: int | None = None,
+                   connect_timeout: float = 5.0) -> Transport:
+    """Open the byte stream an endpoint names (``baud`` overrides the URL's for serial)."""
+    if endpoint.scheme == "tcp":
+        return TcpTransport(endpoint.host, endpoint.port, connect_timeout=connect_timeout)
+    if endpoint.scheme in ("serial", "lms200"):
+        return SerialTransport(endpoint.path, baud or endpoint.baud or 9600)
+    raise BackendError(f"`{endpoint.url}` is not a byte stream (sim rides on the robot's "
+                       f"connection)")
