@@ -31,7 +31,7 @@ import numpy as np
 
 from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.errors import BackendError, WorldError
-from sim.collision import Collider
+from sim.collision import CONTACT, Collider
 from sim.ladar import Ladar, LadarProfile, ladar_profile
 from sim.robot import Phase, RobotProfile, integrate, plan_phases, robot_profile
 from sim.world import World
@@ -176,7 +176,7 @@ class SimBackend:
         else:
             k = math.floor(t1 / self._period + 1e-9)
             if k > self._scan_k:
-                scan_at = max(t0, k * self._period)
+                scan_at = min(t1, max(t0, k * self._period))
                 self._scan_k = k
         x0, y0, th0 = self._x, self._y, self._th
         phases, v_end, w_end = plan_phases(self._v, self._w, self._cmd.v, self._cmd.omega, dt,
@@ -188,6 +188,10 @@ class SimBackend:
         scanned = scan_at is None
         if not scanned and scan_at <= t0 + 1e-12:
             self._scan, scanned = self._take_scan(x, y, th, scan_at), True
+        # The centre moves at most sum(|v|max * duration): if the clearance covers that,
+        # nothing can be touched this step and one distance query (at the end) suffices.
+        reach = sum(ph.max_abs_v * ph.duration for ph in phases)
+        safe = clear[0] - CONTACT >= reach
         for ph in phases:
             pieces = [ph]
             if not scanned and t < scan_at < t + ph.duration:
@@ -195,16 +199,21 @@ class SimBackend:
                 pieces = [Phase(cut, ph.v0, ph.a_v, ph.w0, ph.a_w),
                           Phase(ph.duration - cut, ph.v_at(cut), ph.a_v, ph.w_at(cut), ph.a_w)]
             for piece in pieces:
-                r = self._collider.sweep(x, y, th, piece, clear)
-                x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
-                if r.contact:
-                    contact = True
-                    break
+                if safe:
+                    x, y, th = integrate(x, y, th, piece, piece.duration)
+                else:
+                    r = self._collider.sweep(x, y, th, piece, clear)
+                    x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
+                    if r.contact:
+                        contact = True
+                        break
                 t += piece.duration
                 if not scanned and t >= scan_at - 1e-12:
                     self._scan, scanned = self._take_scan(x, y, th, scan_at), True
             if contact:
                 break
+        if safe:
+            clear = self._collider.clearance(x, y)
         if contact:
             self._v = self._w = 0.0
             if not self._stalled:

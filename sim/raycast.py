@@ -33,6 +33,7 @@ __all__ = ["RayHits", "RayCaster"]
 _TAU = 2.0 * math.pi
 _EPS_ANGLE = 1e-10   # widen segment intervals so a beam through a vertex is never lost
 _T_MIN = 1e-12       # a hit must lie strictly ahead of the origin
+_CULL_ABOVE = 256    # bounding-box culling pays off only in larger worlds
 
 
 @dataclass(frozen=True, eq=False)
@@ -148,12 +149,16 @@ class RayCaster:
     def _segments(self, o: np.ndarray, base: float, rel: np.ndarray, cos: np.ndarray,
                   sin: np.ndarray, max_range: float, best: np.ndarray, kind: np.ndarray,
                   which: np.ndarray, detail: bool) -> None:
-        if self._s0.shape[0] == 0 or rel.shape[0] == 0:
+        n_seg = self._s0.shape[0]
+        if n_seg == 0 or rel.shape[0] == 0:
             return
-        if math.isfinite(max_range):
-            near = ((self._bb_lo[:, 0] <= o[0] + max_range) & (self._bb_hi[:, 0] >= o[0] - max_range)
-                    & (self._bb_lo[:, 1] <= o[1] + max_range)
-                    & (self._bb_hi[:, 1] >= o[1] - max_range))
+        if math.isfinite(max_range) and n_seg > _CULL_ABOVE:
+            lo_x, hi_x = o[0] - max_range, o[0] + max_range
+            lo_y, hi_y = o[1] - max_range, o[1] + max_range
+            near = self._bb_lo[:, 0] <= hi_x
+            near &= self._bb_hi[:, 0] >= lo_x
+            near &= self._bb_lo[:, 1] <= hi_y
+            near &= self._bb_hi[:, 1] >= lo_y
             idx = np.flatnonzero(near)
             if idx.size == 0:
                 return
@@ -166,39 +171,48 @@ class RayCaster:
         px, py, ex, ey = p[:, 0], p[:, 1], e[:, 0], e[:, 1]
         a_p = np.arctan2(py, px)
         a_q = np.arctan2(py + ey, px + ex)
-        sweep = np.mod(a_q - a_p + math.pi, _TAU) - math.pi
-        lo = np.mod(a_p - base, _TAU) + np.minimum(sweep, 0.0) - _EPS_ANGLE
+        sweep = a_q - a_p
+        sweep += math.pi
+        np.mod(sweep, _TAU, out=sweep)
+        sweep -= math.pi
+        # Interval start relative to the first beam, in [-pi, pi); width |sweep| < pi.
+        lo = a_p - (base + math.pi)
+        np.mod(lo, _TAU, out=lo)
+        lo += np.minimum(sweep, 0.0) - (math.pi + _EPS_ANGLE)
         hi = lo + np.abs(sweep) + 2 * _EPS_ANGLE
-        # An interval may straddle the 0/2pi cut of the relative angles: try it shifted.
-        lo3 = np.concatenate([lo, lo - _TAU, lo + _TAU])
-        hi3 = np.concatenate([hi, hi - _TAU, hi + _TAU])
-        k_lo = np.searchsorted(rel, lo3, side="left")
-        k_hi = np.searchsorted(rel, hi3, side="right")
-        cnt = np.maximum(k_hi - k_lo, 0)
+        m = px.shape[0]
+        if rel[-1] >= math.pi - 1e-9:
+            # A fan wider than a half turn can also meet the interval one turn up.
+            lo = np.concatenate([lo, lo + _TAU])
+            hi = np.concatenate([hi, hi + _TAU])
+        k_lo = np.searchsorted(rel, lo, side="left")
+        cnt = np.searchsorted(rel, hi, side="right")
+        cnt -= k_lo
+        np.maximum(cnt, 0, out=cnt)
         total = int(cnt.sum())
         if total == 0:
             return
-        m = px.shape[0]
-        seg3 = np.arange(3 * m) % m
-        pseg = np.repeat(seg3, cnt)
-        starts = np.cumsum(cnt) - cnt
-        pbeam = np.arange(total) + np.repeat(k_lo - starts, cnt)
-        num = px * ey - py * ex                      # cross(p, e), per segment
-        den = cos[pbeam] * ey[pseg] - sin[pbeam] * ex[pseg]
+        pseg = np.repeat(np.arange(cnt.shape[0]) % m if cnt.shape[0] > m else
+                         np.arange(m), cnt)
+        starts = np.cumsum(cnt)
+        starts -= cnt
+        k_lo -= starts
+        pbeam = np.repeat(k_lo, cnt)
+        pbeam += np.arange(total)
+        num = px * ey
+        num -= py * ex                              # cross(p, e), per segment
+        den = cos[pbeam] * ey[pseg]
+        den -= sin[pbeam] * ex[pseg]
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = num[pseg] / den
+            t = np.divide(num[pseg], den, out=den)
         t[~(t > _T_MIN)] = math.inf                 # behind, degenerate or NaN: no hit
-        seg_best = np.full(rel.shape[0], math.inf)
-        np.minimum.at(seg_best, pbeam, t)
-        better = seg_best < best
-        best[better] = seg_best[better]
-        kind[better] = 1
+        np.minimum.at(best, pbeam, t)               # segments come first: best is all inf
         if detail:
-            win = t == seg_best[pbeam]
+            hitb = np.isfinite(best)
+            kind[hitb] = 1
+            win = t == best[pbeam]
             src = pseg[win] if idx is None else idx[pseg[win]]
-            seg_of_beam = np.full(rel.shape[0], -1, dtype=np.intp)
-            seg_of_beam[pbeam[win]] = src
-            which[better] = seg_of_beam[better]
+            which[pbeam[win]] = src
 
     # ------------------------------------------------------------------ arcs
     def _arcs(self, o: np.ndarray, cos: np.ndarray, sin: np.ndarray, max_range: float,

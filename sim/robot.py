@@ -33,7 +33,7 @@ __all__ = [
     "integrate",
 ]
 
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(8)
+_GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(8)))
 _MAX_TURN_PER_PIECE = 0.25  # rad: keeps the quadrature error far below 1e-12
 
 
@@ -225,15 +225,22 @@ def integrate(x: float, y: float, th: float, phase: Phase, tau: float
         chord = phase.v0 * tau * _sinc(dth / 2.0)
         mid = th + dth / 2.0
         return x + chord * math.cos(mid), y + chord * math.sin(mid), th + dth
-    # Ramp: theta(t) is quadratic; integrate v cos(theta), v sin(theta) piecewise.
+    # Ramp: theta(t) is quadratic; integrate v cos(theta), v sin(theta) piecewise with
+    # Gauss-Legendre nodes (plain floats: a tick has one or two pieces, numpy would cost more).
     turn = abs(phase.w0) * tau + 0.5 * abs(phase.a_w) * tau * tau
     pieces = max(1, int(math.ceil(turn / _MAX_TURN_PER_PIECE)))
-    edges = np.linspace(0.0, tau, pieces + 1)
-    half = (edges[1:] - edges[:-1])[:, None] / 2.0
-    t = (edges[:-1, None] + half) + half * _GL_X[None, :]
-    theta = th + phase.w0 * t + 0.5 * phase.a_w * t * t
-    v = phase.v0 + phase.a_v * t
-    wts = half * _GL_W[None, :]
-    dx = float(np.sum(wts * v * np.cos(theta)))
-    dy = float(np.sum(wts * v * np.sin(theta)))
+    h = tau / pieces
+    half = h / 2.0
+    v0, av, w0, aw = phase.v0, phase.a_v, phase.w0, phase.a_w
+    dx = dy = 0.0
+    for i in range(pieces):
+        mid = i * h + half
+        for xg, wg in _GL:
+            t = mid + half * xg
+            a = th + w0 * t + 0.5 * aw * t * t
+            vw = (v0 + av * t) * wg
+            dx += vw * math.cos(a)
+            dy += vw * math.sin(a)
+    dx *= half
+    dy *= half
     return x + dx, y + dy, th + phase.w0 * tau + 0.5 * phase.a_w * tau * tau
