@@ -113,6 +113,8 @@ class Checker:
         self._depth = 0
         self._cache: dict[tuple[Any, ...], Any] = {}
         self.broken: set[str] = set()
+        self._depths: dict[int, int] = {}
+        self._keep: list[Element] = []
 
     # ------------------------------------------------------------------ diagnostics
 
@@ -697,7 +699,16 @@ class Checker:
                           "before it never ends (its interrupt is `never` and its timer `inf`)",
                           hint="give the element before it an interrupt or a finite timer")
                 break
-        return StringNode(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
+        depth = 1 + max(self._depths.get(id(e), 1) for e in elements)
+        if depth > MAX_NESTING:
+            self.error(expr.span, f"elements nest {depth} levels deep here; mdle allows at most "
+                       f"{MAX_NESTING}", hint="flatten the plan: fewer levels of strings inside "
+                                              "strings")
+            raise _Abort
+        node = StringNode(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
+        self._depths[id(node)] = depth
+        self._keep.append(node)  # ids stay unique while the checker lives
+        return node
 
     def instance(self, d: st.Definition, bound: Mapping[str, Value],
                  call: Span | None = None) -> Element:
@@ -734,7 +745,10 @@ class Checker:
             return self.string(body, env, d.name, kind)
         e = self.element(body, env)  # reports what is wrong with the body, if anything
         if isinstance(e, StringNode):
-            return dataclasses.replace(e, label=d.name, kind=kind, span=d.span)
+            node = dataclasses.replace(e, label=d.name, kind=kind, span=d.span)
+            self._depths[id(node)] = self._depths.get(id(e), 1)
+            self._keep.append(node)
+            return node
         self.error(d.body.span, f"`{d.name}` is declared a {d.kind.value} but is an atom: "
                    f"a {d.kind.value} is ((elements), interrupt, timer)",
                    hint=f"declare it with `atom {d.name} = ...`, or write "
@@ -816,7 +830,7 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     main = main if main is not None else (modules[-1] if modules else None)
     try:
         elements: dict[str, Element] = {}
-        for d in checker.ns.definitions.values():
+        for d in _dependency_order(checker.ns, checker.broken):
             e = checker.check_definition(d)
             if e is not None:
                 elements[d.name] = e
@@ -829,6 +843,33 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
         raise CheckError(_ordered(errors), srcs)
     return Program(MappingProxyType(elements), entry, MappingProxyType(srcs),
                    tuple(_ordered(checker.warnings)))
+
+
+def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
+    """Definitions with what they use first, so a long chain of definitions is checked
+    one link at a time (each use then finds its element already built)."""
+    from mdle.resolve import references
+
+    order: list[st.Definition] = []
+    done: set[str] = set()
+    for root in ns.definitions:
+        if root in done:
+            continue
+        stack = [(root, False)]
+        while stack:
+            name, expanded = stack.pop()
+            if expanded:
+                order.append(ns.definitions[name])
+                continue
+            if name in done:
+                continue
+            done.add(name)
+            stack.append((name, True))
+            if name not in broken:
+                stack.extend((r.name, False) for r in references(ns.definitions[name],
+                                                                 ns.definitions)
+                             if r.name not in done)
+    return order
 
 
 def _checker(modules: Sequence[st.Module], registry: Registry,
