@@ -1,0 +1,103 @@
+"""``mdle worlds``: list the reference worlds, or draw one (``mdle worlds show NAME -o F.png``)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+__all__ = ["add_parser", "run"]
+
+
+def add_parser(subparsers: Any) -> None:
+    """Register ``mdle worlds`` and ``mdle worlds show``."""
+    p = subparsers.add_parser(
+        "worlds", help="list the simulator's reference worlds, or draw one",
+        description="List the reference worlds shipped with the simulator (usable as "
+                    "`mdle run --world NAME`), or draw one world, or a world file, to an image.",
+        epilog="Examples: `mdle worlds`; `mdle worlds show corridor -o corridor.png`; "
+               "`mdle worlds show my_room.yaml -o room.png --no-scan`.")
+    sub = p.add_subparsers(dest="action", metavar="ACTION")
+    show = sub.add_parser("show", help="draw a world to an image",
+                          description="Draw a world's obstacles, the robot at its start pose "
+                                      "and, unless --no-scan, the ladar scan it sees there.")
+    show.add_argument("world", metavar="NAME|FILE", help="a reference world name or a YAML file")
+    show.add_argument("-o", "--output", required=True, metavar="FILE",
+                      help="the image to write: .png, .svg or .pdf")
+    show.add_argument("--no-scan", action="store_true", help="do not draw the start scan")
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """List or draw; returns the exit code."""
+    if getattr(args, "action", None) == "show":
+        return _show(args)
+    from sim.catalog import DEFAULT_WORLD, world_descriptions
+
+    rows = world_descriptions()
+    width = max(len(n) for n, _ in rows)
+    for name, desc in rows:
+        mark = " (default)" if name == DEFAULT_WORLD else ""
+        print(f"{name:<{width}}  {desc}{mark}")
+    return 0
+
+
+def _show(args: argparse.Namespace) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    import shapely
+    from matplotlib.patches import Circle as DiscPatch
+    from matplotlib.patches import PathPatch
+    from matplotlib.path import Path as MplPath
+
+    import sim
+    from mdle.errors import MdleError
+
+    world = sim.load_world(args.world)
+    fig, ax = plt.subplots(figsize=(8, 6), layout="constrained")
+    for geom in shapely.get_parts(world.geometry):
+        for poly in shapely.get_parts(geom):
+            verts: list[tuple[float, float]] = []
+            codes: list[int] = []
+            for ring in [poly.exterior, *poly.interiors]:
+                xy = list(ring.coords)
+                verts += xy
+                codes += [MplPath.MOVETO] + [MplPath.LINETO] * (len(xy) - 2) + [MplPath.CLOSEPOLY]
+            ax.add_patch(PathPatch(MplPath(verts, codes), facecolor="0.8", edgecolor="0.3",
+                                   lw=0.8))
+    s = world.start_pose
+    if not args.no_scan:
+        scan = sim.SimBackend(world, ladar="lms200-ideal").observe().scan
+        if scan is not None:
+            mx, my, _ = world.robot.ladar_mount
+            ox = s.x + math.cos(s.theta) * mx - math.sin(s.theta) * my
+            oy = s.y + math.sin(s.theta) * mx + math.cos(s.theta) * my
+            a = s.theta + scan.bearings
+            ex, ey = ox + scan.ranges * np.cos(a), oy + scan.ranges * np.sin(a)
+            ax.plot(np.column_stack([np.full_like(ex, ox), ex]).T,
+                    np.column_stack([np.full_like(ey, oy), ey]).T, color="tab:orange",
+                    lw=0.3, alpha=0.5)
+            ax.plot(ex[scan.valid], ey[scan.valid], ".", ms=2, color="tab:red")
+    r = max(world.robot.radius, 0.1)
+    ax.add_patch(DiscPatch((s.x, s.y), r, facecolor="tab:blue", alpha=0.5, edgecolor="tab:blue"))
+    ax.annotate("", xy=(s.x + 2 * r * math.cos(s.theta), s.y + 2 * r * math.sin(s.theta)),
+                xytext=(s.x, s.y), arrowprops={"arrowstyle": "->", "color": "tab:blue"})
+    x0, y0, x1, y1 = world.bounds
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(f"{world.name}: {world.description}" if world.description else world.name,
+                 fontsize=9)
+    try:
+        fig.savefig(args.output, dpi=120)
+    except (OSError, ValueError) as err:
+        raise MdleError(f"cannot write {args.output}: {err}") from None
+    finally:
+        plt.close(fig)
+    print(f"world drawn to {args.output}")
+    return 0
