@@ -151,15 +151,18 @@ class Lms200Driver:
             except BackendError:
                 continue
             return baud
-        raise BackendError(f"no answer from an LMS-200 on {self._transport.description} at "
-                           f"{', '.join(map(str, order))} baud: check power, cable and port")
+        raise BackendError(f"no answer from an LMS-200 on {self._transport.description} "
+                           f"(tried {', '.join(map(str, order))} baud): check power, cable "
+                           f"and port")
 
     def _request(self, packet: bytes, reply_cmd: int, timeout: float, *,
                  retries: int | None = None, any_telegram: bool = False) -> Telegram:
         """Send ``packet`` and wait for the reply ``reply_cmd``; NAK or silence retries."""
         tries = retries if retries is not None else self._opt.retries
+        naks = self._opt.retries  # a NAK is an answer: resend at once, on top of ``tries``
         what = f"0x{packet[4]:02X}"
-        for _ in range(max(1, tries)):
+        attempt = 0
+        while attempt < max(1, tries):
             try:
                 self._transport.write(packet)
             except TransportClosed as exc:
@@ -176,6 +179,10 @@ class Lms200Driver:
                         nak = nak or not item.ok
                     elif item.cmd == reply_cmd or any_telegram:
                         return item
+            if nak and naks > 0:
+                naks -= 1
+                continue
+            attempt += 1
         raise BackendError(f"the LMS-200 on {self._transport.description} did not answer "
                            f"command {what} ({tries} tries, {timeout} s each)")
 

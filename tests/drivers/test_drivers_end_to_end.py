@@ -1,0 +1,98 @@
+"""A small MDLe program run on the Pioneer backend against the fake ARCOS server."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+import pytest
+
+from mdle.drivers import open_backend
+from mdle.drivers.arcos import Cmd
+from mdle.errors import BackendError
+from mdle.loader import load_text
+from mdle.runtime import Cause, element_of, run
+
+PLAN = """\
+atom fwd = (go(0.4 m/s), range(0 deg) < 0.8 m, 3 s)
+atom spin = (turn(30 deg/s), never, 0.3 s)
+plan main = ((fwd, spin), never, 5 s)
+run main
+"""
+
+
+def _wall_ahead(fake):
+    """Scans of a wall 1 m ahead of where the robot started (it drives towards it)."""
+
+    def scan(_: int) -> np.ndarray:
+        bearings = -math.pi / 2 + np.arange(181) * math.pi / 181
+        ahead = 1000.0 - fake.pose_mm[0]
+        with np.errstate(divide="ignore"):
+            r = np.where(np.cos(bearings) > 0.05, ahead / np.cos(bearings), 32000)
+        return np.minimum(r, 32000).astype(int)
+
+    return scan
+
+
+def test_plan_runs_on_the_pioneer_and_stops_it(fake_robot, fast) -> None:
+    fake = fake_robot()
+    fake.scan_mm = _wall_ahead(fake)
+    program = load_text(PLAN)
+    backend = open_backend("pioneer", fake.url, "sim", options=fast)
+    try:
+        result = run(element_of(program), backend, rate=10.0)
+        # fwd ended by its interrupt (the wall within 0.8 m), spin by its timer
+        causes = {t.path.split("/")[-1]: t.cause for t in result.terminations}
+        assert causes["fwd"] is Cause.INTERRUPT and causes["spin"] is Cause.TIMER
+        assert result.fault is None
+        assert 0.15 < result.distance < 0.4
+        assert result.max_lateness < 0.05
+        vel, rvel = fake.args(Cmd.VEL), fake.args(Cmd.RVEL)
+        assert 400 in vel and 30 in rvel  # go(0.4 m/s), then turn(30 deg/s)
+        # the robot is stopped at the end, before the connection closes
+        assert fake.wait_for(lambda: fake.args(Cmd.VEL)[-1] == 0 and fake.args(Cmd.RVEL)[-1] == 0)
+        assert fake.v_mm == 0 and fake.w_deg == 0
+        assert not fake.commands(Cmd.CLOSE)
+        assert fake.watchdog_trips == 0
+    finally:
+        backend.close()
+    assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
+
+
+def test_dropped_robot_ends_the_run_with_the_robot_stopped(fake_robot, fast) -> None:
+    fake = fake_robot(behaviour="drop", drop_after=0.4)
+    fake.scan_mm = _wall_ahead(fake)
+    program = load_text(PLAN.replace("0.8 m, 3 s", "0.1 m, 3 s"))
+    backend = open_backend("pioneer", fake.url, "sim", options=fast)
+    try:
+        t0 = time.monotonic()
+        with pytest.raises(BackendError, match="lost the robot"):
+            run(element_of(program), backend, rate=10.0)
+        assert time.monotonic() - t0 < 1.0
+    finally:
+        backend.close()
+
+
+def test_mdle_run_cli_on_the_fake_robot(fake_robot, tmp_path) -> None:
+    from mdle.cli import main
+
+    fake = fake_robot()
+    fake.scan_mm = _wall_ahead(fake)
+    plan = tmp_path / "wall.mdle"
+    plan.write_text(PLAN)
+    trace = tmp_path / "run.jsonl"
+    code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url,
+                 "--laser", "sim", "--quiet", "--trace", str(trace)])
+    assert code == 0
+    lines = [json.loads(line) for line in trace.read_text().splitlines()]
+    assert lines[0]["backend"] == "pioneer" and lines[0]["laser"] == "sim"
+    samples = [x for x in lines if x["type"] == "sample"]
+    assert len(samples) >= 5
+    # wall-clock ticks: lateness and the scan's age are recorded per tick
+    assert all(0 <= s["lateness"] < 0.05 for s in samples)
+    assert all(0 <= s["scan_age"] < 0.5 for s in samples)
+    assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
+    assert fake.v_mm == 0 and fake.w_deg == 0
+    assert 400 in fake.args(Cmd.VEL)
