@@ -73,8 +73,8 @@ def scan_points_cached(ctx: Context) -> Any:
     Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2"),
     Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)"),
     Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)"),
-    Param("margin", LENGTH, 0.05, doc="clearance the safety layer keeps ahead (0: off)"),
-    Param("lookahead", TIME, 0.5, doc="how far ahead the safety layer checks the arc"),
+    Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)"),
+    Param("lookahead", TIME, 0.8, doc="how far ahead the safety layer checks the arc"),
     start=start_follow,
 )
 def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Command:

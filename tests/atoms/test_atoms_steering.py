@@ -11,8 +11,8 @@ import pytest
 from atoms import steering as S
 
 G = S.Gains()
-ARGS = dict(side="right", rc=0.5, v=1.0, mu=4.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.05,
-            lookahead=0.5)
+ARGS = dict(side="right", rc=0.5, v=1.0, mu=4.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.15,
+            lookahead=0.8)
 
 
 @pytest.mark.parametrize("kappa", [-2.0, -1.0, -0.25, 0.0, 0.3, 0.7])

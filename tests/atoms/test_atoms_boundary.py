@@ -1,0 +1,119 @@
+"""The boundary view and the boundary sensor functions: conventions, mirroring, oracle, cache."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from atoms import default_registry
+from atoms.boundary import Side, boundary_view, cached_view, parse_side
+from atoms.registry import Context
+from mdle.backend import Observation, Pose, RobotLimits, Scan
+
+LIMITS = RobotLimits(1.0, 1.0, 3.0)
+SENSORS = ("boundary_range", "boundary_curvature", "boundary_tangent")
+
+
+def _ctx(scan: Scan | None) -> Context:
+    return Context(Observation(0.0, Pose(), scan=scan), 0.0, 0.1, LIMITS)
+
+
+def _mirror(scan: Scan) -> Scan:
+    """The same scene reflected left-right (y -> -y)."""
+    return Scan(scan.ranges[::-1].copy(), -scan.bearings[::-1], scan.valid[::-1].copy(),
+                scan.stamp, scan.max_range)
+
+
+@pytest.mark.parametrize("name", SENSORS)
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_sensor_functions_over_the_catalogue(case: Any, name: str, side: str) -> None:
+    fn = default_registry().sensors[name].fn
+    value = fn({"side": side}, _ctx(case.scan))
+    assert isinstance(value, float) and math.isfinite(value)
+    if case.curvature is None:  # nothing seen: max range, and the virtual boundary's 0s
+        assert value == (case.scan.max_range if name == "boundary_range" else 0.0)
+
+
+def test_no_scan_yet_is_a_miss_not_an_error() -> None:
+    reg = default_registry()
+    assert reg.sensors["boundary_range"].fn({"side": "right"}, _ctx(None)) == math.inf
+    assert reg.sensors["boundary_curvature"].fn({"side": "left"}, _ctx(None)) == 0.0
+
+
+def test_wall_on_the_right(raycast: Any) -> None:
+    view = boundary_view(raycast.catalogue["straight_wall"].scan, "right")
+    assert view.side.hit and view.side.r == pytest.approx(0.5)
+    assert view.side.beta == pytest.approx(0.0, abs=1e-9)
+    assert view.side.kappa == pytest.approx(0.0, abs=1e-9)
+    assert not view.front.hit  # a wall parallel to the heading never meets the front ray
+    assert not boundary_view(raycast.catalogue["straight_wall"].scan, "left").side.hit
+
+
+@pytest.mark.parametrize("radius", [1.0, 2.0])
+def test_circle_on_the_right_is_convex_negative(raycast: Any, radius: float) -> None:
+    # the circle's top at 0.5 m to the right: its tangent there is the heading
+    scan = raycast.scan(raycast.circle((0.0, -0.5 - radius), radius))
+    view = boundary_view(scan, "right")
+    assert view.side.kappa == pytest.approx(-1.0 / radius, rel=0.05)
+    assert view.side.beta == pytest.approx(0.0, abs=0.01)
+    ctx = _ctx(scan)
+    reg = default_registry()
+    assert reg.sensors["boundary_curvature"].fn({"side": "right"}, ctx) == view.side.kappa
+
+
+def test_left_is_the_mirror_of_right(raycast: Any) -> None:
+    scan = raycast.scan(raycast.circle((1.0, -1.0), 1.2))
+    right = boundary_view(scan, "right")
+    assert right.side.hit and right.front.hit
+    left = boundary_view(_mirror(scan), "left")
+    for a, b in ((right.front, left.front), (right.side, left.side)):
+        assert a.hit == b.hit
+        assert a.r == pytest.approx(b.r, nan_ok=True)
+        assert a.beta == pytest.approx(b.beta, abs=1e-9)
+        assert a.kappa == pytest.approx(b.kappa, abs=1e-9)
+    # the sensor functions answer in the side's own orientation: convex positive on the left
+    reg = default_registry()
+    k_left = reg.sensors["boundary_curvature"].fn({"side": "left"}, _ctx(_mirror(scan)))
+    assert k_left == pytest.approx(-right.side.kappa) and k_left > 0
+
+
+def test_front_ray_on_a_facing_wall(raycast: Any) -> None:
+    scan = raycast.scan(raycast.line((2.0, 0.0), (1.0, 0.0)))
+    view = boundary_view(scan, "right")
+    assert view.front.hit and view.front.r == pytest.approx(2.0)
+    # oriented obstacle-on-right: the wall is crossed going left, beta = +90 deg
+    assert view.front.beta == pytest.approx(math.pi / 2, abs=1e-9)
+    assert boundary_view(scan, "left").front.beta == pytest.approx(math.pi / 2, abs=1e-9)
+
+
+def test_oracle_scan_values_are_used_as_given(world2d: Any) -> None:
+    shape = world2d.Shape("circle", center=(0.0, -1.5), radius=1.0)
+    scan = world2d.scan(shape, 0.0, 0.0, 0.0)
+    view = boundary_view(scan, "right")
+    assert view.exact
+    assert view.side.kappa == -1.0 and view.side.beta == pytest.approx(0.0, abs=1e-12)
+    left = boundary_view(world2d.scan(world2d.Shape("circle", center=(0.0, 1.5), radius=1.0),
+                                      0.0, 0.0, 0.0), "left")
+    assert left.side.kappa == -1.0 and left.side.beta == pytest.approx(0.0, abs=1e-9)
+
+
+def test_depth_jump_at_the_side_ray_is_not_smoothed_over(raycast: Any) -> None:
+    # a short near post at -90..-85 deg in front of a far wall: too few beams for a surface
+    r = raycast.line((0.0, -3.0), (0.0, -1.0))
+    r = np.where(raycast.bearings < np.radians(-86.5), 0.5, r)
+    view = boundary_view(raycast.scan(r), "right")
+    assert not view.side.hit
+
+
+def test_view_is_computed_once_per_tick(raycast: Any) -> None:
+    ctx = _ctx(raycast.catalogue["circle_R1"].scan)
+    assert cached_view(ctx, "right") is cached_view(ctx, Side.RIGHT)
+
+
+def test_parse_side_lists_the_options() -> None:
+    assert parse_side("right") is Side.RIGHT
+    with pytest.raises(ValueError, match="right, left"):
+        parse_side("up")
