@@ -169,6 +169,16 @@ class RayCaster:
             p = self._s0 - o
             e = self._edge
         px, py, ex, ey = p[:, 0], p[:, 1], e[:, 0], e[:, 1]
+        num = px * ey
+        num -= py * ex                              # cross(p, e), per segment
+        # Back-face culling: with the solid on each segment's right, only segments whose
+        # left (outer) side faces the origin can be hit first from outside (num > 0).
+        front = np.flatnonzero(num > 0.0)
+        if front.size < num.shape[0]:
+            if front.size == 0:
+                return
+            idx = front if idx is None else idx[front]
+            px, py, ex, ey, num = px[front], py[front], ex[front], ey[front], num[front]
         a_p = np.arctan2(py, px)
         a_q = np.arctan2(py + ey, px + ex)
         sweep = a_q - a_p
@@ -199,8 +209,6 @@ class RayCaster:
         k_lo -= starts
         pbeam = np.repeat(k_lo, cnt)
         pbeam += np.arange(total)
-        num = px * ey
-        num -= py * ex                              # cross(p, e), per segment
         den = cos[pbeam] * ey[pseg]
         den -= sin[pbeam] * ex[pseg]
         with np.errstate(divide="ignore", invalid="ignore"):
