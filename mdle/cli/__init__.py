@@ -19,7 +19,7 @@ from mdle.cli import output
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Subcommand modules under ``mdle.cli``, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "worlds")
+COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "worlds", "repl")
 
 
 def build_parser() -> argparse.ArgumentParser:

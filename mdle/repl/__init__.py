@@ -1,0 +1,15 @@
+"""``mdle repl``: compose MDLe atoms and try them on a simulated robot, interactively.
+
+* :mod:`mdle.repl.session`: the state (definitions, robot, path, trace) and what it can do;
+* :mod:`mdle.repl.commands`: the interpreter of one input (definition, element, ``:`` command);
+* :mod:`mdle.repl.views`: the text it prints (run reports, scan, map, ticks);
+* :mod:`mdle.repl.prompt`: the prompt_toolkit front end (history, completion, highlighting);
+* :mod:`mdle.repl.plain`: the front end for piped input (scripts, tests).
+"""
+
+from __future__ import annotations
+
+from mdle.repl.commands import COMMANDS, Repl
+from mdle.repl.session import DEFAULT_UNTIL, RunReport, Session
+
+__all__ = ["Session", "Repl", "RunReport", "COMMANDS", "DEFAULT_UNTIL"]

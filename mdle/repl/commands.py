@@ -1,0 +1,391 @@
+"""What the REPL does with one input: a definition, an element to run, or a ``:`` command.
+
+:class:`Repl` is the interpreter both front ends share (:mod:`mdle.repl.prompt` on a
+terminal, :mod:`mdle.repl.plain` for piped input). :meth:`Repl.handle` never raises for
+a user's mistake: a bad definition, an unknown name, a world that does not load or a run
+that collides prints a message and returns False, and the session stays as it was.
+
+>>> import io
+>>> out, err = io.StringIO(), io.StringIO()
+>>> repl = Repl(Session("empty"), out, err)
+>>> repl.handle("atom creep = (go(0.5 m/s), never, 2 s)"), repl.handle("creep")
+(True, True)
+>>> print(out.getvalue().splitlines()[1])
+creep (level 0) ended by timer at 2.00 s
+>>> repl.handle("crep")
+False
+"""
+
+from __future__ import annotations
+
+import math
+import shlex
+import sys
+import traceback
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import IO
+
+from mdle.backend import Pose
+from mdle.cli.output import print_diagnostics
+from mdle.errors import Diagnostic, MdleError
+from mdle.repl import views
+from mdle.repl.session import ReplError, Session
+
+__all__ = ["Repl", "Command", "COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "classify"]
+
+#: First words of an input that defines something (rather than running an element).
+DEFINITION_KEYWORDS = ("atom", "behavior", "plan", "interrupt", "import", "run")
+#: Every MDLe keyword (completion, highlighting).
+KEYWORDS = DEFINITION_KEYWORDS + ("never", "inf", "and", "or", "xor", "not")
+
+
+@dataclass(frozen=True)
+class Command:
+    """A ``:`` command: its name, argument synopsis, one line of help, and the method of
+    :class:`Repl` that does it (``handler(repl, args) -> bool``)."""
+
+    name: str
+    synopsis: str
+    help: str
+    handler: Callable[["Repl", list[str]], bool]
+    #: What the completer offers for the first argument: "file", "world" or "".
+    completes: str = ""
+
+
+def classify(text: str) -> str:
+    """``"command"``, ``"definition"``, ``"element"`` or ``"empty"`` (blank or a comment)."""
+    stripped = text.strip()
+    if not stripped or stripped.startswith("#"):
+        return "empty"
+    if stripped.startswith(":"):
+        return "command"
+    from mdle.parser import iter_tokens
+
+    first = next(iter(iter_tokens(stripped)), None)
+    if first is None:
+        return "element"  # a bad character: let the parser say so
+    if first.type in ("ATOM", "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN"):
+        return "definition"
+    return "element"
+
+
+class Repl:
+    """The interpreter of REPL inputs, writing results to ``out`` and problems to ``err``.
+
+    Parameters
+    ----------
+    session : Session
+    out, err : text streams, optional
+        Default: standard output and standard error.
+    debug : bool
+        Show the traceback of an internal error (a bug in mdle) instead of one line.
+    """
+
+    def __init__(self, session: Session, out: IO[str] | None = None,
+                 err: IO[str] | None = None, *, debug: bool = False) -> None:
+        self.session = session
+        self.out = out or sys.stdout
+        self.err = err or sys.stderr
+        self.debug = debug
+        self.quit_requested = False
+        self.failures = 0
+
+    # ------------------------------------------------------------------ output
+
+    def say(self, *lines: str) -> None:
+        """Print lines on the output stream."""
+        for line in lines:
+            print(line, file=self.out)
+        self.out.flush()
+
+    def complain(self, message: str, hint: str | None = None) -> None:
+        """Print an error message (as ``mdle check`` prints one) on the error stream."""
+        print_diagnostics([Diagnostic(None, message, hint=hint)], None, self.err)
+
+    # ------------------------------------------------------------------ input
+
+    def is_complete(self, text: str) -> bool:
+        """Whether ``text`` is a whole input (a command always is; MDLe text when its
+        brackets balance and it does not end in the middle of a statement)."""
+        if classify(text) in ("command", "empty"):
+            return True
+        return self.session.workspace.is_complete(text)
+
+    def handle(self, text: str) -> bool:
+        """Do one input; True when it succeeded. Never raises for the user's mistakes
+        (KeyboardInterrupt outside a run is reported as an interruption)."""
+        try:
+            ok = self._dispatch(text)
+        except MdleError as exc:
+            print_diagnostics(exc.diagnostics, exc.sources, self.err)
+            ok = False
+        except KeyboardInterrupt:
+            self.complain("interrupted")
+            ok = False
+        except Exception as exc:  # an mdle bug: report it, keep the session
+            if self.debug:
+                traceback.print_exc(file=self.err)
+            self.complain(f"internal error: {type(exc).__name__}: {exc}",
+                          hint="this is a bug in mdle; the session is intact")
+            ok = False
+        if not ok:
+            self.failures += 1
+        return ok
+
+    def _dispatch(self, text: str) -> bool:
+        kind = classify(text)
+        if kind == "empty":
+            return True
+        if kind == "command":
+            return self._command(text.strip()[1:])
+        if kind == "definition":
+            return self._define(text)
+        return self._run(text)
+
+    def _define(self, text: str) -> bool:
+        added, replaced, warnings = self.session.define(text)
+        if warnings:
+            print_diagnostics(warnings, self.session.sources, self.err)
+        parts = []
+        if added:
+            parts.append("defined " + ", ".join(added))
+        if replaced:
+            parts.append("redefined " + ", ".join(replaced))
+        if not parts and text.split()[0] == "run":
+            entry = self.session.workspace.program().entry
+            parts.append(f"entry is now `{entry}` (`:save` writes `run {entry}`; type "
+                         f"`{entry}` to run it)")
+        self.say("; ".join(parts) if parts else "nothing new")
+        return True
+
+    def _run(self, text: str) -> bool:
+        report = self.session.run(text)
+        if report.error is not None:
+            print_diagnostics(report.error.diagnostics, report.error.sources, self.err)
+        self.say(*views.format_report(report))
+        return report.ok
+
+    # ------------------------------------------------------------------ commands
+
+    def _command(self, line: str) -> bool:
+        try:
+            words = shlex.split(line)
+        except ValueError as exc:
+            raise ReplError(f"cannot read the command: {exc}") from None
+        if not words:
+            return self._help([])
+        name, args = words[0], words[1:]
+        cmd = COMMANDS.get(name)
+        if cmd is None:
+            import difflib
+
+            close = difflib.get_close_matches(name, list(COMMANDS), n=1)
+            raise ReplError(Diagnostic(None, f"unknown command `:{name}`",
+                                       hint=f"did you mean `:{close[0]}`?" if close
+                                       else "`:help` lists the commands"))
+        return cmd.handler(self, args)
+
+    def _help(self, args: list[str]) -> bool:
+        if args:
+            cmd = COMMANDS.get(args[0].lstrip(":"))
+            if cmd is None:
+                raise ReplError(f"no command `:{args[0].lstrip(':')}`; `:help` lists them")
+            self.say(f":{cmd.name} {cmd.synopsis}".rstrip(), f"    {cmd.help}")
+            return True
+        self.say("Type a definition (atom, interrupt, behavior, plan) to add it, or an element "
+                 "to run it",
+                 "from where the robot is: `cruise`, `(go(0.3 m/s), range(0 deg) < 1 m, 10 s)`. "
+                 "Input continues",
+                 "over several lines until the brackets balance. Ctrl-C stops a run, Ctrl-D "
+                 "leaves.", "")
+        width = max(len(f":{c.name} {c.synopsis}") for c in COMMANDS.values())
+        for c in COMMANDS.values():
+            self.say(f"  {(':' + c.name + ' ' + c.synopsis).ljust(width)}  {c.help}")
+        return True
+
+    def _pose(self, args: list[str]) -> bool:
+        _no_args(":pose", args)
+        obs = self.session.observe()
+        s = self.session
+        self.say(f"odometry {views.format_pose(obs.pose)}",
+                 f"true     {views.format_pose(s.backend.true_pose)}",
+                 f"t = {obs.time:.2f} s since the last reset; speed {obs.v:.2f} m/s, "
+                 f"turn rate {math.degrees(obs.omega):.1f} deg/s"
+                 + (f"; clearance {obs.truth['clearance']:.2f} m" if obs.truth else "")
+                 + ("; STALLED" if obs.stalled else ""),
+                 f"world `{s.world.name}`, seed {s.seed}")
+        return True
+
+    def _scan(self, args: list[str]) -> bool:
+        _no_args(":scan", args)
+        s = self.session
+        self.say(*views.format_scan(s.observe(), s.workspace.registry, s.backend.limits,
+                                    s.rate))
+        return True
+
+    def _where(self, args: list[str]) -> bool:
+        width = 72
+        if args:
+            width = _int(args[0], "the map width")
+            if not 20 <= width <= 400:
+                raise ReplError(f":where takes a width of 20 to 400 columns, got {width}")
+        s = self.session
+        self.say(*views.render_map(s.world, s.path_xy(), s.backend.true_pose, width))
+        return True
+
+    def _plot(self, args: list[str]) -> bool:
+        path = _one(":plot", args, "FILE")
+        out = self.session.plot(path)
+        self.say(f"plot written to {out}")
+        return True
+
+    def _trace(self, args: list[str]) -> bool:
+        path = _one(":trace", args, "FILE")
+        n = self.session.write_trace(path)
+        self.say(f"trace written to {path} ({n} samples)")
+        return True
+
+    def _reset(self, args: list[str]) -> bool:
+        pose = None
+        if args:
+            if len(args) not in (2, 3):
+                raise ReplError(":reset takes no argument (the world's start) or X Y [THETA] "
+                                "(metres, metres, degrees)")
+            x = _number(args[0], "x")
+            y = _number(args[1], "y")
+            th = math.radians(_number(args[2], "theta")) if len(args) == 3 else 0.0
+            pose = Pose(x, y, th)
+        here = self.session.reset(pose)
+        self.say(f"robot at {views.format_pose(here)}, t = 0; path cleared")
+        return True
+
+    def _world(self, args: list[str]) -> bool:
+        if not args:
+            import sim
+
+            self.say(f"world `{self.session.world.name}`; reference worlds: "
+                     + ", ".join(sim.list_worlds()))
+            return True
+        spec = _one(":world", args, "NAME|FILE")
+        self.session.set_world(spec)
+        w = self.session.world
+        self.say(f"world `{w.name}`" + (f": {w.description}" if w.description else ""),
+                 f"robot at {views.format_pose(self.session.backend.true_pose)}, t = 0")
+        return True
+
+    def _defs(self, args: list[str]) -> bool:
+        _no_args(":defs", args)
+        text = self.session.workspace.format()
+        self.say(text.rstrip("\n") if text.strip() else "nothing defined yet")
+        return True
+
+    def _save(self, args: list[str]) -> bool:
+        path = _one(":save", args, "FILE")
+        text = self.session.save(path)
+        n = len(self.session.workspace.names())
+        self.say(f"saved {n} definition{'s' if n != 1 else ''} to {path} "
+                 f"({len(text.splitlines())} lines)")
+        return True
+
+    def _load(self, args: list[str]) -> bool:
+        path = _one(":load", args, "FILE")
+        names, warnings = self.session.load(path)
+        if warnings:
+            print_diagnostics(warnings, self.session.sources, self.err)
+        self.say(f"loaded {path}: " + (", ".join(names) if names else "nothing new"))
+        return True
+
+    def _step(self, args: list[str]) -> bool:
+        n = _int(args[0], "the number of ticks") if args else 1
+        if len(args) > 1:
+            raise ReplError(":step takes one argument: the number of ticks")
+        outcome = self.session.step(n)
+        if outcome.started:
+            self.say(f"stepping `{self.session.last_element}` from the robot's current state")
+        self.say(*views.format_step_rows(outcome.rows, outcome.t0))
+        if outcome.report is not None:
+            self.say(*views.format_report(outcome.report))
+            return outcome.report.ok
+        return True
+
+    def _set(self, args: list[str]) -> bool:
+        if len(args) != 2:
+            raise ReplError(":set takes a setting and a value: `:set seed N` or "
+                            "`:set until SECONDS` (`inf` for no limit)")
+        what, value = args
+        if what == "seed":
+            self.session.set_seed(_int(value, "the seed"))
+            self.say(f"seed {self.session.seed}; robot where it was, t = 0, path cleared")
+            return True
+        if what == "until":
+            limit = _number(value, "the run limit")
+            if not limit > 0:
+                raise ReplError(f"the run limit must be positive seconds (or inf), got {value}")
+            self.session.until = None if math.isinf(limit) else limit
+            self.say("runs have no time limit (Ctrl-C stops one)" if math.isinf(limit)
+                     else f"a run stops after {limit:g} s")
+            return True
+        raise ReplError(f"no setting `{what}`: `:set seed N` or `:set until SECONDS`")
+
+    def _quit(self, args: list[str]) -> bool:
+        _no_args(":quit", args)
+        self.quit_requested = True
+        return True
+
+
+def _no_args(cmd: str, args: list[str]) -> None:
+    if args:
+        raise ReplError(f"{cmd} takes no arguments")
+
+
+def _one(cmd: str, args: list[str], what: str) -> str:
+    if len(args) != 1:
+        raise ReplError(f"{cmd} takes one argument: {what}")
+    return args[0]
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ReplError(f"{what} must be a number, got `{text}`") from None
+    if math.isnan(value):
+        raise ReplError(f"{what} must be a number, got `{text}`")
+    return value
+
+
+def _int(text: str, what: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise ReplError(f"{what} must be a whole number, got `{text}`") from None
+
+
+#: Every ``:`` command, in the order ``:help`` lists them.
+COMMANDS: dict[str, Command] = {c.name: c for c in (
+    Command("help", "[COMMAND]", "this list, or one command's help", Repl._help),
+    Command("pose", "", "the robot's pose (odometry and true), time, speed, clearance",
+            Repl._pose),
+    Command("scan", "", "the current scan by sector and the boundary estimates on both sides",
+            Repl._scan),
+    Command("where", "[WIDTH]", "a map of the world with the robot and its path since the "
+            "last reset", Repl._where),
+    Command("plot", "FILE", "draw the path since the last reset as `mdle plot` does "
+            "(.png, .svg, .pdf)", Repl._plot, "file"),
+    Command("trace", "FILE", "write the runs since the last reset as a JSON lines trace",
+            Repl._trace, "file"),
+    Command("reset", "[X Y [THETA]]", "put the robot at the world's start, or at X Y (m) "
+            "heading THETA (deg); clears the path", Repl._reset),
+    Command("world", "[NAME|FILE]", "switch to another world (a reference name or a YAML "
+            "file); without one, list them", Repl._world, "world"),
+    Command("defs", "", "the definitions so far, as `mdle fmt` prints them", Repl._defs),
+    Command("save", "FILE", "write the definitions so far to FILE (formatted)", Repl._save,
+            "file"),
+    Command("load", "FILE", "add the definitions of an .mdle file", Repl._load, "file"),
+    Command("step", "[N]", "advance the last element N ticks (default 1), showing each "
+            "tick's control and sensor values", Repl._step),
+    Command("set", "seed N | until SECONDS", "reseed the simulation; limit how long a run "
+            "may go on (default 600 s)", Repl._set),
+    Command("quit", "", "leave (Ctrl-D too)", Repl._quit),
+)}

@@ -1,0 +1,546 @@
+"""The REPL's state and what it can do, with no terminal in sight.
+
+A :class:`Session` holds the definitions typed so far (a :class:`~mdle.workspace.Workspace`),
+a simulated robot in a world (a :class:`sim.SimBackend` that is never reset between runs, so
+each run starts where the last one left the robot), the path and the per-tick samples since
+the last reset (the session trace), and the element last run (for ``:step``). Its methods
+return plain records; :mod:`mdle.repl.commands` turns them into text.
+
+>>> s = Session("ellipse")
+>>> _ = s.define("atom creep = (go(0.5 m/s), never, 2 s)")
+>>> report = s.run("creep")
+>>> report.decisive.cause.value, round(report.pose.x, 2), round(report.result.distance, 2)
+('timer', -8.0, 1.0)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
+
+from atoms.registry import Registry
+from mdle.backend import Observation, Pose
+from mdle.errors import Diagnostic, MdleError
+from mdle.program import Element
+from mdle.runtime import BaseObserver, Cause, Event, RunResult, Sample, Scheduler, Termination
+from mdle.workspace import Workspace
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from sim import SimBackend, World
+    from sim.backend import SimEvent
+
+__all__ = ["Session", "RunReport", "StepRow", "StepOutcome", "DEFAULT_UNTIL", "ReplError"]
+
+#: Longest a single run may go on, in simulated seconds, before the REPL stops it: an
+#: element with ``never`` and ``inf`` would otherwise never give the prompt back when no
+#: one is there to press Ctrl-C (a piped session). ``:set until`` changes it.
+DEFAULT_UNTIL = 600.0
+
+
+class ReplError(MdleError):
+    """A REPL command cannot be done (nothing to step, nothing to save, a bad argument)."""
+
+
+@dataclass(frozen=True)
+class RunReport:
+    """How one run (or a stepped run, once it ended) went.
+
+    ``label`` is the element's label, ``t0`` the backend time of its first tick (s),
+    ``pose`` the odometry pose at the end, ``true_pose`` the simulator's pose,
+    ``interrupted`` True after Ctrl-C, ``limit`` the run limit when it stopped the run
+    (s, else None), ``collision`` the simulator's record of the first contact during the
+    run, ``error`` the error that aborted it (a failing law or interrupt).
+    """
+
+    label: str
+    result: RunResult
+    t0: float
+    pose: Pose
+    true_pose: Pose
+    interrupted: bool = False
+    limit: float | None = None
+    collision: "SimEvent | None" = None
+    error: MdleError | None = None
+
+    @property
+    def decisive(self) -> Termination:
+        """The termination that ended the run: the outermost element that ended by its
+        own interrupt or timer (or was stopped) at the final tick, else the root's."""
+        root = self.result.termination
+        final = [t for t in self.result.terminations
+                 if abs(t.time - root.time) < 1e-9
+                 and t.cause not in (Cause.COMPLETED, Cause.ENDED_BY_PARENT)]
+        return min(final, key=lambda t: t.level) if final else root
+
+    @property
+    def ok(self) -> bool:
+        """False when the robot collided, the run was aborted or stopped by Ctrl-C."""
+        return (not self.interrupted and self.error is None and self.collision is None
+                and not self.result.collided and self.result.fault is None)
+
+
+@dataclass(frozen=True)
+class StepRow:
+    """One tick shown by ``:step``: the sample, and the scan the tick saw.
+
+    ``front`` is the range of the beam nearest 0 deg (m), ``nearest`` the smallest valid
+    range (m) and ``nearest_bearing`` its bearing (rad); None without a scan.
+    """
+
+    tick: int
+    sample: Sample
+    front: float | None
+    nearest: float | None
+    nearest_bearing: float | None
+
+
+@dataclass(frozen=True)
+class StepOutcome:
+    """What ``:step N`` did: the rows, the report when the element ended, and whether a
+    new run of the element was started for it."""
+
+    rows: tuple[StepRow, ...]
+    report: RunReport | None
+    started: bool
+    label: str
+    t0: float
+
+
+class _Run(BaseObserver):
+    """Records one run of the session: the scheduler, its events and samples."""
+
+    def __init__(self, label: str, text: str) -> None:
+        self.label = label
+        self.text = text
+        self.scheduler: Scheduler | None = None
+        self.events: list[Event] = []
+        self.samples: list[Sample] = []
+        self.result: RunResult | None = None
+
+    def on_start(self, scheduler: Scheduler) -> None:
+        self.scheduler = scheduler
+
+    def on_event(self, event: Event) -> None:
+        self.events.append(event)
+
+    def on_tick(self, sample: Sample) -> None:
+        self.samples.append(sample)
+
+    def on_end(self, result: RunResult) -> None:
+        self.result = result
+
+    @property
+    def t0(self) -> float:
+        if self.samples:
+            return self.samples[0].time
+        return self.events[0].time if self.events else 0.0
+
+
+class Session:
+    """A simulated robot, the definitions typed so far and the runs since the last reset.
+
+    Parameters
+    ----------
+    world : str or path-like, optional
+        A reference world name or a YAML file (default: ``sim.DEFAULT_WORLD``).
+    seed : int, optional
+        Seed of the simulation (default: the world's).
+    registry : Registry, optional
+        Control laws and sensor functions (default: ``atoms.default_registry()``).
+    rate : float
+        Control rate, Hz.
+    until : float or None
+        Longest run, simulated seconds (None: no limit); see :data:`DEFAULT_UNTIL`.
+    robot, sensing : str, optional
+        Robot profile and ladar mode, as for :class:`sim.SimBackend`.
+
+    Raises
+    ------
+    WorldError
+        The world cannot be loaded.
+    """
+
+    def __init__(self, world: "str | os.PathLike[str] | None" = None, *, seed: int | None = None,
+                 registry: Registry | None = None, rate: float = 10.0,
+                 until: float | None = DEFAULT_UNTIL, robot: str | None = None,
+                 sensing: str = "scan") -> None:
+        if not (rate > 0 and math.isfinite(rate)):
+            raise ReplError(f"the control rate must be a positive number of Hz, got {rate!r}")
+        self.workspace = Workspace(registry)
+        self.rate = float(rate)
+        self.until = until
+        self._seed = seed
+        self._robot = robot
+        self._sensing = sensing
+        self._runs: list[_Run] = []
+        self._stepping: _Run | None = None
+        self._last: tuple[str, Element] | None = None
+        self.world: World
+        self.world_spec: str
+        self.backend: SimBackend
+        self._open_world(world)
+
+    # ------------------------------------------------------------------ the world
+
+    def _open_world(self, spec: "str | os.PathLike[str] | None",
+                    pose: Pose | None = None) -> None:
+        import sim
+
+        text = sim.DEFAULT_WORLD if spec is None else os.fspath(spec)
+        world = sim.load_world(text)
+        kwargs: dict[str, Any] = {"seed": self._seed, "sensing": self._sensing}
+        if self._robot:
+            kwargs["robot"] = self._robot
+        backend = sim.SimBackend(world, **kwargs)
+        if pose is not None:
+            backend.reset(pose)
+        self._stop_stepping()
+        self.world, self.backend = world, backend
+        self.world_spec = os.path.abspath(text) if os.path.exists(text) else text
+        self._runs = []
+
+    def set_world(self, spec: "str | os.PathLike[str]") -> None:
+        """Load another world; the robot starts at its start pose, the path is cleared.
+
+        Raises
+        ------
+        WorldError
+            The world cannot be loaded (the session keeps the old one).
+        """
+        self._open_world(spec)
+
+    @property
+    def seed(self) -> int:
+        """The seed the simulation uses now."""
+        return int(self.backend.seed)
+
+    def set_seed(self, seed: int) -> None:
+        """Reseed the simulation. The robot stays where it is; the simulated clock, the
+        path and the trace start afresh (the random streams restart from the new seed)."""
+        here = self.backend.true_pose
+        old = self._seed
+        self._seed = int(seed)
+        try:
+            self._open_world(self.world_spec, here)
+        except MdleError:
+            self._seed = old
+            raise
+
+    def reset(self, pose: Pose | None = None) -> Pose:
+        """Put the robot at ``pose`` (default: the world's start), stopped, at time 0;
+        the path and trace are cleared. Returns the pose.
+
+        Raises
+        ------
+        WorldError
+            The robot would overlap an obstacle there (nothing changes).
+        """
+        self.backend.reset(pose)
+        self._stop_stepping()
+        self._runs = []
+        return self.backend.true_pose
+
+    # ------------------------------------------------------------------ definitions
+
+    def define(self, text: str) -> tuple[tuple[str, ...], tuple[str, ...], tuple[Diagnostic, ...]]:
+        """Add the definitions in ``text``.
+
+        Returns
+        -------
+        (added, replaced, warnings)
+            Names defined for the first time, names whose definition changed, new warnings.
+
+        Raises
+        ------
+        MdleError
+            The text does not parse or check; nothing changes.
+        """
+        before = {n: self.workspace.definition(n) for n in self.workspace.names()}
+        warnings = self.workspace.define(text)
+        added, replaced = [], []
+        for name in self.workspace.names():
+            d = self.workspace.definition(name)
+            if name not in before:
+                added.append(name)
+            elif before[name] is not d:
+                replaced.append(name)
+        return tuple(added), tuple(replaced), warnings
+
+    def load(self, path: "str | os.PathLike[str]") -> tuple[tuple[str, ...], tuple[Diagnostic, ...]]:
+        """Add the definitions of a file (and its imports); returns (names, warnings).
+
+        Raises
+        ------
+        MdleError
+            The file cannot be read, parsed or checked; nothing changes.
+        """
+        before = {n: self.workspace.definition(n) for n in self.workspace.names()}
+        warnings = self.workspace.load(path)
+        names = tuple(n for n in self.workspace.names()
+                      if before.get(n) is not self.workspace.definition(n))
+        return names, warnings
+
+    def save(self, path: "str | os.PathLike[str]") -> str:
+        """Write every definition, formatted as ``mdle fmt`` does; returns the text.
+
+        Raises
+        ------
+        ReplError
+            Nothing is defined yet, or the file cannot be written.
+        """
+        text = self.workspace.format()
+        if not text.strip():
+            raise ReplError("nothing to save: no definitions yet")
+        try:
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(text)
+        except OSError as exc:
+            raise ReplError(f"cannot write `{os.fspath(path)}`: {exc.strerror}") from None
+        return text
+
+    @property
+    def sources(self) -> dict[str, str]:
+        """Texts of everything defined so far by file name, to show source lines under
+        warnings. (The workspace keeps them privately; read here, without changing it.)"""
+        return dict(getattr(self.workspace, "_sources", {}))
+
+    # ------------------------------------------------------------------ running
+
+    @property
+    def last_element(self) -> str | None:
+        """The text of the element last run or stepped (what ``:step`` advances)."""
+        return None if self._last is None else self._last[0]
+
+    @property
+    def stepping(self) -> bool:
+        """True while a stepped run is paused between ``:step`` commands."""
+        return self._stepping is not None
+
+    def compile(self, text: str) -> Element:
+        """The element ``text`` denotes, checked against the definitions.
+
+        Raises
+        ------
+        MdleError
+        """
+        return self.workspace.element(text.strip())
+
+    def run(self, text: str) -> RunReport:
+        """Run the element ``text`` from the robot's current state to its end.
+
+        Ctrl-C (KeyboardInterrupt) stops the run: the robot is stopped and the report
+        says so. A paused stepped run is ended first.
+
+        Raises
+        ------
+        MdleError
+            The text is not an element (nothing ran).
+        """
+        element = self.compile(text)
+        self._stop_stepping()
+        self._last = (text.strip(), element)
+        record, scheduler = self._start(element, text.strip())
+        interrupted = False
+        error: MdleError | None = None
+        try:
+            scheduler.start()
+            while scheduler.tick():
+                pass
+        except KeyboardInterrupt:
+            interrupted = True
+        except MdleError as exc:  # a failing law or interrupt, a backend fault
+            error = exc
+        finally:
+            if scheduler.result is None:  # interrupted between ticks
+                scheduler.stop()
+        return self._report(record, interrupted, error)
+
+    def step(self, n: int) -> StepOutcome:
+        """Advance the last element by ``n`` ticks (starting a new run of it from the
+        robot's current state when none is paused).
+
+        Raises
+        ------
+        ReplError
+            No element has been run yet, or ``n`` is not positive.
+        """
+        if n < 1:
+            raise ReplError(f":step needs a positive number of ticks, got {n}")
+        started = False
+        if self._stepping is None:
+            if self._last is None:
+                raise ReplError("nothing to step: run an element first (type its name or "
+                                "an element such as `(go(0.3 m/s), never, 5 s)`)")
+            text, element = self._last
+            record, _ = self._start(element, text)
+            self._stepping = record
+            started = True
+        record = self._stepping
+        scheduler = record.scheduler
+        assert scheduler is not None
+        rows: list[StepRow] = []
+        report = None
+        interrupted = False
+        error: MdleError | None = None
+        try:
+            for _ in range(n):
+                scan = self.backend.observe().scan  # what this tick will see
+                running = scheduler.tick()
+                rows.append(_row(scheduler.ticks, record.samples[-1], scan))
+                if not running:
+                    break
+        except KeyboardInterrupt:
+            interrupted = True
+        except MdleError as exc:
+            error = exc
+        if scheduler.result is None and interrupted:
+            scheduler.stop()
+        if scheduler.result is not None:
+            self._stepping = None
+            report = self._report(record, interrupted, error)
+        return StepOutcome(tuple(rows), report, started, record.label, record.t0)
+
+    def _start(self, element: Element, text: str) -> tuple[_Run, Scheduler]:
+        record = _Run(element.label, text)
+        scheduler = Scheduler(element, self.backend, self.rate, (record,), until=self.until)
+        scheduler.start()
+        self._runs.append(record)
+        return record, scheduler
+
+    def _stop_stepping(self) -> None:
+        if self._stepping is not None and self._stepping.scheduler is not None:
+            self._stepping.scheduler.stop()
+        self._stepping = None
+
+    def _report(self, record: _Run, interrupted: bool, error: MdleError | None) -> RunReport:
+        result = record.result
+        assert result is not None
+        t0 = record.t0
+        collision = next((e for e in self.backend.events if e.time >= t0 - 1e-9), None)
+        limit = None
+        if (not interrupted and result.cause is Cause.STOPPED and self.until is not None
+                and result.duration >= self.until - 1e-6):
+            limit = self.until
+        obs = self.backend.observe()
+        return RunReport(record.label, result, t0, obs.pose, self.backend.true_pose,
+                         interrupted, limit, collision, error)
+
+    # ------------------------------------------------------------------ looking around
+
+    def observe(self) -> Observation:
+        """What the robot senses now (pose, velocities, newest scan, truth)."""
+        return self.backend.observe()
+
+    @property
+    def samples(self) -> list[Sample]:
+        """Every tick since the last reset, in order."""
+        return [s for r in self._runs for s in r.samples]
+
+    def path_xy(self) -> "np.ndarray":
+        """The robot's true positions since the last reset, shape (N, 2), metres, starting
+        at the pose of the reset and ending at the current pose."""
+        import numpy as np
+
+        pts = [(s.true_x, s.true_y) if s.true_x is not None else (s.x, s.y)
+               for s in self.samples]
+        here = self.backend.true_pose
+        pts.append((here.x, here.y))
+        return np.asarray(pts, dtype=float)
+
+    # ------------------------------------------------------------------ trace and plot
+
+    def trace_header(self) -> dict[str, Any]:
+        """The header of the session trace: world, seed, rate and what ran."""
+        return {"program": {"file": "<repl>", "element": self._runs[-1].label if self._runs
+                            else None, "runs": [r.text for r in self._runs]},
+                "world": {"name": self.world.name, "spec": self.world_spec},
+                "seed": self.seed, "rate": self.rate, "backend": "sim", "repl": True}
+
+    def write_trace(self, path: "str | os.PathLike[str]") -> int:
+        """Write the runs since the last reset as one JSON lines trace (``docs/trace.md``):
+        a ``start`` record per run, their events and samples, and one ``end`` record that
+        sums them up. Returns the number of samples written.
+
+        Raises
+        ------
+        ReplError
+            Nothing has run since the last reset, or the file cannot be written.
+        """
+        from mdle.trace import TraceWriter
+
+        runs = [r for r in self._runs if r.scheduler is not None]
+        if not any(r.samples for r in runs):
+            raise ReplError("nothing to write: no element has run since the last reset")
+        try:
+            writer = TraceWriter(path, self.trace_header())
+        except OSError as exc:
+            raise ReplError(f"cannot write `{os.fspath(path)}`: {exc.strerror}") from None
+        try:
+            for r in runs:
+                assert r.scheduler is not None
+                writer.on_start(r.scheduler)
+                for e in r.events:
+                    writer.on_event(e)
+                for s in r.samples:
+                    writer.on_tick(s)
+            summary = _summary([r.result for r in runs if r.result is not None])
+            if summary is not None:
+                writer.on_end(summary)
+        finally:
+            writer.close()
+        return sum(len(r.samples) for r in runs)
+
+    def plot(self, out: "str | os.PathLike[str]") -> str:
+        """Draw the path since the last reset as ``mdle plot`` does; returns ``out``.
+
+        Raises
+        ------
+        ReplError, PlotError
+        """
+        from mdle.plot import plot_trace
+
+        with tempfile.TemporaryDirectory(prefix="mdle-repl-") as tmp:
+            trace = os.path.join(tmp, "session.jsonl")
+            self.write_trace(trace)
+            return plot_trace(trace, out, world=self.world)
+
+
+def _row(tick: int, sample: Sample, scan: Any) -> StepRow:
+    if scan is None or len(scan.ranges) == 0:
+        return StepRow(tick, sample, None, None, None)
+    import numpy as np
+
+    ranges = np.asarray(scan.ranges, dtype=float)
+    bearings = np.asarray(scan.bearings, dtype=float)
+    valid = np.asarray(scan.valid, dtype=bool) & np.isfinite(ranges)
+    front = float(ranges[int(np.argmin(np.abs(bearings)))])
+    if not valid.any():
+        return StepRow(tick, sample, front, None, None)
+    i = int(np.argmin(np.where(valid, ranges, np.inf)))
+    return StepRow(tick, sample, front, float(ranges[i]), float(bearings[i]))
+
+
+def _summary(results: Sequence[RunResult]) -> RunResult | None:
+    """One result for several runs: the last run's termination, everything else summed."""
+    if not results:
+        return None
+    last = results[-1]
+    clear = [r.min_clearance for r in results if r.min_clearance is not None]
+    return replace(
+        last,
+        terminations=tuple(t for r in results for t in r.terminations),
+        events=tuple(e for r in results for e in r.events),
+        ticks=sum(r.ticks for r in results),
+        duration=sum(r.duration for r in results),
+        distance=sum(r.distance for r in results),
+        min_clearance=min(clear) if clear else None,
+        collided=any(r.collided for r in results),
+        fault=next((r.fault for r in reversed(results) if r.fault), None),
+        max_lateness=max(r.max_lateness for r in results),
+    )
