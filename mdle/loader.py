@@ -9,6 +9,7 @@ every file are reported together, then the check errors.
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -61,6 +62,19 @@ class Loaded:
     main: st.Module | None
 
 
+_IMPORT_LINE = re.compile(r'^[ \t]*import[ \t]+"([^"\n]*)"', re.M)
+
+
+def _scan_imports(text: str, file: str) -> list[st.Import]:
+    """The imports of a file that does not parse (found line by line)."""
+    out = []
+    for m in _IMPORT_LINE.finditer(text):
+        line = text.count("\n", 0, m.start()) + 1
+        col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
+        out.append(st.Import(m.group(1), Span(file, line, col, line, col + len(m.group(0)))))
+    return out
+
+
 def _imports(module: st.Module) -> Iterator[st.Import]:
     return (s for s in module.statements if isinstance(s, st.Import))
 
@@ -84,14 +98,14 @@ def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
         except MdleError as err:
             syntax_failed = syntax_failed or isinstance(err, MdleSyntaxError)
             diagnostics.extend(err.diagnostics)
-            return None
+            # Still follow the file's imports, so their errors are reported too.
+            return st.Module(name, tuple(_scan_imports(src, name)))
 
     root_dir = base_dir if base_dir is not None else (
         os.path.dirname(os.path.abspath(file)) if not file.startswith("<") else os.getcwd())
     main = parse(text, file)
     order: list[st.Module] = []
-    if main is None:
-        raise _error(diagnostics, sources, syntax_failed)
+    assert main is not None
     root_key = os.path.realpath(file) if not file.startswith("<") else file
     state: dict[str, int] = {root_key: 1}  # 1: being loaded (on the path), 2: done
     path: list[tuple[str, str]] = [(root_key, file)]

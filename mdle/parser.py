@@ -536,9 +536,8 @@ def _describe(err: UnexpectedInput, text: str, file: str, start: str,
         opened = _unclosed(source, file)
         if opened is not None:
             notes = (Diagnostic(opened, "this `(` is not closed", Severity.NOTE),)
-            label = label if label is not None and "parenthes" in label.message else Label(
-                "unbalanced parentheses: the file ends before a `(` is closed",
-                "add the missing `)`")
+            label = Label("unbalanced parentheses: the file ends before a `(` is closed",
+                          "add the missing `)`")
     expected_words = describe_expected(expected)
     if label is not None:
         message = f"{label.message} (found {found})"

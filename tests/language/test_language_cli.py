@@ -1,0 +1,112 @@
+"""`mdle check`, `mdle fmt`, `mdle show` as a user runs them (the installed console script)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent
+MDLE = str(BIN / "mdle")
+REPO = Path(__file__).resolve().parents[2]
+TOUR = str(REPO / "plans" / "language" / "tour.mdle")
+
+
+def mdle(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([MDLE, *args], capture_output=True, text=True, timeout=60, cwd=cwd)
+
+
+def test_check_clean_plan_exits_0() -> None:
+    r = mdle("check", TOUR)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.stdout == "checked 1 file: 0 errors, 0 warnings\n" and r.stderr == ""
+
+
+def test_check_folder_checks_every_plan() -> None:
+    r = mdle("check", str(REPO / "plans" / "language"))
+    assert r.returncode == 0, r.stdout
+    assert r.stdout.startswith("checked 4 files")
+
+
+def test_check_errors_exit_1_with_messages_on_stdout(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.mdle"
+    bad.write_text("atom a = (go(1 m), never, 1 s)\natom b = (go(1 m/s), stalled)\n")
+    r = mdle("check", "bad.mdle", cwd=tmp_path)
+    assert r.returncode == 1
+    assert r.stdout.splitlines()[:3] == [
+        "bad.mdle:1:14: error: `v` of `go` is a speed such as `0.3 m/s`, found a length (`1 m`)",
+        "    atom a = (go(1 m), never, 1 s)",
+        "                 ^^^"]
+    assert "bad.mdle:2:29: error: expected a timer such as `10 s` or `inf`" in r.stdout
+    assert r.stdout.endswith("checked 1 file: 2 errors, 0 warnings\n")
+    assert "Traceback" not in r.stdout + r.stderr
+
+
+def test_check_warnings_exit_0_unless_strict(tmp_path: Path) -> None:
+    p = tmp_path / "w.mdle"
+    p.write_text("atom a = (go(1 m/s), never, inf)\nbehavior b = ((a, a), stalled, 5 s)\n")
+    r = mdle("check", str(p))
+    assert r.returncode == 0 and "warning: `a` is never reached" in r.stdout
+    assert mdle("check", "--strict", str(p)).returncode == 1
+    assert mdle("check", "-q", str(p)).stdout == ""
+
+
+@pytest.mark.parametrize("content", [b"\x00\xff\xfe binary", b"", b"(" * 1_000_000,
+                                     b"atom a = (go(3 ft), never, 1 s)",
+                                     b'import "missing.mdle"\n'])
+def test_hostile_files_exit_0_or_1_without_traceback(tmp_path: Path, content: bytes) -> None:
+    p = tmp_path / "h.mdle"
+    p.write_bytes(content)
+    r = mdle("check", str(p))
+    assert r.returncode == (0 if content == b"" else 1)
+    assert "Traceback" not in r.stdout + r.stderr and "internal error" not in r.stderr
+
+
+def test_usage_errors_exit_2() -> None:
+    r = mdle("check")
+    assert r.returncode == 2 and "usage:" in r.stderr
+    assert mdle("check", "--no-such-option", TOUR).returncode == 2
+    assert mdle("fmt", "--write", "--check", TOUR).returncode == 2
+
+
+def test_missing_file_exits_1(tmp_path: Path) -> None:
+    r = mdle("check", str(tmp_path / "absent.mdle"))
+    assert r.returncode == 1 and "no such file" in r.stdout
+
+
+def test_check_does_not_import_numpy_or_shapely() -> None:
+    code = ("import sys\nfrom mdle.cli import main\n"
+            f"code = main(['check', '-q', {TOUR!r}])\n"
+            "heavy = sorted(m for m in ('numpy', 'shapely', 'matplotlib') if m in sys.modules)\n"
+            "print(code, heavy)\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.stdout.strip() == "0 []", r.stdout + r.stderr
+
+
+def test_fmt_prints_check_and_write(tmp_path: Path) -> None:
+    p = tmp_path / "f.mdle"
+    p.write_text("atom a=(go(1 m/s),never,1s)  # c\n")
+    r = mdle("fmt", str(p))
+    assert r.returncode == 0 and r.stdout == "atom a = (go(1 m/s), never, 1 s)  # c\n"
+    assert mdle("fmt", "--check", str(p)).returncode == 1
+    assert mdle("fmt", "--write", str(p)).returncode == 0
+    assert p.read_text() == "atom a = (go(1 m/s), never, 1 s)  # c\n"
+    assert mdle("fmt", "--check", str(p)).returncode == 0
+    p.write_text("atom a = (")
+    r = mdle("fmt", str(p))
+    assert r.returncode == 1 and "unbalanced parentheses" in r.stderr
+
+
+def test_show_prints_tree_and_figures() -> None:
+    r = mdle("show", TOUR)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0] == "plan main  [stalled | 10 min]"
+    assert "\u251c\u2500\u2500 behavior patrol  [never | 5 min]" in lines
+    assert lines[-1] == ("atoms: 14   distinct control laws: 4 (arc, go, stop, turn)   "
+                         "nesting depth: 3   worst-case duration: 10 min")
+    r = mdle("show", TOUR, "--plan", "spin")
+    assert r.stdout.startswith("atom spin: turn(rate = 30 deg/s)  [never | 3 s]")
+    assert mdle("show", TOUR, "--plan", "nope").returncode == 1
