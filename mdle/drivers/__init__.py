@@ -12,7 +12,7 @@
 
 from __future__ import annotations
 
-__all__ = ["open_backend", "BACKEND_KINDS"]
+__all__ = ["BACKEND_KINDS", "open_backend"]
 
 from typing import TYPE_CHECKING
 
@@ -28,8 +28,8 @@ _CONNECT_TIMEOUT = 5.0
 
 
 def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: float = 10.0,
-                 limits: "RobotLimits | None" = None, options: object | None = None,
-                 laser_options: object | None = None) -> "Backend":
+                 limits: RobotLimits | None = None, options: object | None = None,
+                 laser_options: object | None = None) -> Backend:
     """Connect to a robot and return it as a wall-clock backend.
 
     Parameters

@@ -22,24 +22,24 @@ from dataclasses import dataclass, field, fields, replace
 __all__ = [
     "HEADER",
     "MAX_BODY",
-    "Cmd",
-    "SIP_IDS",
-    "checksum",
-    "frame",
-    "encode_command",
-    "decode_command",
-    "PacketReader",
-    "SyncInfo",
-    "parse_sync2",
-    "encode_sync2",
-    "Sip",
-    "decode_sip",
-    "encode_sip",
-    "RobotParams",
     "ROBOT_PARAMS",
-    "robot_params",
-    "OdometryState",
+    "SIP_IDS",
+    "Cmd",
     "Odometer",
+    "OdometryState",
+    "PacketReader",
+    "RobotParams",
+    "Sip",
+    "SyncInfo",
+    "checksum",
+    "decode_command",
+    "decode_sip",
+    "encode_command",
+    "encode_sip",
+    "encode_sync2",
+    "frame",
+    "parse_sync2",
+    "robot_params",
 ]
 
 HEADER = b"\xfa\xfb"
@@ -407,8 +407,11 @@ class Odometer:
     """
 
     params: RobotParams = field(default_factory=RobotParams)
+    relative: bool = False
+    """Report poses relative to the first SIP's (the pose at connect becomes (0, 0, 0))."""
     _raw: tuple[int, int] | None = None
     _sum: tuple[int, int] = (0, 0)
+    _origin: tuple[float, float, float] | None = None
 
     def update(self, sip: Sip) -> OdometryState:
         """Fold in one SIP and return the odometry it implies."""
@@ -427,6 +430,14 @@ class Odometer:
         else:
             # diff_conv is per mm/s of half the difference, as the parameter files define it
             omega = 0.5 * (sip.right_vel - sip.left_vel) * p.vel_conv * p.diff_conv
-        return OdometryState(x=sx * p.dist_conv / 1000.0, y=sy * p.dist_conv / 1000.0,
+        x, y = sx * p.dist_conv / 1000.0, sy * p.dist_conv / 1000.0
+        if self.relative:
+            if self._origin is None:
+                self._origin = (x, y, theta)
+            ox, oy, oth = self._origin
+            c, s = math.cos(oth), math.sin(oth)
+            x, y = c * (x - ox) + s * (y - oy), -s * (x - ox) + c * (y - oy)
+            theta = math.remainder(theta - oth, math.tau)
+        return OdometryState(x=x, y=y,
                              theta=theta, v=v, omega=omega, stalled=sip.stalled,
                              motors_enabled=sip.motors_enabled, battery=sip.battery / 10.0)

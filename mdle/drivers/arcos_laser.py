@@ -21,13 +21,13 @@ from mdle.drivers.arcos import Cmd, encode_command, frame
 __all__ = [
     "LASER_IDS",
     "MAX_READINGS_PER_PACKET",
-    "LaserPacket",
-    "decode_laser_packet",
-    "encode_laser_packets",
-    "enable_command",
-    "sim_bearings",
     "AssembledScan",
+    "LaserPacket",
     "ScanAssembler",
+    "decode_laser_packet",
+    "enable_command",
+    "encode_laser_packets",
+    "sim_bearings",
 ]
 
 LASER_IDS = frozenset({0x60, 0x61})
@@ -80,7 +80,7 @@ def decode_laser_packet(body: bytes) -> LaserPacket:
                        laser_index=p[end], flags=p[end + 1])
 
 
-def encode_laser_packets(ranges_mm: "np.ndarray | list[int]", *, extended: bool = False,
+def encode_laser_packets(ranges_mm: np.ndarray | list[int], *, extended: bool = False,
                          pose: tuple[int, int, int] = (0, 0, 0),
                          per_packet: int = MAX_READINGS_PER_PACKET) -> list[bytes]:
     """The packets a simulator sends for one scan (for test servers and round trips)."""

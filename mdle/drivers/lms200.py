@@ -14,34 +14,33 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass
-from typing import Union
 
 import numpy as np
 
 __all__ = [
-    "STX",
     "ACK",
-    "NAK",
-    "HOST_ADDRESS",
-    "REPLY_ADDRESS",
-    "MODE_INSTALLATION",
-    "MODE_CONTINUOUS",
-    "MODE_REQUEST",
-    "MODE_MEAN",
     "BAUD_CODES",
-    "crc16",
-    "encode_telegram",
-    "mode_command",
-    "baud_command",
-    "status_request",
-    "variant_command",
-    "Telegram",
+    "HOST_ADDRESS",
+    "MODE_CONTINUOUS",
+    "MODE_INSTALLATION",
+    "MODE_MEAN",
+    "MODE_REQUEST",
+    "NAK",
+    "REPLY_ADDRESS",
+    "STX",
     "Ack",
-    "TelegramReader",
     "MeasuredValues",
+    "Telegram",
+    "TelegramReader",
+    "baud_command",
+    "crc16",
     "decode_measured_values",
     "encode_measured_values",
+    "encode_telegram",
     "lms_bearings",
+    "mode_command",
+    "status_request",
+    "variant_command",
 ]
 
 STX = 0x02
@@ -161,7 +160,7 @@ class TelegramReader:
         self.rejected = 0
         self.skipped = 0
 
-    def feed(self, data: bytes) -> list[Union[Ack, Telegram]]:
+    def feed(self, data: bytes) -> list[Ack | Telegram]:
         """Add received bytes; return the acknowledges and telegrams they complete."""
         self._buf += data
         buf = self._buf
@@ -258,7 +257,7 @@ def decode_measured_values(data: bytes, range_bits: int = _RANGE_BITS) -> Measur
                           valid=valid, partial=(header >> 11) & 0x3, unit_mm=unit_mm)
 
 
-def encode_measured_values(values: "np.ndarray | list[int]", *, unit: int = 1,
+def encode_measured_values(values: np.ndarray | list[int], *, unit: int = 1,
                            partial: int = 0, status: int = 0x10) -> bytes:
     """A complete 0xB0 reply telegram for raw ``values`` (for test scanners)."""
     words = np.asarray(values, dtype=np.uint16)

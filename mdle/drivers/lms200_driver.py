@@ -9,6 +9,7 @@ laser. Timeouts follow the facts note: 1 s per message, 3 s for a mode switch, 3
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from dataclasses import dataclass
@@ -21,7 +22,9 @@ from mdle.drivers.lms200 import Ack, Telegram, TelegramReader
 from mdle.drivers.transport import Transport, TransportClosed
 from mdle.errors import BackendError
 
-__all__ = ["Lms200Options", "Lms200Driver", "scan_angle_for"]
+__all__ = ["Lms200Driver", "Lms200Options", "scan_angle_for"]
+
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -196,7 +199,7 @@ class Lms200Driver:
             except TransportClosed as exc:
                 self._set_failure(str(exc))
                 return
-            except Exception as exc:
+            except Exception as exc:  # noqa: BLE001 - a transport bug must end the scans, loudly
                 self._set_failure(f"reading failed: {exc!r}")
                 return
             if not data:
@@ -206,7 +209,8 @@ class Lms200Driver:
                 if isinstance(item, Telegram) and item.cmd == 0xB0:
                     try:
                         scan = self._to_scan(item, now)
-                    except Exception:
+                    except Exception:  # noqa: BLE001 - malformed content, valid CRC
+                        _log.debug("dropped a malformed 0xB0 telegram", exc_info=True)
                         continue
                     with self._lock:
                         self._scan = scan

@@ -18,6 +18,7 @@ best-effort stop; the runtime stops the robot at the end of every run.
 from __future__ import annotations
 
 import atexit
+import logging
 import math
 import signal
 import threading
@@ -25,7 +26,7 @@ import time
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.drivers import arcos, arcos_laser
@@ -33,7 +34,10 @@ from mdle.drivers.arcos import Cmd, OdometryState, PacketReader, RobotParams, Sy
 from mdle.drivers.transport import Transport, TransportClosed
 from mdle.errors import BackendError
 
-__all__ = ["PioneerOptions", "ScanSource", "PioneerBackend", "limits_from_params"]
+__all__ = ["PioneerBackend", "PioneerOptions", "ScanSource", "limits_from_params"]
+
+_log = logging.getLogger(__name__)
+_B = TypeVar("_B", bound="PioneerBackend")
 
 
 @dataclass(frozen=True)
@@ -66,6 +70,9 @@ class PioneerOptions:
     laser_max_range_mm: int = 32000
     """The simulator laser's no-return value."""
     laser_fov_deg: float = 180.0
+    odometry_origin: str = "start"
+    """``start``: the pose at connect is (0, 0, 0), as the simulators' odometry restarts
+    each session; ``robot``: the robot's own odometry counters."""
     model: str | None = None
     """Use this model's parameters whatever SYNC2 reports."""
     param_overrides: tuple[tuple[str, float], ...] = ()
@@ -151,7 +158,7 @@ class PioneerBackend:
 
     clock: ClockMode = ClockMode.WALL
 
-    def __init__(self, transport: Transport, *, laser: "str | ScanSource | None" = None,
+    def __init__(self, transport: Transport, *, laser: str | ScanSource | None = None,
                  limits: RobotLimits | None = None, rate: float = 10.0,
                  options: PioneerOptions | None = None) -> None:
         self._transport = transport
@@ -191,7 +198,11 @@ class PioneerBackend:
             except ValueError as exc:
                 raise BackendError(str(exc)) from None
             self.limits: RobotLimits = limits or limits_from_params(self.params)
-            self._odometer = arcos.Odometer(self.params)
+            if opt.odometry_origin not in ("start", "robot"):
+                raise BackendError(f"odometry origin must be `start` or `robot`, got "
+                                   f"`{opt.odometry_origin}`")
+            self._odometer = arcos.Odometer(self.params,
+                                            relative=opt.odometry_origin == "start")
             self._write(arcos.encode_command(Cmd.OPEN))
             self._write(_PULSE + arcos.encode_command(Cmd.ENABLE, 1))
             if self._sim_laser:
@@ -248,8 +259,8 @@ class PioneerBackend:
         lim = self.limits
         v = min(max(cmd.v, -lim.max_reverse_speed), lim.max_speed)
         w = min(max(cmd.omega, -lim.max_turn_rate), lim.max_turn_rate)
-        mm = int(round(v * 1000.0))
-        deg = int(round(math.degrees(w)))
+        mm = round(v * 1000.0)
+        deg = round(math.degrees(w))
         packet = arcos.encode_command(Cmd.VEL, mm) + arcos.encode_command(Cmd.RVEL, deg)
         self._last_command = time.monotonic()
         self._moving = mm != 0 or deg != 0
@@ -290,7 +301,7 @@ class PioneerBackend:
         self._closed = True
         self._shutdown(send=True)
 
-    def __enter__(self) -> "PioneerBackend":
+    def __enter__(self: _B) -> _B:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -405,7 +416,7 @@ class PioneerBackend:
             except TransportClosed as exc:
                 self._fail(str(exc))
                 return
-            except Exception as exc:  # a transport bug must not kill the robot silently
+            except Exception as exc:  # noqa: BLE001 - a transport bug must end the run, loudly
                 self._fail(f"reading failed: {exc!r}")
                 return
             if data:
@@ -413,7 +424,9 @@ class PioneerBackend:
                 for body in reader.feed(data):
                     try:
                         self._handle(body, now)
-                    except Exception:  # malformed content behind a valid checksum
+                    except Exception:  # noqa: BLE001 - malformed content, valid checksum
+                        _log.debug("dropped a malformed packet %s", body.hex(" "),
+                                   exc_info=True)
                         with self._lock:
                             self._shared.bad_packets += 1
                 with self._lock:
@@ -496,13 +509,13 @@ class PioneerBackend:
             thread.join(timeout=1.0)
         try:
             self._transport.close()
-        except Exception:
-            pass
+        except Exception:  # noqa: BLE001 - closing must go on whatever the stream says
+            _log.debug("closing the robot's stream failed", exc_info=True)
         if self._laser_source is not None:
             try:
                 self._laser_source.close()
-            except Exception:
-                pass
+            except Exception:  # noqa: BLE001
+                _log.debug("closing the laser failed", exc_info=True)
         self._restore_sigterm()
         hook = getattr(self, "_atexit", None)
         if hook is not None:

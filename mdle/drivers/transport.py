@@ -26,14 +26,14 @@ from typing import Any, Protocol
 from mdle.errors import BackendError
 
 __all__ = [
+    "DEFAULT_TCP_PORT",
     "Endpoint",
-    "parse_url",
+    "SerialTransport",
+    "TcpTransport",
     "Transport",
     "TransportClosed",
-    "TcpTransport",
-    "SerialTransport",
     "open_transport",
-    "DEFAULT_TCP_PORT",
+    "parse_url",
 ]
 
 DEFAULT_TCP_PORT = 8101

@@ -213,7 +213,7 @@ class FakeArcos:
         while not self._halt.is_set():
             try:
                 sock, _ = self._server.accept()
-            except (socket.timeout, OSError):
+            except (TimeoutError, OSError):
                 continue
             self.link = _Link(sock=sock)
             self._serve()
@@ -306,11 +306,11 @@ class FakeArcos:
             x, y, th = self.pose_mm
             half = self.w_deg * math.pi / 180 * 170  # wheel speed difference for a 340 mm base
             sip = arcos.Sip(
-                x=int(round(x / self.dist_conv)) & 0x7FFF,
-                y=int(round(y / self.dist_conv)) & 0x7FFF,
-                theta=int(round(th / 0.001534)), left_vel=int(self.v_mm - half),
+                x=round(x / self.dist_conv) & 0x7FFF,
+                y=round(y / self.dist_conv) & 0x7FFF,
+                theta=round(th / 0.001534), left_vel=int(self.v_mm - half),
                 right_vel=int(self.v_mm + half), battery=128, flags=int(self.motors),
-                rot_vel=int(round(self.w_deg * 10)), moving=bool(self.v_mm))
+                rot_vel=round(self.w_deg * 10), moving=bool(self.v_mm))
             packets.append(arcos.encode_sip(sip))
             self.sips_sent += 1
         if self.laser_mode and self.send_laser:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -96,7 +97,7 @@ def test_reader_reassembles_any_split(packets: list[Sip], cuts: list[int]) -> No
     points = sorted({c % (len(stream) + 1) for c in cuts} | {0, len(stream)})
     reader = PacketReader()
     bodies = []
-    for a, b in zip(points, points[1:]):
+    for a, b in itertools.pairwise(points):
         bodies += reader.feed(stream[a:b])
     assert [arcos.decode_sip(b) for b in bodies] == packets
 
@@ -181,3 +182,15 @@ def test_robot_params_overrides_and_unknown_names() -> None:
     assert arcos.robot_params("p3dx-sh", {"dist_conv": 0.5}).dist_conv == 0.5
     with pytest.raises(ValueError, match="unknown robot parameter"):
         arcos.robot_params("p3dx-sh", {"distconv": 0.5})
+
+
+def test_odometer_relative_to_the_pose_at_connect() -> None:
+    odo = Odometer(arcos.robot_params("p3dx-sh"), relative=True)
+    # the robot's counters say (1000, 2000) mm facing +y when we connect
+    quarter = round((math.pi / 2) / 0.001534)
+    first = odo.update(_sip(1000, 2000, theta=quarter))
+    assert (first.x, first.y, first.theta) == (0.0, 0.0, 0.0)
+    # it drives 0.5 m along its heading (+y in its counters): forward in ours
+    state = odo.update(_sip(1000, 2500, theta=quarter))
+    assert state.x == pytest.approx(0.5) and state.y == pytest.approx(0.0, abs=1e-4)
+    assert state.theta == pytest.approx(0.0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -67,7 +69,7 @@ def test_measured_values_round_trip_split_anywhere(values: list[int], unit: int,
     points = sorted({c % (len(stream) + 1) for c in cuts} | {0, len(stream)})
     reader = TelegramReader()
     items = []
-    for a, b in zip(points, points[1:]):
+    for a, b in itertools.pairwise(points):
         items += reader.feed(stream[a:b])
     assert items[0] == Ack(True)
     tel = items[1]

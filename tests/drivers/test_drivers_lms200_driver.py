@@ -11,7 +11,6 @@ import pytest
 
 from mdle.backend import Command
 from mdle.drivers import open_backend
-from mdle.drivers.arcos import Cmd
 from mdle.drivers.lms200_driver import Lms200Driver
 from mdle.drivers.transport import SerialTransport
 from mdle.errors import BackendError

@@ -15,7 +15,7 @@ import pytest
 from mdle.backend import Backend, ClockMode, Command, RobotLimits
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
-from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
+from mdle.drivers.pioneer import PioneerBackend
 from mdle.errors import BackendError
 
 
@@ -73,7 +73,7 @@ def test_commands_are_clamped_and_converted(fake_robot, fast) -> None:
 
 def test_odometry_units_per_model(fake_robot, fast) -> None:
     fake = fake_robot(subtype="p3dx")  # 0.485 mm per position unit
-    backend = open_backend("pioneer", fake.url, options=fast)
+    backend = open_backend("pioneer", fake.url, options=replace(fast, odometry_origin="robot"))
     try:
         assert backend.params.dist_conv == 0.485
         fake.pose_mm = [505.0, -250.0, math.radians(90)]
@@ -84,6 +84,22 @@ def test_odometry_units_per_model(fake_robot, fast) -> None:
         assert obs.pose.theta == pytest.approx(math.pi / 2, abs=0.002)
     finally:
         backend.close()
+
+
+def test_odometry_starts_at_the_pose_at_connect(fake_robot, fast) -> None:
+    fake = fake_robot()
+    fake.pose_mm = [3000.0, -1000.0, math.radians(30)]  # counters left by an earlier run
+    start = open_backend("pioneer", fake.url, options=fast)
+    robot = open_backend("pioneer", fake_robot(pose_mm=[3000.0, -1000.0, 0.5]).url,
+                         options=replace(fast, odometry_origin="robot"))
+    try:
+        first = start.observe().pose
+        assert (first.x, first.y, first.theta) == pytest.approx((0.0, 0.0, 0.0))
+        theirs = robot.observe().pose
+        assert (theirs.x, theirs.y, theirs.theta) == pytest.approx((3.0, -1.0, 0.5), abs=2e-3)
+    finally:
+        start.close()
+        robot.close()
 
 
 def test_model_override_from_the_url(fake_robot, fast) -> None:
