@@ -48,12 +48,12 @@ def ellipse_nearest(a: np.ndarray, b: np.ndarray, y0: np.ndarray, y1: np.ndarray
     # On the minor axis (z0 = 0, inside) the nearest point may be the axis end; the
     # Newton form handles z1 > 0; degenerate z1 = 0 needs the closed form below.
     t = np.maximum(A * z0 - a2, Bx * z1 - b2)       # lower bound of the root
-    for _ in range(_NEWTON_STEPS):                  # fixed small count, vectorised
-        p = A * z0 / (t + a2)
-        q = Bx * z1 / (t + b2)
-        f = p * p + q * q - 1.0
-        df = -2.0 * (p * p / (t + a2) + q * q / (t + b2))
+    for _ in range(_NEWTON_STEPS):                  # stops early once converged
         with np.errstate(divide="ignore", invalid="ignore"):
+            p = A * z0 / (t + a2)
+            q = Bx * z1 / (t + b2)
+            f = p * p + q * q - 1.0
+            df = -2.0 * (p * p / (t + a2) + q * q / (t + b2))
             step = np.where(df < 0, f / df, 0.0)
         step = np.nan_to_num(step)
         t = t - step
