@@ -12,4 +12,4 @@ from sim.backend import SimBackend
 from sim.catalog import DEFAULT_WORLD, list_worlds, load_world
 from sim.world import World
 
-__all__ = ["load_world", "list_worlds", "World", "SimBackend", "DEFAULT_WORLD"]
+__all__ = ["DEFAULT_WORLD", "SimBackend", "World", "list_worlds", "load_world"]

@@ -36,7 +36,7 @@ from sim.ladar import Ladar, LadarProfile, ladar_profile
 from sim.robot import Phase, RobotProfile, integrate, plan_phases, robot_profile
 from sim.world import World
 
-__all__ = ["SimBackend", "SimEvent", "SENSING_MODES"]
+__all__ = ["SENSING_MODES", "SimBackend", "SimEvent"]
 
 SENSING_MODES = ("scan", "exact")
 _TAU = 2.0 * math.pi
@@ -170,7 +170,7 @@ class SimBackend:
             return 0.0
         t0, t1 = self._t, self._t + dt
         # The last ladar instant inside (t0, t1], if any.
-        scan_at = None
+        scan_at = math.inf          # none this step
         if self._period == 0.0:
             scan_at = t1
         else:
@@ -185,7 +185,7 @@ class SimBackend:
         clear = self._clear
         t = t0
         contact = False
-        scanned = scan_at is None
+        scanned = math.isinf(scan_at)
         if not scanned and scan_at <= t0 + 1e-12:
             self._scan, scanned = self._take_scan(x, y, th, scan_at), True
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,

@@ -9,7 +9,7 @@ True
 from __future__ import annotations
 
 import os
-from functools import lru_cache
+from functools import cache
 from importlib import resources
 from pathlib import Path
 
@@ -17,13 +17,13 @@ from mdle.errors import WorldError
 from sim.world import World
 from sim.world_yaml import parse_world, read_world
 
-__all__ = ["load_world", "list_worlds", "world_descriptions", "DEFAULT_WORLD"]
+__all__ = ["DEFAULT_WORLD", "list_worlds", "load_world", "world_descriptions"]
 
 #: The world a newcomer's first ``mdle run`` uses.
 DEFAULT_WORLD = "default"
 
 
-def _folder() -> "resources.abc.Traversable":
+def _folder() -> resources.abc.Traversable:
     return resources.files("sim").joinpath("worlds")
 
 
@@ -32,14 +32,14 @@ def list_worlds() -> list[str]:
     return sorted(p.name[:-5] for p in _folder().iterdir() if p.name.endswith(".yaml"))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _reference(name: str) -> World:
     entry = _folder().joinpath(f"{name}.yaml")
     text = entry.read_text(encoding="utf-8")
     return parse_world(text, file=f"sim/worlds/{name}.yaml", default_name=name)
 
 
-def load_world(spec: "str | os.PathLike[str]") -> World:
+def load_world(spec: str | os.PathLike[str]) -> World:
     """A reference world by name (``corridor``, ``ellipse``, ...) or a YAML file by path.
 
     Raises

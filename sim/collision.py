@@ -29,7 +29,7 @@ from sim.distance import ellipse_nearest, nearest_boundary
 from sim.robot import Phase, integrate
 from sim.shapes import Parts
 
-__all__ = ["CONTACT", "SweepResult", "Collider"]
+__all__ = ["CONTACT", "Collider", "SweepResult"]
 
 #: Clearance (m) at which the body counts as touching an obstacle.
 CONTACT = 1e-4

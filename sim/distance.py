@@ -6,7 +6,8 @@ gives a bound that only tightens). Vectorised over query points and primitives.
 
 >>> import numpy as np
 >>> from sim.shapes import Circle, Rectangle, Parts
->>> parts = Parts.concat([Circle((0.0, 0.0), 1.0).parts(), Rectangle((5.0, 0.0), (2.0, 2.0)).parts()])
+>>> shapes = [Circle((0.0, 0.0), 1.0), Rectangle((5.0, 0.0), (2.0, 2.0))]
+>>> parts = Parts.concat([s.parts() for s in shapes])
 >>> d, p, owner = nearest_boundary(parts, np.array([[2.5, 0.0]]))
 >>> d.tolist(), p.tolist(), owner.tolist()
 ([1.5], [[4.0, 0.0]], [1])
@@ -20,7 +21,7 @@ import numpy as np
 
 from sim.shapes import Parts
 
-__all__ = ["nearest_boundary", "ellipse_nearest"]
+__all__ = ["ellipse_nearest", "nearest_boundary"]
 
 _TAU = 2.0 * math.pi
 _NEWTON_STEPS = 60  # an upper bound; outside points converge in a handful

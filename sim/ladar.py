@@ -35,7 +35,7 @@ from mdle.backend import Scan
 from mdle.errors import WorldError
 from sim.raycast import RayHits
 
-__all__ = ["NOISE_MODELS", "LadarProfile", "LADAR_PROFILES", "ladar_profile", "Ladar"]
+__all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_profile"]
 
 NOISE_MODELS = ("relative", "absolute", "none")
 
@@ -77,12 +77,12 @@ class LadarProfile:
         """(beams,) bearings in the ladar frame, radians, from ``-fov/2`` to ``+fov/2``."""
         return np.linspace(-self.fov / 2.0, self.fov / 2.0, self.beams)
 
-    def with_overrides(self, **changes: Any) -> "LadarProfile":
+    def with_overrides(self, **changes: Any) -> LadarProfile:
         """A copy with some fields replaced (values already in SI)."""
         return replace(self, **changes)
 
     @property
-    def noise_free(self) -> "LadarProfile":
+    def noise_free(self) -> LadarProfile:
         """The same ladar without noise or quantisation."""
         return replace(self, noise="none", sigma=0.0, resolution=0.0)
 

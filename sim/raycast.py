@@ -28,7 +28,7 @@ import numpy as np
 
 from sim.shapes import Parts
 
-__all__ = ["RayHits", "RayCaster"]
+__all__ = ["RayCaster", "RayHits"]
 
 _TAU = 2.0 * math.pi
 _EPS_ANGLE = 1e-10   # widen segment intervals so a beam through a vertex is never lost
@@ -141,7 +141,7 @@ class RayCaster:
             inv = np.empty_like(order)
             inv[order] = np.arange(n)
             ranges, hit = ranges[inv], hit[inv]
-            if detail:
+            if tangents is not None and curvatures is not None and owner is not None:
                 tangents, curvatures, owner = tangents[inv], curvatures[inv], owner[inv]
         return RayHits(ranges, hit, tangents, curvatures, owner)
 

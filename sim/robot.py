@@ -14,6 +14,7 @@ phase with a ramp is integrated by Gauss-Legendre quadrature on sub-pieces of at
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -24,13 +25,13 @@ from mdle.backend import RobotLimits
 from mdle.errors import WorldError
 
 __all__ = [
-    "OdometryNoise",
-    "RobotProfile",
     "ROBOT_PROFILES",
-    "robot_profile",
+    "OdometryNoise",
     "Phase",
-    "plan_phases",
+    "RobotProfile",
     "integrate",
+    "plan_phases",
+    "robot_profile",
 ]
 
 _GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(8)))
@@ -96,7 +97,7 @@ class RobotProfile:
                            max_decel=self.max_decel, max_turn_accel=self.max_turn_accel,
                            radius=self.radius)
 
-    def with_overrides(self, **changes: Any) -> "RobotProfile":
+    def with_overrides(self, **changes: Any) -> RobotProfile:
         """A copy with some fields replaced (values already in SI)."""
         return replace(self, **changes)
 
@@ -198,11 +199,11 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
         w, aw, tw = w_cmd, 0.0, 0.0
     cuts = sorted({0.0, dt, *(t for t in (tv, tw) if 0.0 < t < dt)})
     phases = []
-    for t0, t1 in zip(cuts[:-1], cuts[1:]):
+    for t0, t1 in itertools.pairwise(cuts):
         a_v = av if t0 < tv else 0.0
         a_w = aw if t0 < tw else 0.0
-        v0 = v_cmd if t0 >= tv and tv > 0 else v + av * t0
-        w0 = w_cmd if t0 >= tw and tw > 0 else w + aw * t0
+        v0 = v_cmd if t0 >= tv > 0 else v + av * t0
+        w0 = w_cmd if t0 >= tw > 0 else w + aw * t0
         phases.append(Phase(t1 - t0, v0, a_v, w0, a_w))
     v_end = v_cmd if tv <= dt else v + av * dt
     w_end = w_cmd if tw <= dt else w + aw * dt
@@ -228,7 +229,7 @@ def integrate(x: float, y: float, th: float, phase: Phase, tau: float
     # Ramp: theta(t) is quadratic; integrate v cos(theta), v sin(theta) piecewise with
     # Gauss-Legendre nodes (plain floats: a tick has one or two pieces, numpy would cost more).
     turn = abs(phase.w0) * tau + 0.5 * abs(phase.a_w) * tau * tau
-    pieces = max(1, int(math.ceil(turn / _MAX_TURN_PER_PIECE)))
+    pieces = max(1, math.ceil(turn / _MAX_TURN_PER_PIECE))
     h = tau / pieces
     half = h / 2.0
     v0, av, w0, aw = phase.v0, phase.a_v, phase.w0, phase.a_w

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Union
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,15 +32,15 @@ if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
 __all__ = [
+    "Arc",
+    "Circle",
+    "Curve",
+    "Ellipse",
     "Parts",
     "Polygon",
     "Rectangle",
-    "Circle",
-    "Ellipse",
-    "Wall",
-    "Arc",
-    "Curve",
     "Shape",
+    "Wall",
     "polygon_parts",
 ]
 
@@ -89,7 +89,7 @@ class Parts:
     @staticmethod
     def make(segments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
              arcs: list[tuple[Point, float, float, float, float]] | None = None,
-             ellipses: list[tuple[Point, float, float, float]] | None = None) -> "Parts":
+             ellipses: list[tuple[Point, float, float, float]] | None = None) -> Parts:
         """Build parts from segment arrays, arc tuples ``(center, r, start, sweep, side)``
         and ellipse tuples ``(center, a, b, angle)``."""
         if segments is None:
@@ -110,7 +110,7 @@ class Parts:
         )
 
     @staticmethod
-    def concat(parts: list["Parts"]) -> "Parts":
+    def concat(parts: list[Parts]) -> Parts:
         """Concatenate the parts of several shapes, recording which shape owns what."""
         def cat(name: str, width: int | None = None) -> np.ndarray:
             arrays = [getattr(p, name) for p in parts]
@@ -138,7 +138,7 @@ class Parts:
         return int(self.seg_start.shape[0])
 
 
-def polygon_parts(geom: "BaseGeometry", kappa: float = 0.0) -> Parts:
+def polygon_parts(geom: BaseGeometry, kappa: float = 0.0) -> Parts:
     """Segments of a shapely (Multi)Polygon's rings, oriented with the solid on the right.
 
     shapely's ``orient(sign=1)`` puts the interior on the left of every ring (exterior
@@ -173,7 +173,7 @@ class Polygon:
     name: str = ""
     kind = "polygon"
 
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """The shapely polygon."""
         import shapely
 
@@ -200,7 +200,7 @@ class Rectangle:
         local = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
         return local @ _rot(self.angle).T + np.asarray(self.center, dtype=float)
 
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """The shapely polygon."""
         import shapely
 
@@ -220,7 +220,7 @@ class Circle:
     name: str = ""
     kind = "circle"
 
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """A shapely polygon approximating the disc (plots only)."""
         import shapely
 
@@ -241,7 +241,7 @@ class Ellipse:
     name: str = ""
     kind = "ellipse"
 
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """A shapely polygon approximating the ellipse (plots only)."""
         import shapely
 
@@ -268,7 +268,7 @@ class Wall:
     name: str = ""
     kind = "wall"
 
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """The shapely polygon of the wall (with a hole when closed)."""
         import shapely
 
@@ -301,7 +301,7 @@ class Arc:
         s = (self.end - self.start) % _TAU
         return s if s > 0 else _TAU
 
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """A shapely polygon approximating the ring sector (plots only)."""
         import shapely
 
@@ -343,10 +343,10 @@ def _catmull_rom(points: np.ndarray, closed: bool, spacing: float) -> np.ndarray
     for i in range(len(ext) - 3):  # loop over control spans, off the tick path
         p0, p1, p2, p3 = ext[i:i + 4]
         t0 = 0.0
-        t1 = t0 + max(np.linalg.norm(p1 - p0), 1e-12) ** 0.5
-        t2 = t1 + max(np.linalg.norm(p2 - p1), 1e-12) ** 0.5
-        t3 = t2 + max(np.linalg.norm(p3 - p2), 1e-12) ** 0.5
-        n = max(2, int(math.ceil(np.linalg.norm(p2 - p1) / spacing)))
+        t1 = t0 + max(float(np.linalg.norm(p1 - p0)), 1e-12) ** 0.5
+        t2 = t1 + max(float(np.linalg.norm(p2 - p1)), 1e-12) ** 0.5
+        t3 = t2 + max(float(np.linalg.norm(p3 - p2)), 1e-12) ** 0.5
+        n = max(2, math.ceil(float(np.linalg.norm(p2 - p1)) / spacing))
         t = np.linspace(t1, t2, n, endpoint=False)[:, None]
         a1 = (t1 - t) / (t1 - t0) * p0 + (t - t0) / (t1 - t0) * p1
         a2 = (t2 - t) / (t2 - t1) * p1 + (t - t1) / (t2 - t1) * p2
@@ -418,7 +418,7 @@ class Curve:
             ring, corner = ring[::-1], corner[::-1]
         return ring, corner
 
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """The shapely polygon of the sampled curve (exactly the faces the rays see)."""
         import shapely
 
@@ -443,4 +443,4 @@ class Curve:
         return Parts.make((ring, nxt, k))
 
 
-Shape = Union[Polygon, Rectangle, Circle, Ellipse, Wall, Arc, Curve]
+Shape = Polygon | Rectangle | Circle | Ellipse | Wall | Arc | Curve

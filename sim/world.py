@@ -33,7 +33,7 @@ from sim.shapes import Parts, Shape
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
-__all__ = ["World", "Nearest"]
+__all__ = ["Nearest", "World"]
 
 
 @dataclass(frozen=True)
@@ -91,14 +91,14 @@ class World:
         return RayCaster(self.parts)
 
     @cached_property
-    def geometry(self) -> "BaseGeometry":
+    def geometry(self) -> BaseGeometry:
         """A shapely GeometryCollection of all obstacles (curves approximated; for plots)."""
         import shapely
 
         return shapely.GeometryCollection([o.geometry() for o in self.obstacles])
 
     @cached_property
-    def _prepared(self) -> "BaseGeometry":
+    def _prepared(self) -> BaseGeometry:
         import shapely
 
         g = shapely.union_all([o.geometry() for o in self.obstacles])
@@ -120,7 +120,7 @@ class World:
         return (min(xs) - pad, min(ys) - pad, max(xs) + pad, max(ys) + pad)
 
     # ------------------------------------------------------------- ground truth
-    def cast(self, origin_xy: "np.ndarray | tuple[float, float]", angles: "np.ndarray | list[float]",
+    def cast(self, origin_xy: np.ndarray | tuple[float, float], angles: np.ndarray | list[float],
              max_range: float = math.inf) -> RayHits:
         """Exact ray cast from ``origin_xy`` at world-frame ``angles`` (radians).
 
@@ -131,7 +131,7 @@ class World:
                                 np.atleast_1d(np.asarray(angles, dtype=float)), max_range,
                                 detail=True)
 
-    def nearest_boundary(self, xy: "np.ndarray | tuple[float, float]") -> Nearest:
+    def nearest_boundary(self, xy: np.ndarray | tuple[float, float]) -> Nearest:
         """Nearest obstacle boundary point to ``xy`` ((2,) or (N, 2), metres)."""
         q = np.asarray(xy, dtype=float)
         d, p, own = nearest_boundary(self.parts, q.reshape(-1, 2))
@@ -139,7 +139,7 @@ class World:
             return Nearest(float(d[0]), p[0], int(own[0]))
         return Nearest(d, p, own)
 
-    def inside(self, xy: "np.ndarray | tuple[float, float]") -> "bool | np.ndarray":
+    def inside(self, xy: np.ndarray | tuple[float, float]) -> bool | np.ndarray:
         """True where ``xy`` lies inside an obstacle."""
         import shapely
 
@@ -150,8 +150,8 @@ class World:
         res = shapely.contains_xy(self._prepared, pts[:, 0], pts[:, 1])
         return bool(res[0]) if q.ndim == 1 else res
 
-    def clearance(self, xy: "np.ndarray | tuple[float, float]", radius: float = 0.0
-                  ) -> "float | np.ndarray":
+    def clearance(self, xy: np.ndarray | tuple[float, float], radius: float = 0.0
+                  ) -> float | np.ndarray:
         """Distance from a disc of ``radius`` at ``xy`` to the nearest obstacle, metres.
 
         Negative when the disc overlaps an obstacle (by the overlap depth, or minus the

@@ -13,10 +13,11 @@ The format is documented in ``docs/worlds.md``.
 ... ''')
 >>> w.name, round(w.start_pose.theta, 6), type(w.obstacles[0]).__name__
 ('demo', 1.570796, 'Circle')
->>> parse_world("obstacles:\\n  - {type: circle, center: [3, 0]}\\n", file="bad.yaml")
-Traceback (most recent call last):
-  ...
-mdle.errors.WorldError: bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, radius)
+>>> try:
+...     parse_world("obstacles:\\n  - {type: circle, center: [3, 0]}\\n", file="bad.yaml")
+... except WorldError as err:
+...     print(err)
+bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, radius)
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from typing import Any
 from mdle.backend import Pose
 from mdle.errors import Diagnostic, Span, WorldError
 
-__all__ = ["parse_world", "read_world", "OBSTACLE_TYPES"]
+__all__ = ["OBSTACLE_TYPES", "parse_world", "read_world"]
 
 #: Keys each obstacle type requires and allows (besides ``type`` and ``name``).
 OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -146,7 +147,8 @@ def _point(doc: _Doc, path: str, v: Any) -> tuple[float, float]:
     return (_number(doc, f"{path}[0]", v[0]), _number(doc, f"{path}[1]", v[1]))
 
 
-def _points(doc: _Doc, path: str, v: Any, minimum: int, what: str) -> tuple[tuple[float, float], ...]:
+def _points(doc: _Doc, path: str, v: Any, minimum: int, what: str
+            ) -> tuple[tuple[float, float], ...]:
     if not isinstance(v, list):
         raise doc.fail(path, f"expected a list of [x, y] points, got {_show(v)}")
     if len(v) < minimum:
@@ -208,7 +210,10 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
         if key not in v:
             raise doc.fail(path, f"missing key `{key}` (a {kind} needs {', '.join(required)})")
     name = _string(doc, f"{path}.name", v["name"]) if "name" in v else ""
-    P = lambda key: f"{path}.{key}"  # noqa: E731
+
+    def P(key: str) -> str:
+        return f"{path}.{key}"
+
 
     if kind == "polygon":
         pts = _points(doc, P("points"), v["points"], 3, "a polygon")
@@ -265,14 +270,15 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
     closed = _boolean(doc, P("closed"), v.get("closed", False))
     pts = _points(doc, P("points"), v["points"], 3 if closed else 2,
                   "a closed curve" if closed else "a curve")
+    thick: float | None
     if "thickness" in v:
-        t: float | None = _number(doc, P("thickness"), v["thickness"], positive=True)
+        thick = _number(doc, P("thickness"), v["thickness"], positive=True)
     elif closed:
-        t = None
+        thick = None
     else:
         raise doc.fail(path, "missing key `thickness` (an open curve is a wall and needs one)")
     spacing = _number(doc, P("spacing"), v.get("spacing", 0.05), positive=True)
-    shape = shapes.Curve(pts, t, closed, spacing, name)
+    shape = shapes.Curve(pts, thick, closed, spacing, name)
     g = shape.geometry()
     if not g.is_valid or g.area <= 0:
         raise doc.fail(P("points"), "the curve crosses itself (or its thickness folds it)")
@@ -425,7 +431,7 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
                   source=None if file.startswith("<") else file, extent=extent)
     clearance = world.clearance((start.x, start.y), robot.radius) if obstacles else math.inf
     if clearance < 0:
-        near = world.nearest_boundary((start.x, start.y)).obstacle
+        near = int(world.nearest_boundary((start.x, start.y)).obstacle)
         what = _describe(obstacles[near], near)
         raise doc.fail("start", f"the robot ({robot.name}, radius {robot.radius} m) at "
                        f"({start.x:g}, {start.y:g}) overlaps {what}")

@@ -61,7 +61,7 @@ def _show(args: argparse.Namespace) -> int:
     for geom in shapely.get_parts(world.geometry):
         for poly in shapely.get_parts(geom):
             verts: list[tuple[float, float]] = []
-            codes: list[int] = []
+            codes: list[Any] = []
             for ring in [poly.exterior, *poly.interiors]:
                 xy = list(ring.coords)
                 verts += xy

@@ -107,7 +107,7 @@ def test_no_tunnelling_through_a_thin_wall(speed: float, dt: float) -> None:
     world = wall_world(robot=fast)
     b = SimBackend(world, ladar="lms200-ideal")
     b.command(Command(speed, 0.0))
-    for _ in range(int(round(20.0 / (speed * dt))) + 5):
+    for _ in range(round(20.0 / (speed * dt)) + 5):
         b.advance(dt)
         obs = b.observe()
         assert obs.truth["x"] < 5.0 - 0.0005 - 0.2 + 1e-9          # never into the wall
@@ -251,7 +251,7 @@ def test_scan_rate_and_stamps() -> None:
         b.advance(0.02)
         stamps.append(b.observe().scan.stamp)           # type: ignore[union-attr]
     distinct = sorted(set(stamps))
-    np.testing.assert_allclose(distinct, [0.1 * k for k in range(0, 11)], atol=1e-12)
+    np.testing.assert_allclose(distinct, [0.1 * k for k in range(11)], atol=1e-12)
     # A scan taken mid-step sees the robot where it was at the scan instant.
     b2 = SimBackend(sim.load_world("corridor"))
     b2.command(Command(0.3, 0.0))

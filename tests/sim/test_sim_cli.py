@@ -36,7 +36,8 @@ def test_worlds_show_a_file_without_scan(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("argv", "expected"), [
-    (["worlds", "show", "corridr", "-o", "x.png"], "unknown world `corridr` (did you mean `corridor`?)"),
+    (["worlds", "show", "corridr", "-o", "x.png"],
+     "unknown world `corridr` (did you mean `corridor`?)"),
     (["worlds", "show", "missing.yaml", "-o", "x.png"], "world file not found: missing.yaml"),
 ])
 def test_worlds_show_errors_are_diagnostics(argv: list[str], expected: str,
@@ -52,5 +53,6 @@ def test_malformed_world_file_points_at_the_key(tmp_path: Path,
     bad.write_text("obstacles:\n  - {type: polygon, points: [[0, 0], [1, 0]]}\n")
     assert main(["worlds", "show", str(bad), "-o", str(tmp_path / "x.png")]) == 1
     err = capsys.readouterr().err
-    assert f"{bad}:2:29: error: obstacles[0].points: a polygon needs at least 3 points, got 2" in err
+    assert (f"{bad}:2:29: error: obstacles[0].points: a polygon needs at least 3 points, got 2"
+            in err)
     assert "^" in err and "Traceback" not in err

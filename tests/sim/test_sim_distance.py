@@ -68,7 +68,7 @@ def test_collider_matches_world_distance() -> None:
     for x, y in rng.uniform(-4.5, 4.5, (200, 2)):
         if world.inside((x, y)):
             continue
-        d, own = col.distance(float(x), float(y))
+        d, _ = col.distance(float(x), float(y))
         n = world.nearest_boundary((x, y))
         assert math.isclose(d, n.distance, abs_tol=1e-9)
         assert math.isclose(col.clearance(float(x), float(y))[0], d - 0.25)

@@ -90,50 +90,55 @@ def test_units_are_metres_and_degrees() -> None:
 
 
 BAD = [
-    ("obstacles:\n  - {type: circle, center: [3, 0]}\n",
-     "bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, radius)"),
-    ("obstacles:\n  - type: polygon\n    points: [[0, 0], [1, 0]]\n",
-     "bad.yaml:3:13: error: obstacles[0].points: a polygon needs at least 3 points, got 2"),
-    ("obstacles:\n  - {type: circel, center: [0, 0], radius: 1}\n",
-     "bad.yaml:2:12: error: obstacles[0].type: unknown obstacle type 'circel' (did you mean "
-     "`circle`?); one of: polygon, rectangle, circle, ellipse, wall, arc, curve"),
-    ("obstacles:\n  - {type: circle, center: [0, 0], radius: -1}\n",
-     "bad.yaml:2:44: error: obstacles[0].radius: must be positive, got -1"),
-    ("obstacles:\n  - {type: circle, center: [0, 0], radius: big}\n",
+    ('obstacles:\n  - {type: circle, center: [3, 0]}\n',
+     ('bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, '
+      'radius)')),
+    ('obstacles:\n  - type: polygon\n    points: [[0, 0], [1, 0]]\n',
+     'bad.yaml:3:13: error: obstacles[0].points: a polygon needs at least 3 points, got 2'),
+    ('obstacles:\n  - {type: circel, center: [0, 0], radius: 1}\n',
+     ("bad.yaml:2:12: error: obstacles[0].type: unknown obstacle type 'circel' (did you "
+      'mean `circle`?); one of: polygon, rectangle, circle, ellipse, wall, arc, curve')),
+    ('obstacles:\n  - {type: circle, center: [0, 0], radius: -1}\n',
+     'bad.yaml:2:44: error: obstacles[0].radius: must be positive, got -1'),
+    ('obstacles:\n  - {type: circle, center: [0, 0], radius: big}\n',
      "bad.yaml:2:44: error: obstacles[0].radius: expected a number, got 'big'"),
-    ("obstacle: []\n",
-     "bad.yaml:1:1: error: obstacle: unknown key `obstacle` (did you mean `obstacles`?)"),
-    ("robot: pioner\n",
-     "bad.yaml:1:8: error: robot: unknown robot profile `pioner` (known: ideal, pioneer2dx)"),
-    ("ladar: {noise: pink}\n",
-     "bad.yaml:1:16: error: ladar.noise: unknown noise model 'pink'; one of: relative, "
-     "absolute, none"),
-    ("obstacles: [\n",
-     "bad.yaml:2:1: error: not valid YAML: expected the node content, but found '<stream end>'"),
-    ("- 1\n- 2\n",
-     "bad.yaml:1:1: error: expected a mapping (a world), got a list of 2"),
-    ("obstacles:\n  - {type: circle, center: [0, 0], radius: 1}\n",
-     "bad.yaml:1:1: error: start: the robot (pioneer2dx, radius 0.25 m) at (0, 0) overlaps "
-     "obstacles[0] (circle)"),
-    ("obstacles:\n  - {type: polygon, points: [[0, 0], [1, 1], [1, 0], [0, 1]]}\n",
-     "bad.yaml:2:29: error: obstacles[0].points: the polygon crosses itself or has no area"),
-    ("seed: 1\nseed: 2\n",
-     "bad.yaml:2:1: error: seed: key given twice"),
-    ("obstacles:\n  - {type: circle, centre: [0, 0], radius: 1}\n",
-     "bad.yaml:2:20: error: obstacles[0].centre: unknown key `centre` (did you mean `center`?)"),
-    ("start: {x: 0, y: 0, theta: 0}\nobstacles:\n  - {type: ellipse, center: [5, 0], axes: [1]}\n",
-     "bad.yaml:3:43: error: obstacles[0].axes: expected semi-axes [a, b] in metres, got a "
-     "list of 1"),
-    ("obstacles:\n  - {type: wall, points: [[0, 0], [1, 0]], thickness: 0}\n",
-     "bad.yaml:2:55: error: obstacles[0].thickness: must be positive, got 0"),
-    ("obstacles:\n  - {type: curve, points: [[5, 0], [6, 1]]}\n",
-     "bad.yaml:2:5: error: obstacles[0]: missing key `thickness` (an open curve is a wall and "
-     "needs one)"),
-    ("seed: -3\n", "bad.yaml:1:7: error: seed: must be at least 0, got -3"),
-    ("start: [0, 0]\n", "bad.yaml:1:8: error: start: expected [x, y, theta] (m, m, deg), got a "
-     "list of 2"),
-    ("obstacles:\n  - {type: arc, center: [5, 0], radius: 1, start: 0, end: 0}\n",
-     "bad.yaml:2:59: error: obstacles[0].end: must differ from `start`"),
+    ('obstacle: []\n',
+     'bad.yaml:1:1: error: obstacle: unknown key `obstacle` (did you mean `obstacles`?)'),
+    ('robot: pioner\n',
+     'bad.yaml:1:8: error: robot: unknown robot profile `pioner` (known: ideal, pioneer2dx)'),
+    ('ladar: {noise: pink}\n',
+     ("bad.yaml:1:16: error: ladar.noise: unknown noise model 'pink'; one of: relative, "
+      'absolute, none')),
+    ('obstacles: [\n',
+     ("bad.yaml:2:1: error: not valid YAML: expected the node content, but found '<stream "
+      "end>'")),
+    ('- 1\n- 2\n',
+     'bad.yaml:1:1: error: expected a mapping (a world), got a list of 2'),
+    ('obstacles:\n  - {type: circle, center: [0, 0], radius: 1}\n',
+     ('bad.yaml:1:1: error: start: the robot (pioneer2dx, radius 0.25 m) at (0, 0) '
+      'overlaps obstacles[0] (circle)')),
+    ('obstacles:\n  - {type: polygon, points: [[0, 0], [1, 1], [1, 0], [0, 1]]}\n',
+     'bad.yaml:2:29: error: obstacles[0].points: the polygon crosses itself or has no area'),
+    ('seed: 1\nseed: 2\n',
+     'bad.yaml:2:1: error: seed: key given twice'),
+    ('obstacles:\n  - {type: circle, centre: [0, 0], radius: 1}\n',
+     ('bad.yaml:2:20: error: obstacles[0].centre: unknown key `centre` (did you mean '
+      '`center`?)')),
+    (('start: {x: 0, y: 0, theta: 0}\nobstacles:\n  - {type: ellipse, center: [5, 0], axes: '
+      '[1]}\n'),
+     ('bad.yaml:3:43: error: obstacles[0].axes: expected semi-axes [a, b] in metres, got a '
+      'list of 1')),
+    ('obstacles:\n  - {type: wall, points: [[0, 0], [1, 0]], thickness: 0}\n',
+     'bad.yaml:2:55: error: obstacles[0].thickness: must be positive, got 0'),
+    ('obstacles:\n  - {type: curve, points: [[5, 0], [6, 1]]}\n',
+     ('bad.yaml:2:5: error: obstacles[0]: missing key `thickness` (an open curve is a wall '
+      'and needs one)')),
+    ('seed: -3\n',
+     'bad.yaml:1:7: error: seed: must be at least 0, got -3'),
+    ('start: [0, 0]\n',
+     'bad.yaml:1:8: error: start: expected [x, y, theta] (m, m, deg), got a list of 2'),
+    ('obstacles:\n  - {type: arc, center: [5, 0], radius: 1, start: 0, end: 0}\n',
+     'bad.yaml:2:59: error: obstacles[0].end: must differ from `start`'),
 ]
 
 
