@@ -155,6 +155,10 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
             ms=11, color="k", ls="none", zorder=5, label="start")
 
     _mark_events(ax, trace.events, world is not None and use_truth, trace)
+    hit = np.flatnonzero(trace.column("collided") > 0.5)
+    if len(hit):
+        ax.plot([x[hit[0]]], [y[hit[0]]], marker="*", ms=16, color="tab:red", ls="none",
+                zorder=6, label="first collision")
     if world is not None:
         x0, y0, x1, y1 = world.bounds
         ax.update_datalim([(x0, y0), (x1, y1)])

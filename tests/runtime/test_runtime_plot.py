@@ -102,3 +102,11 @@ def test_plot_errors_are_clear(ir, tmp_path):
     with pytest.raises(PlotError, match="no samples"):
         plot_trace(empty, tmp_path / "x.png")
     assert not math.isnan(read_trace(trace).column("x")[0])
+
+
+def test_first_collision_is_marked(ir, tmp_path):
+    script = lambda t, k: {"truth": {"collided": k >= 3, "clearance": 0.0}}  # noqa: E731
+    trace = _traced(ir, tmp_path, ir.atom("go", 1.0, timer=0.6), ScriptedBackend(script))
+    ax = trace_figure(read_trace(trace)).axes[0]
+    [star] = [ln for ln in ax.lines if ln.get_label() == "first collision"]
+    assert star.get_xdata()[0] == pytest.approx(0.3)
