@@ -249,8 +249,8 @@ class SerialTransport:
         if self._closed:
             raise TransportClosed("serial line closed")
         try:
+            # no flush(): waiting for the bytes to leave (tcdrain) would block the tick
             self._ser.write(data)
-            self._ser.flush()
         except self._errors as exc:
             raise TransportClosed(f"{self._path}: {exc}") from None
 

@@ -96,3 +96,28 @@ def test_mdle_run_cli_on_the_fake_robot(fake_robot, tmp_path) -> None:
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
     assert fake.v_mm == 0 and fake.w_deg == 0
     assert 400 in fake.args(Cmd.VEL)
+
+
+def test_mdle_run_cli_reports_a_lost_robot(fake_robot, tmp_path, capsys) -> None:
+    from mdle.cli import main
+
+    fake = fake_robot(behaviour="drop", drop_after=0.5)
+    plan = tmp_path / "long.mdle"
+    plan.write_text("atom fwd = (go(0.2 m/s), never, 10 s)\nrun fwd\n")
+    t0 = time.monotonic()
+    code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url, "--quiet"])
+    assert code == 1 and time.monotonic() - t0 < 3.0
+    err = capsys.readouterr().err
+    assert "lost the robot" in err and fake.url in err
+    assert "Traceback" not in err
+
+
+def test_mdle_run_cli_robot_not_answering(fake_robot, tmp_path, capsys) -> None:
+    from mdle.cli import main
+
+    fake = fake_robot(behaviour="silent")
+    plan = tmp_path / "p.mdle"
+    plan.write_text("atom fwd = (go(0.2 m/s), never, 1 s)\nrun fwd\n")
+    code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url, "--quiet"])
+    assert code == 1
+    assert "no answer from a Pioneer" in capsys.readouterr().err
