@@ -43,7 +43,11 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
     from atoms.steering import Gains, Memory
 
     umax = min(float(args["umax"]), ctx.limits.max_turn_rate)
-    gains = Gains(mu=float(args["mu"]), kf=float(args["kf"]), umax=umax, tau=float(args["tau"]))
+    kf = float(args["kf"])
+    # critical damping of e'' + (mu/2) e' + 2 kf v^2 e = 0 at this speed (control-law.md s. 3):
+    # the approach then takes the same path length whatever v
+    mu = 4.0 * float(args["zeta"]) * abs(float(args["v"])) * math.sqrt(2.0 * max(kf, 0.0))
+    gains = Gains(mu=mu, kf=kf, umax=umax, tau=float(args["tau"]))
     return FollowState(parse_side(args["side"]), gains, Memory())
 
 
@@ -69,7 +73,7 @@ def scan_points_cached(ctx: Context) -> Any:
     Param("side", default="right", choices=SIDES, doc="side the boundary is on: right or left"),
     Param("rc", LENGTH, 0.5, doc="distance to keep from the boundary"),
     Param("v", SPEED, 0.3, doc="constant forward speed"),
-    Param("mu", NONE, 4.0, doc="damping of the heading terms, 1/s"),
+    Param("zeta", NONE, 1.0, doc="damping ratio of the distance loop (mu = 4 zeta v sqrt(2 kf))"),
     Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2"),
     Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)"),
     Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)"),

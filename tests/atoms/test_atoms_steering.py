@@ -11,7 +11,7 @@ import pytest
 from atoms import steering as S
 
 G = S.Gains()
-ARGS = dict(side="right", rc=0.5, v=1.0, mu=4.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.15,
+ARGS = dict(side="right", rc=0.5, v=1.0, zeta=1.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.15,
             lookahead=0.8)
 
 

@@ -1,0 +1,1 @@
+"""Reproductions of the seed paper's experiments (curvature estimation, boundary following)."""
