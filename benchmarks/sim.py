@@ -30,14 +30,14 @@ import time
 _HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 
-import numpy as np  # noqa: E402
+import numpy as np
 
-from mdle.backend import Command, Pose  # noqa: E402
-from sim.backend import SimBackend  # noqa: E402
-from sim.ladar import LMS200, Ladar  # noqa: E402
-from sim.robot import PIONEER2DX  # noqa: E402
-from sim.shapes import Curve, Rectangle, Wall  # noqa: E402
-from sim.world import World  # noqa: E402
+from mdle.backend import Command, Pose
+from sim.backend import SimBackend
+from sim.ladar import LMS200, Ladar
+from sim.robot import PIONEER2DX
+from sim.shapes import Curve, Rectangle, Wall
+from sim.world import World
 
 
 def scattered_world(n_segments: int, seed: int = 0) -> World:
@@ -94,7 +94,7 @@ def scan_cost(world: World, runs: int) -> tuple[float, float]:
         k[0] += 1
         ox, oy = ladar.origin(0.0, 0.0, th)
         hits = caster.cast(np.array((ox, oy)), ladar.world_angles(th), LMS200.max_range,
-                           detail=False)
+                           detail=False, rel=ladar.rel)
         ladar.measure(hits, th, 0.0)
 
     return median_us(one, 200, runs)

@@ -251,7 +251,7 @@ class SimBackend:
         ox, oy = lad.origin(x, y, th)
         angles = lad.world_angles(th)
         hits = self.world.caster.cast(np.array((ox, oy)), angles, lad.profile.max_range,
-                                      detail=self._oracle)
+                                      detail=self._oracle, rel=lad.rel)
         return lad.measure(hits, th, stamp)
 
     def _update_odometry(self, x0: float, y0: float, th0: float) -> None:

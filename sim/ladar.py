@@ -132,6 +132,10 @@ class Ladar:
         bearings = self.profile.bearings() + mount[2]
         bearings.setflags(write=False)
         self.bearings = bearings
+        rel = bearings - bearings[0]
+        rel.setflags(write=False)
+        #: Beam angles relative to the first (ascending), for :meth:`RayCaster.cast`.
+        self.rel = rel
         self._noise = np.empty(self.profile.beams)
         self._angles = np.empty(self.profile.beams)
 

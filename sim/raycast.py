@@ -92,7 +92,7 @@ class RayCaster:
 
     # ------------------------------------------------------------------ public
     def cast(self, origin: np.ndarray, angles: np.ndarray, max_range: float = math.inf,
-             detail: bool = True) -> RayHits:
+             detail: bool = True, rel: np.ndarray | None = None) -> RayHits:
         """Cast rays from ``origin`` at world-frame ``angles``.
 
         Parameters
@@ -104,6 +104,9 @@ class RayCaster:
             Primitives farther than this are culled; hits beyond it are reported as misses.
         detail : bool
             Also compute tangents, curvatures and owners (the oracle's data).
+        rel : (B,) float array, radians, optional
+            ``angles - angles[0]``, already known to be ascending in [0, 2 pi) (a ladar's
+            fixed fan): saves the check on every scan.
 
         Returns
         -------
@@ -112,8 +115,9 @@ class RayCaster:
         o = np.asarray(origin, dtype=float).reshape(2)
         ang = np.asarray(angles, dtype=float).reshape(-1)
         n = ang.shape[0]
-        rel = np.mod(ang - ang[0], _TAU) if n else ang
         order = None
+        if rel is None:
+            rel = np.mod(ang - ang[0], _TAU) if n else ang
         if n > 1 and not bool(np.all(rel[1:] >= rel[:-1])):
             order = np.argsort(rel, kind="stable")
             ang, rel = ang[order], rel[order]
@@ -122,21 +126,19 @@ class RayCaster:
         best = np.full(n, math.inf)
         kind = np.zeros(n, dtype=np.int8)   # 0 none, 1 segment, 2 arc, 3 ellipse
         which = np.full(n, -1, dtype=np.intp)
-        extra = np.zeros(n) if detail else None  # ellipse parameter / arc hit angle
 
         self._segments(o, ang[0] if n else 0.0, rel, cos, sin, max_range, best, kind, which,
                        detail)
         if len(self.parts.arc_radius):
-            self._arcs(o, cos, sin, max_range, best, kind, which, extra)
+            self._arcs(o, cos, sin, max_range, best, kind, which)
         if len(self.parts.ell_angle):
-            self._ellipses(o, cos, sin, max_range, best, kind, which, extra)
+            self._ellipses(o, cos, sin, max_range, best, kind, which)
 
         hit = np.isfinite(best) & (best <= max_range)
         ranges = np.where(hit, best, math.inf)
         tangents = curvatures = owner = None
         if detail:
-            tangents, curvatures, owner = self._detail(o, cos, sin, ranges, hit, kind, which,
-                                                       extra)
+            tangents, curvatures, owner = self._detail(o, cos, sin, ranges, hit, kind, which)
         if order is not None:
             inv = np.empty_like(order)
             inv[order] = np.arange(n)
@@ -224,8 +226,7 @@ class RayCaster:
 
     # ------------------------------------------------------------------ arcs
     def _arcs(self, o: np.ndarray, cos: np.ndarray, sin: np.ndarray, max_range: float,
-              best: np.ndarray, kind: np.ndarray, which: np.ndarray,
-              extra: np.ndarray | None) -> None:
+              best: np.ndarray, kind: np.ndarray, which: np.ndarray) -> None:
         P = self.parts
         w = P.arc_center - o
         dist = np.hypot(w[:, 0], w[:, 1])
@@ -261,8 +262,7 @@ class RayCaster:
 
     # ------------------------------------------------------------------ ellipses
     def _ellipses(self, o: np.ndarray, cos: np.ndarray, sin: np.ndarray, max_range: float,
-                  best: np.ndarray, kind: np.ndarray, which: np.ndarray,
-                  extra: np.ndarray | None) -> None:
+                  best: np.ndarray, kind: np.ndarray, which: np.ndarray) -> None:
         P = self.parts
         w = o - P.ell_center
         dist = np.hypot(w[:, 0], w[:, 1])
@@ -297,8 +297,8 @@ class RayCaster:
 
     # ------------------------------------------------------------------ oracle data
     def _detail(self, o: np.ndarray, cos: np.ndarray, sin: np.ndarray, ranges: np.ndarray,
-                hit: np.ndarray, kind: np.ndarray, which: np.ndarray,
-                extra: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                hit: np.ndarray, kind: np.ndarray, which: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         P = self.parts
         n = ranges.shape[0]
         tangents = np.full(n, math.nan)
