@@ -138,16 +138,19 @@ class Parts:
         return int(self.seg_start.shape[0])
 
 
-def polygon_parts(geom: BaseGeometry, kappa: float = 0.0) -> Parts:
+def polygon_parts(geom: BaseGeometry, smooth: bool = False) -> Parts:
     """Segments of a shapely (Multi)Polygon's rings, oriented with the solid on the right.
 
     shapely's ``orient(sign=1)`` puts the interior on the left of every ring (exterior
     counter-clockwise, holes clockwise); reversing each ring puts it on the right.
+    Faces get curvature 0, or with ``smooth`` (rings sampled from smooth curves) the mean
+    of the sampled curvature at their two ends.
     """
     from shapely.geometry.polygon import orient
 
     starts: list[np.ndarray] = []
     ends: list[np.ndarray] = []
+    kappas: list[np.ndarray] = []
     polys = getattr(geom, "geoms", [geom])
     for poly in polys:
         poly = orient(poly, sign=1.0)
@@ -155,9 +158,16 @@ def polygon_parts(geom: BaseGeometry, kappa: float = 0.0) -> Parts:
             pts = np.asarray(ring.coords)[::-1]  # closed ring, reversed: solid on the right
             starts.append(pts[:-1])
             ends.append(pts[1:])
+            if smooth:
+                v = pts[:-1]
+                k = _menger(np.roll(v, 1, axis=0), v, np.roll(v, -1, axis=0))
+                kappas.append(0.5 * (k + np.roll(k, -1)))
+            else:
+                kappas.append(np.zeros(len(pts) - 1))
     s0 = np.concatenate(starts) if starts else np.zeros((0, 2))
     s1 = np.concatenate(ends) if ends else np.zeros((0, 2))
-    return Parts.make((s0, s1, np.full(len(s0), kappa)))
+    k = np.concatenate(kappas) if kappas else np.zeros(0)
+    return Parts.make((s0, s1, k))
 
 
 def _rot(angle: float) -> np.ndarray:
@@ -431,7 +441,7 @@ class Curve:
     def parts(self) -> Parts:
         """Faces as segments, each with its sampled curvature; flat end caps get 0."""
         if self.closed and self.thickness is not None:
-            return polygon_parts(self.geometry())
+            return polygon_parts(self.geometry(), smooth=True)
         ring, corner = self._ring()
         prv, nxt = np.roll(ring, 1, axis=0), np.roll(ring, -1, axis=0)
         k_vertex = _menger(prv, ring, nxt)

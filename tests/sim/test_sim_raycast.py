@@ -193,3 +193,16 @@ def test_rectangle_owner_and_orientation() -> None:
     # Facing the rectangle's west face (x = 4.5) from the west: obstacle on the right means
     # travelling north along it.
     assert abs(hits.tangents[0] - math.pi / 2) < TOL
+
+
+def test_closed_curve_wall_faces_curvature_both_sides() -> None:
+    pts = tuple((3 * math.cos(a), 3 * math.sin(a)) for a in np.linspace(0, 2 * math.pi, 36,
+                                                                          endpoint=False))
+    ring = Curve(pts, thickness=0.2, closed=True, spacing=0.05)
+    world = World("ring", obstacles=(ring,))
+    inside = world.cast((0.0, 0.0), np.linspace(0, 6, 13))
+    assert inside.hit.all()
+    np.testing.assert_allclose(inside.ranges, 2.9, atol=2e-3)
+    np.testing.assert_allclose(inside.curvatures, 1 / 2.9, atol=0.02)     # concave inner face
+    outside = world.cast((5.0, 0.0), [math.pi])
+    np.testing.assert_allclose(outside.curvatures, -1 / 3.1, atol=0.02)   # convex outer face
