@@ -1,0 +1,322 @@
+"""The REPL on a terminal: prompt_toolkit with history, completion and highlighting.
+
+* History is kept across sessions in ``$XDG_DATA_HOME/mdle/repl_history``
+  (``~/.local/share/mdle/repl_history`` when the variable is unset).
+* Tab completes keywords, defined names, control laws and sensor functions, a law's or
+  sensor's parameter names inside its call (``follow_boundary(r`` -> ``rc = ``), a symbol
+  parameter's choices (``side = `` -> ``right``, ``left``), units after a number, the
+  ``:`` commands and their arguments (world names, file paths).
+* MDLe input is highlighted by :class:`MdleLexer`, a small pygments lexer (pygments is
+  already installed as a dependency of rich).
+* Enter on an unfinished input (brackets still open, or ending in ``=``, an operator or a
+  comma) starts a new line instead of submitting it.
+* Ctrl-C at the prompt discards the line; during a run it stops the robot and gives the
+  prompt back; Ctrl-D on an empty line leaves.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from pygments.lexer import RegexLexer, default, words
+from pygments.token import (Comment, Keyword, Name, Number, Operator, Punctuation, String,
+                            Text, Whitespace)
+from prompt_toolkit.completion import CompleteEvent, Completer, Completion, PathCompleter
+from prompt_toolkit.document import Document
+
+from mdle.repl.commands import COMMANDS, DEFINITION_KEYWORDS, KEYWORDS, Repl
+
+if TYPE_CHECKING:
+    from prompt_toolkit import PromptSession
+    from prompt_toolkit.input import Input
+    from prompt_toolkit.output import Output
+
+__all__ = ["MdleLexer", "MdleCompleter", "history_path", "make_prompt_session", "run_prompt",
+           "PROMPT", "UNITS"]
+
+PROMPT = "mdle> "
+#: Units offered after a number (the table of :mod:`mdle.units` and their quotients).
+UNITS = ("m", "cm", "mm", "s", "ms", "min", "deg", "rad", "m/s", "deg/s", "rad/s")
+
+_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
+_NUMBER_BEFORE = re.compile(r"(?<![A-Za-z0-9_.])(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?[ \t]*$")
+_CALLEE = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)\s*$")
+_KEYWORD_ARG = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)\s*=\s*$")
+
+
+class MdleLexer(RegexLexer):
+    """Pygments lexer for MDLe text and the REPL's ``:`` commands."""
+
+    name = "MDLe"
+    aliases = ["mdle"]
+    filenames = ["*.mdle"]
+
+    tokens = {
+        "root": [
+            (r"^\s*:[a-z]+", Name.Builtin, "command"),
+            (r"#.*?$", Comment.Single),
+            (r"\s+", Whitespace),
+            (r'"[^"\n]*"', String),
+            (words(DEFINITION_KEYWORDS, suffix=r"\b"), Keyword.Declaration),
+            (words(("never", "inf"), suffix=r"\b"), Keyword.Constant),
+            (words(("and", "or", "xor", "not"), suffix=r"\b"), Operator.Word),
+            (r"(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", Number, "unit"),
+            (r"[A-Za-z_][A-Za-z0-9_]*(?=\s*\()", Name.Function),
+            (r"[A-Za-z_][A-Za-z0-9_]*", Name),
+            (r"\.\.\.", Keyword),
+            (r"<=|>=|==|!=|[<>+\-*/=]", Operator),
+            (r"[()\[\],]", Punctuation),
+            (r".", Text),
+        ],
+        "unit": [
+            (r"[ \t]*(?!(?:and|or|xor|not|never|inf|import|run|atom|behavior|plan|interrupt)"
+             r"\b)[A-Za-z_][A-Za-z0-9_]*(?:[ \t]*/[ \t]*[A-Za-z_][A-Za-z0-9_]*)?",
+             Keyword.Type, "#pop"),
+            default("#pop"),
+        ],
+        "command": [
+            (r".+$", String, "#pop"),
+            default("#pop"),
+        ],
+    }
+
+
+def history_path(environ: "dict[str, str] | os._Environ[str] | None" = None) -> Path:
+    """Where the REPL keeps its history: ``$XDG_DATA_HOME/mdle/repl_history``, or
+    ``~/.local/share/mdle/repl_history`` when ``XDG_DATA_HOME`` is unset or empty (the
+    XDG base directory rule)."""
+    env = os.environ if environ is None else environ
+    base = env.get("XDG_DATA_HOME") or ""
+    root = Path(base) if base and os.path.isabs(base) else Path.home() / ".local" / "share"
+    return root / "mdle" / "repl_history"
+
+
+class MdleCompleter(Completer):
+    """Completion for the REPL; reads the session's definitions and registry each time,
+    so new definitions are offered at once."""
+
+    def __init__(self, repl: Repl) -> None:
+        self.repl = repl
+        self._paths = PathCompleter(expanduser=True)
+
+    # ------------------------------------------------------------------ entry point
+
+    def get_completions(self, document: Document, complete_event: CompleteEvent
+                        ) -> Iterator[Completion]:
+        text = document.text_before_cursor
+        if text.lstrip().startswith(":"):
+            yield from self._command(text.lstrip())
+            return
+        word_match = _WORD.search(text)
+        word = word_match.group(0) if word_match else ""
+        before = text[: len(text) - len(word)]
+        if _NUMBER_BEFORE.search(before) and (word or before.endswith((" ", "\t"))):
+            yield from _starting(word, ((u, "unit") for u in UNITS))
+            return
+        if re.search(r"[0-9.]$", before) and not word:
+            return
+        yield from self._mdle(before, word)
+
+    # ------------------------------------------------------------------ MDLe text
+
+    def _mdle(self, before: str, word: str) -> Iterator[Completion]:
+        registry = self.repl.session.workspace.registry
+        callee = _enclosing_call(before)
+        if callee is not None:
+            params = self._params(callee)
+            kw = _KEYWORD_ARG.search(before)
+            if kw is not None and params is not None:
+                choices = next((p[2] for p in params if p[0] == kw.group(1)), ())
+                if choices:
+                    yield from _starting(word, ((c, "symbol") for c in choices))
+                    return
+            if params is not None and before.rstrip().endswith(("(", ",")):
+                # an argument: a parameter name, a symbol, or a parameter of the
+                # definition being typed (`atom a(d = 1 m) = (go(d), ...)`)
+                yield from _starting(word, [
+                    *((f"{n} = ", doc or "parameter", n) for n, doc, _ in params),
+                    *((c, f"symbol for {n}") for n, _, choices in params for c in choices),
+                    *((n, "parameter of this definition") for n in _own_params(before))])
+                return
+        offered: list[tuple[str, str]] = []
+        if not before.strip():
+            offered += [(k, "keyword") for k in DEFINITION_KEYWORDS]
+        ws = self.repl.session.workspace
+        for name in ws.names():
+            d = ws.definition(name)
+            offered.append((name, d.kind.value if d is not None else "defined"))
+        offered += [(n, "control law") for n in registry.laws]
+        offered += [(n, "sensor") for n in registry.sensors]
+        offered += [(k, "keyword") for k in KEYWORDS if k not in DEFINITION_KEYWORDS]
+        if word:
+            yield from _starting(word, offered)
+
+    def _params(self, callee: str) -> list[tuple[str, str, tuple[str, ...]]] | None:
+        """(name, doc, choices) of the parameters of a law, sensor or definition."""
+        ws = self.repl.session.workspace
+        spec = ws.registry.laws.get(callee) or ws.registry.sensors.get(callee)
+        if spec is not None:
+            return [(p.name, p.doc, p.choices) for p in spec.params]
+        d = ws.definition(callee)
+        if d is not None:
+            return [(p.name, f"parameter of {callee}", ()) for p in d.param_list]
+        return None
+
+    # ------------------------------------------------------------------ commands
+
+    def _command(self, text: str) -> Iterator[Completion]:
+        head, space, rest = text[1:].partition(" ")
+        if not space:
+            for name, cmd in COMMANDS.items():
+                if name.startswith(head):
+                    yield Completion(name, -len(head), display=f":{name}",
+                                     display_meta=cmd.help)
+            return
+        cmd = COMMANDS.get(head)
+        if cmd is None:
+            return
+        arg = rest.lstrip()
+        if " " in arg:
+            return
+        if cmd.name == "help":
+            yield from _starting(arg, ((n, "command") for n in COMMANDS))
+        elif cmd.name == "set":
+            yield from _starting(arg, (("seed", "random seed"), ("until", "run limit, s")))
+        elif cmd.completes == "world":
+            import sim
+
+            yield from _starting(arg, ((n, "reference world") for n in sim.list_worlds()))
+            if arg:
+                yield from self._files(arg)
+        elif cmd.completes == "file":
+            yield from self._files(arg)
+
+    def _files(self, arg: str) -> Iterable[Completion]:
+        return self._paths.get_completions(Document(arg, len(arg)), CompleteEvent())
+
+
+def _starting(word: str, items: Iterable[tuple[str, ...]]) -> Iterator[Completion]:
+    """Completions of ``word`` among (text, meta[, display]) items, each offered once."""
+    seen: set[str] = set()
+    for item in items:
+        text, meta = item[0], item[1]
+        display = item[2] if len(item) > 2 else text
+        if text in seen or not text.startswith(word) or text == word:
+            continue
+        seen.add(text)
+        yield Completion(text, -len(word), display=display, display_meta=meta)
+
+
+_DEF_HEAD = re.compile(r"^\s*(?:atom|behavior|plan|interrupt)\s+[A-Za-z_]\w*\s*\(([^)]*)\)\s*=")
+
+
+def _own_params(before: str) -> list[str]:
+    """Parameter names of the definition being typed (``atom a(d = 1 m, t) = ...``)."""
+    m = _DEF_HEAD.match(before)
+    if m is None:
+        return []
+    return [p.split("=")[0].strip() for p in m.group(1).split(",") if p.split("=")[0].strip()]
+
+
+def _enclosing_call(before: str) -> str | None:
+    """The name called by the innermost unclosed ``name(`` before the cursor, if any."""
+    depth = 0
+    for i in range(len(before) - 1, -1, -1):
+        ch = before[i]
+        if ch == ")":
+            depth += 1
+        elif ch == "(":
+            if depth == 0:
+                m = _CALLEE.search(before[:i])
+                return m.group(1) if m else None
+            depth -= 1
+    return None
+
+
+def make_prompt_session(repl: Repl, *, input: "Input | None" = None,
+                        output: "Output | None" = None, history: bool = True
+                        ) -> "PromptSession[str]":
+    """The prompt_toolkit session of the REPL (history, completion, lexer, key bindings).
+
+    ``input``/``output`` default to the terminal; tests pass a pipe input and a dummy
+    output. With ``history`` False (or when the data directory cannot be created) the
+    history lives in memory only.
+    """
+    from prompt_toolkit import PromptSession
+    from prompt_toolkit.application import get_app
+    from prompt_toolkit.completion.base import get_common_complete_suffix
+    from prompt_toolkit.filters import Condition, has_completions
+    from prompt_toolkit.history import FileHistory, History, InMemoryHistory
+    from prompt_toolkit.key_binding import KeyBindings
+    from prompt_toolkit.lexers import PygmentsLexer
+
+    hist: History = InMemoryHistory()
+    if history:
+        path = history_path()
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            hist = FileHistory(str(path))
+        except OSError:
+            pass
+
+    @Condition
+    def unfinished() -> bool:
+        buf = get_app().current_buffer
+        return not repl.is_complete(buf.text)
+
+    bindings = KeyBindings()
+
+    @bindings.add("enter", filter=unfinished)
+    def _newline(event: Any) -> None:
+        # keep the indentation of the line being continued, plus one level
+        buf = event.current_buffer
+        line = buf.document.current_line
+        indent = line[: len(line) - len(line.lstrip())]
+        buf.insert_text("\n" + indent + ("    " if buf.text.rstrip().endswith(("(", "=", ","))
+                                          and not indent else ""))
+
+    completer = MdleCompleter(repl)
+
+    @bindings.add("tab", filter=~has_completions)
+    def _complete(event: Any) -> None:
+        # Complete at once (prompt_toolkit's own Tab completes in a background task): a
+        # single candidate is inserted, several insert their common part, and when there
+        # is none the menu opens (then Tab moves through it).
+        buf = event.current_buffer
+        found = list(completer.get_completions(buf.document,
+                                               CompleteEvent(completion_requested=True)))
+        if len(found) == 1:
+            buf.apply_completion(found[0])
+            return
+        common = get_common_complete_suffix(buf.document, found) if found else ""
+        if common:
+            buf.insert_text(common)
+        elif found:
+            buf.start_completion(select_first=False)
+
+    return PromptSession(
+        history=hist, completer=completer, lexer=PygmentsLexer(MdleLexer),
+        key_bindings=bindings, multiline=False, complete_while_typing=False,
+        prompt_continuation=lambda width, line, wrap: "...".rjust(width - 1) + " ",
+        input=input, output=output, enable_history_search=True)
+
+
+def run_prompt(repl: Repl, *, input: "Input | None" = None, output: "Output | None" = None,
+               history: bool = True) -> int:
+    """Read and do inputs at the prompt until Ctrl-D or ``:quit``; returns 0."""
+    session = make_prompt_session(repl, input=input, output=output, history=history)
+    repl.say(f"mdle repl: world `{repl.session.world.name}`, seed {repl.session.seed}. "
+             "`:help` lists the commands; Ctrl-D leaves.")
+    while not repl.quit_requested:
+        try:
+            text = session.prompt(PROMPT)
+        except KeyboardInterrupt:  # Ctrl-C at the prompt: drop the line
+            continue
+        except EOFError:  # Ctrl-D
+            break
+        repl.handle(text)
+    return 0

@@ -1,0 +1,248 @@
+"""The REPL interpreter: what each input prints, and that no mistake leaves the REPL."""
+
+from __future__ import annotations
+
+import io
+import math
+import re
+from pathlib import Path
+
+import pytest
+
+from mdle.repl.commands import COMMANDS, Repl, classify
+from mdle.repl.session import Session
+
+
+class Run:
+    """A Repl on the ellipse world with captured output."""
+
+    def __init__(self, world: str = "ellipse") -> None:
+        self.out, self.err = io.StringIO(), io.StringIO()
+        self.repl = Repl(Session(world), self.out, self.err)
+
+    def __call__(self, text: str) -> tuple[bool, str, str]:
+        o, e = self.out.tell(), self.err.tell()
+        ok = self.repl.handle(text)
+        return ok, self.out.getvalue()[o:], self.err.getvalue()[e:]
+
+
+@pytest.fixture
+def r() -> Run:
+    return Run()
+
+
+def test_classify() -> None:
+    assert classify("  ") == "empty" and classify("# note") == "empty"
+    assert classify(":pose") == "command"
+    assert classify("atom a = (go(1 m/s), never, 1 s)") == "definition"
+    assert classify("import \"x.mdle\"") == "definition"
+    assert classify("run main") == "definition"
+    assert classify("atomic") == "element"  # a name that starts like a keyword
+    assert classify("(go(1 m/s), never, 1 s)") == "element"
+
+
+def test_define_run_and_report(r: Run) -> None:
+    ok, out, err = r("atom creep(v = 0.5 m/s) = (go(v), never, 2 s)")
+    assert ok and out == "defined creep\n" and err == ""
+    ok, out, _ = r("atom creep(v = 0.25 m/s) = (go(v), never, 2 s)")
+    assert out == "redefined creep\n"
+    ok, out, err = r("creep")
+    assert ok and err == ""
+    lines = out.splitlines()
+    assert lines[0] == "creep (level 0) ended by timer at 2.00 s"
+    assert lines[1] == "  pose      x -8.50 m  y 0.30 m  heading 0.0 deg"
+    assert lines[2].startswith("  travelled 0.50 m in 2.00 s (21 ticks), min clearance ")
+
+
+def test_mistakes_print_a_message_and_keep_the_session(r: Run) -> None:
+    r("atom creep = (go(0.5 m/s), never, 2 s)")
+    r("creep")
+    before = r.repl.session.backend.true_pose, r.repl.session.workspace.format()
+    bad = [
+        ("atom creep = (go(3 s), never, 1 s)", "is a speed such as"),
+        ("crep", "did you mean `creep`"),
+        ("atom x = (go(1 m/s) never, 1 s)", "error"),
+        ("(go(1 m/s), never, 1 s) )", "error"),
+        (":nope", "unknown command `:nope`"),
+        (":world atlantis", "unknown world `atlantis`"),
+        (":reset 0 0", "overlaps"),
+        (":reset a b", "x must be a number"),
+        (":step x", "whole number"),
+        (":load /no/such/file.mdle", "no/such/file.mdle"),
+        (":set speed 3", "no setting `speed`"),
+        (":pose extra", "takes no arguments"),
+        (":plot", "takes one argument"),
+        (":save 'unbalanced", "cannot read the command"),
+    ]
+    for text, message in bad:
+        ok, out, err = r(text)
+        assert not ok, text
+        assert message in err, (text, err)
+        assert "Traceback" not in err
+    assert r.repl.failures == len(bad)
+    assert (r.repl.session.backend.true_pose, r.repl.session.workspace.format()) == before
+
+
+def test_a_collision_fails_the_input_and_the_next_one_works(r: Run) -> None:
+    ok, out, _ = r("(go(1 m/s), never, 20 s)")
+    assert not ok
+    assert "COLLIDED with `ellipse`" in out
+    # stalled against it: the runtime aborts after 5 s
+    assert "aborted: the robot stalled for 5.0 s" in out
+    assert "ended by error at 10.10 s" in out  # stalled from the tick at 5.1 s
+    ok, out, _ = r(":reset")
+    assert ok and "x -9.00 m  y 0.30 m" in out
+    ok, _, _ = r("(go(1 m/s), never, 1 s)")
+    assert ok
+
+
+def test_help_lists_every_command(r: Run) -> None:
+    ok, out, _ = r(":help")
+    assert ok
+    for name in COMMANDS:
+        assert re.search(rf"^  :{name}\b", out, re.M), name
+    ok, out, _ = r(":help step")
+    assert out.startswith(":step [N]\n")
+    assert {"help", "pose", "scan", "where", "plot", "trace", "reset", "world", "defs", "save",
+            "load", "step", "set", "quit"} <= set(COMMANDS)
+
+
+def test_pose_and_scan(r: Run) -> None:
+    r("(go(1 m/s), range(0 deg) < 1.5 m, 20 s)")
+    ok, out, _ = r(":pose")
+    assert ok
+    assert "odometry x -5.40 m  y 0.30 m  heading 0.0 deg" in out
+    assert "world `ellipse`, seed 0" in out
+    ok, out, _ = r(":scan")
+    assert ok
+    lines = out.splitlines()
+    assert lines[0].startswith("scan at t = 3.60 s: 181 beams from -90 to 90 deg")
+    ahead = float(re.search(r"ahead ([0-9.]+) m", out).group(1))
+    assert ahead == pytest.approx(5.40 - 3.95, abs=0.1)
+    assert lines[-2].startswith("  right:") and lines[-1].startswith("  left :")
+    assert "front ray 1.4" in lines[-2]  # the ellipse ahead, seen by both sides' front ray
+
+
+def test_scan_shows_the_boundary_the_sensor_functions_read() -> None:
+    r = Run()
+    # put the robot 1 m above the ellipse's top (y = 2), heading west: boundary on its left
+    r(":reset 0 3 180")
+    ok, out, _ = r(":scan")
+    m = re.search(r"left : boundary_range ([0-9.]+) m, boundary_tangent (-?[0-9.]+) deg, "
+                  r"boundary_curvature ([-+][0-9.]+) 1/m", out)
+    assert m, out
+    assert float(m.group(1)) == pytest.approx(1.0, abs=0.05)
+    assert abs(float(m.group(2))) < 5.0
+    # the top of the ellipse (a = 4, b = 2) has curvature b / a^2 = 0.125; convex on the
+    # left is positive
+    assert float(m.group(3)) == pytest.approx(0.125, abs=0.08)
+    assert "right: no boundary on the side ray" in out
+
+
+def test_where_draws_the_world_the_path_and_the_robot(r: Run) -> None:
+    r("(go(1 m/s), never, 2 s)")
+    r("(turn(90 deg/s), never, 1 s)")
+    ok, out, _ = r(":where 60")
+    assert ok
+    rows = out.splitlines()
+    grid = [row[1:-1] for row in rows[1:-2]]
+    assert all(len(g) == 60 for g in grid)
+    assert sum(g.count("#") for g in grid) > 50  # the ellipse
+    robot = [(i, g.index("^")) for i, g in enumerate(grid) if "^" in g]
+    start = [(i, g.index("o")) for i, g in enumerate(grid) if "o" in g]
+    assert len(robot) == 1 and len(start) == 1
+    # 2 m east of the start, on the same row: the columns are (18 m / 60) = 0.3 m wide
+    assert robot[0][0] == start[0][0]
+    assert robot[0][1] - start[0][1] == pytest.approx(2.0 / 0.3, abs=1)
+    assert grid[start[0][0]][start[0][1] + 1:robot[0][1]] == "." * (robot[0][1] - start[0][1] - 1)
+    assert "^ robot (x -7.00 m  y 0.30 m  heading 90.0 deg)" in rows[-1]
+
+
+def test_defs_save_load(r: Run, tmp_path: Path) -> None:
+    ok, out, _ = r(":defs")
+    assert out == "nothing defined yet\n"
+    r("atom creep(v = 0.5 m/s) =\n    (go(v),\n     never, 2 s)")
+    r("interrupt near(d = 1 m) = range(0 deg) < d")
+    r("behavior both = ((creep, (turn(1 rad/s), near, 1 s)), never, inf)")
+    ok, out, _ = r("run both")
+    assert ok and "entry is now `both`" in out
+    ok, out, _ = r(":defs")
+    expected = ("atom creep(v = 0.5 m/s) = (go(v), never, 2 s)\n"
+                "interrupt near(d = 1 m) = range(0 deg) < d\n"
+                "behavior both = ((creep, (turn(1 rad/s), near, 1 s)), never, inf)\n"
+                "run both\n")
+    assert out == expected
+    target = tmp_path / "saved.mdle"
+    ok, out, _ = r(f":save {target}")
+    assert ok and out == f"saved 3 definitions to {target} (4 lines)\n"
+    assert target.read_text() == expected
+    other = Run()
+    ok, out, _ = other(f":load {target}")
+    assert ok and out == f"loaded {target}: both, creep, near\n"
+    ok, out, _ = other("both")
+    assert ok and out.startswith("both/turn (level 1) ended by timer at 3.00 s; both completed")
+
+
+def test_step_prints_each_tick(r: Run) -> None:
+    ok, _, err = r(":step")
+    assert not ok and "run an element first" in err
+    r("atom hug = (follow_boundary(side = left, rc = 1 m, v = 1 m/s), never, 0.3 s)")
+    r(":reset 0 3 180")
+    r("hug")
+    r(":reset 0 3 180")
+    ok, out, _ = r(":step 2")
+    lines = out.splitlines()
+    assert ok and lines[0] == "stepping `hug` from the robot's current state"
+    assert lines[1].startswith("  #1    t   0.00 s  hug  cmd v +1.000 m/s  omega ")
+    side = float(re.search(r"side_range ([0-9.]+)", lines[2]).group(1))
+    assert side == pytest.approx(1.0, abs=0.05) and "side_hit 1" in lines[2]
+    assert lines[3].startswith("  #2    t   0.10 s  hug")
+    ok, out, _ = r(":step 5")
+    lines = out.splitlines()
+    assert lines[0].startswith("  #3    t   0.20 s  hug")
+    assert any(line.startswith("hug (level 0) ended by timer at 0.30 s") for line in lines)
+
+
+def test_set_until_and_seed(r: Run) -> None:
+    ok, out, _ = r(":set until 2")
+    assert ok and out == "a run stops after 2 s\n"
+    ok, out, _ = r("(turn(1 rad/s), never, inf)")
+    assert ok and "(the run limit of 2 s; change it with `:set until SECONDS`)" in out
+    ok, out, _ = r(":set until inf")
+    assert r.repl.session.until is None
+    ok, out, _ = r(":set seed 5")
+    assert ok and r.repl.session.seed == 5
+    ok, _, err = r(":set until -1")
+    assert not ok and "positive" in err
+
+
+def test_trace_plot_world_quit(r: Run, tmp_path: Path) -> None:
+    ok, _, err = r(f":trace {tmp_path / 't.jsonl'}")
+    assert not ok and "nothing to write" in err
+    r("(go(1 m/s), never, 1 s)")
+    ok, out, _ = r(f":trace {tmp_path / 't.jsonl'}")
+    assert ok and out == f"trace written to {tmp_path / 't.jsonl'} (11 samples)\n"
+    ok, out, _ = r(f":plot {tmp_path / 'p.svg'}")
+    assert ok and (tmp_path / "p.svg").read_text().lstrip().startswith("<?xml")
+    ok, _, err = r(f":plot {tmp_path / 'p.gif'}")
+    assert not ok and ".png, .svg or .pdf" in err
+    ok, out, _ = r(":world")
+    assert "reference worlds:" in out and "corridor" in out
+    ok, out, _ = r(":world corridor")
+    assert ok and out.startswith("world `corridor`")
+    ok, out, _ = r(":quit")
+    assert ok and r.repl.quit_requested
+
+
+def test_an_internal_error_is_one_line_and_the_session_survives(r: Run, monkeypatch:
+                                                                   pytest.MonkeyPatch) -> None:
+    def broken(self: Session, text: str) -> None:
+        raise ZeroDivisionError("boom")
+
+    monkeypatch.setattr(Session, "run", broken)
+    ok, _, err = r("(go(1 m/s), never, 1 s)")
+    assert not ok and "internal error: ZeroDivisionError: boom" in err
+    monkeypatch.undo()
+    ok, _, _ = r("(go(1 m/s), never, 1 s)")
+    assert ok and r.repl.session.backend.true_pose.x == pytest.approx(-8.0)
+    assert math.isfinite(r.repl.session.observe().time)
