@@ -199,3 +199,24 @@ def test_every_plan_in_plans_runs_in_the_simulator(plan_file, tmp_path):
 def test_plans_folder_is_not_empty():
     # the parametrised test above runs one case per plan: it must have something to run
     assert PLANS, "no plans in plans/"
+
+
+def test_simulation_options_reach_the_backend(plan, tmp_path):
+    trace = tmp_path / "t.jsonl"
+    res = mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "--seed", "5", "--robot",
+               "ideal", "--sensing", "exact", "--rate", "20", "--until", "1", "-q",
+               "--trace", str(trace))
+    assert res.returncode == 0, res.stderr
+    t = read_trace(trace)
+    assert (t.header["seed"], t.header["robot"], t.header["sensing"]) == (5, "ideal", "exact")
+    assert t.column("t").tolist() == pytest.approx([k * 0.05 for k in range(21)])
+    res = mdle("run", str(plan(FOLLOW)), "--robot", "segway", "-q", "--until", "1")
+    assert res.returncode == 1 and "segway" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_realtime_runs_at_wall_clock_speed(plan):
+    # a lower bound only: paced runs must not go faster than the wall clock
+    start = time.monotonic()
+    res = mdle("run", str(plan(SPIN)), "--world", "empty", "--realtime", "--until", "1.5", "-q")
+    assert res.returncode == 0, res.stderr
+    assert time.monotonic() - start >= 1.4
