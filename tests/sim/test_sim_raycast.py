@@ -206,3 +206,29 @@ def test_closed_curve_wall_faces_curvature_both_sides() -> None:
     np.testing.assert_allclose(inside.curvatures, 1 / 2.9, atol=0.02)     # concave inner face
     outside = world.cast((5.0, 0.0), [math.pi])
     np.testing.assert_allclose(outside.curvatures, -1 / 3.1, atol=0.02)   # convex outer face
+
+
+def test_polygons_agree_with_shapely_intersections() -> None:
+    import shapely
+
+    rng = np.random.default_rng(11)
+    shapes = []
+    for _ in range(12):
+        c = rng.uniform(-8, 8, 2)
+        hull = shapely.MultiPoint(c + rng.normal(0, 0.8, (7, 2))).convex_hull
+        shapes.append(Polygon(tuple(map(tuple, np.asarray(hull.exterior.coords)[:-1]))))
+    world = World("hulls", obstacles=tuple(shapes))
+    union = shapely.union_all([s.geometry() for s in shapes])
+    o = np.array([0.3, -0.2])
+    while world.inside(o):
+        o = o + 0.5
+    angles = np.linspace(-math.pi, math.pi, 721)
+    hits = world.cast(o, angles)
+    for a, r, h in zip(angles, hits.ranges, hits.hit):
+        ray = shapely.LineString([o, o + 50 * np.array([math.cos(a), math.sin(a)])])
+        inter = ray.intersection(union.boundary)
+        if inter.is_empty:
+            assert not h
+            continue
+        d = shapely.Point(o).distance(inter)        # the nearest crossing of any boundary
+        assert h and abs(r - d) < 1e-9
