@@ -115,7 +115,7 @@ class MdleCompleter(Completer):
         word = word_match.group(0) if word_match else ""
         before = text[: len(text) - len(word)]
         if _NUMBER_BEFORE.search(before) and (word or before.endswith((" ", "\t"))):
-            yield from _starting(word, ((u, "unit") for u in UNITS))
+            yield from _starting(word, self._units(before))
             return
         if re.search(r"[0-9.]$", before) and not word:
             return
@@ -154,6 +154,28 @@ class MdleCompleter(Completer):
         offered += [(k, "keyword") for k in KEYWORDS if k not in DEFINITION_KEYWORDS]
         if word:
             yield from _starting(word, offered)
+
+    def _units(self, before: str) -> list[tuple[str, str]]:
+        """Units for the number just typed: those of the parameter's dimension when the
+        number is an argument of a law or sensor, else every unit."""
+        from mdle.units import unit_value
+
+        found = _enclosing_call_at(before)
+        dim = None
+        if found is not None:
+            callee, index, keyword = found
+            registry = self.repl.session.workspace.registry
+            spec = registry.laws.get(callee) or registry.sensors.get(callee)
+            if spec is not None:
+                param = spec.param(keyword) if keyword else (
+                    spec.params[index] if index < len(spec.params) else None)
+                if param is not None and not param.is_symbol:
+                    dim = param.dim
+        units = [(u, f"unit of {unit_value(u)[1]}") for u in UNITS]
+        if dim is None:
+            return units
+        fitting = [(u, m) for u, m in units if unit_value(u)[1] == dim]
+        return fitting or units
 
     def _params(self, callee: str) -> list[tuple[str, str, tuple[str, ...]]] | None:
         """(name, doc, choices) of the parameters of a law, sensor or definition."""
@@ -224,17 +246,47 @@ def _own_params(before: str) -> list[str]:
 
 def _enclosing_call(before: str) -> str | None:
     """The name called by the innermost unclosed ``name(`` before the cursor, if any."""
+    found = _enclosing_call_at(before)
+    return None if found is None else found[0]
+
+
+def _enclosing_call_at(before: str) -> tuple[str, int, str | None] | None:
+    """The innermost unclosed call before the cursor: (name, index of the argument being
+    typed, its keyword if written ``name = ``), or None."""
     depth = 0
+    commas = 0
     for i in range(len(before) - 1, -1, -1):
         ch = before[i]
-        if ch == ")":
+        if ch in ")]":
             depth += 1
-        elif ch == "(":
+        elif ch in "([":
             if depth == 0:
+                if ch == "[":
+                    return None
                 m = _CALLEE.search(before[:i])
-                return m.group(1) if m else None
+                if m is None:
+                    return None
+                arg = before[i + 1:]
+                last = arg[_last_top_comma(arg) + 1:]
+                kw = re.match(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*=(?!=)", last)
+                return m.group(1), commas, kw.group(1) if kw else None
             depth -= 1
+        elif ch == "," and depth == 0:
+            commas += 1
     return None
+
+
+def _last_top_comma(text: str) -> int:
+    """Index of the last comma outside brackets in ``text`` (-1 when none)."""
+    depth, at = 0, -1
+    for i, ch in enumerate(text):
+        if ch in "([":
+            depth += 1
+        elif ch in ")]":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            at = i
+    return at
 
 
 def make_prompt_session(repl: Repl, *, input: "Input | None" = None,
@@ -302,7 +354,7 @@ def make_prompt_session(repl: Repl, *, input: "Input | None" = None,
         history=hist, completer=completer, lexer=PygmentsLexer(MdleLexer),
         key_bindings=bindings, multiline=False, complete_while_typing=False,
         prompt_continuation=lambda width, line, wrap: "...".rjust(width - 1) + " ",
-        input=input, output=output, enable_history_search=True)
+        input=input, output=output)
 
 
 def run_prompt(repl: Repl, *, input: "Input | None" = None, output: "Output | None" = None,

@@ -1,0 +1,207 @@
+"""The prompt_toolkit front end, driven through a pipe input with a dummy output:
+completion, multi-line input, history, Ctrl-C at the prompt and during a run, Ctrl-D."""
+
+from __future__ import annotations
+
+import io
+import os
+import signal
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from prompt_toolkit.completion import CompleteEvent
+from prompt_toolkit.document import Document
+from prompt_toolkit.input import create_pipe_input
+from prompt_toolkit.output import DummyOutput
+from pygments.token import Keyword, Name, Number
+
+from mdle.repl.commands import Repl
+from mdle.repl.prompt import MdleCompleter, MdleLexer, history_path, run_prompt
+from mdle.repl.session import Session
+
+
+@pytest.fixture(autouse=True)
+def data_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Never touch the user's history: the data directory is a temporary one."""
+    home = tmp_path / "data"
+    monkeypatch.setenv("XDG_DATA_HOME", str(home))
+    return home
+
+
+@pytest.fixture
+def repl() -> Repl:
+    return Repl(Session("ellipse"), io.StringIO(), io.StringIO())
+
+
+def drive(repl: Repl, *chunks: str) -> int:
+    """Type ``chunks`` at the prompt (then Ctrl-D) and run the REPL until it leaves."""
+    with create_pipe_input() as inp:
+        for c in chunks:
+            inp.send_text(c)
+        inp.send_text("\x04")
+        return run_prompt(repl, input=inp, output=DummyOutput())
+
+
+def completions(repl: Repl, text: str) -> list[str]:
+    c = MdleCompleter(repl)
+    return [x.text for x in c.get_completions(Document(text), CompleteEvent(True))]
+
+
+# ---------------------------------------------------------------------- completion
+
+def test_completer_offers_laws_sensors_names_and_keywords(repl: Repl) -> None:
+    repl.handle("atom follow_wide = (follow_boundary(rc = 2 m), never, 5 s)")
+    assert completions(repl, "fol") == ["follow_wide", "follow_boundary"]
+    assert completions(repl, "(go(1 m/s), bou") == ["boundary_range", "boundary_curvature",
+                                                    "boundary_tangent"]
+    assert completions(repl, "be") == ["behavior"]  # a keyword, at the start only
+    assert "behavior" not in completions(repl, "(go(1 m/s), be")
+    assert completions(repl, "(go(1 m/s), stalled or nev") == ["never"]
+
+
+def test_completer_offers_parameters_symbols_and_units(repl: Repl) -> None:
+    params = completions(repl, "(follow_boundary(")
+    names = [p.name for p in repl.session.workspace.registry.laws["follow_boundary"].params]
+    assert params[:len(names)] == [f"{n} = " for n in names]
+    assert names[:3] == ["side", "rc", "v"]
+    assert "right" in params and "left" in params
+    assert completions(repl, "(follow_boundary(rc = 1 m, ") == params
+    assert completions(repl, "(follow_boundary(side = ") == ["right", "left"]
+    assert completions(repl, "(go(v), boundary_range(side = l") == ["left"]
+    assert completions(repl, "atom a(d = 1 m, speed) = (follow_boundary(rc = 1 m, s") == [
+        "side = ", "speed"]
+    # units of the parameter's dimension: v of go is a speed, rate of turn a turn rate
+    assert completions(repl, "(go(0.3 m") == ["m/s"]
+    assert completions(repl, "(turn(30 deg") == ["deg/s"]
+    assert completions(repl, "(follow_boundary(side = left, 1 ") == ["m", "cm", "mm"]
+    assert completions(repl, "(follow_boundary(v = 1 ") == ["m/s"]
+    assert completions(repl, "(go(1 m/s), never, 2 m") == ["mm", "ms", "min", "m/s"]
+    assert completions(repl, "(go(0") == []
+    assert completions(repl, "atom x2 m") == ["min_range"]  # `2` ends a name: no units
+
+
+def test_completer_offers_commands_worlds_and_files(repl: Repl, tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    assert completions(repl, ":s") == ["scan", "save", "step", "set"]
+    assert completions(repl, ":wor") == ["world"]
+    assert completions(repl, ":world ell") == ["ellipse"]
+    assert completions(repl, ":set u") == ["until"]
+    assert completions(repl, ":help qu") == ["quit"]
+    (tmp_path / "plans").mkdir()
+    (tmp_path / "plans" / "tune.mdle").write_text("")
+    monkeypatch.chdir(tmp_path)
+    assert completions(repl, ":load plans/tu") == ["ne.mdle"]
+
+
+def test_tab_completes_at_the_prompt_and_enter_continues_unfinished_input(repl: Repl) -> None:
+    rc = drive(repl,
+               "atom hug(d = 1 m) = (follow_b\t(rc\td,\r",   # Enter: brackets still open
+               "v = 1 m/s), never, 2 s)\r",
+               "hu\t\r")
+    assert rc == 0
+    assert repl.session.workspace.format() == (
+        "atom hug(d = 1 m) = (follow_boundary(rc = d, v = 1 m/s), never, 2 s)\n")
+    out = repl.out.getvalue()  # type: ignore[attr-defined]
+    assert "defined hug\n" in out
+    assert "hug (level 0) ended by timer at 2.00 s" in out
+    assert repl.failures == 0
+
+
+def test_tab_with_several_candidates_inserts_their_common_part(repl: Repl) -> None:
+    drive(repl, "(go(0.5 m/s), bou\t\tnever, 1 s)\r")
+    # `bou` -> `boundary_` (common part of boundary_range/_curvature/_tangent); the second
+    # Tab opens the menu without choosing, so the text stays as typed
+    err = repl.err.getvalue()  # type: ignore[attr-defined]
+    assert "boundary_never" in err
+
+
+# ---------------------------------------------------------------------- keys
+
+def test_ctrl_c_at_the_prompt_drops_the_line(repl: Repl) -> None:
+    drive(repl, "atom junk = (go(1 m/s)\x03", "(go(1 m/s), never, 1 s)\r")
+    assert repl.session.workspace.names() == []
+    assert repl.failures == 0
+    assert repl.session.backend.true_pose.x == pytest.approx(-8.0)
+
+
+def test_ctrl_d_leaves_and_quit_too(repl: Repl) -> None:
+    assert drive(repl) == 0
+    r2 = Repl(Session("ellipse"), io.StringIO(), io.StringIO())
+    assert drive(r2, ":quit\r", "(go(1 m/s), never, 1 s)\r") == 0
+    assert r2.quit_requested and r2.session.samples == []  # nothing ran after :quit
+
+
+@pytest.fixture
+def sigint_after() -> Iterator[object]:
+    """Sends SIGINT to this process once the condition holds (from a helper thread)."""
+    threads = []
+
+    def arm(condition: object, timeout: float = 60.0) -> None:
+        def wait() -> None:
+            end = time.monotonic() + timeout
+            while time.monotonic() < end:
+                if condition():  # type: ignore[operator]
+                    os.kill(os.getpid(), signal.SIGINT)
+                    return
+                time.sleep(0.01)
+
+        t = threading.Thread(target=wait, daemon=True)
+        threads.append(t)
+        t.start()
+
+    yield arm
+    for t in threads:
+        t.join(5)
+
+
+def test_ctrl_c_during_a_run_stops_the_robot_and_gives_the_prompt_back(
+        repl: Repl, sigint_after: object) -> None:
+    session = repl.session
+    session.until = None  # the element never ends by itself
+    sigint_after(lambda: session.backend.time > 2.0)  # type: ignore[operator]
+    drive(repl, "(turn(30 deg/s), never, inf)\r", ":pose\r")
+    out = repl.out.getvalue()  # type: ignore[attr-defined]
+    assert "turn (level 0) ended by stopped at" in out
+    assert "(Ctrl-C: robot stopped)" in out
+    # the prompt came back: the next input ran
+    assert "odometry x -9.00 m  y 0.30 m" in out
+    assert session.backend._cmd.v == 0.0 and session.backend._cmd.omega == 0.0
+    assert repl.failures == 1  # a stopped run counts as not done
+    t = session.observe().time
+    assert 2.0 < t < 60.0
+
+
+def test_history_is_kept_in_the_data_directory(data_home: Path) -> None:
+    assert history_path() == data_home / "mdle" / "repl_history"
+    assert history_path({"XDG_DATA_HOME": ""}) == Path.home() / ".local/share/mdle/repl_history"
+    assert history_path({"XDG_DATA_HOME": "relative/dir"}) == (
+        Path.home() / ".local/share/mdle/repl_history")  # the XDG rule: absolute paths only
+    r1 = Repl(Session("ellipse"), io.StringIO(), io.StringIO())
+    drive(r1, "atom creep = (go(0.5 m/s), never, 1 s)\r", "creep\r")
+    text = (data_home / "mdle" / "repl_history").read_text()
+    assert "+atom creep = (go(0.5 m/s), never, 1 s)" in text and "+creep" in text
+    # a new session recalls the definition with Up Up (history loads when a prompt
+    # starts, so only the first prompt of a piped test sees it: typeahead is instant)
+    r2 = Repl(Session("ellipse"), io.StringIO(), io.StringIO())
+    drive(r2, "\x1b[A\x1b[A\r", "creep\r")
+    assert r2.session.workspace.names() == ["creep"]
+    assert r2.session.backend.true_pose.x == pytest.approx(-8.5)
+
+
+# ---------------------------------------------------------------------- highlighting
+
+def test_lexer_tokens() -> None:
+    toks = [(t, v) for t, v in MdleLexer().get_tokens(
+        "atom cruise(v = 0.3 m/s) = (go(v), range(0 deg) < 1 m or never, inf) # c\n")
+        if v.strip()]
+    kinds = dict((v, t) for t, v in toks)
+    assert kinds["atom"] in Keyword.Declaration
+    assert kinds["cruise"] in Name.Function and kinds["go"] in Name.Function
+    assert kinds["0.3"] in Number and kinds[" m/s"] in Keyword.Type
+    assert kinds["never"] in Keyword.Constant and kinds["inf"] in Keyword.Constant
+    assert kinds["# c"].__class__ is type(Keyword) and "Comment" in str(kinds["# c"])
+    cmd = [(str(t), v) for t, v in MdleLexer().get_tokens(":world ellipse\n")]
+    assert cmd[0] == ("Token.Name.Builtin", ":world")
