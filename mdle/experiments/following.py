@@ -52,11 +52,13 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
                sensing: str = "scan", robot: str | None = "ideal", seed: int = 0,
                duration: float = 60.0, rate: float | None = None,
                pose: tuple[float, float, float] | None = None, extra: str = "",
-               plan: str | None = None, recorder: object | None = None) -> FollowRun:
-    """Run a following plan in a reference world and measure it.
+               plan: str | None = None, element: str = "main",
+               recorder: object | None = None) -> FollowRun:
+    """Run a following plan in a world (reference name or YAML path) and measure it.
 
     ``rate`` defaults to control-law.md section 5: 100 Hz with exact sensing, 50 Hz with
-    the scan. ``plan`` (MDLe text) replaces the generated one; it must run ``main``.
+    the scan. ``plan`` is a path to an MDLe file that replaces the generated plan, run from
+    its ``element``. ``robot=None`` keeps the world's robot.
     """
     import numpy as np
 
@@ -68,13 +70,18 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
 
     rc = SHAPES.get(world, 0.5) if rc is None else rc
     rate = (100.0 if sensing == "exact" else 50.0) if rate is None else rate
-    program = load_text(plan or follow_plan(side, rc, v, duration, extra), file=f"<{world}>")
+    if plan is None:
+        program = load_text(follow_plan(side, rc, v, duration, extra), file=f"<{world}>")
+    else:
+        from mdle.loader import load_program
+
+        program = load_program(plan)
     w = load_world(world)
     backend = SimBackend(w, seed=seed, robot=robot, sensing=sensing)
     if pose is not None:
         backend.reset(Pose(*pose))
     rec = recorder if recorder is not None else Recorder()
-    result = run(program.elements["main"], backend, rate=rate, observers=[rec])  # type: ignore[list-item]
+    result = run(program.elements[element], backend, rate=rate, observers=[rec])  # type: ignore[list-item]
     samples = rec.samples  # type: ignore[attr-defined]
     t = np.array([s.time for s in samples])
     radius = backend.limits.radius
