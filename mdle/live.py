@@ -211,5 +211,7 @@ class LiveView(BaseObserver):
                 state.append(f"   clearance {s.clearance:.2f} m")
             if s.collided:
                 state.append("   COLLIDED", style="bold red")
+            if s.lateness > 0.0:
+                state.append(f"   tick late {s.lateness * 1e3:.0f} ms", style="yellow")
         events = Text("\n".join(self._events) or "(no events yet)", style="dim")
         return Panel(Group(levels, state, events), title="mdle run", title_align="left")

@@ -1,5 +1,8 @@
-"""The scripted backend emulates what hardware does: own data rates, stale scans, a
-command watchdog, refusal, dropped links; and integrates the held command exactly."""
+"""The scripted backend emulates what hardware does.
+
+Its own data rates, stale scans, a command watchdog, refusal, dropped links; and it
+integrates the held command exactly.
+"""
 
 from __future__ import annotations
 
