@@ -262,9 +262,10 @@ class PioneerBackend:
         mm = round(v * 1000.0)
         deg = round(math.degrees(w))
         packet = arcos.encode_command(Cmd.VEL, mm) + arcos.encode_command(Cmd.RVEL, deg)
-        self._last_command = time.monotonic()
-        self._moving = mm != 0 or deg != 0
-        self._send_or_abort(packet)
+        with self._write_lock:  # one decision at a time with the dead-man switch
+            self._last_command = time.monotonic()
+            self._moving = mm != 0 or deg != 0
+            self._send_or_abort(packet)
 
     def advance(self, dt: float) -> float:
         """Wait until this tick's wall-clock deadline (never longer); return the lateness.
@@ -360,14 +361,27 @@ class PioneerBackend:
                                        f"handshake: {exc}") from None
                 for body in reader.feed(data):
                     if body[0] in arcos.SIP_IDS:
-                        # a session left open: close it and start again
+                        # a session left open: close it, let the SIPs in flight
+                        # drain, and start again
                         self._transport.write(arcos.encode_command(Cmd.CLOSE))
+                        self._drain(quiet=0.1, limit=self._opt.sync_timeout)
                         return None, "found an open session; closed it"
                     if body[0] == step:
                         reply = body
                         break
         assert reply is not None
         return arcos.parse_sync2(reply[1:]), ""
+
+    def _drain(self, quiet: float, limit: float) -> None:
+        """Discard input until the line has been quiet for ``quiet`` s (at most ``limit``)."""
+        end = time.monotonic() + limit
+        while time.monotonic() < end:
+            try:
+                if not self._transport.read(quiet):
+                    return
+            except TransportClosed as exc:
+                raise BackendError(f"the robot closed the connection during the "
+                                   f"handshake: {exc}") from None
 
     def _await_first_data(self) -> None:
         opt = self._opt
@@ -455,13 +469,16 @@ class PioneerBackend:
                     self._shared.scans += 1
 
     def _housekeeping(self, now: float) -> None:
-        if self._moving and now - self._last_command > self._command_timeout:
-            # the runtime went quiet while the robot moves: stop it ourselves
-            self._moving = False
-            self.deadman_stops += 1
-            self._write(_STOP_PACKETS)
-        elif now - self._last_write >= self._opt.keepalive:
-            self._write(_PULSE)
+        with self._write_lock:
+            if self._moving and now - self._last_command > self._command_timeout:
+                # the runtime went quiet while the robot moves: stop it ourselves
+                self._moving = False
+                self.deadman_stops += 1
+                _log.warning("no command for %.2f s: stopping the robot",
+                             now - self._last_command)
+                self._write(_STOP_PACKETS)
+            elif now - self._last_write >= self._opt.keepalive:
+                self._write(_PULSE)
 
     def _fail(self, why: str) -> None:
         with self._lock:

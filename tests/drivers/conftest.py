@@ -268,9 +268,11 @@ class FakeArcos:
             if self.behaviour == "drop" and now - opened_at > self.drop_after:
                 link.close()
                 return
-            if now - last_rx > self.watchdog and (self.v_mm or self.w_deg):
+            if now - last_rx > self.watchdog:
+                # the firmware watchdog: silence stops the motors (counted once per silence)
                 self.watchdog_trips += 1
                 self.v_mm = self.w_deg = 0.0
+                last_rx = now
             if now >= next_sip:
                 next_sip += self.sip_period
                 self._integrate(self.sip_period)

@@ -91,7 +91,7 @@ def test_mdle_run_cli_on_the_fake_robot(fake_robot, tmp_path) -> None:
     samples = [x for x in lines if x["type"] == "sample"]
     assert len(samples) >= 5
     # wall-clock ticks: lateness and the scan's age are recorded per tick
-    assert all(0 <= s["lateness"] < 0.05 for s in samples)
+    assert all(0 <= s["lateness"] < 0.08 for s in samples)
     assert all(0 <= s["scan_age"] < 0.5 for s in samples)
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
     assert fake.v_mm == 0 and fake.w_deg == 0
