@@ -126,6 +126,9 @@ def run(args: argparse.Namespace) -> int:
     from mdle.loader import load_program
     from mdle.runtime import Scheduler, element_of
 
+    if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg", ".pdf"):
+        raise MdleError(Diagnostic(None, f"--plot `{args.plot}`: the file name must end in "
+                                         ".png, .svg or .pdf"))
     program = load_program(args.plan)
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)

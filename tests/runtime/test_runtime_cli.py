@@ -117,6 +117,15 @@ def test_unknown_element_and_world_exit_1(plan):
     assert res.returncode == 1 and "ellipse" in res.stderr and "Traceback" not in res.stderr
 
 
+def test_bad_plot_or_trace_file_is_refused_before_running(plan, tmp_path):
+    res = mdle("run", str(plan(FOLLOW)), "--plot", str(tmp_path / "p.jpg"))
+    assert res.returncode == 1 and ".png, .svg or .pdf" in res.stderr
+    assert res.stdout == ""  # nothing ran
+    res = mdle("run", str(plan(FOLLOW)), "--trace", str(tmp_path / "no" / "t.jsonl"))
+    assert res.returncode == 1 and "cannot write the trace" in res.stderr
+    assert res.stdout == ""
+
+
 def test_pioneer_backend_needs_a_connection(plan):
     res = mdle("run", str(plan(FOLLOW)), "--backend", "pioneer")
     assert res.returncode == 1 and "--connect" in res.stderr

@@ -154,7 +154,7 @@ def scripts():
     return st.lists(tick, min_size=TICKS + 1, max_size=TICKS + 1)
 
 
-@settings(max_examples=200, deadline=None,
+@settings(max_examples=200, deadline=None, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_random_trees_obey_the_semantics(ir, data):
