@@ -19,7 +19,8 @@ from mdle.cli import output
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Subcommand modules under ``mdle.cli``, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "worlds", "repl")
+COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "worlds", "repl",
+                             "experiment")
 
 
 def build_parser() -> argparse.ArgumentParser:
