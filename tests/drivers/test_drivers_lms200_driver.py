@@ -141,3 +141,17 @@ def test_pioneer_with_an_lms200_laser(fake_robot, fake_lms, fast, fast_lms) -> N
         assert robot.wait_for(lambda: robot.v_mm == 0)
     finally:
         backend.close()
+
+
+def test_variant_100_degrees_quarter_degree(fake_lms, fast_lms) -> None:
+    fake = fake_lms(baud=38400, count=401)
+    driver = Lms200Driver(SerialTransport(fake.device, 38400),
+                          replace(fast_lms, variant=(100, 25)))
+    try:
+        assert (0x3B, bytes.fromhex("64 00 19 00")) in fake.received
+        scan = _wait_scan(driver)
+        assert scan.ranges.shape == (401,)
+        assert scan.bearings[0] == pytest.approx(math.radians(-50))
+        assert scan.bearings[1] - scan.bearings[0] == pytest.approx(math.radians(0.25))
+    finally:
+        driver.close()

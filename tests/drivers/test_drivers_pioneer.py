@@ -365,3 +365,29 @@ def test_sigterm_becomes_system_exit_while_connected(fake_robot, fast) -> None:
         backend.close()  # what the runtime's finally block does
     assert signal.getsignal(signal.SIGTERM) is before
     assert fake.wait_for(lambda: fake.v_mm == 0 and fake.commands(Cmd.CLOSE) != [])
+
+
+def test_random_commands_arrive_clamped_and_rounded(fake_robot, fast) -> None:
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    fake = fake_robot()
+    backend = open_backend("pioneer", fake.url, options=fast)
+    lim = backend.limits
+    finite = st.floats(-10.0, 10.0, allow_nan=False)
+
+    @settings(max_examples=40, deadline=None, database=None)
+    @given(v=finite, w=finite)
+    def check(v: float, w: float) -> None:
+        n = len(fake.commands(Cmd.RVEL))
+        backend.command(Command(v, w))
+        assert fake.wait_for(lambda: len(fake.commands(Cmd.RVEL)) > n)
+        want_v = round(min(max(v, -lim.max_reverse_speed), lim.max_speed) * 1000)
+        want_w = round(math.degrees(min(max(w, -lim.max_turn_rate), lim.max_turn_rate)))
+        assert fake.args(Cmd.VEL)[-1] == want_v and fake.args(Cmd.RVEL)[-1] == want_w
+        assert abs(want_v) <= 750 and abs(want_w) <= 100
+
+    try:
+        check()
+    finally:
+        backend.close()
