@@ -114,6 +114,7 @@ class Checker:
         self._cache: dict[tuple[Any, ...], Any] = {}
         self.broken: set[str] = set()
         self._depths: dict[int, int] = {}
+        self._too_deep = False
         self._keep: list[Element] = []
 
     # ------------------------------------------------------------------ diagnostics
@@ -701,9 +702,11 @@ class Checker:
                 break
         depth = 1 + max(self._depths.get(id(e), 1) for e in elements)
         if depth > MAX_NESTING:
-            self.error(expr.span, f"elements nest {depth} levels deep here; mdle allows at most "
-                       f"{MAX_NESTING}", hint="flatten the plan: fewer levels of strings inside "
-                                              "strings")
+            if not self._too_deep:  # once: every enclosing definition would repeat it
+                self._too_deep = True
+                self.error(expr.span, f"elements nest {depth} levels deep here; mdle allows at "
+                           f"most {MAX_NESTING}", hint="flatten the plan: fewer levels of "
+                                                       "strings inside strings")
             raise _Abort
         node = StringNode(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
         self._depths[id(node)] = depth
@@ -715,13 +718,19 @@ class Checker:
         """The element a definition makes with these parameter values (cached)."""
         key = ("element", d.name, _freeze(bound))
         if key in self._cache:
-            return self._cache[key]  # type: ignore[no-any-return]
+            cached = self._cache[key]
+            if cached is None:  # failed before; its errors are already reported
+                raise _Abort
+            return cached  # type: ignore[no-any-return]
         env = MappingProxyType(dict(bound))
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
         try:
             with self._nest(d.span):
                 result = self._definition_body(d, env)
+        except _Abort:
+            self._cache[key] = None
+            raise
         finally:
             if call is not None:
                 self._notes.pop()

@@ -79,7 +79,7 @@ def _cache_file(grammar: str) -> str | None:
 def lark_parser() -> Lark:
     """The LALR parser of ``mdle.lark``, built once per process (tables cached per user)."""
     grammar = importlib.resources.files("mdle.grammar").joinpath("mdle.lark").read_text("utf-8")
-    options: dict[str, Any] = dict(parser="lalr", lexer="basic", propagate_positions=True,
+    options: dict[str, Any] = dict(parser="lalr", lexer="basic", propagate_positions=False,
                                    start=["start", "expr_start"], maybe_placeholders=True,
                                    transformer=_Build(),
                                    lexer_callbacks={"COMMENT": _on_comment, "LPAR": _on_open,
@@ -211,19 +211,13 @@ class _Build(Transformer):  # type: ignore[type-arg]
 
     def number(self, tok: Token) -> st.Number:
         state = _STATE.get()
-        span = _token_span(state.file, tok)
-        m = _NUMBER.fullmatch(str(tok))
-        assert m is not None  # the token's own pattern guarantees the shape
-        text, unit = m.group(1), re.sub(r"[ \t]", "", m.group(2))
+        span = Span(state.file, tok.line, tok.column, tok.end_line, tok.end_column)  # type: ignore[arg-type]
+        text, unit, factor, dim = _split_number(str(tok))
         value = float(text)
         if not math.isfinite(value):
             state.diagnostics.append(Diagnostic(span, f"the number `{text}` is too large"))
             return st.Number(0.0, NONE, text, unit, span)
-        if not unit:
-            return st.Number(value, NONE, text, "", span)
-        try:
-            factor, dim = unit_value(unit)
-        except KeyError:
+        if dim is None:
             state.diagnostics.append(_unknown_unit(unit, span))
             return st.Number(value, NONE, text, unit, span)
         return st.Number(value * factor, dim, text, unit, span)
@@ -254,16 +248,13 @@ class _Build(Transformer):  # type: ignore[type-arg]
         _not_keyword(name)
         return st.Argument(str(name), value, _over(_STATE.get().file, name, value))
 
-    def unary(self, op: Token, operand: st.Expr) -> st.Unary:
-        state = _STATE.get()
-        return _deeper(state, st.Unary(str(op), operand, _over(state.file, op, operand)),
-                       (operand,))
+    def prefixed(self, op: Token, operand: Any) -> _Prefixed:
+        return _Prefixed(op, operand)
 
-    def binary(self, left: st.Expr, op: Token, right: st.Expr) -> st.Binary:
-        state = _STATE.get()
-        node = st.Binary(str(op), left, right, _over(state.file, left, right),
-                         _token_span(state.file, op))
-        return _deeper(state, node, (left, right))
+    def expr(self, *parts: Any) -> st.Expr:
+        if len(parts) == 1 and not isinstance(parts[0], _Prefixed):
+            return parts[0]  # type: ignore[no-any-return]
+        return _precedence(_STATE.get(), parts)
 
     def group(self, lpar: Token, *parts: Any) -> st.Group:
         state = _STATE.get()
@@ -276,6 +267,81 @@ class _Build(Transformer):  # type: ignore[type-arg]
         state = _STATE.get()
         *items, rsqb = parts
         return _deeper(state, st.Vector(tuple(items), _over(state.file, lsqb, rsqb)), items)
+
+
+@functools.lru_cache(maxsize=4096)
+def _split_number(token: str) -> tuple[str, str, float, Any]:
+    """(digits, unit without spaces, factor to SI, dimension or None if unknown)."""
+    m = _NUMBER.fullmatch(token)
+    assert m is not None  # the token's own pattern guarantees the shape
+    text, unit = m.group(1), m.group(2).replace(" ", "").replace("\t", "")
+    if not unit:
+        return text, "", 1.0, NONE
+    try:
+        factor, dim = unit_value(unit)
+    except KeyError:
+        return text, unit, 1.0, None
+    return text, unit, factor, dim
+
+
+class _Prefixed:
+    """A prefix operator and its operand as parsed, before precedence is applied."""
+
+    __slots__ = ("op", "operand")
+
+    def __init__(self, op: Token, operand: Any) -> None:
+        self.op = op
+        self.operand = operand
+
+
+#: Binding power of each operator (higher binds tighter); `not` sits between `and` and
+#: the comparisons, as in Python, and unary minus above `*`.
+_BINARY = {"or": 1, "xor": 2, "and": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5, "!=": 5,
+           "+": 6, "-": 6, "*": 7, "/": 7}
+_NOT, _SIGN, _COMPARISON = 4, 8, 5
+
+
+def _precedence(state: _State, parts: tuple[Any, ...]) -> st.Expr:
+    """Build the operator tree of ``unit (op unit)*`` by operator precedence (shunting
+    yard: iterative, left associative, prefix operators as in Python)."""
+    file = state.file
+    operands: list[st.Expr] = []
+    ops: list[tuple[int, Token, bool]] = []  # (binding power, operator, is prefix)
+
+    def apply() -> None:
+        power, tok, prefix = ops.pop()
+        if prefix:
+            x = operands.pop()
+            operands.append(_deeper(state, st.Unary(str(tok), x, _over(file, tok, x)), (x,)))
+            return
+        right = operands.pop()
+        left = operands.pop()
+        if power == _COMPARISON and any(isinstance(side, st.Binary) and side.op in _CMP
+                                        for side in (left, right)):
+            state.diagnostics.append(Diagnostic(
+                _token_span(file, tok), "comparisons do not chain",
+                hint="write `0 m < x and x < 10 m`"))
+        node = st.Binary(str(tok), left, right, _over(file, left, right), _token_span(file, tok))
+        operands.append(_deeper(state, node, (left, right)))
+
+    for i, part in enumerate(parts):
+        if i % 2:  # a binary operator
+            power = _BINARY[str(part)]
+            while ops and ops[-1][0] >= power:
+                apply()
+            ops.append((power, part, False))
+            continue
+        while isinstance(part, _Prefixed):
+            ops.append((_NOT if part.op == "not" else _SIGN, part.op, True))
+            part = part.operand
+        operands.append(part)
+    while ops:
+        apply()
+    (result,) = operands
+    return result
+
+
+_CMP = frozenset({"<", "<=", ">", ">=", "==", "!="})
 
 
 def _not_keyword(tok: Token) -> None:

@@ -181,11 +181,6 @@ EXAMPLES: dict[Label, list[str]] = {
         "run (main)",
         "run 1",
     ],
-    _CHAINED: [
-        "interrupt i = 0 m < x < 1 m",
-        "interrupt i = x < 1 m > y",
-        "interrupt i = x + 1 m < y == 2 m",
-    ],
     _ASSIGN: [
         "interrupt i = x = 1 m",
         "interrupt i = range(0 deg) = 1 m",
