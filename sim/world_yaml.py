@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -50,6 +51,8 @@ _ROBOT_KEYS = ("profile", "radius", "max_speed", "max_reverse_speed", "max_turn_
 _LADAR_KEYS = ("profile", "beams", "fov", "max_range", "noise", "sigma", "resolution", "rate")
 _ODOM_KEYS = ("distance", "turn", "drift")
 _DEFAULT_WALL_THICKNESS = 0.1
+_FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
+_MAX_CURVE_SAMPLES = 100_000
 
 
 @dataclass
@@ -90,8 +93,9 @@ def _to_python(node: Any, path: str, doc: _Doc, loader: Any) -> Any:
             key = loader.construct_object(knode, deep=True)
             if not isinstance(key, str):
                 km = knode.start_mark
-                doc.marks[path + ".?"] = (km.line + 1, km.column + 1, 1)
-                raise doc.fail(path + ".?", f"keys must be names, got {key!r}")
+                doc.marks["<key>"] = (km.line + 1, km.column + 1, 1)
+                where = f"in `{path}`: " if path else ""
+                raise doc.fail("<key>", f"{where}keys must be names, got {key!r}")
             sub = f"{path}.{key}" if path else key
             if key in out:
                 km = knode.start_mark
@@ -109,6 +113,8 @@ def _to_python(node: Any, path: str, doc: _Doc, loader: Any) -> Any:
 # ---------------------------------------------------------------- value checkers
 def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False
             ) -> float:
+    if isinstance(v, str) and _FLOAT.fullmatch(v.strip()):
+        v = float(v)   # YAML 1.1 reads 1e-3 (no dot) as text; take it as the number meant
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise doc.fail(path, f"expected a number, got {_show(v)}")
     x = float(v)
@@ -199,7 +205,7 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
     kind = v.get("type")
     if kind is None:
         raise doc.fail(path, f"missing key `type` (one of: {', '.join(OBSTACLE_TYPES)})")
-    if kind not in OBSTACLE_TYPES:
+    if not isinstance(kind, str) or kind not in OBSTACLE_TYPES:
         hint = _closest(str(kind), tuple(OBSTACLE_TYPES))
         raise doc.fail(f"{path}.type", f"unknown obstacle type {kind!r}"
                        + (f" (did you mean `{hint}`?)" if hint else "")
@@ -278,6 +284,11 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
     else:
         raise doc.fail(path, "missing key `thickness` (an open curve is a wall and needs one)")
     spacing = _number(doc, P("spacing"), v.get("spacing", 0.05), positive=True)
+    length = sum(math.dist(a, b) for a, b in zip(pts, pts[1:] + (pts[:1] if closed else ())))
+    if 2 * length / spacing > _MAX_CURVE_SAMPLES:   # Catmull-Rom runs up to ~2x the chords
+        least = 2 * length / _MAX_CURVE_SAMPLES
+        raise doc.fail(P("spacing"), f"too fine for a curve {length:.3g} m long (at most "
+                       f"{_MAX_CURVE_SAMPLES} samples); use at least {least:.3g} m")
     shape = shapes.Curve(pts, thick, closed, spacing, name)
     g = shape.geometry()
     if not g.is_valid or g.area <= 0:

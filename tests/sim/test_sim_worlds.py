@@ -79,6 +79,12 @@ def test_load_world_by_path(tmp_path: Path) -> None:
     assert sim.load_world(str(p)).obstacles[0].radius == 1.0
 
 
+def test_numbers_written_without_a_dot_are_numbers() -> None:
+    # YAML 1.1 reads 1e-3 as text; a world file means the number.
+    w = parse_world("start: [1e1, -2E-1, 0]\n")
+    assert (w.start_pose.x, w.start_pose.y) == (10.0, -0.2)
+
+
 def test_units_are_metres_and_degrees() -> None:
     w = parse_world("start: [1, 2, 90]\nrobot: {profile: ideal, max_turn_rate: 90}\n"
                     "ladar: {fov: 90, beams: 91}\n"
@@ -90,6 +96,12 @@ def test_units_are_metres_and_degrees() -> None:
 
 
 BAD = [
+    ('obstacles:\n  - {type: [1]}\n',
+     ('bad.yaml:2:12: error: obstacles[0].type: unknown obstacle type [1]; one of: polygon, '
+      'rectangle, circle, ellipse, wall, arc, curve')),
+    ('? [1, 2]\n: 3\n', 'bad.yaml:1:3: error: keys must be names, got [1, 2]'),
+    ('obstacles:\n  - {type: curve, points: [[0, 0], [1, 0]], thickness: 1, spacing: 1e-9}\n',
+     'bad.yaml:2:68: error: obstacles[0].spacing: too fine for a curve 1 m long'),
     ('obstacles:\n  - {type: circle, center: [3, 0]}\n',
      ('bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, '
       'radius)')),
