@@ -26,7 +26,7 @@ import time
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Protocol, TypeVar
+from typing import Any, Protocol
 
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.drivers import arcos, arcos_laser
@@ -37,7 +37,6 @@ from mdle.errors import BackendError
 __all__ = ["PioneerBackend", "PioneerOptions", "ScanSource", "limits_from_params"]
 
 _log = logging.getLogger(__name__)
-_B = TypeVar("_B", bound="PioneerBackend")
 
 
 @dataclass(frozen=True)
@@ -163,11 +162,10 @@ class PioneerBackend:
                  options: PioneerOptions | None = None) -> None:
         self._transport = transport
         self._opt = opt = options or PioneerOptions()
-        if rate <= 0 or (isinstance(laser, str) and laser != "sim"):
+        problem = _check_arguments(laser, rate, opt)
+        if problem is not None:
             transport.close()
-            raise BackendError(f"the control rate must be positive, got {rate} Hz"
-                               if rate <= 0 else
-                               f"unknown laser `{laser}` (use `sim` or a laser driver)")
+            raise BackendError(problem)
         self.rate = rate
         self._command_timeout = max(opt.command_timeout, 3.0 / rate)
         self._max_scan_age = max(opt.max_scan_age, 2.0 / rate)
@@ -193,14 +191,14 @@ class PioneerBackend:
         try:
             self.info = self._handshake()
             model = opt.model or self.info.subtype
+            if model.lower() not in arcos.ROBOT_PARAMS:
+                _log.warning("unknown Pioneer model `%s`: using p3dx-sh parameters (override "
+                             "with ?model=... or conversion factors in the URL)", model)
             try:
                 self.params = arcos.robot_params(model, dict(opt.param_overrides))
             except ValueError as exc:
                 raise BackendError(str(exc)) from None
             self.limits: RobotLimits = limits or limits_from_params(self.params)
-            if opt.odometry_origin not in ("start", "robot"):
-                raise BackendError(f"odometry origin must be `start` or `robot`, got "
-                                   f"`{opt.odometry_origin}`")
             self._odometer = arcos.Odometer(self.params,
                                             relative=opt.odometry_origin == "start")
             self._write(arcos.encode_command(Cmd.OPEN))
@@ -221,6 +219,8 @@ class PioneerBackend:
     def observe(self) -> Observation:
         """The newest odometry and scan; raises BackendError if the robot or laser is lost
         or their data are older than the limits (the robot is stopped first)."""
+        if self._closed:
+            raise BackendError("the Pioneer connection is closed")
         now = time.monotonic()
         if self._tick_start is None:
             self._tick_start = now
@@ -302,7 +302,7 @@ class PioneerBackend:
         self._closed = True
         self._shutdown(send=True)
 
-    def __enter__(self: _B) -> _B:
+    def __enter__(self) -> PioneerBackend:  # noqa: PYI034 (typing.Self needs Python 3.11)
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -559,6 +559,22 @@ class PioneerBackend:
                 signal.signal(signal.SIGTERM, old)
             except (ValueError, TypeError):
                 pass
+
+
+def _check_arguments(laser: object, rate: float, opt: PioneerOptions) -> str | None:
+    """What is wrong with the constructor's arguments, or None."""
+    if not rate > 0:
+        return f"the control rate must be positive, got {rate} Hz"
+    if isinstance(laser, str) and laser != "sim":
+        return f"unknown laser `{laser}` (use `sim` or a laser driver)"
+    if opt.odometry_origin not in ("start", "robot"):
+        return f"odometry origin must be `start` or `robot`, got `{opt.odometry_origin}`"
+    if opt.model is not None and opt.model.lower() not in arcos.ROBOT_PARAMS:
+        return (f"unknown Pioneer model `{opt.model}`; known: "
+                f"{', '.join(sorted(arcos.ROBOT_PARAMS))}")
+    if opt.laser_mode not in (1, 2):
+        return f"simulator laser mode must be 1 (0x60) or 2 (0x61), got {opt.laser_mode}"
+    return None
 
 
 def _sigterm_to_exit(signum: int, frame: object) -> None:

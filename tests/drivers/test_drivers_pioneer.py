@@ -111,6 +111,10 @@ def test_model_override_from_the_url(fake_robot, fast) -> None:
         backend.close()
     with pytest.raises(BackendError, match="unknown option `speed`"):
         open_backend("pioneer", fake.url + "?speed=1", options=fast)
+    with pytest.raises(BackendError, match="unknown Pioneer model `p9`; known: p2de"):
+        open_backend("pioneer", fake.url + "?model=p9", options=fast)
+    with pytest.raises(BackendError, match="`max_speed` must be a number"):
+        open_backend("pioneer", fake.url + "?max_speed=fast", options=fast)
 
 
 def test_robot_drives_and_odometry_follows(fake_robot, fast) -> None:
@@ -195,6 +199,9 @@ def test_lost_connection_mid_run_ends_with_clear_error(fake_robot, fast) -> None
     backend.close()  # idempotent
     with pytest.raises(BackendError, match="closed"):
         backend.command(Command(0.1, 0.0))
+    with pytest.raises(BackendError, match="closed"):
+        backend.observe()
+    backend.stop()  # harmless after close
 
 
 def test_robot_that_never_answers(fake_robot, fast) -> None:
