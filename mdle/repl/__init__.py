@@ -12,4 +12,4 @@ from __future__ import annotations
 from mdle.repl.commands import COMMANDS, Repl
 from mdle.repl.session import DEFAULT_UNTIL, RunReport, Session
 
-__all__ = ["Session", "Repl", "RunReport", "COMMANDS", "DEFAULT_UNTIL"]
+__all__ = ["COMMANDS", "DEFAULT_UNTIL", "Repl", "RunReport", "Session"]

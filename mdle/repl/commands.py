@@ -32,7 +32,7 @@ from mdle.errors import Diagnostic, MdleError
 from mdle.repl import views
 from mdle.repl.session import ReplError, Session
 
-__all__ = ["Repl", "Command", "COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "classify"]
+__all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 
 #: First words of an input that defines something (rather than running an element).
 DEFINITION_KEYWORDS = ("atom", "behavior", "plan", "interrupt", "import", "run")
@@ -48,7 +48,7 @@ class Command:
     name: str
     synopsis: str
     help: str
-    handler: Callable[["Repl", list[str]], bool]
+    handler: Callable[[Repl, list[str]], bool]
     #: What the completer offers for the first argument: "file", "world" or "".
     completes: str = ""
 
@@ -123,7 +123,7 @@ class Repl:
         except KeyboardInterrupt:
             self.complain("interrupted")
             ok = False
-        except Exception as exc:  # an mdle bug: report it, keep the session
+        except Exception as exc:  # noqa: BLE001 (an mdle bug: report it, keep the session)
             if self.debug:
                 traceback.print_exc(file=self.err)
             self.complain(f"internal error: {type(exc).__name__}: {exc}",
@@ -156,7 +156,7 @@ class Repl:
             entry = self.session.workspace.program().entry
             parts.append(f"entry is now `{entry}` (`:save` writes `run {entry}`; type "
                          f"`{entry}` to run it)")
-        self.say("; ".join(parts) if parts else "nothing new")
+        self.say("; ".join(parts) if parts else "no change")
         return True
 
     def _run(self, text: str) -> bool:
@@ -210,8 +210,7 @@ class Repl:
         s = self.session
         self.say(f"odometry {views.format_pose(obs.pose)}",
                  f"true     {views.format_pose(s.backend.true_pose)}",
-                 f"t = {obs.time:.2f} s since the last reset; speed {obs.v:.2f} m/s, "
-                 f"turn rate {math.degrees(obs.omega):.1f} deg/s"
+                 f"t = {obs.time:.2f} s since the last reset"
                  + (f"; clearance {obs.truth['clearance']:.2f} m" if obs.truth else "")
                  + ("; STALLED" if obs.stalled else ""),
                  f"world `{s.world.name}`, seed {s.seed}")

@@ -14,7 +14,7 @@ from typing import IO
 
 from mdle.repl.commands import Repl
 
-__all__ = ["run_plain", "PROMPT", "CONTINUATION"]
+__all__ = ["CONTINUATION", "PROMPT", "run_plain"]
 
 PROMPT = "mdle> "
 CONTINUATION = "  ... "

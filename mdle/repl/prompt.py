@@ -20,13 +20,22 @@ import os
 import re
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ClassVar
 
-from pygments.lexer import RegexLexer, default, words
-from pygments.token import (Comment, Keyword, Name, Number, Operator, Punctuation, String,
-                            Text, Whitespace)
 from prompt_toolkit.completion import CompleteEvent, Completer, Completion, PathCompleter
 from prompt_toolkit.document import Document
+from pygments.lexer import RegexLexer, default, words
+from pygments.token import (
+    Comment,
+    Keyword,
+    Name,
+    Number,
+    Operator,
+    Punctuation,
+    String,
+    Text,
+    Whitespace,
+)
 
 from mdle.repl.commands import COMMANDS, DEFINITION_KEYWORDS, KEYWORDS, Repl
 
@@ -35,8 +44,15 @@ if TYPE_CHECKING:
     from prompt_toolkit.input import Input
     from prompt_toolkit.output import Output
 
-__all__ = ["MdleLexer", "MdleCompleter", "history_path", "make_prompt_session", "run_prompt",
-           "PROMPT", "UNITS"]
+__all__ = [
+    "PROMPT",
+    "UNITS",
+    "MdleCompleter",
+    "MdleLexer",
+    "history_path",
+    "make_prompt_session",
+    "run_prompt",
+]
 
 PROMPT = "mdle> "
 #: Units offered after a number (the table of :mod:`mdle.units` and their quotients).
@@ -52,10 +68,10 @@ class MdleLexer(RegexLexer):
     """Pygments lexer for MDLe text and the REPL's ``:`` commands."""
 
     name = "MDLe"
-    aliases = ["mdle"]
-    filenames = ["*.mdle"]
+    aliases: ClassVar[list[str]] = ["mdle"]
+    filenames: ClassVar[list[str]] = ["*.mdle"]
 
-    tokens = {
+    tokens: ClassVar[dict[str, list[Any]]] = {
         "root": [
             (r"^\s*:[a-z]+", Name.Builtin, "command"),
             (r"#.*?$", Comment.Single),
@@ -73,8 +89,8 @@ class MdleLexer(RegexLexer):
             (r".", Text),
         ],
         "unit": [
-            (r"[ \t]*(?!(?:and|or|xor|not|never|inf|import|run|atom|behavior|plan|interrupt)"
-             r"\b)[A-Za-z_][A-Za-z0-9_]*(?:[ \t]*/[ \t]*[A-Za-z_][A-Za-z0-9_]*)?",
+            ((r"[ \t]*(?!(?:and|or|xor|not|never|inf|import|run|atom|behavior|plan|interrupt)"
+              r"\b)[A-Za-z_][A-Za-z0-9_]*(?:[ \t]*/[ \t]*[A-Za-z_][A-Za-z0-9_]*)?"),
              Keyword.Type, "#pop"),
             default("#pop"),
         ],
@@ -85,7 +101,7 @@ class MdleLexer(RegexLexer):
     }
 
 
-def history_path(environ: "dict[str, str] | os._Environ[str] | None" = None) -> Path:
+def history_path(environ: dict[str, str] | os._Environ[str] | None = None) -> Path:
     """Where the REPL keeps its history: ``$XDG_DATA_HOME/mdle/repl_history``, or
     ``~/.local/share/mdle/repl_history`` when ``XDG_DATA_HOME`` is unset or empty (the
     XDG base directory rule)."""
@@ -193,10 +209,10 @@ class MdleCompleter(Completer):
     def _command(self, text: str) -> Iterator[Completion]:
         head, space, rest = text[1:].partition(" ")
         if not space:
-            for name, cmd in COMMANDS.items():
+            for name, each in COMMANDS.items():
                 if name.startswith(head):
                     yield Completion(name, -len(head), display=f":{name}",
-                                     display_meta=cmd.help)
+                                     display_meta=each.help)
             return
         cmd = COMMANDS.get(head)
         if cmd is None:
@@ -289,9 +305,9 @@ def _last_top_comma(text: str) -> int:
     return at
 
 
-def make_prompt_session(repl: Repl, *, input: "Input | None" = None,
-                        output: "Output | None" = None, history: bool = True
-                        ) -> "PromptSession[str]":
+def make_prompt_session(repl: Repl, *, input: Input | None = None,
+                        output: Output | None = None, history: bool = True
+                        ) -> PromptSession[str]:
     """The prompt_toolkit session of the REPL (history, completion, lexer, key bindings).
 
     ``input``/``output`` default to the terminal; tests pass a pipe input and a dummy
@@ -357,7 +373,7 @@ def make_prompt_session(repl: Repl, *, input: "Input | None" = None,
         input=input, output=output)
 
 
-def run_prompt(repl: Repl, *, input: "Input | None" = None, output: "Output | None" = None,
+def run_prompt(repl: Repl, *, input: Input | None = None, output: Output | None = None,
                history: bool = True) -> int:
     """Read and do inputs at the prompt until Ctrl-D or ``:quit``; returns 0."""
     session = make_prompt_session(repl, input=input, output=output, history=history)

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from sim import SimBackend, World
     from sim.backend import SimEvent
 
-__all__ = ["Session", "RunReport", "StepRow", "StepOutcome", "DEFAULT_UNTIL", "ReplError"]
+__all__ = ["DEFAULT_UNTIL", "ReplError", "RunReport", "Session", "StepOutcome", "StepRow"]
 
 #: Longest a single run may go on, in simulated seconds, before the REPL stops it: an
 #: element with ``never`` and ``inf`` would otherwise never give the prompt back when no
@@ -65,7 +65,7 @@ class RunReport:
     true_pose: Pose
     interrupted: bool = False
     limit: float | None = None
-    collision: "SimEvent | None" = None
+    collision: SimEvent | None = None
     error: MdleError | None = None
 
     @property
@@ -166,7 +166,7 @@ class Session:
         The world cannot be loaded.
     """
 
-    def __init__(self, world: "str | os.PathLike[str] | None" = None, *, seed: int | None = None,
+    def __init__(self, world: str | os.PathLike[str] | None = None, *, seed: int | None = None,
                  registry: Registry | None = None, rate: float = 10.0,
                  until: float | None = DEFAULT_UNTIL, robot: str | None = None,
                  sensing: str = "scan") -> None:
@@ -188,7 +188,7 @@ class Session:
 
     # ------------------------------------------------------------------ the world
 
-    def _open_world(self, spec: "str | os.PathLike[str] | None",
+    def _open_world(self, spec: str | os.PathLike[str] | None,
                     pose: Pose | None = None) -> None:
         import sim
 
@@ -205,7 +205,7 @@ class Session:
         self.world_spec = os.path.abspath(text) if os.path.exists(text) else text
         self._runs = []
 
-    def set_world(self, spec: "str | os.PathLike[str]") -> None:
+    def set_world(self, spec: str | os.PathLike[str]) -> None:
         """Load another world; the robot starts at its start pose, the path is cleared.
 
         Raises
@@ -254,25 +254,33 @@ class Session:
         Returns
         -------
         (added, replaced, warnings)
-            Names defined for the first time, names whose definition changed, new warnings.
+            Names defined for the first time, names whose definition changed (a definition
+            typed again unchanged is in neither), new warnings.
 
         Raises
         ------
         MdleError
             The text does not parse or check; nothing changes.
         """
-        before = {n: self.workspace.definition(n) for n in self.workspace.names()}
+        before = self._forms()
         warnings = self.workspace.define(text)
-        added, replaced = [], []
+        after = self._forms()
+        added = tuple(n for n in after if n not in before)
+        replaced = tuple(n for n in after if n in before and before[n] != after[n])
+        return added, replaced, warnings
+
+    def _forms(self) -> dict[str, str]:
+        """Each definition's canonical text, to tell a changed definition from a retyped one."""
+        from mdle.format import format_statement
+
+        out = {}
         for name in self.workspace.names():
             d = self.workspace.definition(name)
-            if name not in before:
-                added.append(name)
-            elif before[name] is not d:
-                replaced.append(name)
-        return tuple(added), tuple(replaced), warnings
+            if d is not None:
+                out[name] = format_statement(d)
+        return out
 
-    def load(self, path: "str | os.PathLike[str]") -> tuple[tuple[str, ...], tuple[Diagnostic, ...]]:
+    def load(self, path: str | os.PathLike[str]) -> tuple[tuple[str, ...], tuple[Diagnostic, ...]]:
         """Add the definitions of a file (and its imports); returns (names, warnings).
 
         Raises
@@ -280,13 +288,12 @@ class Session:
         MdleError
             The file cannot be read, parsed or checked; nothing changes.
         """
-        before = {n: self.workspace.definition(n) for n in self.workspace.names()}
+        before = self._forms()
         warnings = self.workspace.load(path)
-        names = tuple(n for n in self.workspace.names()
-                      if before.get(n) is not self.workspace.definition(n))
-        return names, warnings
+        after = self._forms()
+        return tuple(n for n in after if before.get(n) != after[n]), warnings
 
-    def save(self, path: "str | os.PathLike[str]") -> str:
+    def save(self, path: str | os.PathLike[str]) -> str:
         """Write every definition, formatted as ``mdle fmt`` does; returns the text.
 
         Raises
@@ -442,7 +449,7 @@ class Session:
         """Every tick since the last reset, in order."""
         return [s for r in self._runs for s in r.samples]
 
-    def path_xy(self) -> "np.ndarray":
+    def path_xy(self) -> np.ndarray:
         """The robot's true positions since the last reset, shape (N, 2), metres, starting
         at the pose of the reset and ending at the current pose."""
         import numpy as np
@@ -462,7 +469,7 @@ class Session:
                 "world": {"name": self.world.name, "spec": self.world_spec},
                 "seed": self.seed, "rate": self.rate, "backend": "sim", "repl": True}
 
-    def write_trace(self, path: "str | os.PathLike[str]") -> int:
+    def write_trace(self, path: str | os.PathLike[str]) -> int:
         """Write the runs since the last reset as one JSON lines trace (``docs/trace.md``):
         a ``start`` record per run, their events and samples, and one ``end`` record that
         sums them up. Returns the number of samples written.
@@ -496,7 +503,7 @@ class Session:
             writer.close()
         return sum(len(r.samples) for r in runs)
 
-    def plot(self, out: "str | os.PathLike[str]") -> str:
+    def plot(self, out: str | os.PathLike[str]) -> str:
         """Draw the path since the last reset as ``mdle plot`` does; returns ``out``.
 
         Raises

@@ -36,7 +36,7 @@ def format_pose(p: Pose) -> str:
     return f"x {p.x:.2f} m  y {p.y:.2f} m  heading {_deg(p.theta):.1f} deg"
 
 
-def format_report(report: "RunReport") -> list[str]:
+def format_report(report: RunReport) -> list[str]:
     """How a run ended (level, cause, time since it started), the pose, the distance."""
     r = report.result
     d = report.decisive
@@ -65,7 +65,7 @@ def format_report(report: "RunReport") -> list[str]:
     return lines
 
 
-def format_scan(obs: Observation, registry: "Registry", limits: "RobotLimits",
+def format_scan(obs: Observation, registry: Registry, limits: RobotLimits,
                 rate: float = 10.0) -> list[str]:
     """The scan by sectors (nearest range in each) and the boundary estimates the steering
     law and the sensor functions ``boundary_*`` read, on both sides."""
@@ -122,7 +122,7 @@ def format_scan(obs: Observation, registry: "Registry", limits: "RobotLimits",
     return lines
 
 
-def format_step_rows(rows: Sequence["StepRow"], t0: float) -> list[str]:
+def format_step_rows(rows: Sequence[StepRow], t0: float) -> list[str]:
     """One line per tick (time, active atom, command, pose, ranges) and, when the control
     law reported diagnostics, a second line with them."""
     out = []
@@ -146,7 +146,7 @@ def _diag(diag: Mapping[str, float]) -> str:
     return "  ".join(f"{k} {v:.3g}" for k, v in diag.items())
 
 
-def render_map(world: "World", path: "np.ndarray", pose: Pose, width: int = 72,
+def render_map(world: World, path: np.ndarray, pose: Pose, width: int = 72,
                height: int | None = None) -> list[str]:
     """An ASCII map of the world: ``#`` obstacles, ``.`` the path, ``o`` where the path
     began, an arrow for the robot (``> ^ < v``, its heading to the nearest quarter).
@@ -171,7 +171,7 @@ def render_map(world: "World", path: "np.ndarray", pose: Pose, width: int = 72,
     x0, y0 = min(x0, float(pts[:, 0].min()) - 0.5), min(y0, float(pts[:, 1].min()) - 0.5)
     x1, y1 = max(x1, float(pts[:, 0].max()) + 0.5), max(y1, float(pts[:, 1].max()) + 0.5)
     cw = (x1 - x0) / width
-    rows = height or max(4, int(math.ceil((y1 - y0) / (2.0 * cw))))
+    rows = height or max(4, math.ceil((y1 - y0) / (2.0 * cw)))
     ch = (y1 - y0) / rows
     xs = x0 + (np.arange(width) + 0.5) * cw
     ys = y1 - (np.arange(rows) + 0.5) * ch  # top row first
@@ -182,7 +182,7 @@ def render_map(world: "World", path: "np.ndarray", pose: Pose, width: int = 72,
         clear = np.asarray(world.clearance(centres, 0.0)).reshape(rows, width)
         grid[clear <= 0.5 * max(cw, ch)] = "#"
 
-    def cell(x: "np.ndarray", y: "np.ndarray") -> tuple["np.ndarray", "np.ndarray"]:
+    def cell(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         c = np.clip(((x - x0) / cw).astype(int), 0, width - 1)
         r = np.clip(((y1 - y) / ch).astype(int), 0, rows - 1)
         return r, c
@@ -194,15 +194,15 @@ def render_map(world: "World", path: "np.ndarray", pose: Pose, width: int = 72,
         step = 0.5 * min(cw, ch)
         dense = [p[:1]]
         for a, b, d in zip(p[:-1], p[1:], seg):
-            n = max(1, int(math.ceil(d / step)))
+            n = max(1, math.ceil(d / step))
             dense.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
         q = np.vstack(dense)
         r, c = cell(q[:, 0], q[:, 1])
         grid[r, c] = "."
         r, c = cell(p[:1, 0], p[:1, 1])
         grid[r, c] = "o"
-    arrow = ">^<v"[int(round(math.atan2(math.sin(pose.theta), math.cos(pose.theta))
-                             / (math.pi / 2))) % 4]
+    arrow = ">^<v"[round(math.atan2(math.sin(pose.theta), math.cos(pose.theta))
+                         / (math.pi / 2)) % 4]
     r, c = cell(np.array([pose.x]), np.array([pose.y]))
     grid[r, c] = arrow
     border = "+" + "-" * width + "+"

@@ -46,6 +46,8 @@ def test_define_run_and_report(r: Run) -> None:
     assert ok and out == "defined creep\n" and err == ""
     ok, out, _ = r("atom creep(v = 0.25 m/s) = (go(v), never, 2 s)")
     assert out == "redefined creep\n"
+    ok, out, _ = r("atom creep(v=0.25 m/s)=(go(v),never,2 s)")  # the same, retyped
+    assert ok and out == "no change\n"
     ok, out, err = r("creep")
     assert ok and err == ""
     lines = out.splitlines()
@@ -75,7 +77,7 @@ def test_mistakes_print_a_message_and_keep_the_session(r: Run) -> None:
         (":save 'unbalanced", "cannot read the command"),
     ]
     for text, message in bad:
-        ok, out, err = r(text)
+        ok, _, err = r(text)
         assert not ok, text
         assert message in err, (text, err)
         assert "Traceback" not in err
@@ -100,7 +102,7 @@ def test_help_lists_every_command(r: Run) -> None:
     ok, out, _ = r(":help")
     assert ok
     for name in COMMANDS:
-        assert re.search(rf"^  :{name}\b", out, re.M), name
+        assert re.search(rf"^  :{name}\b", out, re.MULTILINE), name
     ok, out, _ = r(":help step")
     assert out.startswith(":step [N]\n")
     assert {"help", "pose", "scan", "where", "plot", "trace", "reset", "world", "defs", "save",
@@ -128,6 +130,7 @@ def test_scan_shows_the_boundary_the_sensor_functions_read() -> None:
     # put the robot 1 m above the ellipse's top (y = 2), heading west: boundary on its left
     r(":reset 0 3 180")
     ok, out, _ = r(":scan")
+    assert ok
     m = re.search(r"left : boundary_range ([0-9.]+) m, boundary_tangent (-?[0-9.]+) deg, "
                   r"boundary_curvature ([-+][0-9.]+) 1/m", out)
     assert m, out

@@ -197,7 +197,7 @@ def test_lexer_tokens() -> None:
     toks = [(t, v) for t, v in MdleLexer().get_tokens(
         "atom cruise(v = 0.3 m/s) = (go(v), range(0 deg) < 1 m or never, inf) # c\n")
         if v.strip()]
-    kinds = dict((v, t) for t, v in toks)
+    kinds = {v: t for t, v in toks}
     assert kinds["atom"] in Keyword.Declaration
     assert kinds["cruise"] in Name.Function and kinds["go"] in Name.Function
     assert kinds["0.3"] in Number and kinds[" m/s"] in Keyword.Type

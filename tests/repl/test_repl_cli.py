@@ -1,0 +1,169 @@
+"""`mdle repl` as a piped, non-terminal session: the installed command in a subprocess.
+
+A first session defines atoms, runs them and saves the definitions; a second loads them
+again and goes on. Poses are checked against closed forms (the ellipse world's ideal
+unicycle starts at (-9, 0.3) heading east, with no acceleration limits or odometry noise).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+
+def _mdle() -> list[str]:
+    exe = Path(sys.executable).with_name("mdle")
+    if exe.exists():
+        return [str(exe)]
+    found = shutil.which("mdle")
+    assert found, "the `mdle` command is not installed"
+    return [found]
+
+
+def repl(stdin: str, *args: str, cwd: Path, timeout: float = 120
+         ) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "XDG_DATA_HOME": str(cwd / "data")}
+    return subprocess.run([*_mdle(), "repl", *args], input=stdin, capture_output=True, check=False,
+                          text=True, cwd=cwd, timeout=timeout, env=env)
+
+
+def pose_in(out: str) -> tuple[float, float, float]:
+    """The last odometry pose `:pose` printed."""
+    found = re.findall(r"^odometry x (-?[0-9.]+) m  y (-?[0-9.]+) m  heading (-?[0-9.]+) deg",
+                       out, re.MULTILINE)
+    assert found, out
+    x, y, h = found[-1]
+    return float(x), float(y), float(h)
+
+
+FIRST = """\
+# a first session: two atoms, typed over several lines
+atom creep(v = 0.5 m/s) =
+    (go(v), never, 2 s)
+atom quarter(rate = 90 deg/s) = (turn(rate),
+                                  never,
+                                  1 s)
+creep
+quarter
+creep(1 m/s)
+:pose
+:save tuned.mdle
+"""
+
+
+def test_define_run_save_then_load_in_a_second_session(tmp_path: Path) -> None:
+    res = repl(FIRST, "--world", "ellipse", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert res.stderr == ""
+    assert "\x1b" not in res.stdout  # no control codes off a terminal
+    out = res.stdout
+    assert "defined creep\n" in out and "defined quarter\n" in out
+    assert "creep (level 0) ended by timer at 2.00 s" in out
+    assert "quarter (level 0) ended by timer at 1.00 s" in out
+    # east 1 m, a quarter turn left, north 2 m
+    assert pose_in(out) == pytest.approx((-8.0, 2.3, 90.0), abs=0.006)
+    assert "saved 2 definitions to tuned.mdle (2 lines)" in out
+    saved = (tmp_path / "tuned.mdle").read_text()
+    assert saved == ("atom creep(v = 0.5 m/s) = (go(v), never, 2 s)\n"
+                     "atom quarter(rate = 90 deg/s) = (turn(rate), never, 1 s)\n")
+    # the saved file is what `mdle fmt` prints: formatting it changes nothing
+    fmt = subprocess.run([*_mdle(), "fmt", "--check", "tuned.mdle"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=60, check=False)
+    assert fmt.returncode == 0, fmt.stdout + fmt.stderr
+
+    # a second session loads them (the FILE argument), goes on, and :load again is quiet
+    second = "quarter(-90 deg/s)\ncreep\n:pose\n:load tuned.mdle\n:defs\n"
+    res = repl(second, "--world", "ellipse", "tuned.mdle", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    out = res.stdout
+    assert out.startswith("loaded tuned.mdle: creep, quarter\n")
+    # a quarter turn right (heading -90), then 1 m south
+    assert pose_in(out) == pytest.approx((-9.0, -0.7, -90.0), abs=0.006)
+    assert "loaded tuned.mdle: nothing new" in out
+    assert out.endswith(saved)
+
+
+def test_failed_inputs_give_exit_1_and_the_session_goes_on(tmp_path: Path) -> None:
+    script = """\
+atom creep = (go(0.5 m/s), never, 2 s)
+atom broken = (go(2 s), never, 1 s)
+crep
+creep
+(go(1 m/s), never, 20 s)
+:pose
+:reset -9 -3 0
+:pose
+"""
+    res = repl(script, "--world", "ellipse", cwd=tmp_path)
+    assert res.returncode == 1
+    assert "\x1b" not in res.stdout + res.stderr
+    err = res.stderr
+    assert "<repl>:1:19: error: `v` of `go` is a speed such as `0.3 m/s`" in err
+    assert "unknown name `crep`" in err and "did you mean `creep`?" in err
+    out = res.stdout
+    assert "creep (level 0) ended by timer at 2.00 s" in out
+    assert "COLLIDED with `ellipse`" in out
+    poses = re.findall(r"^odometry x (-?[0-9.]+) m  y (-?[0-9.]+) m", out, re.MULTILINE)
+    assert float(poses[0][0]) == pytest.approx(-3.95, abs=0.01)  # stopped at the ellipse
+    assert poses[1] == ("-9.00", "-3.00")
+    assert "Traceback" not in err
+
+
+def test_echo_prints_a_transcript_and_an_unfinished_input_fails(tmp_path: Path) -> None:
+    res = repl("(go(1 m/s),\n never, 1 s)\n:pose\n(go(1 m/s), never,\n", "--world", "ellipse",
+               "--echo", cwd=tmp_path)
+    assert res.returncode == 1
+    lines = res.stdout.splitlines()
+    assert lines[0] == "mdle> (go(1 m/s),"
+    assert lines[1] == "  ...  never, 1 s)"
+    assert lines[2].startswith("go (level 0) ended by timer at 1.00 s")
+    assert "mdle> :pose" in lines
+    assert "the input ended in the middle of an unfinished statement" in res.stderr
+
+
+def test_quit_stops_reading_and_bad_options_are_usage_errors(tmp_path: Path) -> None:
+    res = repl(":quit\nnot-run\n", "--world", "ellipse", cwd=tmp_path)
+    assert res.returncode == 0 and "not-run" not in res.stderr
+    res = repl("", "--world", "atlantis", cwd=tmp_path)
+    assert res.returncode == 1 and "unknown world `atlantis`" in res.stderr
+    res = repl("", "--until", "0", cwd=tmp_path)
+    assert res.returncode == 2
+    res = repl("", "missing.mdle", cwd=tmp_path)
+    assert res.returncode == 1 and "missing.mdle" in res.stderr
+
+
+def test_until_option_limits_a_run(tmp_path: Path) -> None:
+    res = repl("(turn(1 rad/s), never, inf)\n", "--world", "ellipse", "--until", "1.5",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "turn (level 0) ended by stopped at 1.50 s (the run limit of 1.5 s" in res.stdout
+
+
+def test_sigint_during_a_piped_run_stops_it_and_the_session_goes_on(tmp_path: Path) -> None:
+    env = {**os.environ, "XDG_DATA_HOME": str(tmp_path / "data")}
+    proc = subprocess.Popen([*_mdle(), "repl", "--world", "ellipse", "--until", "inf"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
+    assert proc.stdin is not None and proc.stdout is not None
+    proc.stdin.write(":pose\n")
+    proc.stdin.flush()
+    assert proc.stdout.readline().startswith("odometry")  # the session is up
+    for _ in range(3):
+        proc.stdout.readline()
+    proc.stdin.write("(turn(1 rad/s), never, inf)\n")
+    proc.stdin.flush()
+    time.sleep(1.0)  # the run is going (it never ends by itself)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(":pose\n", timeout=60)
+    assert proc.returncode == 1, err  # the stopped run counts as failed
+    assert "turn (level 0) ended by stopped at" in out and "(Ctrl-C: robot stopped)" in out
+    # turned in place, then the :pose after it ran (the first one was read above)
+    assert out.count("odometry x -9.00 m  y 0.30 m") == 1
