@@ -232,6 +232,9 @@ class FakeArcos:
         while not self._halt.is_set():
             data = link.recv(0.005)
             if data is None:
+                # the client went away: like the simulators, end the session and stop
+                self.v_mm = self.w_deg = 0.0
+                self.motors = False
                 return
             now = time.monotonic()
             if data and self.baud is not None and link.baud() != self.baud:

@@ -121,3 +121,53 @@ def test_mdle_run_cli_robot_not_answering(fake_robot, tmp_path, capsys) -> None:
     code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url, "--quiet"])
     assert code == 1
     assert "no answer from a Pioneer" in capsys.readouterr().err
+
+
+def _spawn_run(fake, tmp_path):
+    import subprocess
+    import sys
+
+    plan = tmp_path / "long.mdle"
+    plan.write_text("atom fwd = (go(0.2 m/s), never, 30 s)\nrun fwd\n")
+    return subprocess.Popen(
+        [sys.executable, "-m", "mdle", "run", str(plan), "--backend", "pioneer",
+         "--connect", fake.url, "--laser", "sim", "--quiet"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+@pytest.mark.parametrize("signame", ["SIGTERM", "SIGINT"])
+def test_mdle_run_process_stopped_by_a_signal_stops_the_robot(fake_robot, tmp_path,
+                                                              signame: str) -> None:
+    import signal
+
+    fake = fake_robot()
+    proc = _spawn_run(fake, tmp_path)
+    try:
+        assert fake.wait_for(lambda: fake.v_mm == 200, timeout=15.0), proc.stderr
+        proc.send_signal(getattr(signal, signame))
+        _, err = proc.communicate(timeout=10.0)
+    finally:
+        proc.kill()
+    assert proc.returncode == 128 + getattr(signal, signame), err
+    assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
+    assert fake.v_mm == 0 and fake.w_deg == 0 and fake.args(Cmd.VEL)[-1] == 0
+
+
+@pytest.mark.parametrize("serial", [False, True], ids=["tcp", "serial"])
+def test_killed_process_leaves_the_robot_to_stop_itself(fake_robot, tmp_path,
+                                                       serial: bool) -> None:
+    # TCP: the simulator sees the connection close and ends the session; serial: the
+    # line just goes quiet and the firmware watchdog (0.5 s here, 2 s on a robot) trips
+    fake = fake_robot(watchdog=0.5, serial=serial)
+    if serial:
+        fake.url += "?baud=9600"
+    proc = _spawn_run(fake, tmp_path)
+    try:
+        assert fake.wait_for(lambda: fake.v_mm == 200, timeout=15.0)
+        proc.kill()  # SIGKILL: no handler, no finally block runs
+        proc.communicate(timeout=10.0)
+    finally:
+        proc.kill()
+    assert fake.wait_for(lambda: fake.v_mm == 0, timeout=2.0)
+    assert not fake.commands(Cmd.CLOSE)
+    assert (fake.watchdog_trips >= 1) if serial else (fake.watchdog_trips == 0)
