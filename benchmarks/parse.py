@@ -71,9 +71,7 @@ def main() -> int:
     args = ap.parse_args()
 
     from mdle.loader import load_text
-    from mdle.parser import lark_parser, parse_module
-
-    from mdle.parser import iter_tokens
+    from mdle.parser import iter_tokens, lark_parser, parse_module
 
     text = generated_plan(args.lines)
     n = text.count("\n")

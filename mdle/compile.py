@@ -32,8 +32,16 @@ from typing import Any
 from atoms.registry import BOOL, REQUIRED, LawSpec, Registry, SensorSpec
 from mdle import conditions as cond
 from mdle import syntax as st
-from mdle.dimensions import (Quantity, Symbol, Value, dim_example, dim_words, fits,
-                             show_value, unit_for)
+from mdle.dimensions import (
+    Quantity,
+    Symbol,
+    Value,
+    dim_example,
+    dim_words,
+    fits,
+    show_value,
+    unit_for,
+)
 from mdle.errors import CheckError, Diagnostic, Severity, Span
 from mdle.format import format_expr
 from mdle.program import INF, AtomNode, Element, Interrupt, Program, StringKind, StringNode
@@ -793,7 +801,7 @@ def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
 
 
 def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
-    for side, t, other in ((expr.right, b, a), (expr.left, a, b)):
+    for side, other in ((expr.right, a), (expr.left, b)):
         if isinstance(side, st.Number) and not side.unit and other.dim is not None:
             unit = unit_for(other.dim)
             if unit:

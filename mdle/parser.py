@@ -351,7 +351,8 @@ def _not_keyword(tok: Token) -> None:
     if word in KEYWORDS:
         state = _STATE.get()
         state.diagnostics.append(Diagnostic(
-            _token_span(state.file, tok), f"`{word}` is a keyword of MDLe and cannot be used as a name",
+            _token_span(state.file, tok),
+            f"`{word}` is a keyword of MDLe and cannot be used as a name",
             hint=f"pick another name, such as `{word}_1`"))
 
 
@@ -417,7 +418,7 @@ def parse_expression(text: str, file: str = "<repl>") -> st.Expr:
         _STATE.reset(token)
     if state.diagnostics:
         raise MdleSyntaxError(_sorted(state.diagnostics), {file: text})
-    return expr  # type: ignore[no-any-return]
+    return expr  # type: ignore[return-value]
 
 
 def _sorted(diags: list[Diagnostic]) -> list[Diagnostic]:
@@ -451,7 +452,7 @@ def _parse_with_recovery(text: str, file: str
         token = _STATE.set(state)
         resume_at: int | None = None
         try:
-            statements = list(parser.parse(source, start="start"))
+            statements = list(parser.parse(source, start="start"))  # type: ignore[call-overload]
         except UnexpectedInput as err:
             diagnostics.append(_describe(err, text, file, "start", source))
             errors += 1
@@ -502,7 +503,8 @@ def _offset_of(text: str, line: int, column: int) -> int:
 _STATEMENT_TOKENS = frozenset({"ATOM", "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN"})
 
 
-def _resume_offset(source: str, err: UnexpectedInput | None, span: Span | None = None) -> int | None:
+def _resume_offset(source: str, err: UnexpectedInput | None,
+                   span: Span | None = None) -> int | None:
     at = _error_offset(source, err, span)
     tok = getattr(err, "token", None)
     if isinstance(err, UnexpectedToken) and tok is not None and tok.type in _STATEMENT_TOKENS \
@@ -560,7 +562,8 @@ def _describe(err: UnexpectedInput, text: str, file: str, start: str,
     source = text if source is None else source
     if isinstance(err, UnexpectedCharacters):
         span = Span(file, err.line, err.column, err.line, err.column + 1)
-        char = source[err.pos_in_stream] if 0 <= err.pos_in_stream < len(source) else ""
+        pos = err.pos_in_stream if err.pos_in_stream is not None else -1
+        char = source[pos] if 0 <= pos < len(source) else ""
         what, hint = character_hint(char)
         if char == '"':
             return Diagnostic(span, "unterminated file name: the closing `\"` is missing on this "

@@ -70,7 +70,8 @@ def build_namespace(definitions: Iterable[st.Definition], registry: Registry, *,
     return Namespace(MappingProxyType(defs), registry), errors
 
 
-def references(definition: st.Definition, names: Mapping[str, st.Definition]) -> list[st.Name | st.Call]:
+def references(definition: st.Definition,
+               names: Mapping[str, st.Definition]) -> list[st.Name | st.Call]:
     """The uses of other definitions in a definition's body and defaults (parameters shadow)."""
     shadow = {p.name for p in definition.param_list}
     found: list[st.Name | st.Call] = []

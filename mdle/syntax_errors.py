@@ -231,7 +231,8 @@ EXAMPLES: dict[Label, list[str]] = {
 
 
 def describe_token(type_: str, value: str) -> str:
-    """The unexpected token in words: ``the name `foo```, ``the keyword `run```, ``the end of the file``."""
+    """The unexpected token in words: ``the name `foo```, ``the keyword `run```, or
+    ``the end of the file``."""
     if type_ == "$END" or type_ == "<EOF>" or value == "":
         return "the end of the file"
     shown = value if len(value) <= 40 else value[:37] + "..."
