@@ -55,7 +55,9 @@ class RunReport:
     ``pose`` the odometry pose at the end, ``true_pose`` the simulator's pose,
     ``interrupted`` True after Ctrl-C, ``limit`` the run limit when it stopped the run
     (s, else None), ``collision`` the simulator's record of the first contact during the
-    run, ``error`` the error that aborted it (a failing law or interrupt).
+    run, ``error`` the error that aborted it (a failing law or interrupt), ``closest``
+    where the robot came closest to an obstacle: (time since the start (s), x, y (m, true
+    position)), None without ground truth.
     """
 
     label: str
@@ -67,6 +69,7 @@ class RunReport:
     limit: float | None = None
     collision: SimEvent | None = None
     error: MdleError | None = None
+    closest: tuple[float, float, float] | None = None
 
     @property
     def decisive(self) -> Termination:
@@ -436,7 +439,7 @@ class Session:
             limit = self.until
         obs = self.backend.observe()
         return RunReport(record.label, result, t0, obs.pose, self.backend.true_pose,
-                         interrupted, limit, collision, error)
+                         interrupted, limit, collision, error, _closest(record.samples, t0))
 
     # ------------------------------------------------------------------ looking around
 
@@ -531,6 +534,19 @@ def _row(tick: int, sample: Sample, scan: Any) -> StepRow:
         return StepRow(tick, sample, front, None, None)
     i = int(np.argmin(np.where(valid, ranges, np.inf)))
     return StepRow(tick, sample, front, float(ranges[i]), float(bearings[i]))
+
+
+def _closest(samples: Sequence[Sample], t0: float) -> tuple[float, float, float] | None:
+    """(t - t0, x, y) of the sample with the smallest true clearance, None without truth."""
+    best = None
+    for s in samples:
+        if s.clearance is not None and (best is None or s.clearance < best.clearance):
+            best = s
+    if best is None:
+        return None
+    x = best.true_x if best.true_x is not None else best.x
+    y = best.true_y if best.true_y is not None else best.y
+    return best.time - t0, x, y
 
 
 def _summary(results: Sequence[RunResult]) -> RunResult | None:

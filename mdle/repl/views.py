@@ -52,9 +52,14 @@ def format_report(report: RunReport) -> list[str]:
                 "`:set until SECONDS`)")
     lines.append(how)
     lines.append(f"  pose      {format_pose(report.pose)}")
+    closest = ""
+    if r.min_clearance is not None:
+        closest = f", min clearance {r.min_clearance:.2f} m"
+        if report.closest is not None:
+            t, x, y = report.closest
+            closest += f" (t = {t:.1f} s at x {x:.2f} m, y {y:.2f} m)"
     lines.append(f"  travelled {r.distance:.2f} m in {r.duration:.2f} s ({r.ticks} ticks)"
-                 + (f", min clearance {r.min_clearance:.2f} m" if r.min_clearance is not None
-                    else ""))
+                 + closest)
     c = report.collision
     if c is not None:
         what = f"`{c.label}`" if c.label else "an obstacle"
