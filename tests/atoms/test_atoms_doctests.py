@@ -7,7 +7,7 @@ import importlib
 
 import pytest
 
-MODULES = ["atoms.estimators"]
+MODULES = ["atoms.estimators", "atoms.boundary", "atoms.steering"]
 
 
 @pytest.mark.parametrize("name", MODULES)
