@@ -53,6 +53,8 @@ _ODOM_KEYS = ("distance", "turn", "drift")
 _DEFAULT_WALL_THICKNESS = 0.1
 _FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 _MAX_CURVE_SAMPLES = 100_000
+_MIN_SIZE, _MAX_SIZE = 1e-4, 1e5   # metres: sizes outside this are typos, not worlds
+_MAX_BEAMS = 100_000
 
 
 @dataclass
@@ -111,8 +113,8 @@ def _to_python(node: Any, path: str, doc: _Doc, loader: Any) -> Any:
 
 
 # ---------------------------------------------------------------- value checkers
-def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False
-            ) -> float:
+def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False,
+            size: bool = False) -> float:
     if isinstance(v, str) and _FLOAT.fullmatch(v.strip()):
         v = float(v)   # YAML 1.1 reads 1e-3 (no dot) as text; take it as the number meant
     if isinstance(v, bool) or not isinstance(v, (int, float)):
@@ -120,8 +122,10 @@ def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: boo
     x = float(v)
     if not math.isfinite(x):
         raise doc.fail(path, f"expected a finite number, got {v}")
-    if positive and x <= 0:
+    if (positive or size) and x <= 0:
         raise doc.fail(path, f"must be positive, got {v}")
+    if size and not _MIN_SIZE <= x <= _MAX_SIZE:
+        raise doc.fail(path, f"must be between {_MIN_SIZE:g} m and {_MAX_SIZE:g} m, got {v}")
     if nonneg and x < 0:
         raise doc.fail(path, f"must not be negative, got {v}")
     return x
@@ -233,20 +237,20 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
         size = v["size"]
         if not isinstance(size, list) or len(size) != 2:
             raise doc.fail(P("size"), f"expected [width, height] in metres, got {_show(size)}")
-        w = _number(doc, P("size") + "[0]", size[0], positive=True)
-        h = _number(doc, P("size") + "[1]", size[1], positive=True)
+        w = _number(doc, P("size") + "[0]", size[0], size=True)
+        h = _number(doc, P("size") + "[1]", size[1], size=True)
         ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0)))
         return shapes.Rectangle(c, (w, h), ang, name)
     if kind == "circle":
         return shapes.Circle(_point(doc, P("center"), v["center"]),
-                             _number(doc, P("radius"), v["radius"], positive=True), name)
+                             _number(doc, P("radius"), v["radius"], size=True), name)
     if kind == "ellipse":
         c = _point(doc, P("center"), v["center"])
         ax = v["axes"]
         if not isinstance(ax, list) or len(ax) != 2:
             raise doc.fail(P("axes"), f"expected semi-axes [a, b] in metres, got {_show(ax)}")
-        a = _number(doc, P("axes") + "[0]", ax[0], positive=True)
-        b = _number(doc, P("axes") + "[1]", ax[1], positive=True)
+        a = _number(doc, P("axes") + "[0]", ax[0], size=True)
+        b = _number(doc, P("axes") + "[1]", ax[1], size=True)
         ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0)))
         return shapes.Ellipse(c, (a, b), ang, name)
     if kind == "wall":
@@ -254,18 +258,18 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
         pts = _points(doc, P("points"), v["points"], 3 if closed else 2,
                       "a closed wall" if closed else "a wall")
         t = _number(doc, P("thickness"), v.get("thickness", _DEFAULT_WALL_THICKNESS),
-                    positive=True)
+                    size=True)
         shape = shapes.Wall(pts, t, closed, name)
         if shape.geometry().is_empty:
             raise doc.fail(P("points"), "the wall has no area")
         return shape
     if kind == "arc":
         c = _point(doc, P("center"), v["center"])
-        r = _number(doc, P("radius"), v["radius"], positive=True)
+        r = _number(doc, P("radius"), v["radius"], size=True)
         a0 = math.radians(_number(doc, P("start"), v["start"]))
         a1 = math.radians(_number(doc, P("end"), v["end"]))
         t = _number(doc, P("thickness"), v.get("thickness", _DEFAULT_WALL_THICKNESS),
-                    positive=True)
+                    size=True)
         if t >= 2 * r:
             raise doc.fail(P("thickness"), f"must be less than twice the radius ({2 * r} m)")
         if abs(a1 - a0) < 1e-12:
@@ -278,12 +282,12 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
                   "a closed curve" if closed else "a curve")
     thick: float | None
     if "thickness" in v:
-        thick = _number(doc, P("thickness"), v["thickness"], positive=True)
+        thick = _number(doc, P("thickness"), v["thickness"], size=True)
     elif closed:
         thick = None
     else:
         raise doc.fail(path, "missing key `thickness` (an open curve is a wall and needs one)")
-    spacing = _number(doc, P("spacing"), v.get("spacing", 0.05), positive=True)
+    spacing = _number(doc, P("spacing"), v.get("spacing", 0.05), size=True)
     length = sum(math.dist(a, b) for a, b in zip(pts, pts[1:] + (pts[:1] if closed else ())))
     if 2 * length / spacing > _MAX_CURVE_SAMPLES:   # Catmull-Rom runs up to ~2x the chords
         least = 2 * length / _MAX_CURVE_SAMPLES
@@ -341,6 +345,8 @@ def _ladar(doc: _Doc, path: str, v: Any) -> Any:
     ch: dict[str, Any] = {}
     if "beams" in m:
         ch["beams"] = _integer(doc, f"{path}.beams", m["beams"], minimum=1)
+        if ch["beams"] > _MAX_BEAMS:
+            raise doc.fail(f"{path}.beams", f"must be at most {_MAX_BEAMS}, got {m['beams']}")
     if "fov" in m:
         fov = _number(doc, f"{path}.fov", m["fov"], positive=True)
         if fov > 360:

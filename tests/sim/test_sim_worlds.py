@@ -100,8 +100,10 @@ BAD = [
      ('bad.yaml:2:12: error: obstacles[0].type: unknown obstacle type [1]; one of: polygon, '
       'rectangle, circle, ellipse, wall, arc, curve')),
     ('? [1, 2]\n: 3\n', 'bad.yaml:1:3: error: keys must be names, got [1, 2]'),
-    ('obstacles:\n  - {type: curve, points: [[0, 0], [1, 0]], thickness: 1, spacing: 1e-9}\n',
-     'bad.yaml:2:68: error: obstacles[0].spacing: too fine for a curve 1 m long'),
+    ('obstacles:\n  - {type: curve, points: [[0, 0], [10, 0]], thickness: 1, spacing: 1e-4}\n',
+     'bad.yaml:2:69: error: obstacles[0].spacing: too fine for a curve 10 m long'),
+    ('obstacles:\n  - {type: circle, center: [5, 0], radius: 1e-9}\n',
+     'bad.yaml:2:44: error: obstacles[0].radius: must be between 0.0001 m and 100000 m, got 1e-9'),
     ('obstacles:\n  - {type: circle, center: [3, 0]}\n',
      ('bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, '
       'radius)')),
