@@ -134,15 +134,20 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     else:
         x, y = trace.column("x"), trace.column("y")
     curv = _curvature(trace)
-    fig = Figure(figsize=(8.0, 9.5 if curv else 7.0), layout="constrained")
+    pts = boundary_points(trace)
+    (x0, x1), (y0, y1) = _extent(x, y, pts, world)
+    # the path panel takes the shape of the scene (a long corridor makes a wide, low panel)
+    width = 8.0
+    path_h = float(np.clip(width * (y1 - y0) / (x1 - x0) + 1.0, 2.8, 7.5))
+    curv_h = 2.8 if curv else 0.0
+    fig = Figure(figsize=(width, path_h + curv_h), layout="constrained")
     if curv:
-        ax, axk = fig.subplots(2, 1, height_ratios=[2.2, 1.0])
+        ax, axk = fig.subplots(2, 1, height_ratios=[path_h, curv_h])
     else:
         ax, axk = fig.subplots(1, 1), None
 
     if world is not None:
         _draw_world(ax, world.geometry)
-    pts = boundary_points(trace)
     if len(pts):
         ax.plot(pts[:, 0], pts[:, 1], ".", ms=2.0, color="tab:brown", alpha=0.6, zorder=2,
                 label="detected boundary")
@@ -159,12 +164,9 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     if len(hit):
         ax.plot([x[hit[0]]], [y[hit[0]]], marker="*", ms=16, color="tab:red", ls="none",
                 zorder=6, label="first collision")
-    if world is not None:
-        x0, y0, x1, y1 = world.bounds
-        ax.update_datalim([(x0, y0), (x1, y1)])
-    ax.update_datalim(np.column_stack([x, y]))
-    ax.autoscale_view()
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(True, lw=0.3, alpha=0.5)
@@ -182,6 +184,25 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
         axk.grid(True, lw=0.3, alpha=0.5)
         axk.set_title("measured boundary curvature", fontsize="medium")
     return fig
+
+
+def _extent(x: "np.ndarray", y: "np.ndarray", pts: "np.ndarray", world: Any
+            ) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Plot limits holding the path, the detected boundary and the world, with a margin."""
+    import numpy as np
+
+    xs = [x[np.isfinite(x)], pts[:, 0]]
+    ys = [y[np.isfinite(y)], pts[:, 1]]
+    if world is not None:
+        wx0, wy0, wx1, wy1 = world.bounds
+        xs.append(np.array([wx0, wx1]))
+        ys.append(np.array([wy0, wy1]))
+    ax_, ay_ = np.concatenate(xs), np.concatenate(ys)
+    lo_x, hi_x = float(ax_.min()), float(ax_.max())
+    lo_y, hi_y = float(ay_.min()), float(ay_.max())
+    span = max(hi_x - lo_x, hi_y - lo_y, 1.0)
+    pad = 0.05 * span
+    return (lo_x - pad, hi_x + pad), (lo_y - pad, hi_y + pad)
 
 
 def _mark_events(ax: "Axes", events: Sequence[Mapping[str, Any]], truth: bool,
