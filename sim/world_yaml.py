@@ -114,20 +114,23 @@ def _to_python(node: Any, path: str, doc: _Doc, loader: Any) -> Any:
 
 # ---------------------------------------------------------------- value checkers
 def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False,
-            size: bool = False) -> float:
+            size: bool = False, shown: str | None = None) -> float:
     if isinstance(v, str) and _FLOAT.fullmatch(v.strip()):
-        v = float(v)   # YAML 1.1 reads 1e-3 (no dot) as text; take it as the number meant
+        # YAML 1.1 reads 1e-3 (no dot) as text; take it as the number meant.
+        return _number(doc, path, float(v), positive=positive, nonneg=nonneg, size=size,
+                       shown=v.strip())
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise doc.fail(path, f"expected a number, got {_show(v)}")
     x = float(v)
     if not math.isfinite(x):
-        raise doc.fail(path, f"expected a finite number, got {v}")
+        raise doc.fail(path, f"expected a finite number, got {shown or v}")
     if (positive or size) and x <= 0:
-        raise doc.fail(path, f"must be positive, got {v}")
+        raise doc.fail(path, f"must be positive, got {shown or v}")
     if size and not _MIN_SIZE <= x <= _MAX_SIZE:
-        raise doc.fail(path, f"must be between {_MIN_SIZE:g} m and {_MAX_SIZE:g} m, got {v}")
+        raise doc.fail(path, f"must be between {_MIN_SIZE:g} m and {_MAX_SIZE:g} m, got "
+                             f"{shown or v}")
     if nonneg and x < 0:
-        raise doc.fail(path, f"must not be negative, got {v}")
+        raise doc.fail(path, f"must not be negative, got {shown or v}")
     return x
 
 
