@@ -25,6 +25,8 @@ if TYPE_CHECKING:
 BACKEND_KINDS: tuple[str, ...] = ("pioneer",)
 
 _CONNECT_TIMEOUT = 5.0
+#: Bytes of a 181-value 0xB0 telegram with its ACK (the facts note's figure).
+_LMS_SCAN_BYTES = 372
 
 
 def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: float = 10.0,
@@ -120,6 +122,9 @@ def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: flo
             lopt = laser_options if isinstance(laser_options, Lms200Options) else Lms200Options()
             if lep.baud is not None:
                 lopt = replace(lopt, baud=lep.baud)
+            # a slow line delivers scans less often: allow 2.5 scan transfer times of age
+            transfer = _LMS_SCAN_BYTES * 10.0 / lopt.baud
+            opt = replace(opt, max_scan_age=max(opt.max_scan_age, 2.5 * transfer))
             laser_source = Lms200Driver(open_transport(lep, baud=9600), lopt)
         else:
             raise BackendError(f"--laser `{laser}`: expected `sim` or "

@@ -155,3 +155,18 @@ def test_variant_100_degrees_quarter_degree(fake_lms, fast_lms) -> None:
         assert scan.bearings[1] - scan.bearings[0] == pytest.approx(math.radians(0.25))
     finally:
         driver.close()
+
+
+def test_slow_lms_line_widens_the_scan_age_limit(fake_robot, fake_lms, fast, fast_lms) -> None:
+    robot = fake_robot()
+    laser = fake_lms(baud=9600, period=0.4)  # a 181-value scan takes 0.39 s at 9600 baud
+    backend = open_backend("pioneer", robot.url, laser.url + "?baud=9600", options=fast,
+                           laser_options=fast_lms)
+    try:
+        assert backend._max_scan_age == pytest.approx(2.5 * 372 * 10 / 9600)
+        t0 = time.monotonic()
+        while time.monotonic() - t0 < 1.2:  # scans 0.4 s apart never count as stale
+            backend.observe()
+            backend.advance(0.1)
+    finally:
+        backend.close()

@@ -398,3 +398,18 @@ def test_random_commands_arrive_clamped_and_rounded(fake_robot, fast) -> None:
         check()
     finally:
         backend.close()
+
+
+def test_simulator_laser_options(fake_robot, fast) -> None:
+    fake = fake_robot()
+    fake.scan_mm = lambda i: np.full(181, 8000)
+    backend = open_backend("pioneer", fake.url, "sim?max_range=8", options=fast)
+    try:
+        scan = backend.observe().scan
+        assert scan is not None and scan.max_range == 8.0 and not scan.valid.any()
+    finally:
+        backend.close()
+    with pytest.raises(BackendError, match="unknown option\\(s\\) fov; known: max_range"):
+        open_backend("pioneer", fake.url, "sim?fov=90", options=fast)
+    with pytest.raises(BackendError, match="max_range must be metres"):
+        open_backend("pioneer", fake.url, "sim?max_range=far", options=fast)
