@@ -172,7 +172,7 @@ class RayCaster:
             e = self._edge
         px, py, ex, ey = p[:, 0], p[:, 1], e[:, 0], e[:, 1]
         num = px * ey
-        num -= py * ex                              # cross(p, e), per segment
+        num -= py * ex                              # cross(p, e) = cross(p, q), per segment
         # Back-face culling: with the solid on each segment's right, only segments whose
         # left (outer) side faces the origin can be hit first from outside (num > 0).
         front = np.flatnonzero(num > 0.0)
@@ -180,18 +180,19 @@ class RayCaster:
             if front.size == 0:
                 return
             idx = front if idx is None else idx[front]
-            px, py, ex, ey, num = px[front], py[front], ex[front], ey[front], num[front]
-        a_p = np.arctan2(py, px)
-        a_q = np.arctan2(py + ey, px + ex)
-        sweep = a_q - a_p
-        sweep += math.pi
-        np.mod(sweep, _TAU, out=sweep)
-        sweep -= math.pi
-        # Interval start relative to the first beam, in [-pi, pi); width |sweep| < pi.
-        lo = a_p - (base + math.pi)
+            p, e, num = p[front], e[front], num[front]
+            px, py, ex, ey = p[:, 0], p[:, 1], e[:, 0], e[:, 1]
+        # The segment's bearing interval seen from the origin: from p, counter-clockwise
+        # by the angle between p and q = p + e (in (0, pi) for a front face).
+        dot = px * (px + ex)
+        dot += py * (py + ey)
+        sweep = np.arctan2(num, dot)
+        lo = np.arctan2(py, px)
+        lo -= base + math.pi
         np.mod(lo, _TAU, out=lo)
-        lo += np.minimum(sweep, 0.0) - (math.pi + _EPS_ANGLE)
-        hi = lo + np.abs(sweep) + 2 * _EPS_ANGLE
+        lo -= math.pi + _EPS_ANGLE                 # relative to the first beam, [-pi, pi)
+        hi = lo + sweep
+        hi += 2 * _EPS_ANGLE
         m = px.shape[0]
         if rel[-1] >= math.pi - 1e-9:
             # A fan wider than a half turn can also meet the interval one turn up.
@@ -215,7 +216,7 @@ class RayCaster:
         den -= sin[pbeam] * ex[pseg]
         with np.errstate(divide="ignore", invalid="ignore"):
             t = np.divide(num[pseg], den, out=den)
-        t[~(t > _T_MIN)] = math.inf                 # behind, degenerate or NaN: no hit
+        t[t <= _T_MIN] = math.inf                   # grazing at an interval's edge: no hit
         np.minimum.at(best, pbeam, t)               # segments come first: best is all inf
         if detail:
             hitb = np.isfinite(best)
