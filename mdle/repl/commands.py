@@ -283,8 +283,9 @@ class Repl:
         path = _one(":save", args, "FILE")
         text = self.session.save(path)
         n = len(self.session.workspace.names())
+        lines = len(text.splitlines())
         self.say(f"saved {n} definition{'s' if n != 1 else ''} to {path} "
-                 f"({len(text.splitlines())} lines)")
+                 f"({lines} line{'s' if lines != 1 else ''})")
         return True
 
     def _load(self, args: list[str]) -> bool:

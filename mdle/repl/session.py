@@ -35,7 +35,8 @@ if TYPE_CHECKING:
     from sim import SimBackend, World
     from sim.backend import SimEvent
 
-__all__ = ["DEFAULT_UNTIL", "ReplError", "RunReport", "Session", "StepOutcome", "StepRow"]
+__all__ = ["DEFAULT_UNTIL", "SETTLED_WINDOW", "ReplError", "RunReport", "Session", "SideStats",
+           "StepOutcome", "StepRow"]
 
 #: Longest a single run may go on, in simulated seconds, before the REPL stops it: an
 #: element with ``never`` and ``inf`` would otherwise never give the prompt back when no
@@ -48,6 +49,24 @@ class ReplError(MdleError):
 
 
 @dataclass(frozen=True)
+class SideStats:
+    """The boundary distance a following law reported during a run (m): smallest and
+    largest over the run, and mean and standard deviation over its last ``window``
+    seconds (the settled part, when the run is longer than that), from ``n`` ticks."""
+
+    low: float
+    high: float
+    mean: float
+    std: float
+    window: float
+    n: int
+
+
+#: Seconds at the end of a run over which the settled boundary distance is averaged.
+SETTLED_WINDOW = 10.0
+
+
+@dataclass(frozen=True)
 class RunReport:
     """How one run (or a stepped run, once it ended) went.
 
@@ -57,7 +76,9 @@ class RunReport:
     (s, else None), ``collision`` the simulator's record of the first contact during the
     run, ``error`` the error that aborted it (a failing law or interrupt), ``closest``
     where the robot came closest to an obstacle: (time since the start (s), x, y (m, true
-    position)), None without ground truth.
+    position)), None without ground truth, ``side`` the distance to the followed boundary
+    the control law reported (its ``side_range`` diagnostic on ticks with ``side_hit``), as
+    :class:`SideStats`, None when the law reported none.
     """
 
     label: str
@@ -70,6 +91,7 @@ class RunReport:
     collision: SimEvent | None = None
     error: MdleError | None = None
     closest: tuple[float, float, float] | None = None
+    side: SideStats | None = None
 
     @property
     def decisive(self) -> Termination:
@@ -439,7 +461,8 @@ class Session:
             limit = self.until
         obs = self.backend.observe()
         return RunReport(record.label, result, t0, obs.pose, self.backend.true_pose,
-                         interrupted, limit, collision, error, _closest(record.samples, t0))
+                         interrupted, limit, collision, error, _closest(record.samples, t0),
+                         _side_stats(record.samples))
 
     # ------------------------------------------------------------------ looking around
 
@@ -538,15 +561,28 @@ def _row(tick: int, sample: Sample, scan: Any) -> StepRow:
 
 def _closest(samples: Sequence[Sample], t0: float) -> tuple[float, float, float] | None:
     """(t - t0, x, y) of the sample with the smallest true clearance, None without truth."""
-    best = None
-    for s in samples:
-        if s.clearance is not None and (best is None or s.clearance < best.clearance):
-            best = s
-    if best is None:
+    known = [s for s in samples if s.clearance is not None]
+    if not known:
         return None
+    best = min(known, key=lambda s: float(s.clearance))  # type: ignore[arg-type]
     x = best.true_x if best.true_x is not None else best.x
     y = best.true_y if best.true_y is not None else best.y
     return best.time - t0, x, y
+
+
+def _side_stats(samples: Sequence[Sample]) -> SideStats | None:
+    """Statistics of the ``side_range`` diagnostic on the ticks where the side ray hit."""
+    import numpy as np
+
+    rows = [(s.time, s.diag["side_range"]) for s in samples
+            if "side_range" in s.diag and s.diag.get("side_hit", 1.0) > 0.5]
+    if not rows:
+        return None
+    t, r = np.asarray(rows, dtype=float).T
+    window = min(SETTLED_WINDOW, float(t[-1] - t[0]))
+    last = r[t >= t[-1] - window]
+    return SideStats(float(r.min()), float(r.max()), float(last.mean()), float(last.std()),
+                     window, len(r))
 
 
 def _summary(results: Sequence[RunResult]) -> RunResult | None:

@@ -60,6 +60,10 @@ def format_report(report: RunReport) -> list[str]:
             closest += f" (t = {t:.1f} s at x {x:.2f} m, y {y:.2f} m)"
     lines.append(f"  travelled {r.distance:.2f} m in {r.duration:.2f} s ({r.ticks} ticks)"
                  + closest)
+    side = report.side
+    if side is not None:
+        lines.append(f"  boundary  {side.low:.2f}..{side.high:.2f} m from the side ray; last "
+                     f"{side.window:.0f} s: mean {side.mean:.2f} m, sd {side.std:.3f} m")
     c = report.collision
     if c is not None:
         what = f"`{c.label}`" if c.label else "an obstacle"

@@ -217,3 +217,23 @@ def test_save_and_load(session: Session, tmp_path: Path) -> None:
     assert pose_of(other)[0] == pytest.approx(-8.5)
     with pytest.raises(ReplError, match="cannot write"):
         session.save(tmp_path / "no" / "such" / "dir.mdle")
+
+
+def test_report_closest_approach_and_settled_boundary_distance(session: Session) -> None:
+    approach = session.run("(go(1 m/s), range(0 deg) < 1.5 m, 20 s)")
+    # heading straight at the ellipse: closest at the last tick, where it stopped
+    assert approach.closest is not None
+    t, x, y = approach.closest
+    assert (t, x, y) == pytest.approx((3.6, -5.4, 0.3), abs=1e-6)
+    assert approach.result.min_clearance == pytest.approx(
+        session.world.clearance((x, y), 0.0), abs=1e-6)
+    assert approach.side is None  # go reports no boundary distance
+    session.reset(Pose(0.0, 3.0, math.pi))  # 1 m above the ellipse's top, heading west
+    hug = session.run("(follow_boundary(side = left, rc = 1 m, v = 0.5 m/s), never, 12 s)")
+    side = hug.side
+    # 120 ticks with control (the 121st sample is after the end: no diagnostics)
+    assert side is not None and side.n == 120 and side.window == 10.0
+    samples = [s.diag["side_range"] for s in session.samples if s.diag.get("side_hit")]
+    assert side.low == min(samples) and side.high == max(samples)
+    assert side.mean == pytest.approx(sum(samples[-101:]) / 101)
+    assert side.mean == pytest.approx(1.0, abs=0.05) and side.std < 0.05
