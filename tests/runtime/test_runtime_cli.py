@@ -229,3 +229,32 @@ def test_realtime_runs_at_wall_clock_speed(plan):
     res = mdle("run", str(plan(SPIN)), "--world", "empty", "--realtime", "--until", "1.5", "-q")
     assert res.returncode == 0, res.stderr
     assert time.monotonic() - start >= 1.4
+
+
+def test_live_view_on_a_terminal(plan):
+    import pty
+
+    master, slave = pty.openpty()
+    env = dict(os.environ, MPLBACKEND="Agg", COLUMNS="100", TERM="xterm")
+    proc = subprocess.Popen([*_mdle(), "run", str(plan(SPIN)), "--world", "empty", "--until",
+                             "2", "--realtime"], stdout=slave, stderr=slave, env=env)
+    os.close(slave)
+    chunks = []
+    try:
+        while True:
+            try:
+                data = os.read(master, 65536)
+            except OSError:  # the child closed the terminal
+                break
+            if not data:
+                break
+            chunks.append(data)
+        assert proc.wait(timeout=60) == 0
+    finally:
+        os.close(master)
+        if proc.poll() is None:
+            proc.kill()
+    text = b"".join(chunks).decode("utf-8", "replace")
+    assert "\x1b[" in text  # drawn with control codes
+    assert "mdle run" in text and "timer left" in text  # the live panel was drawn
+    assert "spin" in text and "elements run" in text and "real-time factor" in text
