@@ -23,8 +23,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
@@ -145,18 +144,15 @@ class Checker:
         self._seen.add(key)
         self.warnings.append(Diagnostic(span, message, Severity.WARNING, hint))
 
-    @contextmanager
-    def _nest(self, span: Span) -> Iterator[None]:
+    def _enter(self, span: Span) -> None:
+        """One level deeper (the caller leaves with ``self._depth -= 1`` in a finally)."""
         self._depth += 1
-        try:
-            if self._depth > MAX_NESTING:
-                self.error(span, f"elements and interrupts nest more than {MAX_NESTING} levels "
-                           "deep here (counting through named definitions)",
-                           hint="flatten the plan: fewer levels of behaviors inside behaviors")
-                raise _Abort
-            yield
-        finally:
+        if self._depth > MAX_NESTING:
             self._depth -= 1
+            self.error(span, f"elements and interrupts nest more than {MAX_NESTING} levels "
+                       "deep here (counting through named definitions)",
+                       hint="flatten the plan: fewer levels of behaviors inside behaviors")
+            raise _Abort
 
     def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
         close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.6)
@@ -168,48 +164,54 @@ class Checker:
     def value(self, expr: st.Expr, env: Env) -> Value:
         """A fixed value: numbers with units, parameters, arithmetic; a bare unknown name is
         a symbol (its use decides whether that is right). Raises _Abort after an error."""
-        with self._nest(expr.span):
-            if isinstance(expr, st.Number):
-                return Quantity(expr.value, expr.dim, bare=not expr.unit)
-            if isinstance(expr, st.Name):
-                if expr.name in env:
-                    return env[expr.name]
-                target = self.ns.lookup(expr.name)
-                if target is not None:
-                    self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
-                               f"{_kind_name(target)}",
-                               hint="arguments and timers are fixed when an element starts; "
-                                    "sensor readings belong in interrupts")
+        self._enter(expr.span)
+        try:
+            return self._value(expr, env)
+        finally:
+            self._depth -= 1
+
+    def _value(self, expr: st.Expr, env: Env) -> Value:
+        if isinstance(expr, st.Number):
+            return Quantity(expr.value, expr.dim, bare=not expr.unit)
+        if isinstance(expr, st.Name):
+            if expr.name in env:
+                return env[expr.name]
+            target = self.ns.lookup(expr.name)
+            if target is not None:
+                self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
+                           f"{_kind_name(target)}",
+                           hint="arguments and timers are fixed when an element starts; "
+                                "sensor readings belong in interrupts")
+                raise _Abort
+            return Symbol(expr.name)
+        if isinstance(expr, st.Inf):
+            return Quantity(INF, None)
+        if isinstance(expr, st.Group) and len(expr.items) == 1 and not expr.repeat:
+            return self.value(expr.items[0], env)
+        if isinstance(expr, st.Unary) and expr.op in "+-":
+            q = self._number(expr.operand, env)
+            return q if expr.op == "+" else Quantity(-q.value, q.dim, q.bare)
+        if isinstance(expr, st.Binary) and expr.op in ("+", "-", "*", "/"):
+            a, b = self._number(expr.left, env), self._number(expr.right, env)
+            if expr.op in "+-":
+                if not (fits(a, b.dim) and fits(b, a.dim)):
+                    self.error(expr.op_span, f"cannot {'add' if expr.op == '+' else 'subtract'}"
+                               f" {dim_words(b.dim)} and {dim_words(a.dim)}")
                     raise _Abort
-                return Symbol(expr.name)
-            if isinstance(expr, st.Inf):
-                return Quantity(INF, None)
-            if isinstance(expr, st.Group) and len(expr.items) == 1 and not expr.repeat:
-                return self.value(expr.items[0], env)
-            if isinstance(expr, st.Unary) and expr.op in "+-":
-                q = self._number(expr.operand, env)
-                return q if expr.op == "+" else Quantity(-q.value, q.dim, q.bare)
-            if isinstance(expr, st.Binary) and expr.op in ("+", "-", "*", "/"):
-                a, b = self._number(expr.left, env), self._number(expr.right, env)
-                if expr.op in "+-":
-                    if not (fits(a, b.dim) and fits(b, a.dim)):
-                        self.error(expr.op_span, f"cannot {'add' if expr.op == '+' else 'subtract'}"
-                                   f" {dim_words(b.dim)} and {dim_words(a.dim)}")
-                        raise _Abort
-                    dim = a.dim if not a.zero else b.dim
-                    v = a.value + b.value if expr.op == "+" else a.value - b.value
-                    return Quantity(v, dim, a.bare and b.bare)
-                dim = None if a.dim is None or b.dim is None else (
-                    a.dim * b.dim if expr.op == "*" else a.dim / b.dim)
-                if expr.op == "*":
-                    return Quantity(a.value * b.value, dim, a.bare and b.bare)
-                if b.value == 0:
-                    self.error(expr.span, "division by zero")
-                    raise _Abort
-                return Quantity(a.value / b.value, dim, a.bare and b.bare)
-            self.error(expr.span, f"expected a fixed value such as `1 m` or `10 s`, "
-                       f"found `{_short(expr)}`")
-            raise _Abort
+                dim = a.dim if not a.zero else b.dim
+                v = a.value + b.value if expr.op == "+" else a.value - b.value
+                return Quantity(v, dim, a.bare and b.bare)
+            dim = None if a.dim is None or b.dim is None else (
+                a.dim * b.dim if expr.op == "*" else a.dim / b.dim)
+            if expr.op == "*":
+                return Quantity(a.value * b.value, dim, a.bare and b.bare)
+            if b.value == 0:
+                self.error(expr.span, "division by zero")
+                raise _Abort
+            return Quantity(a.value / b.value, dim, a.bare and b.bare)
+        self.error(expr.span, f"expected a fixed value such as `1 m` or `10 s`, "
+                   f"found `{_short(expr)}`")
+        raise _Abort
 
     def _number(self, expr: st.Expr, env: Env) -> Quantity:
         v = self.value(expr, env)
@@ -375,8 +377,11 @@ class Checker:
 
     def condition(self, expr: st.Expr, env: Env) -> cond.Typed:
         """Type and compile an interrupt expression (or a part of one)."""
-        with self._nest(expr.span):
+        self._enter(expr.span)
+        try:
             return self._condition(expr, env)
+        finally:
+            self._depth -= 1
 
     def _condition(self, expr: st.Expr, env: Env) -> cond.Typed:
         if isinstance(expr, st.Number):
@@ -509,8 +514,11 @@ class Checker:
 
     def element(self, expr: st.Expr, env: Env) -> Element:
         """Compile an expression standing where an element is expected."""
-        with self._nest(expr.span):
+        self._enter(expr.span)
+        try:
             return self._element(expr, env)
+        finally:
+            self._depth -= 1
 
     def _element(self, expr: st.Expr, env: Env) -> Element:
         if isinstance(expr, (st.Name, st.Call)):
@@ -734,8 +742,11 @@ class Checker:
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
         try:
-            with self._nest(d.span):
+            self._enter(d.span)
+            try:
                 result = self._definition_body(d, env)
+            finally:
+                self._depth -= 1
         except _Abort:
             self._cache[key] = None
             raise

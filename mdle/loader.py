@@ -42,6 +42,8 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
         raise CheckError(Diagnostic(span, f"cannot read `{name}`: it is a directory")) from None
     except OSError as err:
         raise CheckError(Diagnostic(span, f"cannot read `{name}`: {err.strerror or err}")) from None
+    except ValueError:  # a NUL character in the path
+        raise CheckError(Diagnostic(span, f"cannot read `{name!r}`: not a file name")) from None
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as err:
@@ -119,6 +121,10 @@ def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
             state[key] = 2
             order.append(module)
             continue
+        if not imp.path or "\x00" in imp.path:
+            diagnostics.append(Diagnostic(imp.span, "`import` needs a file name",
+                                          hint='for example `import "common.mdle"`'))
+            continue
         target = os.path.join(folder, imp.path)
         key = os.path.realpath(target)
         shown = os.path.normpath(os.path.join(os.path.dirname(module.file), imp.path)) \
@@ -130,9 +136,6 @@ def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
                                                "both import"))
             continue
         if state.get(key) == 2:
-            continue
-        if not imp.path:
-            diagnostics.append(Diagnostic(imp.span, "`import` needs a file name"))
             continue
         try:
             src = read_source(target, shown, imp.span)

@@ -81,3 +81,19 @@ def test_not_utf8(tmp_path: Path) -> None:
     path.write_bytes(b"atom a = \xff")
     with pytest.raises(MdleSyntaxError, match="not UTF-8 text"):
         load_program(path)
+
+
+@pytest.mark.parametrize("text", ['import "a\x00b.mdle"', 'import ""', 'import "a\x00"\natom ('])
+def test_impossible_import_names(text: str) -> None:
+    from mdle.errors import MdleError
+    from mdle.loader import load_text
+
+    with pytest.raises(MdleError) as err:
+        load_text(text)
+    assert err.value.diagnostics[0].span.line == 1
+
+
+def test_impossible_file_names() -> None:
+    for name in ("a\x00b.mdle", "x" * 5000 + ".mdle"):
+        with pytest.raises(CheckError, match="cannot read"):
+            load_program(name)
