@@ -335,7 +335,13 @@ def _robot(doc: _Doc, path: str, v: Any) -> Any:
         ch["odometry"] = OdometryNoise(distance=vals["distance"],
                                        turn=vals["turn"] * math.sqrt(math.pi / 180.0),
                                        drift=math.radians(vals["drift"]))
-    return base.with_overrides(**ch)
+    robot = base.with_overrides(**ch)
+    mx, my, _ = robot.ladar_mount
+    if math.hypot(mx, my) > robot.radius + 1e-12:
+        where = f"{path}.ladar_mount" if "ladar_mount" in m else f"{path}.radius"
+        raise doc.fail(where, f"the ladar at ({mx:g}, {my:g}) m must sit within the body "
+                       f"(radius {robot.radius:g} m)")
+    return robot
 
 
 def _ladar(doc: _Doc, path: str, v: Any) -> Any:

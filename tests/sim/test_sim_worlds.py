@@ -180,3 +180,11 @@ def test_world_is_immutable() -> None:
     world = sim.load_world("square")
     with pytest.raises(AttributeError):
         world.name = "other"  # type: ignore[misc]
+
+
+def test_ladar_must_sit_on_the_body() -> None:
+    with pytest.raises(WorldError, match=r"robot.ladar_mount: the ladar at \(0.5, 0\) m must sit "
+                                         r"within the body \(radius 0.25 m\)"):
+        parse_world("robot: {profile: pioneer2dx, ladar_mount: [0.5, 0, 0]}\n")
+    with pytest.raises(WorldError, match=r"robot.radius: the ladar at \(0.017, 0.008\) m"):
+        parse_world("robot: {profile: pioneer2dx, radius: 0}\n")
