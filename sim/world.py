@@ -125,7 +125,9 @@ class World:
         """Exact ray cast from ``origin_xy`` at world-frame ``angles`` (radians).
 
         Returns ranges (inf for misses), hit mask, boundary tangents (obstacle on the
-        right, world frame), signed curvatures and the obstacle index of every ray.
+        right, world frame), signed curvatures and the obstacle index of every ray. Rays
+        are meant to start outside obstacles (as a ladar on the robot does): straight faces
+        are culled when seen from behind, so a ray starting inside a polygon does not see it.
         """
         return self.caster.cast(np.asarray(origin_xy, dtype=float),
                                 np.atleast_1d(np.asarray(angles, dtype=float)), max_range,
