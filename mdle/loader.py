@@ -165,7 +165,10 @@ def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
 
 def _error(diags: list[Diagnostic], sources: dict[str, str], syntax: bool) -> MdleError:
     cls = MdleSyntaxError if syntax else CheckError
-    return cls(diags, sources)
+    files = {name: i for i, name in enumerate(sources)}
+    ordered = sorted(diags, key=lambda d: (files.get(d.span.file, len(files)), d.span.line,
+                                           d.span.column) if d.span else (-1, 0, 0))
+    return cls(ordered, sources)
 
 
 def load_text(text: str, file: str = "<string>", registry: Registry | None = None) -> Program:
