@@ -199,13 +199,14 @@ def render_map(world: World, path: np.ndarray, pose: Pose, width: int = 72,
     if len(path):
         # dense enough that consecutive points land in touching cells
         p = np.asarray(path, dtype=float).reshape(-1, 2)
-        seg = np.hypot(*np.diff(p, axis=0).T) if len(p) > 1 else np.zeros(0)
-        step = 0.5 * min(cw, ch)
-        dense = [p[:1]]
-        for a, b, d in zip(p[:-1], p[1:], seg):
-            n = max(1, math.ceil(d / step))
-            dense.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
-        q = np.vstack(dense)
+        d = np.diff(p, axis=0)
+        # points every half cell along each segment: segment i gets n_i points at
+        # fractions 1/n_i .. 1 of the way
+        n = np.maximum(1, np.ceil(np.hypot(d[:, 0], d[:, 1]) / (0.5 * min(cw, ch)))
+                       ).astype(int)
+        seg = np.repeat(np.arange(len(d)), n)
+        k = np.arange(seg.size) - np.repeat(np.cumsum(n) - n, n) + 1
+        q = np.vstack([p[:1], p[seg] + d[seg] * (k / n[seg])[:, None]])
         r, c = cell(q[:, 0], q[:, 1])
         grid[r, c] = "."
         r, c = cell(p[:1, 0], p[:1, 1])

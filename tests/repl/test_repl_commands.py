@@ -7,8 +7,10 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from mdle.backend import Pose
 from mdle.repl.commands import COMMANDS, Repl, classify
 from mdle.repl.session import Session
 
@@ -249,3 +251,65 @@ def test_an_internal_error_is_one_line_and_the_session_survives(r: Run, monkeypa
     ok, _, _ = r("(go(1 m/s), never, 1 s)")
     assert ok and r.repl.session.backend.true_pose.x == pytest.approx(-8.0)
     assert math.isfinite(r.repl.session.observe().time)
+
+
+def test_where_path_has_no_gaps_and_stays_on_the_map() -> None:
+    from mdle.repl.views import render_map
+
+    s = Session("ellipse")
+    # a long jump between two samples must still be drawn cell by cell
+    path = np.array([[-10.0, -4.0], [6.0, 4.0]])
+    rows = render_map(s.world, path, Pose(20.0, 4.0, 0.0), width=40)
+    grid = [row[1:-1] for row in rows[1:-2]]
+    marks = [(i, j) for i, g in enumerate(grid) for j, ch in enumerate(g) if ch in ".o"]
+    cols = sorted({j for _, j in marks})
+    assert cols == list(range(cols[0], cols[-1] + 1))  # every column in between is drawn
+    assert any(">" in g for g in grid)  # the robot far off the world's extent is on the map
+    assert "x -11.0..20.5 m" in rows[-1]
+
+
+def test_exact_sensing_scan_and_a_world_file(tmp_path: Path) -> None:
+    out, err = io.StringIO(), io.StringIO()
+    repl = Repl(Session("ellipse", sensing="exact"), out, err)
+    assert repl.handle(":reset 0 3 180") and repl.handle(":scan")
+    text = out.getvalue()
+    assert "(exact)" in text
+    m = re.search(r"left : boundary_range ([0-9.]+) m, boundary_tangent (-?[0-9.]+) deg, "
+                  r"boundary_curvature ([-+][0-9.]+) 1/m", text)
+    assert m, text
+    # the oracle: exactly 1 m to the ellipse's top, tangent along the heading, b / a^2
+    assert float(m.group(1)) == pytest.approx(1.0, abs=0.005)
+    assert float(m.group(2)) == pytest.approx(0.0, abs=0.05)
+    assert float(m.group(3)) == pytest.approx(0.125, abs=0.001)
+    world = tmp_path / "box.yaml"
+    world.write_text("name: box\nseed: 3\nstart: {x: 0, y: 0, theta: 90}\nrobot: ideal\n"
+                     "obstacles:\n  - {type: circle, name: post, center: [0, 3], radius: 0.5}\n")
+    assert repl.handle(f":world {world}")
+    assert repl.session.world.name == "box" and repl.session.seed == 3
+    assert repl.handle("(go(1 m/s), range(0 deg) < 1 m, 10 s)")
+    assert repl.session.backend.true_pose.y == pytest.approx(1.5, abs=0.11)
+
+
+def test_a_failing_control_law_is_reported_and_the_session_goes_on() -> None:
+    import types
+
+    from atoms import default_registry
+    from atoms.registry import Registry, control_law
+    from mdle.backend import Command
+
+    @control_law()
+    def explode(args: object, ctx: object, state: object) -> Command:
+        """Drive, then fail."""
+        if ctx.t > 0.25:  # type: ignore[attr-defined]
+            raise ValueError("sensor went away")
+        return Command(1.0, 0.0)
+
+    reg = default_registry().merged(Registry.from_modules(types.SimpleNamespace(e=explode)))
+    out, err = io.StringIO(), io.StringIO()
+    repl = Repl(Session("ellipse", registry=reg), out, err)
+    assert not repl.handle("(explode, never, 5 s)")
+    assert "control law `explode` of `explode` failed at t = 0.300 s" in err.getvalue()
+    assert "ended by error at 0.30 s" in out.getvalue()
+    assert repl.session.backend._cmd.v == 0.0  # stopped
+    assert repl.handle("(go(1 m/s), never, 1 s)")
+    assert repl.session.backend.true_pose.x == pytest.approx(-9.0 + 0.3 + 1.0)
