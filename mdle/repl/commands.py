@@ -31,6 +31,7 @@ from mdle.cli.output import print_diagnostics
 from mdle.errors import Diagnostic, MdleError
 from mdle.repl import views
 from mdle.repl.session import ReplError, Session
+from mdle.runtime import Observer
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 
@@ -90,6 +91,8 @@ class Repl:
         self.debug = debug
         self.quit_requested = False
         self.failures = 0
+        #: Extra observers of every run (the prompt adds a progress line).
+        self.run_observers: list[Observer] = []
 
     # ------------------------------------------------------------------ output
 
@@ -160,7 +163,7 @@ class Repl:
         return True
 
     def _run(self, text: str) -> bool:
-        report = self.session.run(text)
+        report = self.session.run(text, self.run_observers)
         if report.error is not None:
             print_diagnostics(report.error.diagnostics, report.error.sources, self.err)
         self.say(*views.format_report(report))

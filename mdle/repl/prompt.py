@@ -18,9 +18,10 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterable, Iterator
+import time
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import IO, TYPE_CHECKING, Any, ClassVar
 
 from prompt_toolkit.completion import CompleteEvent, Completer, Completion, PathCompleter
 from prompt_toolkit.document import Document
@@ -38,6 +39,7 @@ from pygments.token import (
 )
 
 from mdle.repl.commands import COMMANDS, DEFINITION_KEYWORDS, KEYWORDS, Repl
+from mdle.runtime import BaseObserver, RunResult, Sample
 
 if TYPE_CHECKING:
     from prompt_toolkit import PromptSession
@@ -49,6 +51,7 @@ __all__ = [
     "UNITS",
     "MdleCompleter",
     "MdleLexer",
+    "ProgressLine",
     "history_path",
     "make_prompt_session",
     "run_prompt",
@@ -373,10 +376,53 @@ def make_prompt_session(repl: Repl, *, input: Input | None = None,
         input=input, output=output)
 
 
+class ProgressLine(BaseObserver):
+    """While a run goes on, one status line on the terminal: the active element, the
+    simulated time and the pose, rewritten at most every ``interval`` seconds of wall
+    time (the first time only after ``interval``, so quick runs show nothing) and erased
+    when the run ends."""
+
+    def __init__(self, stream: IO[str], interval: float = 0.2,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.stream = stream
+        self.interval = interval
+        self.clock = clock
+        self._next = 0.0
+        self._t0: float | None = None
+        self._shown = False
+
+    def on_start(self, scheduler: Any) -> None:
+        self._next = self.clock() + self.interval
+        self._t0 = None
+        self._shown = False
+
+    def on_tick(self, sample: Sample) -> None:
+        if self._t0 is None:
+            self._t0 = sample.time
+        now = self.clock()
+        if now < self._next:
+            return
+        self._next = now + self.interval
+        self.stream.write(f"\r\x1b[K  running {sample.path or '...'}: t {sample.time - self._t0:.1f} s"
+                          f"  x {sample.x:.2f} m  y {sample.y:.2f} m  (Ctrl-C stops it)")
+        self.stream.flush()
+        self._shown = True
+
+    def on_end(self, result: RunResult) -> None:
+        if self._shown:
+            self.stream.write("\r\x1b[K")
+            self.stream.flush()
+            self._shown = False
+
+
 def run_prompt(repl: Repl, *, input: Input | None = None, output: Output | None = None,
                history: bool = True) -> int:
-    """Read and do inputs at the prompt until Ctrl-D or ``:quit``; returns 0."""
+    """Read and do inputs at the prompt until Ctrl-D or ``:quit``; returns 0.
+
+    On the real terminal (``output`` None) a :class:`ProgressLine` shows long runs."""
     session = make_prompt_session(repl, input=input, output=output, history=history)
+    if output is None:
+        repl.run_observers.append(ProgressLine(repl.out))
     repl.say(f"mdle repl: world `{repl.session.world.name}`, seed {repl.session.seed}. "
              "`:help` lists the commands; Ctrl-D leaves.")
     while not repl.quit_requested:

@@ -26,7 +26,16 @@ from atoms.registry import Registry
 from mdle.backend import Observation, Pose
 from mdle.errors import Diagnostic, MdleError
 from mdle.program import Element
-from mdle.runtime import BaseObserver, Cause, Event, RunResult, Sample, Scheduler, Termination
+from mdle.runtime import (
+    BaseObserver,
+    Cause,
+    Event,
+    Observer,
+    RunResult,
+    Sample,
+    Scheduler,
+    Termination,
+)
 from mdle.workspace import Workspace
 
 if TYPE_CHECKING:
@@ -363,11 +372,12 @@ class Session:
         """
         return self.workspace.element(text.strip())
 
-    def run(self, text: str) -> RunReport:
+    def run(self, text: str, observers: Sequence[Observer] = ()) -> RunReport:
         """Run the element ``text`` from the robot's current state to its end.
 
         Ctrl-C (KeyboardInterrupt) stops the run: the robot is stopped and the report
-        says so. A paused stepped run is ended first.
+        says so. A paused stepped run is ended first. ``observers`` also watch this run
+        (a progress line, say).
 
         Raises
         ------
@@ -377,7 +387,7 @@ class Session:
         element = self.compile(text)
         self._stop_stepping()
         self._last = (text.strip(), element)
-        record, scheduler = self._start(element, text.strip())
+        record, scheduler = self._start(element, text.strip(), observers)
         interrupted = False
         error: MdleError | None = None
         try:
@@ -409,7 +419,9 @@ class Session:
             if self._last is None:
                 raise ReplError("nothing to step: run an element first (type its name or "
                                 "an element such as `(go(0.3 m/s), never, 5 s)`)")
-            text, element = self._last
+            text = self._last[0]
+            element = self.compile(text)  # the definitions may have changed since
+            self._last = (text, element)
             record, _ = self._start(element, text)
             self._stepping = record
             started = True
@@ -438,9 +450,11 @@ class Session:
             report = self._report(record, interrupted, error)
         return StepOutcome(tuple(rows), report, started, record.label, record.t0)
 
-    def _start(self, element: Element, text: str) -> tuple[_Run, Scheduler]:
+    def _start(self, element: Element, text: str, observers: Sequence[Observer] = ()
+               ) -> tuple[_Run, Scheduler]:
         record = _Run(element.label, text)
-        scheduler = Scheduler(element, self.backend, self.rate, (record,), until=self.until)
+        scheduler = Scheduler(element, self.backend, self.rate, (record, *observers),
+                              until=self.until)
         scheduler.start()
         self._runs.append(record)
         return record, scheduler

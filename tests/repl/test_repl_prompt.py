@@ -21,6 +21,7 @@ from pygments.token import Keyword, Name, Number
 from mdle.repl.commands import Repl
 from mdle.repl.prompt import MdleCompleter, MdleLexer, history_path, run_prompt
 from mdle.repl.session import Session
+from mdle.runtime import BaseObserver
 
 
 @pytest.fixture(autouse=True)
@@ -205,3 +206,29 @@ def test_lexer_tokens() -> None:
     assert kinds["# c"].__class__ is type(Keyword) and "Comment" in str(kinds["# c"])
     cmd = [(str(t), v) for t, v in MdleLexer().get_tokens(":world ellipse\n")]
     assert cmd[0] == ("Token.Name.Builtin", ":world")
+
+
+def test_progress_line_shows_long_runs_and_is_erased() -> None:
+    from mdle.repl.prompt import ProgressLine
+
+    wall = [0.0]
+    stream = io.StringIO()
+    progress = ProgressLine(stream, interval=0.2, clock=lambda: wall[0])
+    s = Session("ellipse")
+
+    class Advance(BaseObserver):
+        """Wall time goes 0.05 s per tick: a line every 4 ticks, from the 4th on."""
+
+        def on_tick(self, sample: object) -> None:
+            wall[0] += 0.05
+
+    s.run("(go(1 m/s), never, 1 s)", [Advance(), progress])
+    text = stream.getvalue()
+    shown = text.split("\r\x1b[K")
+    assert shown[0] == "" and shown[-1] == ""  # each line overwrites; erased at the end
+    lines = [x for x in shown if x]
+    assert lines[0] == "  running go: t 0.3 s  x -8.70 m  y 0.30 m  (Ctrl-C stops it)"
+    assert len(lines) == 2  # at 0.3 s and 0.7 s of simulated time (11 ticks)
+    quick = io.StringIO()
+    s.run("(go(1 m/s), never, 0.1 s)", [ProgressLine(quick)])
+    assert quick.getvalue() == ""  # a quick run shows nothing

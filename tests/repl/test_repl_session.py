@@ -237,3 +237,14 @@ def test_report_closest_approach_and_settled_boundary_distance(session: Session)
     assert side.low == min(samples) and side.high == max(samples)
     assert side.mean == pytest.approx(sum(samples[-101:]) / 101)
     assert side.mean == pytest.approx(1.0, abs=0.05) and side.std < 0.05
+
+
+def test_step_uses_the_definitions_as_they_are_now(session: Session) -> None:
+    session.define("atom creep = (go(0.5 m/s), never, 2 s)")
+    session.run("creep")
+    session.define("atom creep = (go(0.25 m/s), never, 2 s)")
+    out = session.step(2)
+    assert [r.sample.cmd_v for r in out.rows] == [0.25, 0.25]
+    session.define("atom creep = (go(1 m/s), never, 2 s)")
+    out = session.step(1)  # the paused run goes on as it started
+    assert out.rows[0].sample.cmd_v == 0.25
