@@ -241,7 +241,7 @@ def test_trace_plot_world_quit(r: Run, tmp_path: Path) -> None:
 
 def test_an_internal_error_is_one_line_and_the_session_survives(r: Run, monkeypatch:
                                                                    pytest.MonkeyPatch) -> None:
-    def broken(self: Session, text: str) -> None:
+    def broken(self: Session, text: str, observers: object = ()) -> None:
         raise ZeroDivisionError("boom")
 
     monkeypatch.setattr(Session, "run", broken)
