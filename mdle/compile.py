@@ -508,6 +508,10 @@ class Checker:
             raise _Abort
         shown = {k: show_value(v) for k, v in env.items()
                  if not (isinstance(v, Quantity) and math.isnan(v.value))}
+        if t.is_const and t.const and not any(
+                isinstance(v, Quantity) and math.isnan(v.value) for v in env.values()):
+            self.warn(expr.span, f"the interrupt `{_short(expr)}` is always true: the element "
+                      "ends as soon as it starts", hint="did you mean `never`?")
         return cond.to_interrupt(t, format_expr(expr, shown))
 
     # ------------------------------------------------------------------ elements

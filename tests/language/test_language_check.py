@@ -150,6 +150,13 @@ def test_unreachable_element_warning(reg: Registry) -> None:
     assert [(w.span.line, w.span.column) for w in p.warnings] == [(3, 25), (4, 41)]
 
 
+def test_always_true_interrupt_warning(reg: Registry) -> None:
+    p = check("atom a = (drive(1 m/s), not never, 1 s)\n"
+              "interrupt near(d) = beam(0 deg) < d\natom b = (drive(1 m/s), near(1 m), 1 s)", reg)
+    assert [w.message for w in p.warnings] == [
+        "the interrupt `not never` is always true: the element ends as soon as it starts"]
+
+
 # ------------------------------------------------------------------ errors (exact shape)
 
 
