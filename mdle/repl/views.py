@@ -22,6 +22,8 @@ if TYPE_CHECKING:
 
 __all__ = ["format_pose", "format_report", "format_scan", "format_step_rows", "render_map"]
 
+#: Fewest rows of the map (a long, narrow world gets flatter cells rather than a sliver).
+MIN_ROWS = 12
 #: Sectors of the compact scan view, degrees wide.
 SECTOR_DEG = 15.0
 
@@ -180,16 +182,22 @@ def render_map(world: World, path: np.ndarray, pose: Pose, width: int = 72,
     x0, y0 = min(x0, float(pts[:, 0].min()) - 0.5), min(y0, float(pts[:, 1].min()) - 0.5)
     x1, y1 = max(x1, float(pts[:, 0].max()) + 0.5), max(y1, float(pts[:, 1].max()) + 0.5)
     cw = (x1 - x0) / width
-    rows = height or max(4, math.ceil((y1 - y0) / (2.0 * cw)))
+    # cells twice as tall as wide (as characters are), but at least MIN_ROWS rows
+    rows = height or max(MIN_ROWS, math.ceil((y1 - y0) / (2.0 * cw)))
     ch = (y1 - y0) / rows
     xs = x0 + (np.arange(width) + 0.5) * cw
     ys = y1 - (np.arange(rows) + 0.5) * ch  # top row first
-    gx, gy = np.meshgrid(xs, ys)
-    centres = np.column_stack([gx.ravel(), gy.ravel()])
     grid = np.full((rows, width), " ", dtype="<U1")
     if world.obstacles:
-        clear = np.asarray(world.clearance(centres, 0.0)).reshape(rows, width)
-        grid[clear <= 0.5 * max(cw, ch)] = "#"
+        # a cell is an obstacle when some point of it lies within half a column of one:
+        # tall cells are probed at `sub` heights so thin walls along x are not missed
+        sub = max(1, math.ceil(ch / cw))
+        dy = (np.arange(sub) + 0.5) / sub * ch - 0.5 * ch
+        gx, gy, gd = np.meshgrid(xs, ys, dy, indexing="ij")
+        probes = np.column_stack([gx.ravel(), (gy + gd).ravel()])
+        clear = np.asarray(world.clearance(probes, 0.0)).reshape(width, rows, sub)
+        near = (clear <= 0.5 * max(cw, ch / sub)).any(axis=2).T
+        grid[near] = "#"
 
     def cell(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         c = np.clip(((x - x0) / cw).astype(int), 0, width - 1)
@@ -217,6 +225,7 @@ def render_map(world: World, path: np.ndarray, pose: Pose, width: int = 72,
     grid[r, c] = arrow
     border = "+" + "-" * width + "+"
     lines = [border] + ["|" + "".join(row) + "|" for row in grid] + [border]
-    lines.append(f"x {x0:.1f}..{x1:.1f} m, y {y0:.1f}..{y1:.1f} m; one column = {cw:.2f} m. "
+    lines.append(f"x {x0:.1f}..{x1:.1f} m, y {y0:.1f}..{y1:.1f} m; a cell is {cw:.2f} m wide, "
+                 f"{ch:.2f} m tall. "
                  f"# obstacle  . path  o path start  {arrow} robot ({format_pose(pose)})")
     return lines
