@@ -140,11 +140,18 @@ def test_quit_stops_reading_and_bad_options_are_usage_errors(tmp_path: Path) -> 
     assert res.returncode == 1 and "missing.mdle" in res.stderr
 
 
-def test_until_option_limits_a_run(tmp_path: Path) -> None:
+def test_until_seed_robot_and_sensing_options(tmp_path: Path) -> None:
     res = repl("(turn(1 rad/s), never, inf)\n", "--world", "ellipse", "--until", "1.5",
                cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert "turn (level 0) ended by stopped at 1.50 s (the run limit of 1.5 s" in res.stdout
+    # the default world with the ideal unicycle (no acceleration limits) and an exact ladar
+    res = repl("(go(1 m/s), never, 1 s)\n:pose\n:scan\n", "--seed", "4", "--robot", "ideal",
+               "--sensing", "exact", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert pose_in(res.stdout) == pytest.approx((-3.0, -3.0, 0.0))  # from (-4, -3) east
+    assert "world `default`, seed 4" in res.stdout
+    assert "max range 10 m (exact)" in res.stdout
 
 
 def test_sigint_during_a_piped_run_stops_it_and_the_session_goes_on(tmp_path: Path) -> None:
