@@ -19,6 +19,7 @@ False
 from __future__ import annotations
 
 import math
+import re
 import shlex
 import sys
 import traceback
@@ -56,19 +57,24 @@ class Command:
 
 def classify(text: str) -> str:
     """``"command"``, ``"definition"``, ``"element"`` or ``"empty"`` (blank or a comment)."""
-    stripped = text.strip()
-    if not stripped or stripped.startswith("#"):
+    code = _uncommented(text).strip()
+    if not code:
         return "empty"
-    if stripped.startswith(":"):
+    if code.startswith(":"):
         return "command"
-    from mdle.parser import iter_tokens
-
-    first = next(iter(iter_tokens(stripped)), None)
-    if first is None:
-        return "element"  # a bad character: let the parser say so
-    if first.type in ("ATOM", "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN"):
+    if _DEFINITION.match(code):
         return "definition"
     return "element"
+
+
+#: A statement starts with one of these keywords (the grammar keeps `atomic` a name).
+_DEFINITION = re.compile("(?:" + "|".join(DEFINITION_KEYWORDS) + ")(?![A-Za-z0-9_])")
+
+
+def _uncommented(text: str) -> str:
+    """``text`` without its comments (``#`` to the end of a line, outside strings)."""
+    return re.sub(r'"[^"\n]*"|#[^\n]*', lambda m: m.group(0) if m.group(0)[0] == '"' else "",
+                  text)
 
 
 class Repl:

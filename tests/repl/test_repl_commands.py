@@ -313,3 +313,11 @@ def test_a_failing_control_law_is_reported_and_the_session_goes_on() -> None:
     assert repl.session.backend._cmd.v == 0.0  # stopped
     assert repl.handle("(go(1 m/s), never, 1 s)")
     assert repl.session.backend.true_pose.x == pytest.approx(-9.0 + 0.3 + 1.0)
+
+
+def test_classify_skips_comments() -> None:
+    assert classify("# just a note\n   # and another") == "empty"
+    assert classify("# tuned on Monday\natom a = (go(1 m/s), never, 1 s)") == "definition"
+    assert classify("import \"dir#1/x.mdle\"  # a # inside a string is not a comment") == (
+        "definition")
+    assert classify("  # first\n  :pose") == "command"
