@@ -193,8 +193,13 @@ class _Build(Transformer):  # type: ignore[type-arg]
         _not_keyword(name)
         return st.Run(str(name), _over(file, kw, name), _token_span(file, name))
 
-    def definition(self, kw: Token, name: Token, params: list[st.Param] | None,
+    def def_head(self, kw: Token, name: Token, params: list[Any] | None
+                 ) -> tuple[Token, Token, list[Any] | None]:
+        return kw, name, params
+
+    def definition(self, head: tuple[Token, Token, list[Any] | None],
                    body: st.Expr) -> st.Definition:
+        kw, name, params = head
         file = _STATE.get().file
         _not_keyword(name)
         return st.Definition(st.DefKind(str(kw)), str(name),
@@ -633,10 +638,10 @@ def _label(err: UnexpectedInput, source: str, start: str) -> Label | None:
     if start == "expr_start":
         probe = _fail(_example_parse("start"), "atom a = " + source)
     else:
-        stack = getattr(getattr(err, "state", None), "value_stack", None) or []
+        stack = [v[0] if isinstance(v, tuple) and v and isinstance(v[0], Token) else v
+                 for v in getattr(getattr(err, "state", None), "value_stack", None) or []]
         first = next((i for i, v in enumerate(stack) if isinstance(v, Token)
-                      and v.type in ("ATOM", "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN")),
-                     None)
+                      and v.type in _STATEMENT_TOKENS), None)
         if first is not None and first > 0 and stack[first].start_pos is not None:
             at = stack[first].start_pos
             probe = _fail(_example_parse("start"), re.sub(r"[^\n]", " ", source[:at]) + source[at:])
