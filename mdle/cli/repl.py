@@ -35,6 +35,8 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--until", type=_seconds, metavar="SECONDS",
                    help="stop any run after this many simulated seconds (default 600; "
                         "`inf`: no limit)")
+    p.add_argument("--realtime", action="store_true",
+                   help="pace runs to the wall clock (default: as fast as the simulator goes)")
     p.add_argument("--plain", action="store_true",
                    help="read input plainly even on a terminal (no line editing)")
     p.add_argument("--echo", action="store_true",
@@ -63,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     until = DEFAULT_UNTIL if args.until is None else (None if math.isinf(args.until)
                                                       else args.until)
     session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
-                      sensing=args.sensing)
+                      sensing=args.sensing, realtime=args.realtime)
     repl = Repl(session, debug=getattr(args, "debug", False))
     interactive = sys.stdin.isatty() and sys.stdout.isatty() and not args.plain
     if args.file:

@@ -320,8 +320,9 @@ class Repl:
 
     def _set(self, args: list[str]) -> bool:
         if len(args) != 2:
-            raise ReplError(":set takes a setting and a value: `:set seed N` or "
-                            "`:set until SECONDS` (`inf` for no limit)")
+            raise ReplError(":set takes a setting and a value: `:set seed N`, "
+                            "`:set until SECONDS` (`inf` for no limit) or "
+                            "`:set realtime on|off`")
         what, value = args
         if what == "seed":
             self.session.set_seed(_int(value, "the seed"))
@@ -335,7 +336,15 @@ class Repl:
             self.say("runs have no time limit (Ctrl-C stops one)" if math.isinf(limit)
                      else f"a run stops after {limit:g} s")
             return True
-        raise ReplError(f"no setting `{what}`: `:set seed N` or `:set until SECONDS`")
+        if what == "realtime":
+            if value not in ("on", "off"):
+                raise ReplError(f":set realtime takes `on` or `off`, got `{value}`")
+            self.session.realtime = value == "on"
+            self.say("runs go at the pace of the wall clock" if self.session.realtime
+                     else "runs go as fast as the simulator can")
+            return True
+        raise ReplError(f"no setting `{what}`: `:set seed N`, `:set until SECONDS` or "
+                        "`:set realtime on|off`")
 
     def _quit(self, args: list[str]) -> bool:
         _no_args(":quit", args)
@@ -394,7 +403,8 @@ COMMANDS: dict[str, Command] = {c.name: c for c in (
     Command("load", "FILE", "add the definitions of an .mdle file", Repl._load, "file"),
     Command("step", "[N]", "advance the last element N ticks (default 1), showing each "
             "tick's control and sensor values", Repl._step),
-    Command("set", "seed N | until SECONDS", "reseed the simulation; limit how long a run "
-            "may go on (default 600 s)", Repl._set),
+    Command("set", "seed N | until SECONDS | realtime on|off", "reseed the simulation; "
+            "limit how long a run may go on (default 600 s); pace runs to the wall clock",
+            Repl._set),
     Command("quit", "", "leave (Ctrl-D too)", Repl._quit),
 )}

@@ -226,7 +226,8 @@ class MdleCompleter(Completer):
         if cmd.name == "help":
             yield from _starting(arg, ((n, "command") for n in COMMANDS))
         elif cmd.name == "set":
-            yield from _starting(arg, (("seed", "random seed"), ("until", "run limit, s")))
+            yield from _starting(arg, (("seed", "random seed"), ("until", "run limit, s"),
+                                       ("realtime", "on or off")))
         elif cmd.completes == "world":
             import sim
 

@@ -193,6 +193,8 @@ class Session:
         Longest run, simulated seconds (None: no limit); see :data:`DEFAULT_UNTIL`.
     robot, sensing : str, optional
         Robot profile and ladar mode, as for :class:`sim.SimBackend`.
+    realtime : bool
+        Pace runs to the wall clock (default: as fast as the simulator goes).
 
     Raises
     ------
@@ -203,12 +205,14 @@ class Session:
     def __init__(self, world: str | os.PathLike[str] | None = None, *, seed: int | None = None,
                  registry: Registry | None = None, rate: float = 10.0,
                  until: float | None = DEFAULT_UNTIL, robot: str | None = None,
-                 sensing: str = "scan") -> None:
+                 sensing: str = "scan", realtime: bool = False) -> None:
         if not (rate > 0 and math.isfinite(rate)):
             raise ReplError(f"the control rate must be a positive number of Hz, got {rate!r}")
         self.workspace = Workspace(registry)
         self.rate = float(rate)
         self.until = until
+        #: Pace runs to the wall clock (to watch them); otherwise as fast as possible.
+        self.realtime = realtime
         self._seed = seed
         self._robot = robot
         self._sensing = sensing
@@ -454,7 +458,7 @@ class Session:
                ) -> tuple[_Run, Scheduler]:
         record = _Run(element.label, text)
         scheduler = Scheduler(element, self.backend, self.rate, (record, *observers),
-                              until=self.until)
+                              until=self.until, realtime=self.realtime)
         scheduler.start()
         self._runs.append(record)
         return record, scheduler

@@ -321,3 +321,18 @@ def test_classify_skips_comments() -> None:
     assert classify("import \"dir#1/x.mdle\"  # a # inside a string is not a comment") == (
         "definition")
     assert classify("  # first\n  :pose") == "command"
+
+
+def test_set_realtime_paces_runs_to_the_wall_clock(r: Run) -> None:
+    import time
+
+    ok, out, _ = r(":set realtime on")
+    assert out == "runs go at the pace of the wall clock\n"
+    assert ok and r.repl.session.realtime
+    start = time.monotonic()
+    assert r("(go(1 m/s), never, 0.5 s)")[0]
+    assert time.monotonic() - start >= 0.45
+    ok, _, _ = r(":set realtime off")
+    assert ok and not r.repl.session.realtime
+    ok, _, err = r(":set realtime maybe")
+    assert not ok and "`on` or `off`" in err
