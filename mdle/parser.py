@@ -550,14 +550,11 @@ def _end_span(text: str, file: str) -> Span:
 def _unclosed(text: str, file: str) -> Span | None:
     """Where the innermost `(` or `[` still open at the end of the text was opened."""
     stack: list[Token] = []
-    try:
-        for tok in lark_parser().lex(text, dont_ignore=False):
-            if tok.type in ("LPAR", "LSQB"):
-                stack.append(tok)
-            elif tok.type in ("RPAR", "RSQB") and stack:
-                stack.pop()
-    except UnexpectedInput:
-        return None
+    for tok in iter_tokens(text):
+        if tok.type in ("LPAR", "LSQB"):
+            stack.append(tok)
+        elif tok.type in ("RPAR", "RSQB") and stack:
+            stack.pop()
     return _token_span(file, stack[-1]) if stack else None
 
 
@@ -704,12 +701,17 @@ def _close_keyword(word: str, expected: set[str]) -> str | None:
 
 
 def iter_tokens(text: str) -> Iterator[Token]:
-    """The tokens of a text (comments and whitespace skipped); stops at the first bad character."""
-    token = _STATE.set(_State("<lex>"))
-    try:
-        yield from lark_parser().lex(text, dont_ignore=False)
-    except UnexpectedInput:
-        return
-    finally:
-        _STATE.reset(token)
+    """The tokens of a text (comments and whitespace skipped); stops at the first bad
+    character (and after :data:`MAX_DEPTH` unclosed brackets)."""
+    state = _State("<lex>")
+    lexer = lark_parser().lex(text, dont_ignore=False)
+    while True:
+        token = _STATE.set(state)
+        try:
+            tok = next(lexer)
+        except (StopIteration, UnexpectedInput, _TooDeep):
+            return
+        finally:
+            _STATE.reset(token)
+        yield tok
 

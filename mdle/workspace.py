@@ -16,7 +16,7 @@ from mdle.compile import _Abort, _checker, check_program
 from mdle.errors import CheckError, Diagnostic
 from mdle.format import format_statement
 from mdle.loader import load_modules, read_source
-from mdle.parser import iter_tokens, parse_expression
+from mdle.parser import MAX_DEPTH, iter_tokens, parse_expression
 from mdle.program import Element, Program
 from mdle.resolve import build_namespace
 
@@ -130,6 +130,8 @@ class Workspace:
             elif tok.type in ("RPAR", "RSQB"):
                 depth -= 1
             last = tok
+        if depth >= MAX_DEPTH:
+            return True  # too deep to ever parse: let the parser say so now
         if depth > 0:
             return False
         if last is None:

@@ -75,6 +75,7 @@ def test_program_and_entry(reg: Registry) -> None:
     ("atom a = (drive(1 m/s), never, 1 s)", True), ("atom a =", False),
     ("interrupt i = x >", False), ("interrupt i = x > 1 m and", False), ("", True),
     ("cruise", True), ("atom a = (drive(1 m/s), never, 1 s))", True), ("\x00 (", True),
+    ("(" * 500, True),
 ])
 def test_is_complete(text: str, complete: bool, reg: Registry) -> None:
     assert Workspace(reg).is_complete(text) is complete
