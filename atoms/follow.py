@@ -98,13 +98,13 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                       g.umax, filter_kappa=not view.exact)
     if left:
         u = -u
-    u_law = u
+    u_law, v_law = u, v
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        u, clearance = steering.safety_filter(scan_points_cached(ctx), v, u, g.umax,
-                                              ctx.limits.radius, margin,
-                                              float(args["lookahead"]))
+        v, u, clearance = steering.safety_filter(scan_points_cached(ctx), v, u, g.umax,
+                                                 ctx.limits.radius, margin,
+                                                 float(args["lookahead"]))
     sgn = -1.0 if left else 1.0
     f, s = view.front, view.side
     ctx.cache["trace"] = {
@@ -118,7 +118,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "side_curvature": sgn * s.kappa if s.hit else 0.0,
         "mode": 1.0 if state.memory.mode == steering.CORNER else 0.0,
         "u_law": u_law,
-        "safety": float(u != u_law),
+        "safety": float(u != u_law or v != v_law),
         "predicted_clearance": clearance if math.isfinite(clearance) else -1.0,
     }
     return Command(v, u)

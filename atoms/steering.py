@@ -342,16 +342,39 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
     return _blend_and_floor(front, side, v, rc, g, umax)
 
 
+def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookahead: float,
+                   samples: int) -> "np.ndarray":
+    """Clearance (m, before the body radius) of the arcs driven at ``speed`` and each of
+    ``rates`` for ``lookahead`` seconds, sampled at ``samples`` points after the start."""
+    import numpy as np
+
+    length = speed * lookahead
+    s = np.linspace(length / samples, length, samples)
+    c = rates / speed                                            # (K,) curvature of each arc
+    th = c[:, None] * s[None, :]                                 # (K, S)
+    straight = np.abs(c) < 1e-9
+    cs = np.where(straight, 1.0, c)[:, None]
+    ax = np.where(straight[:, None], s[None, :], np.sin(th) / cs)
+    ay = np.where(straight[:, None], 0.0, (1.0 - np.cos(th)) / cs)
+    dx = ax[..., None] - near[:, 0]
+    dy = ay[..., None] - near[:, 1]
+    return np.sqrt((dx * dx + dy * dy).min(axis=(1, 2)))         # (K,)
+
+
 def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius: float,
                   margin: float, lookahead: float, candidates: int = 25,
-                  samples: int = 8) -> tuple[float, float]:
-    """The full-scan safety layer: keep ``u`` unless its arc comes too close to any scan point.
+                  samples: int = 8) -> tuple[float, float, float]:
+    """The full-scan safety layer: keep ``(v, u)`` unless its arc comes too close to the scan.
 
     The arc the robot drives at ``(v, u)`` over ``lookahead`` seconds is sampled and its
-    clearance (distance to the nearest scan point minus the body ``radius``) computed. If it
-    is at least ``margin`` the command stands. Otherwise the turn rate is replaced by the
-    admissible one (clearance >= margin) nearest to ``u`` among ``candidates`` rates spread
-    over +-umax, or, if none is admissible, by the one with the most clearance.
+    clearance (distance to the nearest scan point minus the body ``radius``) computed. It is
+    admissible if that is at least ``margin``, or, when the robot is already closer than
+    ``margin``, if the arc gets no closer than it is now. An admissible command stands.
+    Otherwise the turn rate is replaced by the admissible one nearest to ``u`` among
+    ``candidates`` rates over +-umax, at full speed if one exists, else at half, a quarter,
+    and finally standing still (turning on the spot, which never gets closer), so the robot
+    never drives into a dead end it cannot turn out of (a constant-speed unicycle cannot
+    turn round in a wedge narrower than its turning circle).
 
     Parameters
     ----------
@@ -366,35 +389,27 @@ def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius:
 
     Returns
     -------
-    (u, clearance)
-        The turn rate to command and the predicted clearance of the law's own arc (m).
+    (v, u, clearance)
+        The command to send and the predicted clearance of the law's own arc (m).
     """
     import numpy as np
 
     if points.shape[0] == 0 or v <= 0 or lookahead <= 0:
-        return u, math.inf
-    length = v * lookahead
-    near = points[(points * points).sum(1) < (length + radius + margin + 0.05) ** 2]
+        return v, u, math.inf
+    reach = v * lookahead + radius + margin + 0.05
+    near = points[(points * points).sum(1) < reach * reach]
     if near.shape[0] == 0:
-        return u, math.inf
-    rates = np.concatenate(([u], np.linspace(-umax, umax, candidates)))
-    s = np.linspace(length / samples, length, samples)
-    c = rates / v                                               # (K,) curvature of each arc
-    th = c[:, None] * s[None, :]                                # (K, S)
-    straight = np.abs(c) < 1e-9
-    cs = np.where(straight, 1.0, c)[:, None]
-    ax = np.where(straight[:, None], s[None, :], np.sin(th) / cs)
-    ay = np.where(straight[:, None], 0.0, (1.0 - np.cos(th)) / cs)
-    dx = ax[..., None] - near[:, 0]
-    dy = ay[..., None] - near[:, 1]
-    clear = np.sqrt((dx * dx + dy * dy).min(axis=(1, 2))) - radius  # (K,)
-    own = float(clear[0])
-    if own >= margin:
-        return u, own
-    ok = clear[1:] >= margin
-    if ok.any():
-        pick = np.flatnonzero(ok)[np.argmin(np.abs(rates[1:][ok] - u))]
-        return float(rates[1 + pick]), own
-    return float(rates[int(np.argmax(clear))]), own
-
-
+        return v, u, math.inf
+    now = float(np.sqrt((near * near).sum(1).min())) - radius
+    need = min(margin, now - 1e-3)
+    own = float(_arc_clearance(near, v, np.array([u]), lookahead, samples)[0]) - radius
+    if own >= need:
+        return v, u, own
+    rates = np.linspace(-umax, umax, candidates)
+    for factor in (1.0, 0.5, 0.25):
+        clear = _arc_clearance(near, v * factor, rates, lookahead, samples) - radius
+        ok = clear >= need
+        if ok.any():
+            pick = np.flatnonzero(ok)[np.argmin(np.abs(rates[ok] - u))]
+            return v * factor, float(rates[pick]), own
+    return 0.0, min(max(u, -umax), umax), own  # turn on the spot: never closer

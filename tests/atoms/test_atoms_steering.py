@@ -104,15 +104,24 @@ def test_corner_law_on_the_circle_is_the_circling_rate() -> None:
 
 def test_safety_filter_keeps_a_clear_arc_and_replaces_a_blocked_one() -> None:
     far = np.array([[5.0, 5.0]])
-    assert S.safety_filter(far, 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (0.2, math.inf)
+    assert S.safety_filter(far, 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (1.0, 0.2, math.inf)
     post = np.array([[0.35, 0.02]])  # a thin post just left of straight ahead
-    u, own = S.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5)
+    v, u, own = S.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5)
     assert own < 0.05
-    assert u != 0.0
+    assert v == 1.0 and u != 0.0
     # the chosen arc really clears the post
     th = u * np.linspace(0.0, 0.5, 200)
     path = np.stack((np.sin(th) / u, (1 - np.cos(th)) / u), axis=1)
     assert np.min(np.hypot(*(path - post[0]).T)) >= 0.05
+
+
+def test_safety_filter_slows_down_in_a_dead_end() -> None:
+    # a narrow wedge ahead, opening towards the robot: no arc at full speed escapes it
+    t = np.linspace(0.0, 2.0, 200)[:, None]
+    walls = np.vstack((np.hstack((t, 0.2 - 0.1 * t)), np.hstack((t, -0.2 + 0.1 * t))))
+    v, u, own = S.safety_filter(walls[walls[:, 0] > 0.1], 1.0, 0.0, 3.0, 0.0, 0.15, 0.8)
+    assert own < 0.15
+    assert v < 1.0  # slowed (or stopped to turn on the spot) rather than driving on
 
 
 # ---- closed loops on exact shapes (tests/atoms/conftest.py), real atom, no simulator --------
