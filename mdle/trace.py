@@ -151,8 +151,8 @@ class TraceWriter:
             line += ',"diag":{%s}' % ",".join(['%s:%.9g' % (self._quoted(k), v)
                                                for k, v in s.diag.items()])
         line += "}"
-        if "nan" in line or "inf" in line or "NaN" in line or "Infinity" in line:
-            line = _dumps(_sample_dict(s))  # rare: non-finite values (or such a path)
+        if "nan" in line or "inf" in line:  # %-format writes non-finite floats so
+            line = _dumps(_sample_dict(s))  # rare: redo with nulls (also for such a path)
         return line
 
     def on_end(self, result: RunResult) -> None:
