@@ -180,8 +180,10 @@ def test_missing_timer_message(reg: Registry) -> None:
 @pytest.mark.parametrize("text, message", [
     ("atom a = (drive(1 m/s), never, 10 m)",
      "expected a timer such as `10 s` or `inf`, found a length (`10 m`)"),
-    ("atom a = (drive(1 m/s), never, never)", "expected a timer such as `10 s` or `inf`, found `never`"),
-    ("atom a = (drive(1 m/s), never, px > 1 m)", "expected a timer such as `10 s` or `inf`, found a condition"),
+    ("atom a = (drive(1 m/s), never, never)",
+     "expected a timer such as `10 s` or `inf`, found `never`"),
+    ("atom a = (drive(1 m/s), never, px > 1 m)",
+     "expected a timer such as `10 s` or `inf`, found a condition"),
     ("atom a = (drive(1 m/s), never, -1 s)", "a timer cannot be negative"),
     ("atom a = (drive(1 m/s), never, px)",
      "expected a fixed value, but `px` is a sensor function"),
@@ -239,10 +241,12 @@ def test_missing_timer_message(reg: Registry) -> None:
     ("atom a = (drive(1 m/s), never, 1 s)\nrun b", "unknown element `b`"),
     ("atom a(v) = (drive(v), never, 1 s)\nrun a", "`a` cannot run as it stands: it needs `v`"),
     ("interrupt i = bumped\nrun i", "`run` takes an atom, behavior or plan; `i` is an interrupt"),
-    ("atom a = (drive(1 m/s), never, 1 s)\nrun a\nrun a", "`run` is given twice: t.mdle:2:1 and t.mdle:3:1"),
+    ("atom a = (drive(1 m/s), never, 1 s)\nrun a\nrun a",
+     "`run` is given twice: t.mdle:2:1 and t.mdle:3:1"),
     ("atom drive = (spin(1 rad/s), never, 1 s)",
      "`drive` is already a control law; a definition cannot take its name"),
-    ("atom a(v = 1 m/s, v = 2 m/s) = (drive(v), never, 1 s)", "parameter `v` of `a` is declared twice"),
+    ("atom a(v = 1 m/s, v = 2 m/s) = (drive(v), never, 1 s)",
+     "parameter `v` of `a` is declared twice"),
     ("atom a = (drive(1 m/s / 0), never, 1 s)", "division by zero"),
 ])
 def test_each_error_class(text: str, message: str, reg: Registry) -> None:

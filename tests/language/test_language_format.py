@@ -96,7 +96,8 @@ def test_comments_and_blank_lines() -> None:
 def test_keywords_units_and_operators_are_normalised() -> None:
     text = 'import   "c.mdle"\ninterrupt i(d=1m)=not(x>d)and y<2  m or -t*2>=3s\nrun   i'
     assert format_source(text) == ('import "c.mdle"\n'
-                                   "interrupt i(d = 1 m) = not (x > d) and y < 2 m or -t * 2 >= 3 s\n"
+                                   "interrupt i(d = 1 m) = "
+                                   "not (x > d) and y < 2 m or -t * 2 >= 3 s\n"
                                    "run i\n")
 
 

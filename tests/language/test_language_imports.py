@@ -18,7 +18,8 @@ def write(folder: Path, name: str, text: str) -> Path:
 
 
 def test_import_relative_to_the_importing_file(tmp_path: Path) -> None:
-    write(tmp_path, "lib/common.mdle", 'import "deeper/more.mdle"\natom a = (go(1 m/s), never, 1 s)')
+    write(tmp_path, "lib/common.mdle",
+          'import "deeper/more.mdle"\natom a = (go(1 m/s), never, 1 s)')
     write(tmp_path, "lib/deeper/more.mdle", "atom b = (stop, never, 1 s)\nrun b")
     main = write(tmp_path, "plans/main.mdle",
                  'import "../lib/common.mdle"\nplan main = ((a, b), never, inf)')

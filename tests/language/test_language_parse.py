@@ -59,7 +59,8 @@ def test_every_statement_kind() -> None:
 def test_keyword_arguments_and_symbols() -> None:
     e = parse_expression("follow_boundary(side = right, rc = 0.5 m)")
     assert isinstance(e, st.Call)
-    assert [(a.name, type(a.value).__name__) for a in e.args] == [("side", "Name"), ("rc", "Number")]
+    assert [(a.name, type(a.value).__name__) for a in e.args] == [
+        ("side", "Name"), ("rc", "Number")]
 
 
 def test_repeat_and_vector() -> None:
