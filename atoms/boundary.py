@@ -1,4 +1,4 @@
-"""The boundary as the steering law sees it: range, tangent and curvature at the front and side rays.
+"""The boundary as the steering law sees it: range, tangent, curvature at the front and side rays.
 
 :func:`boundary_view` turns one scan into a :class:`BoundaryView` for following on the right or
 on the left; :func:`cached_view` computes it once per tick (in ``ctx.cache``) for every control

@@ -277,8 +277,11 @@ def menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
 
 def _windows(s: Surfaces, windows: Sequence[int] | int
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every window at once, as complex numbers ``x + iy``: the chords u = P[n]-P[n-w] and
-    v = P[n+w]-P[n], each (W, N), and the (W, N) mask of windows that fit on one surface."""
+    """Every window at once, as complex numbers ``x + iy``.
+
+    Returns the chords u = P[n]-P[n-w] and v = P[n+w]-P[n], each (W, N), and the (W, N) mask
+    of windows that fit on one surface.
+    """
     w = np.asarray(windows, dtype=np.intp).reshape(-1, 1)
     n = s.valid.size
     idx = np.arange(n)
@@ -421,7 +424,7 @@ def estimate_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | 
     s = surfaces(ranges, bearings, valid)
     if sigma > 0:
         s = smooth_positions(s, sigma)
-    return fn(s, windows)  # type: ignore[operator]
+    return fn(s, windows)  # type: ignore[operator,arg-type]
 
 
 def principal_direction(points: np.ndarray) -> float:

@@ -64,8 +64,11 @@ def wrap(a: float) -> float:
 
 @dataclass(frozen=True)
 class Ray:
-    """What one ray of the law sees: hit flag, range (m), tangent angle from the heading (rad,
-    obstacle-on-right orientation) and signed curvature (1/m, convex negative)."""
+    """What one ray of the law sees.
+
+    A hit flag, the range (m), the tangent angle from the heading (rad, obstacle-on-right
+    orientation) and the signed curvature (1/m, convex negative).
+    """
 
     hit: bool
     r: float = math.nan
@@ -79,8 +82,9 @@ MISS = Ray(False)
 
 @dataclass(frozen=True)
 class Gains:
-    """Gains and safeguard thresholds of the law (control-law.md section 5). SI units; the
-    thresholds marked "x rc" are multiples of the following distance ``rc``.
+    """Gains and safeguard thresholds of the law (control-law.md section 5).
+
+    SI units; the thresholds marked "x rc" are multiples of the following distance ``rc``.
 
     Attributes
     ----------
@@ -91,7 +95,8 @@ class Gains:
     umax : float, rad/s
         Turn-rate saturation.
     s_min, c_min : float
-        Grazing rejection: a front hit needs ``sin(beta) > s_min``, a side hit ``cos(beta) > c_min``.
+        Grazing rejection: a front hit needs ``sin(beta) > s_min``, a side hit
+        ``cos(beta) > c_min``.
     a0_min, a0_max : float
         Clamp of the front ray's rotation gain ``a0 = 1 - k0 r0 / sin b0``.
     conc_margin, d_min : float
@@ -105,8 +110,8 @@ class Gains:
         Front floor: full left turn once the margin to the turning envelope is below
         ``floor_hard``, none above ``floor_soft``.
     corner_reach, corner_jump : float, x rc
-        Corner mode starts only if the last side range was below ``corner_reach`` and the side
-        ray is lost (a miss or a range jump above ``corner_jump``) ...
+        Corner mode starts only if the last side range was below ``corner_reach`` and the
+        side ray is lost (a miss or a range jump above ``corner_jump``) ...
     corner_turn_jump : float, rad
         ... or the side tangent turned clockwise by more than this in the world frame.
     corner_exit_angle, corner_exit_range : float, rad and x rc
@@ -262,9 +267,12 @@ def _blend_and_floor(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax:
 
 
 def corner_law(d: float, e: float, v: float, rc: float, g: Gains, umax: float) -> float:
-    """Circle a point at distance ``d`` (m) seen at ``e = bearing + pi/2`` (rad, 0 when it is
-    straight to the right): ``u = -v cos(e)/d - 2 v f(d) cos(e/2) + mu sin(e/2)``, for which
-    ``V_c = 4 sin^2(e/4) + g(d)`` has ``dV_c/dt = -mu sin^2(e/2)``."""
+    """Circle a point at distance ``d`` (m) seen at ``e = bearing + pi/2`` (rad).
+
+    ``e`` is 0 when the point is straight to the right;
+    ``u = -v cos(e)/d - 2 v f(d) cos(e/2) + mu sin(e/2)``, for which
+    ``V_c = 4 sin^2(e/4) + g(d)`` has ``dV_c/dt = -mu sin^2(e/2)``.
+    """
     d = max(d, 1e-3)
     u = -v * math.cos(e) / d - 2.0 * v * f_gain(d, rc, g) * math.cos(e / 2.0) \
         + g.mu * math.sin(e / 2.0)
@@ -344,8 +352,10 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
 
 def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookahead: float,
                    samples: int) -> "np.ndarray":
-    """Clearance (m, before the body radius) of the arcs driven at ``speed`` and each of
-    ``rates`` for ``lookahead`` seconds, sampled at ``samples`` points after the start."""
+    """Clearance (m, before the body radius) of arcs driven at ``speed`` and ``rates``.
+
+    Each arc lasts ``lookahead`` seconds and is sampled at ``samples`` points after the start.
+    """
     import numpy as np
 
     length = speed * lookahead

@@ -35,7 +35,9 @@ class Row:
 
     @property
     def label(self) -> str:
-        w = f"{self.windows[0]}-{self.windows[-1]}" if len(self.windows) > 1 else str(self.windows[0])
+        """The row as Table 1 names it."""
+        w = (f"{self.windows[0]}-{self.windows[-1]}" if len(self.windows) > 1
+             else str(self.windows[0]))
         return f"{self.method}, {'filtered' if self.filtered else 'unfiltered'}, w {w}"
 
 
@@ -49,7 +51,7 @@ PAPER: dict[Row, tuple[float, float]] = dict(zip(ROWS, [
     (5.12, 7.74), (1.23, 4.40), (0.58, 3.56),
     (14.52, 15.75), (1.87, 5.46), (0.79, 4.51),
     (6.44, 10.35), (0.79, 5.53), (0.80, 4.73),
-]))
+], strict=True))
 
 OBJECTS = (("trash can", "trashcan"), ("cabinet", "cabinet"))
 
@@ -121,8 +123,11 @@ def format_table(result: Result) -> str:
 
 
 def plot_figures(out: Path, seed: int = 0, draws: int = 5) -> list[Path]:
-    """Figures 4 (cabinet) and 5 (trash can): the averaged geometric estimate (w 7-9) of a few
-    scans against the scan angle, with the exact curvature. Returns the files written."""
+    """Plot Figures 4 (cabinet) and 5 (trash can); return the files written.
+
+    The averaged geometric estimate (w 7-9) of a few scans against the scan angle, with the
+    exact curvature.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

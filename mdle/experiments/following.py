@@ -97,8 +97,10 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
 
 def _start_poses(world: str, n: int, seed: int, distance: float = 8.0
                  ) -> list[tuple[float, float, float]]:
-    """Seeded starts ``distance`` from the obstacle's centre, heading at it +-17 deg (the
-    wall: random position 1-6 m above it, heading -11 to -169 deg)."""
+    """Seeded starts ``distance`` from the obstacle's centre, heading at it +-17 deg.
+
+    The wall: a random position 1-6 m above it, heading -11 to -169 deg.
+    """
     import numpy as np
 
     from sim import load_world
@@ -109,14 +111,15 @@ def _start_poses(world: str, n: int, seed: int, distance: float = 8.0
         xs = rng.uniform(-5.0, 5.0, n)
         ys = rng.uniform(1.0, 6.0, n)
         th = -rng.uniform(math.radians(11.0), math.radians(169.0), n)
-        return list(zip(xs.tolist(), ys.tolist(), th.tolist()))
+        return list(zip(xs.tolist(), ys.tolist(), th.tolist(), strict=True))
     cx, cy = w.geometry.centroid.x, w.geometry.centroid.y
     bearing = rng.uniform(-math.pi, math.pi, n)
     off = rng.uniform(-math.radians(17.0), math.radians(17.0), n)
     x = cx + distance * np.cos(bearing)
     y = cy + distance * np.sin(bearing)
     th = bearing + math.pi + off
-    return list(zip(x.tolist(), y.tolist(), np.arctan2(np.sin(th), np.cos(th)).tolist()))
+    return list(zip(x.tolist(), y.tolist(), np.arctan2(np.sin(th), np.cos(th)).tolist(),
+                    strict=True))
 
 
 def random_starts(world: str, n: int = 50, *, seed: int = 0, side: str = "right",
