@@ -716,7 +716,7 @@ class Checker:
         for i in range(len(elements) - 1):
             if never_ends(elements[i]):
                 self.warn(items[i + 1].span,
-                          f"{_called(items[i + 1], True)} is never reached: "
+                          f"{_called(items[i + 1])} is never reached: "
                           f"{_called(items[i])} before it never ends (its interrupt is `never` "
                           "and its timer `inf`)",
                           hint="give the element before it an interrupt or a finite timer")
@@ -830,12 +830,12 @@ def _short(expr: st.Expr) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _called(expr: st.Expr, first: bool = False) -> str:
+def _called(expr: st.Expr) -> str:
     """How a message names an element: its text if short, else where it starts."""
     text = format_expr(expr)
     if len(text) <= 40:
         return f"`{text}`"
-    return f"{'T' if first else 't'}he element at line {expr.span.line}, column {expr.span.column}"
+    return f"the element at line {expr.span.line}, column {expr.span.column}"
 
 
 def _after(expr: st.Group) -> Span:
