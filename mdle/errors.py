@@ -128,14 +128,20 @@ def render_diagnostic(d: Diagnostic, sources: dict[str, str] | None = None) -> s
         src_lines = text.splitlines()
         if 1 <= d.span.line <= len(src_lines):
             raw = src_lines[d.span.line - 1].replace("\t", " ")
-            shown = raw if len(raw) <= 160 else raw[:160] + " ..."
             col = max(1, min(d.span.column, len(raw) + 1))
+            width = 1
             if d.span.end_line == d.span.line and d.span.end_column > col:
-                width = min(d.span.end_column - col, max(1, len(shown) - col + 1))
-            else:
-                width = 1
+                width = d.span.end_column - col
+            # Long lines (a 1 MB one-liner) are cut to a window around the column.
+            start = max(0, col - 80) if len(raw) > 160 else 0
+            shown = raw[start:start + 160]
+            if start:
+                shown, col = "... " + shown, col - start + 4
+            width = max(1, min(width, len(shown) - col + 1))
+            if start + 160 < len(raw):
+                shown += " ..."
             lines.append("    " + shown)
-            lines.append("    " + " " * (col - 1) + "^" * max(1, width))
+            lines.append("    " + " " * (col - 1) + "^" * width)
     if d.hint:
         lines.append(f"  hint: {d.hint}")
     for note in d.notes:
