@@ -43,6 +43,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -275,6 +276,19 @@ def menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
     return out
 
 
+@lru_cache(maxsize=64)
+def _window_index(n: int, windows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Index arrays of every window for an N-beam scan (a pure function, memoised: scans of
+    one sensor always have the same N). Returned read-only."""
+    w = np.asarray(windows, dtype=np.intp).reshape(-1, 1)
+    idx = np.arange(n)
+    lo = np.maximum(idx - w, 0)
+    hi = np.minimum(idx + w, max(n - 1, 0))
+    for a in (w, lo, hi):
+        a.setflags(write=False)
+    return w, lo, hi
+
+
 def _windows(s: Surfaces, windows: Sequence[int] | int
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every window at once, as complex numbers ``x + iy``.
@@ -282,14 +296,10 @@ def _windows(s: Surfaces, windows: Sequence[int] | int
     Returns the chords u = P[n]-P[n-w] and v = P[n+w]-P[n], each (W, N), and the (W, N) mask
     of windows that fit on one surface.
     """
-    w = np.asarray(windows, dtype=np.intp).reshape(-1, 1)
+    key = (int(windows),) if isinstance(windows, (int, np.integer)) else tuple(map(int, windows))
     n = s.valid.size
-    idx = np.arange(n)
+    w, lo, hi = _window_index(n, key)
     ok = s.reach >= w
-    lo = idx - w
-    np.maximum(lo, 0, out=lo)
-    hi = idx + w
-    np.minimum(hi, max(n - 1, 0), out=hi)
     z = np.ascontiguousarray(s.points).view(np.complex128).reshape(n)
     return z - z[lo], z[hi] - z, ok
 
@@ -301,8 +311,10 @@ def _finish(k: np.ndarray, u: np.ndarray, au: np.ndarray, ok: np.ndarray) -> Est
     ``u = P[n] - P[n-w]`` turned by half the arc it spans, ``asin(|u| k / 2)``: exact on a
     circle even when the beams sample it unevenly (the chord ``P[n+w] - P[n-w]`` is not).
     """
-    s = np.clip(0.5 * au * k, -1.0, 1.0)
-    t = u * (np.sqrt(1.0 - s * s) + 1j * s)  # |t| = |u|: longer windows weigh more
+    s = 0.5 * au * k  # |s| <= 1: a chord is never longer than the diameter (up to rounding)
+    s2 = s * s
+    np.minimum(s2, 1.0, out=s2)
+    t = u * (np.sqrt(1.0 - s2) + 1j * s)  # |t| = |u|: longer windows weigh more
     if k.shape[0] == 1:
         valid = ok[0]
         kappa = k[0]
