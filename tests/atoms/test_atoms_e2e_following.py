@@ -87,4 +87,5 @@ def test_random_starts_never_collide(world: str) -> None:
     assert len(runs) == 50
     worst = min(r.min_clearance for r in runs)
     assert not any(r.collided for r in runs), [r for r in runs if r.collided]
-    assert worst > 0.0, f"worst clearance {worst:.3f} m"
+    # the safety layer's margin is 0.15 m; measured worst: 0.148-0.156 m
+    assert worst > 0.1, f"worst clearance {worst:.3f} m"
