@@ -62,3 +62,11 @@ def test_cli_prints_table_1_and_writes_figures(tmp_path: Path,
 def test_cli_refuses_zero_draws(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["experiment", "curvature", "--draws", "0"]) == 2
     assert "at least 1" in capsys.readouterr().err
+
+
+def test_cli_following_prints_one_line_per_shape(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["experiment", "following", "--duration", "3"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert [ln.split()[0] for ln in lines[1:]] == ["ellipse", "hexagon", "u-shape", "square",
+                                                   "arrow", "wall"]
+    assert all(ln.split()[2] == "False" for ln in lines[1:])  # no collision in 3 s
