@@ -19,7 +19,8 @@ Conventions (control-law.md):
   ``sensing="exact"``) the exact values at the two beams are used. Otherwise: the front ray takes
   the averaged geometric estimate (centred windows 7-9, or a one-sided chord near a surface's
   end); the side ray, where no beams exist beyond -90 deg, a local quadratic fitted over beams
-  ``0..side_span`` (see :func:`_side_ray`). Windows never leave one connected surface.
+  over the first ``side_span`` (30 deg) of beams (see :func:`_side_ray`). Windows never leave
+  one connected surface.
 
 numpy is imported on first use (this module declares sensor functions the checker loads).
 """
@@ -155,7 +156,8 @@ def _front_ray(pts: "np.ndarray", start: int, c: int, end: int, r0: float,
 
 
 def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
-                  windows: Sequence[int] = (7, 8, 9), side_span: int = 30) -> BoundaryView:
+                  windows: Sequence[int] = (7, 8, 9),
+                  side_span: float = math.radians(30.0)) -> BoundaryView:
     """The front and side rays for following ``side``, from one scan.
 
     Parameters
@@ -165,8 +167,9 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
     side : Side or "right" | "left"
     windows : sequence of int, beams
         Windows of the averaged geometric estimate (front ray).
-    side_span : int, beams
-        Beams of the side ray's local quadratic fit.
+    side_span : float, radians
+        Bearing span of the beams in the side ray's local quadratic fit (30 beams on an
+        LMS-200 at 1 deg).
 
     Returns
     -------
@@ -218,12 +221,14 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
     s = surfaces(ranges, bearings, valid)
     front = _front_ray(s.points, int(s.start[c]), c, int(s.end[c]), float(ranges[c]), windows) \
         if c_ok else MISS
-    side_ray = _side_ray(s.points, int(s.end[0]), float(ranges[0]), side_span) if s_ok else MISS
+    step = abs(float(bearings[1] - bearings[0])) if bearings.size > 1 else 1.0
+    n_span = max(4, int(round(side_span / step))) if step > 0 else 4
+    side_ray = _side_ray(s.points, int(s.end[0]), float(ranges[0]), n_span) if s_ok else MISS
     return BoundaryView(front, side_ray, False, scan.max_range)
 
 
 def cached_view(ctx: Context, side: Side | str, windows: Sequence[int] = (7, 8, 9),
-                side_span: int = 30) -> BoundaryView:
+                side_span: float = math.radians(30.0)) -> BoundaryView:
     """:func:`boundary_view` of this tick's scan, computed once per tick and side."""
     side = parse_side(side)
     key = ("boundary", side, tuple(windows), side_span)

@@ -31,7 +31,7 @@ The pieces:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -165,7 +165,6 @@ class Memory:
     kappa: float | None = None
     last_rs: float = math.nan
     time: float = 0.0
-    extra: dict[str, float] = field(default_factory=dict)
 
 
 def f_gain(z: float, rc: float, g: Gains) -> float:
