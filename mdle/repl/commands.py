@@ -31,7 +31,7 @@ from mdle.backend import Pose
 from mdle.cli.output import print_diagnostics
 from mdle.errors import Diagnostic, MdleError
 from mdle.repl import views
-from mdle.repl.session import ReplError, Session
+from mdle.repl.session import ReplError, RunReport, Session
 from mdle.runtime import Observer
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
@@ -99,6 +99,8 @@ class Repl:
         self.failures = 0
         #: Extra observers of every run (the prompt adds a progress line).
         self.run_observers: list[Observer] = []
+        #: Colour maps and run reports (rich markup; the prompt sets it on a terminal).
+        self.color = False
 
     # ------------------------------------------------------------------ output
 
@@ -107,6 +109,34 @@ class Repl:
         for line in lines:
             print(line, file=self.out)
         self.out.flush()
+
+    def say_styled(self, lines: list[str], styles: dict[str, str], first: str | None = None
+                   ) -> None:
+        """Print lines, colouring the characters in ``styles`` (character -> rich style)
+        and the first line with ``first``, when :attr:`color` is on; plain otherwise."""
+        if not self.color:
+            self.say(*lines)
+            return
+        from rich.console import Console
+        from rich.text import Text
+
+        console = Console(file=self.out, highlight=False, soft_wrap=True, force_terminal=True,
+                          color_system="standard")
+        for n, line in enumerate(lines):
+            text = Text(line)
+            if n == 0 and first:
+                text.stylize(first)
+            for i, ch in enumerate(line):
+                style = styles.get(ch)
+                if style:
+                    text.stylize(style, i, i + 1)
+            console.print(text)
+        self.out.flush()
+
+    def _say_report(self, report: RunReport) -> None:
+        style = "bold green" if report.ok else (
+            "bold yellow" if report.interrupted else "bold red")
+        self.say_styled(views.format_report(report), {}, style)
 
     def complain(self, message: str, hint: str | None = None) -> None:
         """Print an error message (as ``mdle check`` prints one) on the error stream."""
@@ -172,7 +202,7 @@ class Repl:
         report = self.session.run(text, self.run_observers)
         if report.error is not None:
             print_diagnostics(report.error.diagnostics, report.error.sources, self.err)
-        self.say(*views.format_report(report))
+        self._say_report(report)
         return report.ok
 
     # ------------------------------------------------------------------ commands
@@ -239,7 +269,11 @@ class Repl:
             if not 20 <= width <= 400:
                 raise ReplError(f":where takes a width of 20 to 400 columns, got {width}")
         s = self.session
-        self.say(*views.render_map(s.world, s.path_xy(), s.backend.true_pose, width))
+        lines = views.render_map(s.world, s.path_xy(), s.backend.true_pose, width)
+        grid, legend = lines[:-1], lines[-1]
+        robot = {a: "bold yellow" for a in "<>^v"}
+        self.say_styled(grid, {"#": "grey50", ".": "cyan", "o": "bold cyan", **robot})
+        self.say(legend)
         return True
 
     def _plot(self, args: list[str]) -> bool:
@@ -314,7 +348,7 @@ class Repl:
             self.say(f"stepping `{self.session.last_element}` from the robot's current state")
         self.say(*views.format_step_rows(outcome.rows, outcome.t0))
         if outcome.report is not None:
-            self.say(*views.format_report(outcome.report))
+            self._say_report(outcome.report)
             return outcome.report.ok
         return True
 

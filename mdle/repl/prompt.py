@@ -424,6 +424,7 @@ def run_prompt(repl: Repl, *, input: Input | None = None, output: Output | None 
     session = make_prompt_session(repl, input=input, output=output, history=history)
     if output is None:
         repl.run_observers.append(ProgressLine(repl.out))
+        repl.color = repl.out.isatty()
     repl.say(f"mdle repl: world `{repl.session.world.name}`, seed {repl.session.seed}. "
              "`:help` lists the commands; Ctrl-D leaves.")
     while not repl.quit_requested:

@@ -336,3 +336,16 @@ def test_set_realtime_paces_runs_to_the_wall_clock(r: Run) -> None:
     assert ok and not r.repl.session.realtime
     ok, _, err = r(":set realtime maybe")
     assert not ok and "`on` or `off`" in err
+
+
+def test_colour_only_when_asked(r: Run) -> None:
+    r("(go(1 m/s), never, 1 s)")
+    ok, plain, _ = r(":where")
+    assert "\x1b" not in plain
+    r.repl.color = True
+    ok, coloured, _ = r(":where")
+    assert ok and "\x1b[" in coloured
+    strip = re.sub(r"\x1b\[[0-9;]*m", "", coloured)
+    assert strip == plain  # the same text, with colours
+    ok, report, _ = r("(go(1 m/s), never, 1 s)")
+    assert report.startswith("\x1b[1;32mgo (level 0) ended by timer")  # bold green: fine
