@@ -304,6 +304,9 @@ class Checker:
         return bound
 
     def _argument(self, callee: str, slot: _Slot, expr: st.Expr, env: Env) -> Value:
+        if (isinstance(expr, st.Name) and expr.name in slot.choices
+                and expr.name not in env):
+            return Symbol(expr.name)  # a declared symbol wins over a definition's name
         v = self.value(expr, env)
         if slot.choices:
             if not isinstance(v, Symbol) or v.name not in slot.choices:
@@ -908,7 +911,7 @@ def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
             stack.append((name, True))
             if name not in broken:
                 stack.extend((r.name, False) for r in references(ns.definitions[name],
-                                                                 ns.definitions)
+                                                                 ns.definitions, ns.registry)
                              if r.name not in done)
     return order
 

@@ -17,7 +17,7 @@ from atoms.registry import LawSpec, Registry, SensorSpec
 from mdle import syntax as st
 from mdle.errors import Diagnostic, Severity
 
-__all__ = ["Namespace", "build_namespace", "references", "find_cycles"]
+__all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "find_cycles"]
 
 
 @dataclass(frozen=True)
@@ -70,9 +70,26 @@ def build_namespace(definitions: Iterable[st.Definition], registry: Registry, *,
     return Namespace(MappingProxyType(defs), registry), errors
 
 
-def references(definition: st.Definition,
-               names: Mapping[str, st.Definition]) -> list[st.Name | st.Call]:
-    """The uses of other definitions in a definition's body and defaults (parameters shadow)."""
+def symbol_argument(spec: LawSpec | SensorSpec | None, index: int, arg: st.Argument) -> bool:
+    """True when ``arg`` (the ``index``-th argument of a call to ``spec``) is one of the
+    symbols its parameter declares, such as ``left`` in ``follow_boundary(side = left)``.
+
+    A declared symbol wins over a definition of the same name: a plan called ``left``
+    does not change what ``side = left`` means.
+    """
+    if spec is None or not isinstance(arg.value, st.Name):
+        return False
+    if arg.name is not None:
+        param = spec.param(arg.name)
+    else:
+        param = spec.params[index] if index < len(spec.params) else None
+    return param is not None and arg.value.name in param.choices
+
+
+def references(definition: st.Definition, names: Mapping[str, st.Definition],
+               registry: Registry | None = None) -> list[st.Name | st.Call]:
+    """The uses of other definitions in a definition's body and defaults (parameters shadow;
+    with a ``registry``, symbols that a control law or sensor function declares do too)."""
     shadow = {p.name for p in definition.param_list}
     found: list[st.Name | st.Call] = []
     stack: list[st.Expr] = [definition.body]
@@ -81,6 +98,11 @@ def references(definition: st.Definition,
         e = stack.pop()
         if isinstance(e, (st.Name, st.Call)) and e.name in names and e.name not in shadow:
             found.append(e)
+        if isinstance(e, st.Call) and registry is not None and e.name not in names:
+            spec = registry.laws.get(e.name) or registry.sensors.get(e.name)
+            stack.extend(a.value for i, a in enumerate(e.args)
+                         if not symbol_argument(spec, i, a))
+            continue
         stack.extend(st.children(e))
     return found
 
@@ -88,7 +110,8 @@ def references(definition: st.Definition,
 def find_cycles(ns: Namespace) -> tuple[set[str], list[Diagnostic]]:
     """Definitions defined in terms of themselves; one error per cycle, at each member."""
     defs = ns.definitions
-    edges = {name: [(r.name, r) for r in references(d, defs)] for name, d in defs.items()}
+    edges = {name: [(r.name, r) for r in references(d, defs, ns.registry)]
+             for name, d in defs.items()}
     color: dict[str, int] = {}  # 1: on the current path, 2: done
     in_cycle: set[str] = set()
     errors: list[Diagnostic] = []

@@ -304,3 +304,18 @@ def test_default_registry_plans(plans_dir) -> None:  # type: ignore[no-untyped-d
     p = load_program(plans_dir / "language" / "tour.mdle")
     assert p.entry == "main" and not p.warnings
     assert math.isclose(p.elements["spin"].args["rate"], math.radians(30))  # type: ignore[union-attr]
+
+
+def test_declared_symbols_win_over_definitions_of_the_same_name(reg: Registry) -> None:
+    # A plan called `left` must not change what `side = left` means, nor make the atoms
+    # that say it "defined in terms of themselves".
+    p = check("atom left = (hug(side = left), gap(left) < 1 m, 5 s)\n"
+              "atom right = (hug(right), never, 5 s)\n"
+              "plan main = ((left, right), never, inf)", reg)
+    main = p.elements["main"]
+    assert isinstance(main, StringNode)
+    assert [e.label for e in main.elements] == ["left", "right"]
+    assert [dict(e.args)["side"] for e in main.elements] == ["left", "right"]
+    # Where no symbol is declared the name still means the definition.
+    assert "expected a fixed value, but `left` is" in errors(
+        "atom left = (hug(), never, 5 s)\natom a = (drive(left), never, 5 s)", reg)[0]
