@@ -12,7 +12,7 @@ __all__ = ["default_registry"]
 
 
 def default_registry() -> Registry:
-    """The registry of the built-in control laws and sensor functions."""
+    """Return the registry of the built-in control laws and sensor functions."""
     from atoms import boundary, follow, laws, motion, sensors
 
     return Registry.from_modules(laws, sensors, boundary, follow, motion)

@@ -138,7 +138,7 @@ class LawSpec:
     doc: str = ""
 
     def param(self, name: str) -> Param | None:
-        """The parameter called ``name``, or None."""
+        """Return the parameter called ``name``, or None."""
         return next((p for p in self.params if p.name == name), None)
 
 
@@ -156,7 +156,7 @@ class SensorSpec:
     doc: str = ""
 
     def param(self, name: str) -> Param | None:
-        """The parameter called ``name``, or None."""
+        """Return the parameter called ``name``, or None."""
         return next((p for p in self.params if p.name == name), None)
 
 
@@ -210,7 +210,10 @@ class Registry:
         for spec in specs:
             if spec.name in laws or spec.name in sensors:
                 raise ValueError(f"`{spec.name}` is registered twice")
-            (laws if isinstance(spec, LawSpec) else sensors)[spec.name] = spec  # type: ignore[index]
+            if isinstance(spec, LawSpec):
+                laws[spec.name] = spec
+            else:
+                sensors[spec.name] = spec
         return cls(MappingProxyType(laws), MappingProxyType(sensors))
 
     @classmethod
@@ -227,7 +230,7 @@ class Registry:
         return cls.from_specs(specs)
 
     def merged(self, other: "Registry") -> "Registry":
-        """A registry with the entries of both; a name in both is a ``ValueError``."""
+        """Return a registry with the entries of both; a name in both is a ``ValueError``."""
         return Registry.from_specs([*self.laws.values(), *self.sensors.values(),
                                     *other.laws.values(), *other.sensors.values()])
 

@@ -84,7 +84,7 @@ def t(args: Args, ctx: Context) -> float:
 
 @sensor(result=BOOL)
 def stalled(args: Args, ctx: Context) -> bool:
-    """True while the robot pushes against something and cannot move (Pioneer stall flag)."""
+    """Whether the robot pushes against something and cannot move (Pioneer stall flag)."""
     return ctx.obs.stalled
 
 

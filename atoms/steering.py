@@ -168,12 +168,12 @@ class Memory:
 
 
 def f_gain(z: float, rc: float, g: Gains) -> float:
-    """The CLF's distance term ``f(z) = clip(kf (z - rc), -fmax, fmax)`` (1/m)."""
+    """Return the CLF's distance term ``f(z) = clip(kf (z - rc), -fmax, fmax)`` (1/m)."""
     return min(max(g.kf * (z - rc), -g.fmax), g.fmax)
 
 
 def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -> float:
-    """The CLF split law for already-validated rays (pass :data:`MISS` for a missing one).
+    """Return the CLF split law for already-validated rays (pass :data:`MISS` for a missing one).
 
     With the front missing this is the exact closed form
     ``u = v (ks - 2 f cos(bs/2)) / D + mu (1 - ks rs / cos bs) sin(bs/2)``,
@@ -373,7 +373,7 @@ def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookah
 def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius: float,
                   margin: float, lookahead: float, candidates: int = 25,
                   samples: int = 8) -> tuple[float, float, float]:
-    """The full-scan safety layer: keep ``(v, u)`` unless its arc comes too close to the scan.
+    """Apply the full-scan safety layer: keep ``(v, u)`` unless its arc nears the scan.
 
     The arc the robot drives at ``(v, u)`` over ``lookahead`` seconds is sampled and its
     clearance (distance to the nearest scan point minus the body ``radius``) computed. It is

@@ -60,6 +60,7 @@ def lms_scan_us(cycles: int) -> float:
 
 
 def main() -> None:
+    """Print the time of one driver cycle."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cycles", type=int, default=2000)
     args = parser.parse_args()

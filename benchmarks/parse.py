@@ -1,5 +1,7 @@
-"""Parser and checker speed: lines per second on a generated 10,000-line plan, and the
-wall time of `mdle check` on a small plan (targets: >= 10,000 lines/s; < 0.5 s).
+"""Measure the parser and checker speed.
+
+Lines per second on a generated 10,000-line plan, and the wall time of `mdle check` on a
+small plan (targets: >= 10,000 lines/s; < 0.5 s).
 
 Run: python benchmarks/parse.py [--lines N] [--repeat R]
 """
@@ -12,15 +14,19 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 
 
 def generated_plan(lines: int) -> str:
-    """A plan of ``lines`` lines written the way plans in plans/ are: comments, blank
-    lines, one-line atoms and interrupts, behaviors and plans laid out one element per
-    line (the `mdle fmt` layout). Every construct appears; the result checks cleanly."""
+    """Return a plan of ``lines`` lines written the way plans in plans/ are.
+
+    Comments, blank lines, one-line atoms and interrupts, behaviors and plans laid out one
+    element per line (the `mdle fmt` layout). Every construct appears; the result checks
+    cleanly.
+    """
     out = ["# Generated benchmark plan.", "",
            "interrupt blocked(d = 0.5 m) = range(0 deg) < d",
            "interrupt lost = min_range(-100 deg, -80 deg) > 2 m or stalled", ""]
@@ -55,7 +61,8 @@ def generated_plan(lines: int) -> str:
     return "\n".join(out) + "\n"
 
 
-def best_of(fn, repeat: int) -> float:  # type: ignore[no-untyped-def]
+def best_of(fn: Callable[[], object], repeat: int) -> float:
+    """Return the best wall time of ``repeat`` calls of ``fn`` (seconds)."""
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
@@ -65,6 +72,7 @@ def best_of(fn, repeat: int) -> float:  # type: ignore[no-untyped-def]
 
 
 def main() -> int:
+    """Print the figures; exit status 1 when `mdle check` fails."""
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--lines", type=int, default=10_000)
     ap.add_argument("--repeat", type=int, default=3)

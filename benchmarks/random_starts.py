@@ -16,13 +16,14 @@ from pathlib import Path
 # from shadowing the packages of the same name.
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
 
-import argparse
-import time
+import argparse  # noqa: E402 (after the sys.path fix above)
+import time  # noqa: E402
 
-from mdle.experiments.following import SHAPES, random_starts, table
+from mdle.experiments.following import SHAPES, random_starts, table  # noqa: E402
 
 
 def main() -> None:
+    """Print one line per shape."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=50)
     parser.add_argument("--duration", type=float, default=40.0)

@@ -149,7 +149,7 @@ class Backend(Protocol):
     limits: RobotLimits
 
     def observe(self) -> Observation:
-        """The newest observation; raises BackendError if the robot is lost."""
+        """Return the newest observation; raises BackendError if the robot is lost."""
         ...
 
     def command(self, cmd: Command) -> None:

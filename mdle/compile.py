@@ -162,8 +162,11 @@ class Checker:
     # ------------------------------------------------------------------ fixed values
 
     def value(self, expr: st.Expr, env: Env) -> Value:
-        """A fixed value: numbers with units, parameters, arithmetic; a bare unknown name is
-        a symbol (its use decides whether that is right). Raises _Abort after an error."""
+        """Evaluate a fixed value: numbers with units, parameters, arithmetic.
+
+        A bare unknown name is a symbol (its use decides whether that is right). Raises
+        _Abort after an error.
+        """
         self._enter(expr.span)
         try:
             return self._value(expr, env)
@@ -222,7 +225,7 @@ class Checker:
         return v
 
     def timer(self, expr: st.Expr, env: Env) -> float:
-        """A timer in seconds: `inf`, a time, or a plain number (seconds)."""
+        """Return a timer in seconds: `inf`, a time, or a plain number (seconds)."""
         if isinstance(expr, st.Never):
             self.error(expr.span, "expected a timer such as `10 s` or `inf`, found `never`",
                        hint="`never` is the interrupt that never fires; the timer that never "
@@ -346,7 +349,7 @@ class Checker:
                       tuple(p.choices), bool(p.choices)) for p in spec.params]
 
     def slots_of(self, d: st.Definition) -> list[_Slot]:
-        """The parameters of a definition; a parameter's dimension is its default's."""
+        """Return the parameters of a definition; a parameter's dimension is its default's."""
         key = ("slots", d.name, id(d))
         if key in self._cache:
             return self._cache[key]  # type: ignore[no-any-return]
@@ -502,7 +505,7 @@ class Checker:
         return t
 
     def interrupt(self, expr: st.Expr, env: Env) -> Interrupt:
-        """The compiled interrupt of an element."""
+        """Return the compiled interrupt of an element."""
         t = self.condition(expr, env)
         if not t.is_bool:
             self.error(expr.span, "expected an interrupt such as `stalled` or "
@@ -686,7 +689,7 @@ class Checker:
         return q.value
 
     def string(self, expr: st.Group, env: Env, label: str, kind: StringKind) -> StringNode:
-        """A string element ((e1, ..., en), xi, T); the first item may be one element."""
+        """Return a string element ((e1, ..., en), xi, T); the first item may be one element."""
         head, xi, timer = expr.items
         repeat = False
         items: tuple[st.Expr, ...]
@@ -739,7 +742,7 @@ class Checker:
 
     def instance(self, d: st.Definition, bound: Mapping[str, Value],
                  call: Span | None = None) -> Element:
-        """The element a definition makes with these parameter values (cached)."""
+        """Return the element a definition makes with these parameter values (cached)."""
         key = ("element", d.name, _freeze(bound))
         if key in self._cache:
             cached = self._cache[key]
@@ -890,8 +893,11 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
 
 
 def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
-    """Definitions with what they use first, so a long chain of definitions is checked
-    one link at a time (each use then finds its element already built)."""
+    """Order definitions so that what each uses comes first.
+
+    A long chain of definitions is then checked one link at a time (each use finds its
+    element already built).
+    """
     from mdle.resolve import references
 
     order: list[st.Definition] = []

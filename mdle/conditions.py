@@ -49,7 +49,7 @@ class Typed:
         return None if self.kind is BOOL else self.kind
 
     def call(self) -> Fn:
-        """A closure for this expression (constants become a function returning them)."""
+        """Return a closure for this expression (constants become a function returning them)."""
         if self.fn is not None:
             return self.fn
         value = self.const
@@ -57,12 +57,12 @@ class Typed:
 
 
 def constant(kind: Kind, value: Any) -> Typed:
-    """A value known at check time."""
+    """Return a value known at check time."""
     return Typed(kind, None, value)
 
 
 def sensor_reading(spec: SensorSpec, args: Mapping[str, Any]) -> Typed:
-    """A sensor function read each time the interrupt is tested."""
+    """Return a sensor function read each time the interrupt is tested."""
     fn = spec.fn
 
     def read(ctx: Context) -> Any:
@@ -87,7 +87,7 @@ def negate(op: str, a: Typed) -> Typed:
 
 
 def logic(op: str, a: Typed, b: Typed) -> Typed:
-    """``a and b``, ``a or b``, ``a xor b`` on conditions, short-circuit where it can."""
+    """Combine conditions with ``and``, ``or``, ``xor``, short-circuiting where it can."""
     if a.is_const and b.is_const:
         value = {"and": a.const and b.const, "or": a.const or b.const,
                  "xor": bool(a.const) != bool(b.const)}[op]
@@ -123,7 +123,7 @@ def _divide(x: float, y: float) -> float:
 
 
 def compare(op: str, a: Typed, b: Typed) -> Typed:
-    """A comparison of two numbers of the same dimension."""
+    """Return a comparison of two numbers of the same dimension."""
     cmp = _COMPARE[op]
     if a.is_const and b.is_const:
         return constant(BOOL, bool(cmp(a.const, b.const)))
@@ -138,7 +138,7 @@ def compare(op: str, a: Typed, b: Typed) -> Typed:
 
 
 def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
-    """``a + b`` and friends; division by zero gives inf (or nan), never an exception."""
+    """Apply ``a + b`` and friends; division by zero gives inf (or nan), never an exception."""
     fn = _divide if op == "/" else _ARITH[op]
     if a.is_const and b.is_const:
         return constant(kind, fn(a.const, b.const))
@@ -147,7 +147,7 @@ def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
 
 
 def to_interrupt(t: Typed, source: str) -> Interrupt:
-    """The runtime's :class:`~mdle.program.Interrupt` for a checked condition."""
+    """Return the runtime's :class:`~mdle.program.Interrupt` for a checked condition."""
     if t.is_const:
         if not t.const:
             return NEVER if source == "never" else Interrupt(NEVER.test, source, never=True)

@@ -72,12 +72,12 @@ _UNIT_OF: dict[Dim, str] = {LENGTH: "m", TIME: "s", ANGLE: "deg", SPEED: "m/s",
 
 
 def dim_words(dim: Dim | None) -> str:
-    """A dimension in words: ``a speed``, ``a plain number``, ``any value``."""
+    """Return a dimension in words: ``a speed``, ``a plain number``, ``any value``."""
     return "any value" if dim is None else str(dim)
 
 
 def dim_example(dim: Dim | None) -> str:
-    """A dimension with an example: ``a speed such as `0.3 m/s```."""
+    """Return a dimension with an example: ``a speed such as `0.3 m/s```."""
     if dim is None:
         return "a value"
     example = _EXAMPLES.get(dim)
@@ -85,7 +85,7 @@ def dim_example(dim: Dim | None) -> str:
 
 
 def unit_for(dim: Dim) -> str | None:
-    """The unit suggested for a bare number where ``dim`` is expected."""
+    """Return the unit suggested for a bare number where ``dim`` is expected."""
     return _UNIT_OF.get(dim)
 
 
@@ -95,7 +95,7 @@ def fits(value: Quantity, dim: Dim | None) -> bool:
 
 
 def show_value(value: Value) -> str:
-    """A value as a person reads it, in SI units: ``0.3 m/s``, ``right``."""
+    """Return a value as a person reads it, in SI units: ``0.3 m/s``, ``right``."""
     if isinstance(value, Symbol):
         return value.name
     if math.isnan(value.value):

@@ -31,14 +31,14 @@ _INDENT = "    "
 
 
 def format_source(text: str, file: str = "<string>") -> str:
-    """The canonical form of a text (raises MdleSyntaxError if it does not parse)."""
+    """Return the canonical form of a text (raises MdleSyntaxError if it does not parse)."""
     from mdle.parser import parse_module
 
     return format_module(parse_module(text, file))
 
 
 def format_expr(expr: st.Expr, names: Mapping[str, str] | None = None) -> str:
-    """An expression on one line (interrupt sources in traces and ``mdle show`` use this).
+    """Return an expression on one line (interrupt sources in traces and ``mdle show`` use this).
 
     ``names`` replaces names by texts (the checker shows a parameter's value this way).
     """
@@ -91,8 +91,10 @@ def _number(n: st.Number) -> str:
 
 
 def _layout(expr: st.Expr, indent: str, room: int) -> list[str]:
-    """Lines for ``expr`` whose first line starts after text already on the line
-    (``room`` columns left there) and whose later lines start with ``indent``."""
+    """Lay out ``expr`` after text already on the line (``room`` columns left there).
+
+    Later lines start with ``indent``.
+    """
     flat = format_expr(expr)
     if len(flat) <= room or not isinstance(expr, (st.Group, st.Vector, st.Call)):
         return [flat]
@@ -134,7 +136,10 @@ def format_statement(s: st.Statement) -> str:
 
 
 def format_module(module: st.Module) -> str:
-    """A whole file in canonical form, comments kept (ends with one newline; empty if empty)."""
+    """Return a whole file in canonical form, comments kept.
+
+    The text ends with one newline (and is empty for an empty file).
+    """
     comments = sorted(module.comments, key=lambda c: (c.span.line, c.span.column))
     out: list[str] = []
     last_line = 0  # the last source line already accounted for

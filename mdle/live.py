@@ -43,7 +43,7 @@ def format_event(e: Event, t0: float = 0.0) -> str:
 
 
 def summary_rows(result: RunResult, wall_seconds: float | None = None) -> list[tuple[str, str]]:
-    """The summary as (label, value) rows, shared by the rich table and the plain lines."""
+    """Return the summary as (label, value) rows, shared by the rich table and the plain lines."""
     t = result.termination
     rows = [("ended", f"{t.path}: {t.cause.value} at {_secs(result.duration)}")]
     if result.fault:
@@ -150,7 +150,7 @@ class LiveView(BaseObserver):
     # ------------------------------------------------------------------ rendering
 
     def print_summary(self, result: RunResult) -> None:
-        """The summary table (rich on a terminal, plain lines otherwise)."""
+        """Return the summary table (rich on a terminal, plain lines otherwise)."""
         rows = summary_rows(result, self.wall_seconds)
         elements = _element_rows(result)
         if self.plain:

@@ -25,7 +25,7 @@ __all__ = ["load_program", "load_text", "load_modules", "read_source", "Loaded"]
 
 def read_source(path: str | os.PathLike[str], shown: str | None = None,
                 span: Span | None = None) -> str:
-    """The text of a plan file (UTF-8, an optional BOM dropped).
+    """Return the text of a plan file (UTF-8, an optional BOM dropped).
 
     Raises
     ------
@@ -68,7 +68,7 @@ _IMPORT_LINE = re.compile(r'^[ \t]*import[ \t]+"([^"\n]*)"', re.M)
 
 
 def _scan_imports(text: str, file: str) -> list[st.Import]:
-    """The imports of a file that does not parse (found line by line)."""
+    """Return the imports of a file that does not parse (found line by line)."""
     out = []
     for m in _IMPORT_LINE.finditer(text):
         line = text.count("\n", 0, m.start()) + 1

@@ -60,7 +60,7 @@ _STATEMENT_LINE = re.compile(r"^[ \t]*(?:import|run|atom|behavior|plan|interrupt
 
 
 def _cache_file(grammar: str) -> str | None:
-    """A per-user cache file for the analysed grammar, or None if there is nowhere to write."""
+    """Return a per-user cache file for the analysed grammar (None: nowhere to write)."""
     import lark
 
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
@@ -77,7 +77,7 @@ def _cache_file(grammar: str) -> str | None:
 
 @functools.lru_cache(maxsize=1)
 def lark_parser() -> Lark:
-    """The LALR parser of ``mdle.lark``, built once per process (tables cached per user)."""
+    """Return the LALR parser of ``mdle.lark``, built once per process (tables cached per user)."""
     grammar = importlib.resources.files("mdle.grammar").joinpath("mdle.lark").read_text("utf-8")
     options: dict[str, Any] = dict(parser="lalr", lexer="basic", propagate_positions=False,
                                    start=["start", "expr_start"], maybe_placeholders=True,
@@ -156,7 +156,7 @@ def _end(file: str, part: Any) -> tuple[int, int]:
 
 
 def _over(file: str, first: Any, last: Any) -> Span:
-    """The span from the start of ``first`` to the end of ``last`` (tokens or nodes)."""
+    """Return the span from the start of ``first`` to the end of ``last`` (tokens or nodes)."""
     line, col = _start(file, first)
     end_line, end_col = _end(file, last)
     return Span(file, line, col, end_line, end_col)
@@ -307,8 +307,10 @@ _NOT, _SIGN, _COMPARISON = 4, 8, 5
 
 
 def _precedence(state: _State, parts: tuple[Any, ...]) -> st.Expr:
-    """Build the operator tree of ``unit (op unit)*`` by operator precedence (shunting
-    yard: iterative, left associative, prefix operators as in Python)."""
+    """Build the operator tree of ``unit (op unit)*`` by operator precedence.
+
+    Shunting yard: iterative, left associative, prefix operators as in Python.
+    """
     file = state.file
     operands: list[st.Expr] = []
     ops: list[tuple[int, Token, bool]] = []  # (binding power, operator, is prefix)
@@ -444,8 +446,11 @@ def _too_deep(span: Span) -> Diagnostic:
 
 def _parse_with_recovery(text: str, file: str
                          ) -> tuple[list[st.Statement], list[st.Comment], list[Diagnostic]]:
-    """Parse; after a syntax error, blank out what came before and resume at the next
-    line that starts with a statement keyword (positions stay exact)."""
+    """Parse, resuming after each syntax error.
+
+    After an error, blank out what came before and resume at the next line that starts
+    with a statement keyword (positions stay exact).
+    """
     parser = lark_parser()
     diagnostics: list[Diagnostic] = []
     comments: list[st.Comment] = []
@@ -624,7 +629,7 @@ def _describe(err: UnexpectedInput, text: str, file: str, start: str,
 
 
 def _label(err: UnexpectedInput, source: str, start: str) -> Label | None:
-    """The label of the bad snippet that fails like this error, if any.
+    """Return the label of the bad snippet that fails like this error, if any.
 
     lark compares parser states including the stack depth, and the examples are lone
     statements; so the failing statement is parsed again alone (what precedes it
@@ -660,10 +665,13 @@ def _example_errors() -> tuple[tuple[Label, UnexpectedInput], ...]:
 
 
 def _match(err: UnexpectedInput) -> Label | None:
-    """``UnexpectedInput.match_examples`` with its rules (same parser state and accepted
-    set; an exact token first, then the same token type, then the state alone), over
-    example errors computed once. (lark 1.3's own version can raise a TypeError while
-    formatting a debug message when two examples share a state.)"""
+    """Match an error against the labelled examples as ``match_examples`` does.
+
+    Its rules (same parser state and accepted set; an exact token first, then the same
+    token type, then the state alone), over example errors computed once. (lark 1.3's own
+    version can raise a TypeError while formatting a debug message when two examples share
+    a state.)
+    """
     same_type: Label | None = None
     same_state: Label | None = None
     token = getattr(err, "token", None)
@@ -701,8 +709,10 @@ def _close_keyword(word: str, expected: set[str]) -> str | None:
 
 
 def iter_tokens(text: str) -> Iterator[Token]:
-    """The tokens of a text (comments and whitespace skipped); stops at the first bad
-    character (and after :data:`MAX_DEPTH` unclosed brackets)."""
+    """Return the tokens of a text (comments and whitespace skipped).
+
+    Stops at the first bad character (and after :data:`MAX_DEPTH` unclosed brackets).
+    """
     state = _State("<lex>")
     lexer = lark_parser().lex(text, dont_ignore=False)
     while True:

@@ -120,7 +120,7 @@ def _segments_by_atom(x: "np.ndarray", y: "np.ndarray", paths: Sequence[str]
 
 
 def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "Figure":
-    """The figure for ``trace`` (see the module docstring); ``world`` a :class:`sim.World`."""
+    """Return the figure for ``trace`` (see the module docstring); ``world`` a sim.World."""
     import numpy as np
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
@@ -256,7 +256,7 @@ def _title(trace: Trace) -> str:
 
 
 def world_of(trace: Trace) -> Any:
-    """The world named in the trace header, or None when it cannot be loaded."""
+    """Return the world named in the trace header, or None when it cannot be loaded."""
     spec = (trace.header.get("world") or {}).get("spec")
     if not spec:
         return None

@@ -28,7 +28,7 @@ class Namespace:
     registry: Registry
 
     def lookup(self, name: str) -> st.Definition | LawSpec | SensorSpec | None:
-        """What a name refers to: a definition, a control law, a sensor function or nothing."""
+        """Return what a name refers to: a definition, law, sensor function or nothing."""
         found = self.definitions.get(name)
         if found is not None:
             return found
@@ -71,8 +71,10 @@ def build_namespace(definitions: Iterable[st.Definition], registry: Registry, *,
 
 
 def symbol_argument(spec: LawSpec | SensorSpec | None, index: int, arg: st.Argument) -> bool:
-    """True when ``arg`` (the ``index``-th argument of a call to ``spec``) is one of the
-    symbols its parameter declares, such as ``left`` in ``follow_boundary(side = left)``.
+    """Whether ``arg``, the ``index``-th argument of a call to ``spec``, is a declared symbol.
+
+    That is, one of the symbols its parameter declares, such as ``left`` in
+    ``follow_boundary(side = left)``.
 
     A declared symbol wins over a definition of the same name: a plan called ``left``
     does not change what ``side = left`` means.
@@ -88,8 +90,11 @@ def symbol_argument(spec: LawSpec | SensorSpec | None, index: int, arg: st.Argum
 
 def references(definition: st.Definition, names: Mapping[str, st.Definition],
                registry: Registry | None = None) -> list[st.Name | st.Call]:
-    """The uses of other definitions in a definition's body and defaults (parameters shadow;
-    with a ``registry``, symbols that a control law or sensor function declares do too)."""
+    """Return the uses of other definitions in a definition's body and defaults.
+
+    Parameters shadow; with a ``registry``, symbols that a control law or sensor function
+    declares do too.
+    """
     shadow = {p.name for p in definition.param_list}
     found: list[st.Name | st.Call] = []
     stack: list[st.Expr] = [definition.body]

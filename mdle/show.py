@@ -40,7 +40,7 @@ class Structure:
 
 
 def format_time(seconds: float) -> str:
-    """A duration as people write it: ``inf``, ``10 min``, ``2.5 s``."""
+    """Return a duration as people write it: ``inf``, ``10 min``, ``2.5 s``."""
     if math.isinf(seconds):
         return "inf"
     if seconds >= 60 and seconds % 60 == 0:
@@ -107,7 +107,7 @@ def _head(e: Element) -> str:
 
 
 def show_element(element: Element) -> str:
-    """The tree of an element, one line per element, with box-drawing guides."""
+    """Return the tree of an element, one line per element, with box-drawing guides."""
     lines: list[str] = []
     stack: list[tuple[Element, str, str]] = [(element, "", "")]
     while stack:
@@ -124,8 +124,10 @@ def show_element(element: Element) -> str:
 
 
 def show_program(program: Program, name: str | None = None) -> str:
-    """The tree and figures of one element of a program (default: its entry), or of every
-    runnable definition when there is no entry."""
+    """Show the tree and figures of one element of a program (default: its entry).
+
+    With no entry, every runnable definition is shown.
+    """
     names = [name] if name is not None else ([program.entry] if program.entry else
                                              list(program.elements))
     blocks = []

@@ -234,7 +234,7 @@ class Module:
 
 
 def children(expr: Expr) -> tuple[Expr, ...]:
-    """The sub-expressions of an expression, left to right (for walks that need no recursion)."""
+    """Return the sub-expressions of an expression, left to right (for non-recursive walks)."""
     if isinstance(expr, Call):
         return tuple(a.value for a in expr.args)
     if isinstance(expr, Unary):

@@ -231,8 +231,10 @@ EXAMPLES: dict[Label, list[str]] = {
 
 
 def describe_token(type_: str, value: str) -> str:
-    """The unexpected token in words: ``the name `foo```, ``the keyword `run```, or
-    ``the end of the file``."""
+    """Describe the unexpected token in words.
+
+    For example ``the name `foo```, ``the keyword `run```, or ``the end of the file``.
+    """
     if type_ == "$END" or type_ == "<EOF>" or value == "":
         return "the end of the file"
     shown = value if len(value) <= 40 else value[:37] + "..."
@@ -248,7 +250,7 @@ def describe_token(type_: str, value: str) -> str:
 
 
 def describe_expected(expected: set[str] | frozenset[str]) -> str:
-    """The set of acceptable terminals in words, short enough for one line."""
+    """Return the set of acceptable terminals in words, short enough for one line."""
     names = set(expected)
     parts: list[str] = []
     statement = {k.upper() for k in STATEMENT_KEYWORDS}

@@ -43,7 +43,7 @@ class Dim:
         return _NAMES.get(self, self.symbol())
 
     def symbol(self) -> str:
-        """The dimension as a unit expression in SI base units, such as ``m/s``."""
+        """Return the dimension as a unit expression in SI base units, such as ``m/s``."""
         num = [u for u, e in (("m", self.length), ("s", self.time), ("rad", self.angle)) if e > 0
                for _ in range(e)]
         den = [u for u, e in (("m", self.length), ("s", self.time), ("rad", self.angle)) if e < 0

@@ -49,8 +49,9 @@ class Workspace:
     # ------------------------------------------------------------------ changes
 
     def define(self, text: str, file: str = "<repl>") -> tuple[Diagnostic, ...]:
-        """Add (or replace) the definitions in ``text``; imports are relative to the current
-        directory. Returns the new warnings.
+        """Add (or replace) the definitions in ``text``; return the new warnings.
+
+        Imports are relative to the current directory.
 
         Raises
         ------
@@ -120,8 +121,11 @@ class Workspace:
         return element
 
     def is_complete(self, text: str) -> bool:
-        """Whether the REPL has a whole input: brackets balanced and the text does not end
-        in the middle of a statement (after `=`, an operator, a comma or a keyword)."""
+        """Whether the REPL has a whole input.
+
+        Brackets balanced and the text does not end in the middle of a statement (after
+        `=`, an operator, a comma or a keyword).
+        """
         depth = 0
         last = None
         for tok in iter_tokens(text):
@@ -139,11 +143,11 @@ class Workspace:
         return last.type not in _CONTINUES and not text.rstrip().endswith(",")
 
     def names(self) -> list[str]:
-        """The names defined so far, sorted."""
+        """Return the names defined so far, sorted."""
         return sorted(self._defs)
 
     def definition(self, name: str) -> st.Definition | None:
-        """The definition of ``name``, or None."""
+        """Return the definition of ``name``, or None."""
         return self._defs.get(name)
 
     def format(self) -> str:
@@ -154,7 +158,7 @@ class Workspace:
         return "\n".join(lines) + ("\n" if lines else "")
 
     def program(self) -> Program:
-        """The checked program of every definition so far."""
+        """Return the checked program of every definition so far."""
         runs: tuple[st.Statement, ...] = ()
         if self._entry:
             runs = (st.Run(self._entry),)

@@ -24,7 +24,7 @@ COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "worlds", "r
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser with every subcommand."""
+    """Return the argument parser with every subcommand."""
     parser = argparse.ArgumentParser(
         prog="mdle",
         description="Write, check, simulate and run MDLe motion plans for mobile robots.",

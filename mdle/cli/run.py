@@ -80,7 +80,7 @@ def _hertz(text: str) -> float:
 
 
 def world_beside(plan: str | os.PathLike[str]) -> Path | None:
-    """The world file that goes with a plan: ``x.world.yaml`` or ``x.yaml`` beside ``x.mdle``."""
+    """Find the world file of a plan: ``x.world.yaml`` or ``x.yaml`` beside ``x.mdle``."""
     p = Path(plan)
     for candidate in (p.with_suffix(".world.yaml"), p.with_suffix(".yaml")):
         if candidate.is_file():
@@ -199,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any, Any]:
-    """The backend the options ask for and its world (None on hardware).
+    """Return the backend the options ask for and its world (None on hardware).
 
     Fills the header's world, seed and robot.
     """

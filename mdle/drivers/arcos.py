@@ -82,7 +82,7 @@ SIP_IDS = frozenset({0x32, 0x33})
 
 
 def checksum(body: bytes) -> int:
-    """The ARCOS checksum of ``ID + payload``.
+    """Return the ARCOS checksum of ``ID + payload``.
 
     The sum of big-endian 16-bit words modulo 2**16; an odd last byte is XORed in.
     """
@@ -108,7 +108,7 @@ def _encode_int(value: int) -> bytes:
 
 
 def encode_command(cmd: int, arg: int | str | bytes | None = None, extra: bytes = b"") -> bytes:
-    """The packet for one client command.
+    """Return the packet for one client command.
 
     Parameters
     ----------
@@ -236,7 +236,7 @@ def parse_sync2(payload: bytes) -> SyncInfo:
 
 
 def encode_sync2(info: SyncInfo) -> bytes:
-    """The server's SYNC2 reply packet (for test servers)."""
+    """Return the server's SYNC2 reply packet (for test servers)."""
     payload = b"".join(s.encode("latin-1") + b"\x00" for s in (info.name, info.type, info.subtype))
     return frame(bytes([Cmd.SYNC2]) + payload)
 
@@ -268,15 +268,18 @@ class Sip:
 
     @property
     def motors_enabled(self) -> bool:
+        """Whether the motors are on (flags bit 0)."""
         return bool(self.flags & 1)
 
     @property
     def stalled(self) -> bool:
+        """Whether either wheel is stalled (stall bits 0 and 8)."""
         return bool(self.stall & 0x0101)
 
 
 _SIP_HEAD = struct.Struct("<HHhhhBHhHBB")  # x y theta l r battery stall control flags compass n
-_SIP_TAIL = struct.Struct("<BBBBBhBhHhbb")  # grip asel analog din dout bat10 chg rotvel fault lat temp soc
+# grip asel analog din dout bat10 chg rotvel fault lat temp soc
+_SIP_TAIL = struct.Struct("<BBBBBhBhHhbb")
 
 
 def decode_sip(body: bytes) -> Sip:
@@ -304,7 +307,7 @@ def decode_sip(body: bytes) -> Sip:
 
 
 def encode_sip(sip: Sip) -> bytes:
-    """The packet a server sends for ``sip`` (used by test servers and round trips)."""
+    """Return the packet a server sends for ``sip`` (used by test servers and round trips)."""
     payload = _SIP_HEAD.pack(sip.x & 0x7FFF, sip.y & 0x7FFF, sip.theta, sip.left_vel,
                              sip.right_vel, sip.battery, sip.stall, sip.control, sip.flags,
                              sip.compass, len(sip.sonars))
@@ -361,7 +364,7 @@ _DEFAULT_MODEL = "p3dx-sh"
 
 
 def robot_params(subtype: str, overrides: dict[str, float] | None = None) -> RobotParams:
-    """The parameters for a SYNC2 subtype, with ``overrides`` (field name -> value) applied.
+    """Return the parameters for a SYNC2 subtype, with ``overrides`` (field name -> value) applied.
 
     Unknown subtypes fall back to ``p3dx-sh`` (the simulators' default). Raises
     ValueError for an override naming no field.
@@ -392,7 +395,7 @@ class OdometryState:
 
 
 def _wrap15(delta: int) -> int:
-    """A 15-bit counter difference mapped into [-16384, 16383]."""
+    """Return a 15-bit counter difference mapped into [-16384, 16383]."""
     return ((delta + 0x4000) & 0x7FFF) - 0x4000
 
 

@@ -83,7 +83,7 @@ def decode_laser_packet(body: bytes) -> LaserPacket:
 def encode_laser_packets(ranges_mm: np.ndarray | list[int], *, extended: bool = False,
                          pose: tuple[int, int, int] = (0, 0, 0),
                          per_packet: int = MAX_READINGS_PER_PACKET) -> list[bytes]:
-    """The packets a simulator sends for one scan (for test servers and round trips)."""
+    """Return the packets a simulator sends for one scan (for test servers and round trips)."""
     values = [int(r) for r in ranges_mm]
     total = len(values)
     out = []

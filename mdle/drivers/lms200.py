@@ -82,7 +82,7 @@ def crc16(data: bytes) -> int:
 
 def encode_telegram(cmd: int, data: bytes = b"", *, address: int = HOST_ADDRESS,
                     status: int | None = None) -> bytes:
-    """A complete telegram: STX, address, length, command, data, [status], CRC.
+    """Return a complete telegram: STX, address, length, command, data, [status], CRC.
 
     ``status`` is only for replies (test scanners); the host never sends one.
 
@@ -259,7 +259,7 @@ def decode_measured_values(data: bytes, range_bits: int = _RANGE_BITS) -> Measur
 
 def encode_measured_values(values: np.ndarray | list[int], *, unit: int = 1,
                            partial: int = 0, status: int = 0x10) -> bytes:
-    """A complete 0xB0 reply telegram for raw ``values`` (for test scanners)."""
+    """Return a complete 0xB0 reply telegram for raw ``values`` (for test scanners)."""
     words = np.asarray(values, dtype=np.uint16)
     header = (len(words) & 0x03FF) | ((partial & 0x3) << 11) | ((unit & 0x3) << 14)
     data = struct.pack("<H", header) + words.astype("<u2").tobytes()

@@ -46,7 +46,7 @@ class Lms200Options:
 
 
 def scan_angle_for(count: int) -> float:
-    """The scan angle (deg) an LMS-200 scan of ``count`` values covers."""
+    """Return the scan angle (deg) an LMS-200 scan of ``count`` values covers."""
     return 100.0 if count in (101, 201, 401) else 180.0
 
 
@@ -93,7 +93,7 @@ class Lms200Driver:
     # ------------------------------------------------------------------ ScanSource
 
     def latest(self) -> Scan | None:
-        """The newest complete scan (stamp: ``time.monotonic()`` when it was measured)."""
+        """Return the newest complete scan (stamp: ``time.monotonic()`` when it was measured)."""
         with self._lock:
             return self._scan
 
@@ -141,8 +141,10 @@ class Lms200Driver:
                                f"(reply {reply.data.hex(' ')})")
 
     def _probe(self) -> int:
-        """Find the rate the scanner listens at: it answers a stop-streaming request
-        (or is heard streaming) only at the right one."""
+        """Find the rate the scanner listens at.
+
+        It answers a stop-streaming request (or is heard streaming) only at the right one.
+        """
         opt = self._opt
         order = [opt.baud] + [b for b in opt.probe_bauds if b != opt.baud]
         for baud in order:

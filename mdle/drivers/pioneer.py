@@ -83,11 +83,14 @@ class PioneerOptions:
 
 
 class ScanSource(Protocol):
-    """A laser delivering scans on its own (e.g. :class:`~mdle.drivers.lms200_driver.
-    Lms200Driver`). Stamps are ``time.monotonic()`` seconds."""
+    """A laser delivering scans on its own (e.g.
+
+    :class:`~mdle.drivers.lms200_driver. Lms200Driver`). Stamps are ``time.monotonic()``
+    seconds.
+    """
 
     def latest(self) -> Scan | None:
-        """The newest complete scan, or None before the first."""
+        """Return the newest complete scan, or None before the first."""
         ...
 
     def failure(self) -> str | None:
@@ -100,7 +103,7 @@ class ScanSource(Protocol):
 
 
 def limits_from_params(p: RobotParams) -> RobotLimits:
-    """The :class:`RobotLimits` a model's parameters describe."""
+    """Return the :class:`RobotLimits` a model's parameters describe."""
     return RobotLimits(max_speed=p.max_speed, max_reverse_speed=p.max_reverse_speed,
                        max_turn_rate=p.max_turn_rate, max_accel=p.max_accel,
                        max_decel=p.max_decel, max_turn_accel=p.max_turn_accel,
@@ -217,8 +220,11 @@ class PioneerBackend:
     # ------------------------------------------------------------------ Backend API
 
     def observe(self) -> Observation:
-        """The newest odometry and scan; raises BackendError if the robot or laser is lost
-        or their data are older than the limits (the robot is stopped first)."""
+        """Return the newest odometry and scan.
+
+        Raises BackendError if the robot or laser is lost or their data are older than the
+        limits (the robot is stopped first).
+        """
         if self._closed:
             raise BackendError("the Pioneer connection is closed")
         now = time.monotonic()
@@ -562,7 +568,7 @@ class PioneerBackend:
 
 
 def _check_arguments(laser: object, rate: float, opt: PioneerOptions) -> str | None:
-    """What is wrong with the constructor's arguments, or None."""
+    """Return what is wrong with the constructor's arguments, or None."""
     if not rate > 0:
         return f"the control rate must be positive, got {rate} Hz"
     if isinstance(laser, str) and laser != "sim":

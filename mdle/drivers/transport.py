@@ -117,14 +117,18 @@ class TransportClosed(Exception):
 
 
 class Transport(Protocol):
-    """A bidirectional byte stream. ``read`` may run in one thread while ``write`` runs
-    in another."""
+    """A bidirectional byte stream.
+
+    ``read`` may run in one thread while ``write`` runs in another.
+    """
 
     description: str
 
     def read(self, timeout: float) -> bytes:
-        """Bytes available within ``timeout`` seconds (``b""`` if none); raises
-        TransportClosed when the stream has ended."""
+        """Return the bytes available within ``timeout`` seconds (``b""`` if none).
+
+        Raises TransportClosed when the stream has ended.
+        """
         ...
 
     def write(self, data: bytes) -> None:
@@ -157,6 +161,7 @@ class TcpTransport:
         self._closed = False
 
     def read(self, timeout: float) -> bytes:
+        """See :meth:`Transport.read`."""
         if self._closed:
             raise TransportClosed("connection closed")
         try:
@@ -171,6 +176,7 @@ class TcpTransport:
         return data
 
     def write(self, data: bytes) -> None:
+        """See :meth:`Transport.write`."""
         if self._closed:
             raise TransportClosed("connection closed")
         try:
@@ -179,9 +185,10 @@ class TcpTransport:
             raise TransportClosed(f"{self.description}: {exc}") from None
 
     def set_baud(self, baud: int) -> None:
-        """A TCP stream has no line rate: nothing to do."""
+        """Do nothing: a TCP stream has no line rate."""
 
     def close(self) -> None:
+        """See :meth:`Transport.close`."""
         if self._closed:
             return
         self._closed = True
@@ -227,6 +234,7 @@ class SerialTransport:
         self._closed = False
 
     def read(self, timeout: float) -> bytes:
+        """See :meth:`Transport.read`."""
         if self._closed:
             raise TransportClosed("serial line closed")
         try:
@@ -246,6 +254,7 @@ class SerialTransport:
             raise TransportClosed(f"{self._path}: {exc}") from None
 
     def write(self, data: bytes) -> None:
+        """See :meth:`Transport.write`."""
         if self._closed:
             raise TransportClosed("serial line closed")
         try:
@@ -255,6 +264,7 @@ class SerialTransport:
             raise TransportClosed(f"{self._path}: {exc}") from None
 
     def set_baud(self, baud: int) -> None:
+        """See :meth:`Transport.set_baud`."""
         try:
             self._ser.reset_input_buffer()
             self._ser.baudrate = baud
@@ -263,6 +273,7 @@ class SerialTransport:
         self.description = f"{self._path} at {baud} baud"
 
     def close(self) -> None:
+        """See :meth:`Transport.close`."""
         if self._closed:
             return
         self._closed = True

@@ -134,7 +134,7 @@ def random_starts(world: str, n: int = 50, *, seed: int = 0, side: str = "right"
 
 
 def table(runs: Sequence[FollowRun]) -> str:
-    """A plain-text summary: collisions, worst clearance, mean error, per world."""
+    """Return a plain-text summary: collisions, worst clearance, mean error, per world."""
     from collections import defaultdict
 
     by: dict[tuple[str, str], list[FollowRun]] = defaultdict(list)

@@ -44,8 +44,11 @@ KEYWORDS = DEFINITION_KEYWORDS + ("never", "inf", "and", "or", "xor", "not")
 
 @dataclass(frozen=True)
 class Command:
-    """A ``:`` command: its name, argument synopsis, one line of help, and the method of
-    :class:`Repl` that does it (``handler(repl, args) -> bool``)."""
+    """A ``:`` command.
+
+    Its name, argument synopsis, one line of help, and the method of :class:`Repl` that
+    does it (``handler(repl, args) -> bool``).
+    """
 
     name: str
     synopsis: str
@@ -112,8 +115,11 @@ class Repl:
 
     def say_styled(self, lines: list[str], styles: dict[str, str], first: str | None = None
                    ) -> None:
-        """Print lines, colouring the characters in ``styles`` (character -> rich style)
-        and the first line with ``first``, when :attr:`color` is on; plain otherwise."""
+        """Print lines, in colour when :attr:`color` is on, plain otherwise.
+
+        The characters in ``styles`` (character -> rich style) and the first line (style
+        ``first``) are coloured.
+        """
         if not self.color:
             self.say(*lines)
             return
@@ -145,15 +151,21 @@ class Repl:
     # ------------------------------------------------------------------ input
 
     def is_complete(self, text: str) -> bool:
-        """Whether ``text`` is a whole input (a command always is; MDLe text when its
-        brackets balance and it does not end in the middle of a statement)."""
+        """Whether ``text`` is a whole input.
+
+        A command always is; MDLe text is when its brackets balance and it does not end in
+        the middle of a statement.
+        """
         if classify(text) in ("command", "empty"):
             return True
         return self.session.workspace.is_complete(text)
 
     def handle(self, text: str) -> bool:
-        """Do one input; True when it succeeded. Never raises for the user's mistakes
-        (KeyboardInterrupt outside a run is reported as an interruption)."""
+        """Do one input; True when it succeeded.
+
+        Never raises for the user's mistakes (KeyboardInterrupt outside a run is reported as
+        an interruption).
+        """
         try:
             ok = self._dispatch(text)
         except MdleError as exc:

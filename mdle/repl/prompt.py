@@ -105,9 +105,11 @@ class MdleLexer(RegexLexer):
 
 
 def history_path(environ: dict[str, str] | os._Environ[str] | None = None) -> Path:
-    """Where the REPL keeps its history: ``$XDG_DATA_HOME/mdle/repl_history``, or
-    ``~/.local/share/mdle/repl_history`` when ``XDG_DATA_HOME`` is unset or empty (the
-    XDG base directory rule)."""
+    """Where the REPL keeps its history.
+
+    ``$XDG_DATA_HOME/mdle/repl_history``, or ``~/.local/share/mdle/repl_history`` when
+    ``XDG_DATA_HOME`` is unset or empty (the XDG base directory rule).
+    """
     env = os.environ if environ is None else environ
     base = env.get("XDG_DATA_HOME") or ""
     root = Path(base) if base and os.path.isabs(base) else Path.home() / ".local" / "share"
@@ -115,8 +117,11 @@ def history_path(environ: dict[str, str] | os._Environ[str] | None = None) -> Pa
 
 
 class MdleCompleter(Completer):
-    """Completion for the REPL; reads the session's definitions and registry each time,
-    so new definitions are offered at once."""
+    """Completion for the REPL.
+
+    It reads the session's definitions and registry each time, so new definitions are
+    offered at once.
+    """
 
     def __init__(self, repl: Repl) -> None:
         self.repl = repl
@@ -126,6 +131,7 @@ class MdleCompleter(Completer):
 
     def get_completions(self, document: Document, complete_event: CompleteEvent
                         ) -> Iterator[Completion]:
+        """Yield the completions of the text before the cursor (prompt_toolkit's hook)."""
         text = document.text_before_cursor
         if text.lstrip().startswith(":"):
             yield from self._command(text.lstrip())
@@ -175,8 +181,11 @@ class MdleCompleter(Completer):
             yield from _starting(word, offered)
 
     def _units(self, before: str) -> list[tuple[str, str]]:
-        """Units for the number just typed: those of the parameter's dimension when the
-        number is an argument of a law or sensor, else every unit."""
+        """Units for the number just typed.
+
+        Those of the parameter's dimension when the number is an argument of a law or
+        sensor, else every unit.
+        """
         from mdle.units import unit_value
 
         found = _enclosing_call_at(before)
@@ -265,14 +274,17 @@ def _own_params(before: str) -> list[str]:
 
 
 def _enclosing_call(before: str) -> str | None:
-    """The name called by the innermost unclosed ``name(`` before the cursor, if any."""
+    """Return the name called by the innermost unclosed ``name(`` before the cursor, if any."""
     found = _enclosing_call_at(before)
     return None if found is None else found[0]
 
 
 def _enclosing_call_at(before: str) -> tuple[str, int, str | None] | None:
-    """The innermost unclosed call before the cursor: (name, index of the argument being
-    typed, its keyword if written ``name = ``), or None."""
+    """Find the innermost unclosed call before the cursor.
+
+    Returns (name, index of the argument being typed, its keyword if written
+    ``name = ``), or None.
+    """
     depth = 0
     commas = 0
     for i in range(len(before) - 1, -1, -1):
@@ -312,7 +324,7 @@ def _last_top_comma(text: str) -> int:
 def make_prompt_session(repl: Repl, *, input: Input | None = None,
                         output: Output | None = None, history: bool = True
                         ) -> PromptSession[str]:
-    """The prompt_toolkit session of the REPL (history, completion, lexer, key bindings).
+    """Return the prompt_toolkit session of the REPL (history, completion, lexer, key bindings).
 
     ``input``/``output`` default to the terminal; tests pass a pipe input and a dummy
     output. With ``history`` False (or when the data directory cannot be created) the
@@ -378,10 +390,12 @@ def make_prompt_session(repl: Repl, *, input: Input | None = None,
 
 
 class ProgressLine(BaseObserver):
-    """While a run goes on, one status line on the terminal: the active element, the
-    simulated time and the pose, rewritten at most every ``interval`` seconds of wall
-    time (the first time only after ``interval``, so quick runs show nothing) and erased
-    when the run ends."""
+    """While a run goes on, one status line on the terminal.
+
+    It shows the active element, the simulated time and the pose, rewritten at most every
+    ``interval`` seconds of wall time (the first time only after ``interval``, so quick
+    runs show nothing) and erased when the run ends.
+    """
 
     def __init__(self, stream: IO[str], interval: float = 0.2,
                  clock: Callable[[], float] = time.monotonic) -> None:
@@ -393,23 +407,27 @@ class ProgressLine(BaseObserver):
         self._shown = False
 
     def on_start(self, scheduler: Any) -> None:
+        """Arm the first update ``interval`` seconds from now."""
         self._next = self.clock() + self.interval
         self._t0 = None
         self._shown = False
 
     def on_tick(self, sample: Sample) -> None:
+        """Rewrite the status line when ``interval`` has passed since the last one."""
         if self._t0 is None:
             self._t0 = sample.time
         now = self.clock()
         if now < self._next:
             return
         self._next = now + self.interval
-        self.stream.write(f"\r\x1b[K  running {sample.path or '...'}: t {sample.time - self._t0:.1f} s"
+        elapsed = sample.time - self._t0
+        self.stream.write(f"\r\x1b[K  running {sample.path or '...'}: t {elapsed:.1f} s"
                           f"  x {sample.x:.2f} m  y {sample.y:.2f} m  (Ctrl-C stops it)")
         self.stream.flush()
         self._shown = True
 
     def on_end(self, result: RunResult) -> None:
+        """Erase the status line."""
         if self._shown:
             self.stream.write("\r\x1b[K")
             self.stream.flush()
@@ -420,7 +438,8 @@ def run_prompt(repl: Repl, *, input: Input | None = None, output: Output | None 
                history: bool = True) -> int:
     """Read and do inputs at the prompt until Ctrl-D or ``:quit``; returns 0.
 
-    On the real terminal (``output`` None) a :class:`ProgressLine` shows long runs."""
+    On the real terminal (``output`` None) a :class:`ProgressLine` shows long runs.
+    """
     session = make_prompt_session(repl, input=input, output=output, history=history)
     if output is None:
         repl.run_observers.append(ProgressLine(repl.out))

@@ -59,9 +59,12 @@ class ReplError(MdleError):
 
 @dataclass(frozen=True)
 class SideStats:
-    """The boundary distance a following law reported during a run (m): smallest and
-    largest over the run, and mean and standard deviation over its last ``window``
-    seconds (the settled part, when the run is longer than that), from ``n`` ticks."""
+    """The boundary distance a following law reported during a run (m).
+
+    Smallest and largest over the run, and mean and standard deviation over its last
+    ``window`` seconds (the settled part, when the run is longer than that), from ``n``
+    ticks.
+    """
 
     low: float
     high: float
@@ -104,8 +107,11 @@ class RunReport:
 
     @property
     def decisive(self) -> Termination:
-        """The termination that ended the run: the outermost element that ended by its
-        own interrupt or timer (or was stopped) at the final tick, else the root's."""
+        """The termination that ended the run.
+
+        The outermost element that ended by its own interrupt or timer (or was stopped) at
+        the final tick, else the root's.
+        """
         root = self.result.termination
         final = [t for t in self.result.terminations
                  if abs(t.time - root.time) < 1e-9
@@ -136,8 +142,11 @@ class StepRow:
 
 @dataclass(frozen=True)
 class StepOutcome:
-    """What ``:step N`` did: the rows, the report when the element ended, and whether a
-    new run of the element was started for it."""
+    """What ``:step N`` did.
+
+    The rows, the report when the element ended, and whether a new run of the element was
+    started for it.
+    """
 
     rows: tuple[StepRow, ...]
     report: RunReport | None
@@ -259,8 +268,11 @@ class Session:
         return int(self.backend.seed)
 
     def set_seed(self, seed: int) -> None:
-        """Reseed the simulation. The robot stays where it is; the simulated clock, the
-        path and the trace start afresh (the random streams restart from the new seed)."""
+        """Reseed the simulation.
+
+        The robot stays where it is; the simulated clock, the path and the trace start
+        afresh (the random streams restart from the new seed).
+        """
         here = self.backend.true_pose
         old = self._seed
         self._seed = int(seed)
@@ -271,8 +283,9 @@ class Session:
             raise
 
     def reset(self, pose: Pose | None = None) -> Pose:
-        """Put the robot at ``pose`` (default: the world's start), stopped, at time 0;
-        the path and trace are cleared. Returns the pose.
+        """Put the robot at ``pose`` (default: the world's start), stopped, at time 0.
+
+        The path and trace are cleared. Returns the pose.
 
         Raises
         ------
@@ -351,8 +364,10 @@ class Session:
 
     @property
     def sources(self) -> dict[str, str]:
-        """Texts of everything defined so far by file name, to show source lines under
-        warnings. (The workspace keeps them privately; read here, without changing it.)"""
+        """Texts of everything defined so far by file name, to show source lines under warnings.
+
+        (The workspace keeps them privately; read here, without changing it.)
+        """
         return dict(getattr(self.workspace, "_sources", {}))
 
     # ------------------------------------------------------------------ running
@@ -368,7 +383,7 @@ class Session:
         return self._stepping is not None
 
     def compile(self, text: str) -> Element:
-        """The element ``text`` denotes, checked against the definitions.
+        """Return the element ``text`` denotes, checked against the definitions.
 
         Raises
         ------
@@ -408,8 +423,9 @@ class Session:
         return self._report(record, interrupted, error)
 
     def step(self, n: int) -> StepOutcome:
-        """Advance the last element by ``n`` ticks (starting a new run of it from the
-        robot's current state when none is paused).
+        """Advance the last element by ``n`` ticks.
+
+        A new run of it starts from the robot's current state when none is paused.
 
         Raises
         ------
@@ -485,7 +501,7 @@ class Session:
     # ------------------------------------------------------------------ looking around
 
     def observe(self) -> Observation:
-        """What the robot senses now (pose, velocities, newest scan, truth)."""
+        """Return what the robot senses now (pose, velocities, newest scan, truth)."""
         return self.backend.observe()
 
     @property
@@ -494,8 +510,11 @@ class Session:
         return [s for r in self._runs for s in r.samples]
 
     def path_xy(self) -> np.ndarray:
-        """The robot's true positions since the last reset, shape (N, 2), metres, starting
-        at the pose of the reset and ending at the current pose."""
+        """Return the robot's true positions since the last reset.
+
+        Shape (N, 2), metres, starting at the pose of the reset and ending at the current
+        pose.
+        """
         import numpy as np
 
         pts = [(s.true_x, s.true_y) if s.true_x is not None else (s.x, s.y)
@@ -507,15 +526,16 @@ class Session:
     # ------------------------------------------------------------------ trace and plot
 
     def trace_header(self) -> dict[str, Any]:
-        """The header of the session trace: world, seed, rate and what ran."""
+        """Return the header of the session trace: world, seed, rate and what ran."""
         return {"program": {"file": "<repl>", "element": self._runs[-1].label if self._runs
                             else None, "runs": [r.text for r in self._runs]},
                 "world": {"name": self.world.name, "spec": self.world_spec},
                 "seed": self.seed, "rate": self.rate, "backend": "sim", "repl": True}
 
     def write_trace(self, path: str | os.PathLike[str]) -> int:
-        """Write the runs since the last reset as one JSON lines trace (``docs/trace.md``):
-        a ``start`` record per run, their events and samples, and one ``end`` record that
+        """Write the runs since the last reset as one JSON lines trace (``docs/trace.md``).
+
+        A ``start`` record per run, their events and samples, and one ``end`` record that
         sums them up. Returns the number of samples written.
 
         Raises

@@ -78,8 +78,11 @@ def format_report(report: RunReport) -> list[str]:
 
 def format_scan(obs: Observation, registry: Registry, limits: RobotLimits,
                 rate: float = 10.0) -> list[str]:
-    """The scan by sectors (nearest range in each) and the boundary estimates the steering
-    law and the sensor functions ``boundary_*`` read, on both sides."""
+    """Show the scan by sectors (nearest range in each) and the boundary estimates.
+
+    The estimates are those the steering law and the sensor functions ``boundary_*`` read,
+    on both sides.
+    """
     import numpy as np
 
     from atoms.boundary import boundary_view
@@ -134,8 +137,10 @@ def format_scan(obs: Observation, registry: Registry, limits: RobotLimits,
 
 
 def format_step_rows(rows: Sequence[StepRow], t0: float) -> list[str]:
-    """One line per tick (time, active atom, command, pose, ranges) and, when the control
-    law reported diagnostics, a second line with them."""
+    """Show one line per tick (time, active atom, command, pose, ranges).
+
+    When the control law reported diagnostics, a second line shows them.
+    """
     out = []
     for row in rows:
         s = row.sample
@@ -159,8 +164,10 @@ def _diag(diag: Mapping[str, float]) -> str:
 
 def render_map(world: World, path: np.ndarray, pose: Pose, width: int = 72,
                height: int | None = None) -> list[str]:
-    """An ASCII map of the world: ``#`` obstacles, ``.`` the path, ``o`` where the path
-    began, an arrow for the robot (``> ^ < v``, its heading to the nearest quarter).
+    """Draw an ASCII map of the world.
+
+    ``#`` obstacles, ``.`` the path, ``o`` where the path began, an arrow for the robot
+    (``> ^ < v``, its heading to the nearest quarter).
 
     Parameters
     ----------

@@ -53,7 +53,8 @@ def test_runs_continue_from_where_the_robot_stopped(session: Session) -> None:
 
 def test_an_interrupt_ends_the_run_and_the_report_says_which_level(session: Session) -> None:
     session.define("atom approach = (go(1 m/s), range(0 deg) < 1.5 m, 30 s)\n"
-                   "behavior careful = ((approach, (turn(1 rad/s), never, 10 s)), theta > 1 rad, inf)")
+                   "behavior careful = ((approach, (turn(1 rad/s), never, 10 s)),"
+                   " theta > 1 rad, inf)")
     report = session.run("careful")
     d = report.decisive
     # the behavior's own interrupt fired while the turn was running: level 0 ends it
