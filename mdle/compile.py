@@ -628,6 +628,19 @@ class Checker:
                              else (), env, u.span)
         except _Abort:
             failed = True
+        interrupt, t = self._ending(xi, timer, env, failed)
+        return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
+                        (1.0, 1.0), expr.span)
+
+    def _ending(self, xi: st.Expr, timer: st.Expr, env: Env,
+                failed: bool) -> tuple[Interrupt, float]:
+        """Check how an element ends: its interrupt and its timer, both reported.
+
+        ``failed`` says an earlier part of the element had an error. Raises _Abort when it
+        or either of these did, once all of them have been checked.
+        """
+        interrupt: Interrupt | None = None
+        t: float | None = None
         try:
             interrupt = self.interrupt(xi, env)
         except _Abort:
@@ -636,10 +649,9 @@ class Checker:
             t = self.timer(timer, env)
         except _Abort:
             failed = True
-        if failed:
+        if failed or interrupt is None or t is None:
             raise _Abort
-        return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
-                        (1.0, 1.0), expr.span)
+        return interrupt, t
 
     def _scaled(self, expr: st.Group, env: Env) -> AtomNode:
         alpha_e, beta_e, sigma_e = expr.items
@@ -709,16 +721,7 @@ class Checker:
                 elements.append(self.element(item, env))
             except _Abort:
                 failed = True
-        try:
-            interrupt = self.interrupt(xi, env)
-        except _Abort:
-            failed = True
-        try:
-            t = self.timer(timer, env)
-        except _Abort:
-            failed = True
-        if failed:
-            raise _Abort
+        interrupt, t = self._ending(xi, timer, env, failed)
         for i in range(len(elements) - 1):
             if never_ends(elements[i]):
                 self.warn(items[i + 1].span,

@@ -10,6 +10,8 @@ import argparse
 import sys
 from typing import Any
 
+from mdle.cli.options import add_simulation_options, positive_seconds
+
 __all__ = ["add_parser", "run"]
 
 
@@ -27,12 +29,8 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--world", metavar="NAME|FILE",
                    help="simulated world: a reference world name or a YAML file "
                         "(default: the default world)")
-    p.add_argument("--seed", type=int, help="random seed of the simulation (default: the world's)")
-    p.add_argument("--robot", metavar="PROFILE",
-                   help="robot profile (pioneer2dx, ideal; default: the world's)")
-    p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
-                   help="simulated ladar: a noisy scan (default) or exact oracle geometry")
-    p.add_argument("--until", type=_seconds, metavar="SECONDS",
+    add_simulation_options(p)
+    p.add_argument("--until", type=positive_seconds, metavar="SECONDS",
                    help="stop any run after this many simulated seconds (default 600; "
                         "`inf`: no limit)")
     p.add_argument("--realtime", action="store_true",
@@ -42,16 +40,6 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--echo", action="store_true",
                    help="with plain input, print each input after the prompt (a transcript)")
     p.set_defaults(handler=run)
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be more than zero seconds, got {text!r}")
-    return value
 
 
 def run(args: argparse.Namespace) -> int:

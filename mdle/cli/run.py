@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.cli import output
+from mdle.cli.options import add_simulation_options, seconds
 
 __all__ = ["add_parser", "run", "world_beside"]
 
@@ -36,8 +37,7 @@ def add_parser(subparsers: Any) -> None:
                         "PLAN.world.yaml or PLAN.yaml beside the plan, else the default world)")
     p.add_argument("--plan", dest="element", metavar="NAME",
                    help="element to run (default: the file's `run` target, else `main`)")
-    p.add_argument("--seed", type=int, help="random seed of the simulation (default: the world's)")
-    p.add_argument("--until", type=_seconds, metavar="SECONDS",
+    p.add_argument("--until", type=seconds, metavar="SECONDS",
                    help="stop after this many seconds of (simulated) time")
     p.add_argument("--realtime", action="store_true",
                    help="pace the simulation to the wall clock")
@@ -52,21 +52,8 @@ def add_parser(subparsers: Any) -> None:
                    help="robot connection for --backend pioneer (tcp://host:port, "
                         "serial:///dev/ttyS0)")
     p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
-    p.add_argument("--robot", metavar="PROFILE",
-                   help="robot profile in simulation (pioneer2dx, ideal; default: the world's)")
-    p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
-                   help="simulated ladar: a noisy scan (default) or exact oracle geometry")
+    add_simulation_options(p)
     p.set_defaults(handler=run)
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be zero or more seconds, got {text!r}")
-    return value
 
 
 def _hertz(text: str) -> float:

@@ -27,10 +27,9 @@ from mdle.backend import Observation, Pose
 from mdle.errors import Diagnostic, MdleError
 from mdle.program import Element
 from mdle.runtime import (
-    BaseObserver,
     Cause,
-    Event,
     Observer,
+    Recorder,
     RunResult,
     Sample,
     Scheduler,
@@ -155,31 +154,22 @@ class StepOutcome:
     t0: float
 
 
-class _Run(BaseObserver):
+class _Run(Recorder):
     """Records one run of the session: the scheduler, its events and samples."""
 
     def __init__(self, label: str, text: str) -> None:
+        super().__init__()
         self.label = label
         self.text = text
-        self.scheduler: Scheduler | None = None
-        self.events: list[Event] = []
-        self.samples: list[Sample] = []
-        self.result: RunResult | None = None
 
-    def on_start(self, scheduler: Scheduler) -> None:
-        self.scheduler = scheduler
-
-    def on_event(self, event: Event) -> None:
-        self.events.append(event)
-
-    def on_tick(self, sample: Sample) -> None:
-        self.samples.append(sample)
-
-    def on_end(self, result: RunResult) -> None:
-        self.result = result
+    @property
+    def scheduler(self) -> Scheduler | None:
+        """The run's scheduler, once it has started."""
+        return self.started
 
     @property
     def t0(self) -> float:
+        """Simulated time of the run's first sample (or event), seconds."""
         if self.samples:
             return self.samples[0].time
         return self.events[0].time if self.events else 0.0

@@ -19,6 +19,7 @@ import time
 import tty
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 import pytest
@@ -46,7 +47,10 @@ class _Link:
         self.closed = False
 
     def fileno(self) -> int:
-        return self.sock.fileno() if self.sock is not None else self.fd  # type: ignore
+        if self.sock is not None:
+            return self.sock.fileno()
+        assert self.fd is not None, "a link has a socket or a file descriptor"
+        return self.fd
 
     def recv(self, timeout: float) -> bytes | None:
         """Bytes, ``b""`` on timeout, None when the peer has gone."""
@@ -56,7 +60,7 @@ class _Link:
             ready, _, _ = select.select([self.fileno()], [], [], timeout)
             if not ready:
                 return b""
-            data = self.sock.recv(65536) if self.sock is not None else os.read(self.fd, 65536)
+            data = self.sock.recv(65536) if self.sock is not None else os.read(self.fileno(), 65536)
         except OSError:
             return None
         return data or None
@@ -68,7 +72,7 @@ class _Link:
             if self.sock is not None:
                 self.sock.sendall(data)
             else:
-                os.write(self.fd, data)  # type: ignore[arg-type]
+                os.write(self.fileno(), data)
             return True
         except OSError:
             return False
@@ -442,34 +446,33 @@ class FakeLms200:
             self.baud = new_baud
 
 
-@pytest.fixture
-def fake_robot() -> Iterator[Callable[..., FakeArcos]]:
-    """Factory of started :class:`FakeArcos` servers, stopped after the test."""
-    made: list[FakeArcos] = []
+_Fake = TypeVar("_Fake", FakeArcos, FakeLms200)
 
-    def make(**kw: object) -> FakeArcos:
-        fake = FakeArcos(**kw)  # type: ignore[arg-type]
+
+def _started(cls: Callable[..., _Fake]) -> Iterator[Callable[..., _Fake]]:
+    """Yield a factory of ``cls`` fakes; stop every one it made afterwards."""
+    made: list[_Fake] = []
+
+    def make(**kw: object) -> _Fake:
+        fake = cls(**kw)
         made.append(fake)
         return fake
 
     yield make
     for fake in made:
         fake.stop()
+
+
+@pytest.fixture
+def fake_robot() -> Iterator[Callable[..., FakeArcos]]:
+    """Factory of started :class:`FakeArcos` servers, stopped after the test."""
+    yield from _started(FakeArcos)
 
 
 @pytest.fixture
 def fake_lms() -> Iterator[Callable[..., FakeLms200]]:
     """Factory of started :class:`FakeLms200` scanners, stopped after the test."""
-    made: list[FakeLms200] = []
-
-    def make(**kw: object) -> FakeLms200:
-        fake = FakeLms200(**kw)  # type: ignore[arg-type]
-        made.append(fake)
-        return fake
-
-    yield make
-    for fake in made:
-        fake.stop()
+    yield from _started(FakeLms200)
 
 
 @pytest.fixture

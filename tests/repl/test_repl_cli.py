@@ -9,30 +9,27 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import signal
 import subprocess
-import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-
-def _mdle() -> list[str]:
-    exe = Path(sys.executable).with_name("mdle")
-    if exe.exists():
-        return [str(exe)]
-    found = shutil.which("mdle")
-    assert found, "the `mdle` command is not installed"
-    return [found]
+Repl = Callable[..., "subprocess.CompletedProcess[str]"]
 
 
-def repl(stdin: str, *args: str, cwd: Path, timeout: float = 120
-         ) -> subprocess.CompletedProcess[str]:
-    env = {**os.environ, "XDG_DATA_HOME": str(cwd / "data")}
-    return subprocess.run([*_mdle(), "repl", *args], input=stdin, capture_output=True, check=False,
-                          text=True, cwd=cwd, timeout=timeout, env=env)
+@pytest.fixture
+def repl(mdle_command: list[str]) -> Repl:
+    """``repl(stdin, *args, cwd=..., timeout=120)``: one piped ``mdle repl`` session."""
+    def run(stdin: str, *args: str, cwd: Path, timeout: float = 120
+            ) -> subprocess.CompletedProcess[str]:
+        env = {**os.environ, "XDG_DATA_HOME": str(cwd / "data")}
+        return subprocess.run([*mdle_command, "repl", *args], input=stdin, capture_output=True,
+                              check=False, text=True, cwd=cwd, timeout=timeout, env=env)
+
+    return run
 
 
 def pose_in(out: str) -> tuple[float, float, float]:
@@ -59,7 +56,8 @@ creep(1 m/s)
 """
 
 
-def test_define_run_save_then_load_in_a_second_session(tmp_path: Path) -> None:
+def test_define_run_save_then_load_in_a_second_session(tmp_path: Path, repl: Repl,
+                                                         mdle_command: list[str]) -> None:
     res = repl(FIRST, "--world", "ellipse", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert res.stderr == ""
@@ -75,7 +73,7 @@ def test_define_run_save_then_load_in_a_second_session(tmp_path: Path) -> None:
     assert saved == ("atom creep(v = 0.5 m/s) = (go(v), never, 2 s)\n"
                      "atom quarter(rate = 90 deg/s) = (turn(rate), never, 1 s)\n")
     # the saved file is what `mdle fmt` prints: formatting it changes nothing
-    fmt = subprocess.run([*_mdle(), "fmt", "--check", "tuned.mdle"], cwd=tmp_path,
+    fmt = subprocess.run([*mdle_command, "fmt", "--check", "tuned.mdle"], cwd=tmp_path,
                          capture_output=True, text=True, timeout=60, check=False)
     assert fmt.returncode == 0, fmt.stdout + fmt.stderr
 
@@ -91,7 +89,7 @@ def test_define_run_save_then_load_in_a_second_session(tmp_path: Path) -> None:
     assert out.endswith(saved)
 
 
-def test_failed_inputs_give_exit_1_and_the_session_goes_on(tmp_path: Path) -> None:
+def test_failed_inputs_give_exit_1_and_the_session_goes_on(tmp_path: Path, repl: Repl) -> None:
     script = """\
 atom creep = (go(0.5 m/s), never, 2 s)
 atom broken = (go(2 s), never, 1 s)
@@ -117,7 +115,7 @@ creep
     assert "Traceback" not in err
 
 
-def test_echo_prints_a_transcript_and_an_unfinished_input_fails(tmp_path: Path) -> None:
+def test_echo_prints_a_transcript_and_an_unfinished_input_fails(tmp_path: Path, repl: Repl) -> None:
     res = repl("(go(1 m/s),\n never, 1 s)\n:pose\n(go(1 m/s), never,\n", "--world", "ellipse",
                "--echo", cwd=tmp_path)
     assert res.returncode == 1
@@ -129,7 +127,7 @@ def test_echo_prints_a_transcript_and_an_unfinished_input_fails(tmp_path: Path) 
     assert "the input ended in the middle of an unfinished statement" in res.stderr
 
 
-def test_quit_stops_reading_and_bad_options_are_usage_errors(tmp_path: Path) -> None:
+def test_quit_stops_reading_and_bad_options_are_usage_errors(tmp_path: Path, repl: Repl) -> None:
     res = repl(":quit\nnot-run\n", "--world", "ellipse", cwd=tmp_path)
     assert res.returncode == 0 and "not-run" not in res.stderr
     res = repl("", "--world", "atlantis", cwd=tmp_path)
@@ -140,7 +138,7 @@ def test_quit_stops_reading_and_bad_options_are_usage_errors(tmp_path: Path) -> 
     assert res.returncode == 1 and "missing.mdle" in res.stderr
 
 
-def test_until_seed_robot_and_sensing_options(tmp_path: Path) -> None:
+def test_until_seed_robot_and_sensing_options(tmp_path: Path, repl: Repl) -> None:
     res = repl("(turn(1 rad/s), never, inf)\n", "--world", "ellipse", "--until", "1.5",
                cwd=tmp_path)
     assert res.returncode == 0, res.stderr
@@ -154,9 +152,10 @@ def test_until_seed_robot_and_sensing_options(tmp_path: Path) -> None:
     assert "max range 10 m (exact)" in res.stdout
 
 
-def test_sigint_during_a_piped_run_stops_it_and_the_session_goes_on(tmp_path: Path) -> None:
+def test_sigint_during_a_piped_run_stops_it_and_the_session_goes_on(
+        tmp_path: Path, mdle_command: list[str]) -> None:
     env = {**os.environ, "XDG_DATA_HOME": str(tmp_path / "data")}
-    proc = subprocess.Popen([*_mdle(), "repl", "--world", "ellipse", "--until", "inf"],
+    proc = subprocess.Popen([*mdle_command, "repl", "--world", "ellipse", "--until", "inf"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, cwd=tmp_path, env=env)
     assert proc.stdin is not None and proc.stdout is not None

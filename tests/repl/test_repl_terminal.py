@@ -28,6 +28,16 @@ class Terminal:
     def text(self) -> str:
         return _ANSI.sub("", self.raw.decode(errors="replace"))
 
+    def _read(self) -> bool:
+        """Add what the terminal shows within 0.1 s to ``raw``; False once it has closed."""
+        ready, _, _ = select.select([self.fd], [], [], 0.1)
+        if ready:
+            try:
+                self.raw += os.read(self.fd, 65536)
+            except OSError:
+                return False
+        return True
+
     def expect(self, pattern: str, timeout: float = 60.0) -> str:
         """Read until ``pattern`` (a regex) appears in the text since the start."""
         end = time.monotonic() + timeout
@@ -35,12 +45,8 @@ class Terminal:
             m = re.search(pattern, self.text())
             if m:
                 return m.group(0)
-            ready, _, _ = select.select([self.fd], [], [], 0.1)
-            if ready:
-                try:
-                    self.raw += os.read(self.fd, 65536)
-                except OSError:
-                    break
+            if not self._read():
+                break
         raise AssertionError(f"never saw {pattern!r}; the terminal shows:\n{self.text()}")
 
     def prompt(self, n: int, timeout: float = 60.0) -> None:
@@ -51,12 +57,8 @@ class Terminal:
         while self.raw.count(b"\x1b[?2004h") < n:
             if time.monotonic() > end:
                 raise AssertionError(f"no prompt #{n}; the terminal shows:\n{self.text()}")
-            ready, _, _ = select.select([self.fd], [], [], 0.1)
-            if ready:
-                try:
-                    self.raw += os.read(self.fd, 65536)
-                except OSError:
-                    break
+            if not self._read():
+                break
 
     def send(self, keys: str) -> None:
         os.write(self.fd, keys.encode())
@@ -67,12 +69,7 @@ class Terminal:
             pid, status = os.waitpid(self.pid, os.WNOHANG)
             if pid:
                 return os.waitstatus_to_exitcode(status)
-            ready, _, _ = select.select([self.fd], [], [], 0.1)
-            if ready:
-                try:
-                    self.raw += os.read(self.fd, 65536)
-                except OSError:
-                    pass
+            self._read()
         os.kill(self.pid, 9)
         raise AssertionError(f"the REPL did not exit; the terminal shows:\n{self.text()}")
 
