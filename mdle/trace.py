@@ -2,9 +2,12 @@
 
 One JSON object per line, each with a ``type``: one ``header`` (program, world, seed,
 versions), an ``event`` for every element start and end, a ``sample`` per tick, and an
-``end`` record with the run's result. Every record is flushed as it is written, so a
-crash or Ctrl-C loses nothing already recorded; the reader accepts a trace whose last
-line was cut short. Non-finite numbers (NaN, inf) are written as ``null`` so the file is
+``end`` record with the run's result. Records reach the file (the operating system) at
+once for the header, events and the end record, and within :data:`FLUSH_PERIOD` of wall
+time for samples; the writer flushes whenever the run ends, whatever the cause (error,
+Ctrl-C, SIGTERM), so only a process killed outright (SIGKILL, a crash of the
+interpreter itself) can lose samples, at most the last ``flush_period`` seconds of them.
+The reader accepts a trace whose last line was cut short. Non-finite numbers (NaN, inf) are written as ``null`` so the file is
 strict JSON. The schema is documented in ``docs/trace.md``.
 """
 
@@ -14,7 +17,8 @@ import json
 import math
 import os
 import platform
-from collections.abc import Iterator, Mapping
+import time
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import IO, TYPE_CHECKING, Any
 
@@ -26,11 +30,17 @@ if TYPE_CHECKING:
 
     from mdle.runtime.scheduler import Scheduler
 
-__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "TraceWriter", "Trace", "TraceError", "read_trace",
+__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError", "read_trace",
            "versions"]
 
 TRACE_FORMAT = "mdle-trace"
 TRACE_VERSION = 1
+
+#: Longest wall time (s) a sample record waits in memory before it is written out. A
+#: paced run (hardware at 10 Hz, ``--realtime``) ticks slower than this, so every tick is
+#: written as it happens; a fast simulated run writes in batches of many ticks, one
+#: ``write(2)`` per batch instead of one per record (about 2 us each).
+FLUSH_PERIOD = 0.02
 
 
 class TraceError(MdleError):
@@ -68,7 +78,7 @@ def _dumps(record: Mapping[str, Any]) -> str:
 
 
 class TraceWriter:
-    """Write a run's trace as JSON lines, flushing every record.
+    """Write a run's trace as JSON lines, flushing events at once and samples in batches.
 
     Parameters
     ----------
@@ -78,17 +88,31 @@ class TraceWriter:
         What the run is: ``program`` (file, element), ``world``, ``seed``, ``rate``,
         ``backend``... Merged into the header record after ``format``, ``version`` and
         ``versions``.
+    flush_period : float
+        Longest wall time (s) a sample waits in memory before it is written; 0 writes
+        every record as it comes. Events, the header and the end record are always
+        written at once.
+    clock : callable
+        Wall clock for the flush period, s (injectable for tests).
 
     The writer is an observer: pass it to :func:`mdle.runtime.run` or a
     :class:`~mdle.runtime.Scheduler`. :meth:`close` is called by ``on_end``; call it
     yourself if the run never started.
     """
 
-    def __init__(self, path: str | os.PathLike[str], header: Mapping[str, Any] | None = None
-                 ) -> None:
+    def __init__(self, path: str | os.PathLike[str], header: Mapping[str, Any] | None = None,
+                 *, flush_period: float = FLUSH_PERIOD,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        if not flush_period >= 0.0:
+            raise ValueError(f"flush_period must be >= 0 s, got {flush_period!r}")
         self.path = os.fspath(path)
-        # unbuffered: each record is one write(2), in the OS before the next tick starts
+        # unbuffered file, batching of our own: every write(2) carries whole lines only,
+        # so a trace cut off by a kill still parses up to its last complete record
         self._file: IO[bytes] | None = open(self.path, "wb", buffering=0)
+        self._pending: list[str] = []
+        self._period = float(flush_period)
+        self._clock = clock
+        self._flush_at = 0.0  # clock() by which queued samples are written
         self._paths: dict[str, str] = {}
         head: dict[str, Any] = {"type": "header", "format": TRACE_FORMAT,
                                 "version": TRACE_VERSION, "versions": versions()}
@@ -96,8 +120,28 @@ class TraceWriter:
         self._write(_dumps(head))
 
     def _write(self, line: str) -> None:
-        if self._file is not None:
-            self._file.write((line + "\n").encode())
+        """Queue ``line`` and write everything queued now."""
+        self._pending.append(line)
+        self.flush()
+
+    def flush(self) -> None:
+        """Write every queued record to the file now (the run's end does it too)."""
+        pending = self._pending
+        if pending:
+            data = ("\n".join(pending) + "\n").encode()
+            try:
+                if self._file is not None:
+                    view = memoryview(data)
+                    while view:  # a regular file takes it all at once; be safe anyway
+                        n = self._file.write(view)
+                        if not n:
+                            raise OSError(f"cannot write the trace `{self.path}`")
+                        view = view[n:]
+            finally:
+                # A Ctrl-C is raised at the earliest after write() returns: clearing in
+                # `finally` writes no record twice, and drops none that was not written.
+                pending.clear()
+        self._flush_at = self._clock() + self._period
 
     def _quoted(self, path: str) -> str:
         q = self._paths.get(path)
@@ -122,22 +166,26 @@ class TraceWriter:
             "x": p.x, "y": p.y, "theta": p.theta}))
 
     def on_tick(self, sample: Sample) -> None:
-        """Write a ``sample`` record (a fast path formats finite floats directly)."""
-        s = sample
+        """Queue a ``sample`` record; write the queue once it is ``flush_period`` old."""
         try:
-            line = self._sample_line(s)
+            line = self._sample_line(sample)
         except (TypeError, ValueError):  # a diagnostic that is not a number
-            line = _dumps(_sample_dict(s))
-        self._write(line)
+            line = _dumps(_sample_dict(sample))
+        self._pending.append(line)
+        if self._clock() >= self._flush_at:
+            self.flush()
 
     def _sample_line(self, s: Sample) -> str:
         """The sample as one JSON line (floats formatted directly, fast)."""
+        path = self._paths.get(s.path)
+        if path is None:
+            path = self._quoted(s.path)
         # time keeps every digit (hardware clocks may be large); the rest 9 significant
         line = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,'
                 '"omega":%.9g,"cmd_v":%.9g,"cmd_omega":%.9g,"path":%s,"lateness":%.9g,'
                 '"stalled":%s'
                 % (float(s.time), s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega,
-                   self._quoted(s.path), s.lateness, "true" if s.stalled else "false"))
+                   path, s.lateness, "true" if s.stalled else "false"))
         if s.scan_age is not None:
             line += ',"scan_age":%.9g' % s.scan_age
         if s.clearance is not None:
@@ -170,8 +218,19 @@ class TraceWriter:
     def close(self) -> None:
         """Flush and close the file (safe to call more than once)."""
         if self._file is not None:
-            self._file.close()
-            self._file = None
+            try:
+                self.flush()
+            finally:
+                self._file.close()
+                self._file = None
+        self._pending.clear()
+
+    def __del__(self) -> None:
+        # a writer dropped without close() still writes what it queued
+        try:
+            self.close()
+        except Exception:  # noqa: BLE001 - nothing can be reported from a finalizer
+            pass
 
     def __enter__(self) -> "TraceWriter":
         return self

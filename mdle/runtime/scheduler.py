@@ -61,9 +61,9 @@ class ActiveElement:
 class _Slot:
     """An element at one place in the tree, with everything a tick needs precomputed."""
 
-    __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "test",
-                 "source", "children", "repeat", "step", "start", "args", "alpha_v",
-                 "alpha_w", "law", "span")
+    __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "limit",
+                 "test", "source", "children", "repeat", "step", "start", "args", "alpha_v",
+                 "alpha_w", "law", "span", "tested")
 
     def __init__(self, node: Element, path: str, label: str, level: int) -> None:
         self.node = node
@@ -71,8 +71,13 @@ class _Slot:
         self.label = label
         self.level = level
         self.timer = float(node.timer)
+        # the timer fires once the local time reaches `limit`; inf (or nan) never does
+        self.limit = self.timer - TIME_EPS
         self.test: Callable[[Context], bool] | None = (
             None if node.interrupt.never else node.interrupt.test)
+        # whether a tick has anything to test at this level (a `never` interrupt and no
+        # timer have not: such levels are left out of the per-tick scan)
+        self.tested = self.test is not None or self.limit < math.inf
         self.source = node.interrupt.source
         self.span: Span | None = node.span
         self.children: tuple[_Slot, ...] = ()
@@ -166,6 +171,9 @@ class Scheduler:
         self._root = _Slot(element, element.label, element.label, 0)
         self._pacer = Pacer() if realtime and backend.clock is ClockMode.SIMULATED else None
         self._stack: list[_Frame] = []
+        # (level, start, limit, test, slot) of each active level that can fire, outermost
+        # first; rebuilt after the stack changes (None: stale)
+        self._checks: tuple[tuple[int, float, float, Any, _Slot], ...] | None = ()
         self._events: list[Event] = []
         self._terminations: list[Termination] = []
         self._ticks = 0
@@ -371,18 +379,37 @@ class Scheduler:
         stack = self._stack
         level = 0
         while True:
-            if level < len(stack):
-                frame = stack[level]
-                slot = frame.slot
-                t = now - frame.start
-                if t >= slot.timer - TIME_EPS:
-                    cause = Cause.TIMER
-                elif slot.test is not None and self._test(slot, ctx, t):
-                    cause = Cause.INTERRUPT
-                else:
-                    level += 1
-                    continue
-                self._end_from(level, cause, now)
+            checks = self._checks
+            if checks is None:
+                checks = self._checks = tuple(
+                    (f.slot.level, f.start, f.slot.limit, f.slot.test, f.slot)
+                    for f in stack if f.slot.tested)
+            fired = -1
+            cause = Cause.TIMER
+            checked: _Slot | None = None
+            t = 0.0
+            try:
+                for lvl, start, limit, test, checked in checks:
+                    if lvl < level:
+                        continue
+                    t = now - start
+                    if t >= limit:  # the timer wins when both hold
+                        fired = lvl
+                        break
+                    if test is not None:
+                        ctx.t = t
+                        if test(ctx):
+                            fired = lvl
+                            cause = Cause.INTERRUPT
+                            break
+            except MdleError:
+                raise
+            except Exception as exc:
+                assert checked is not None
+                raise _failure(f"interrupt `{checked.source}` of `{checked.path}` failed at "
+                               f"t = {t:.3f} s", checked.span, exc) from exc
+            if fired >= 0:
+                self._end_from(fired, cause, now)
                 level = self._next_child(now, ctx)
                 continue
             # Every active element has been tested and none fired.
@@ -405,16 +432,6 @@ class Scheduler:
             else:
                 return
 
-    def _test(self, slot: _Slot, ctx: Context, t: float) -> bool:
-        ctx.t = t
-        try:
-            return bool(slot.test(ctx))  # type: ignore[misc]
-        except MdleError:
-            raise
-        except Exception as exc:
-            raise _failure(f"interrupt `{slot.source}` of `{slot.path}` failed at "
-                           f"t = {t:.3f} s", slot.span, exc) from exc
-
     def _next_child(self, now: float, ctx: Context) -> int:
         """After the top of the stack was popped: start the next element of the parent.
 
@@ -436,6 +453,7 @@ class Scheduler:
         while True:
             frame = _Frame(slot, now, self._ticks - 1)
             self._stack.append(frame)
+            self._checks = None
             self._emit(Event(now, EventKind.START, slot.path, slot.level, slot.kind,
                              self._pose))
             if slot.is_atom:
@@ -463,6 +481,7 @@ class Scheduler:
         stack = self._stack
         while len(stack) > level:
             frame = stack.pop()
+            self._checks = None
             slot = frame.slot
             c = cause if all_levels or len(stack) == level else Cause.ENDED_BY_PARENT
             frame.state = None  # per-atom state is dropped with the atom
@@ -504,6 +523,7 @@ class Scheduler:
             if cause is not None:
                 while stack:
                     frame = stack.pop()
+                    self._checks = None
                     slot = frame.slot
                     frame.state = None
                     self._terminations.append(Termination(slot.path, slot.level, cause, now))
@@ -511,6 +531,7 @@ class Scheduler:
                                      self._pose, cause))
         finally:
             stack.clear()
+            self._checks = None
             try:
                 self.backend.stop()
             finally:

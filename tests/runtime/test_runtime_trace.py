@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import gc
 import json
 import math
 
 import pytest
 
 from mdle.backend import Command
-from mdle.runtime import Cause, run
+from mdle.errors import MdleRuntimeError
+from mdle.runtime import Cause, Scheduler, run
 from mdle.runtime.scripted import ScriptedBackend
 from mdle.trace import TraceError, TraceWriter, read_trace
 
@@ -55,8 +57,8 @@ def test_non_finite_values_become_null_and_diagnostics_are_kept(ir, tmp_path):
     assert math.isnan(trace.column("diag.front")[1])
 
 
-def test_records_are_on_disk_before_the_run_ends(ir, tmp_path):
-    # flushed per record: a crash (here: a failing law) loses nothing already written
+def test_without_a_flush_period_every_record_is_on_disk_at_once(ir, tmp_path):
+    # flush_period=0: one write per record, the file is complete before each law step
     seen = []
     path = tmp_path / "t.jsonl"
 
@@ -65,9 +67,83 @@ def test_records_are_on_disk_before_the_run_ends(ir, tmp_path):
         return Command()
 
     run(ir.atom("a", law=ir.const_law("a", step=step), timer=0.2), ScriptedBackend(),
-        observers=[TraceWriter(path)])
+        observers=[TraceWriter(path, flush_period=0.0)])
     # header + start + START event before tick 0's law runs; then one sample per tick
     assert seen == [3, 4]
+
+
+class _Clock:
+    """A wall clock the test moves by hand."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+def test_samples_wait_at_most_the_flush_period_and_events_none(ir, tmp_path):
+    clock = _Clock()
+    seen = []
+    path = tmp_path / "t.jsonl"
+
+    def step(args, ctx, state):
+        seen.append([json.loads(x)["type"] for x in path.read_text().splitlines()])
+        clock.now += 0.004  # each tick takes 4 ms of wall time
+        return Command()
+
+    main = ir.string("main", ir.atom("a", law=ir.const_law("a", step=step), timer=0.5),
+                     ir.atom("b", law=ir.const_law("b", step=step), timer=0.2))
+    run(main, ScriptedBackend(), observers=[TraceWriter(path, flush_period=0.01, clock=clock)])
+    head = ["header", "start", "event", "event"]
+    assert seen[0] == head  # header, start and the START events are written at once
+    # samples queued at +4, +8, +12 ms after the last write go out together at +12 ms
+    # (none waits more than 10 ms); the next batch 12 ms later
+    assert [s.count("sample") for s in seen[:5]] == [0, 0, 0, 3, 3]
+    # a's timer ends it at tick 5: its END and b's START are written at once, together
+    # with the two samples still queued before them
+    assert seen[5] == head + ["sample"] * 5 + ["event", "event"]
+    trace = read_trace(path)
+    assert len(trace.samples) == 8 and trace.end is not None and not trace.truncated
+
+
+@pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
+def test_a_run_ended_by_ctrl_c_or_a_crash_leaves_every_sample_on_disk(ir, tmp_path, error):
+    # a long flush period: only the run's end can have written the samples
+    calls = []
+
+    def step(args, ctx, state):
+        calls.append(ctx.t)
+        if len(calls) == 5:
+            raise error("boom")
+        return Command(0.1, 0.0)
+
+    path = tmp_path / "t.jsonl"
+    writer = TraceWriter(path, flush_period=3600.0)
+    with pytest.raises((KeyboardInterrupt, MdleRuntimeError)):
+        run(ir.atom("a", law=ir.const_law("a", step=step)), ScriptedBackend(),
+            observers=[writer])
+    trace = read_trace(path)
+    assert len(trace.samples) == 4 and not trace.truncated
+    assert trace.end is not None
+    assert trace.end["cause"] == ("stopped" if error is KeyboardInterrupt else "error")
+
+
+def test_a_writer_dropped_without_close_still_writes_what_it_queued(ir, tmp_path):
+    path = tmp_path / "t.jsonl"
+    writer = TraceWriter(path, flush_period=3600.0)
+    sch = Scheduler(ir.atom("a", 0.1), ScriptedBackend(), observers=[writer])
+    for _ in range(3):
+        sch.tick()
+    del sch, writer
+    gc.collect()
+    trace = read_trace(path)
+    assert len(trace.samples) == 3 and trace.end is None and not trace.truncated
+
+
+def test_flush_period_must_not_be_negative(tmp_path):
+    with pytest.raises(ValueError, match="flush_period"):
+        TraceWriter(tmp_path / "t.jsonl", flush_period=-1.0)
 
 
 def test_reader_accepts_a_cut_off_last_line(ir, tmp_path):
