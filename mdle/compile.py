@@ -352,7 +352,7 @@ class Checker:
         """Return the parameters of a definition; a parameter's dimension is its default's."""
         key = ("slots", d.name, id(d))
         if key in self._cache:
-            return self._cache[key]  # type: ignore[no-any-return]
+            return self._cache[key]
         slots: list[_Slot] = []
         seen: dict[str, st.Param] = {}
         for p in d.param_list:
@@ -489,7 +489,7 @@ class Checker:
                         call: Span | None) -> cond.Typed:
         key = ("interrupt", d.name, _freeze(bound))
         if key in self._cache:
-            return self._cache[key]  # type: ignore[no-any-return]
+            return self._cache[key]
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
         try:
@@ -751,7 +751,7 @@ class Checker:
             cached = self._cache[key]
             if cached is None:  # failed before; its errors are already reported
                 raise _Abort
-            return cached  # type: ignore[no-any-return]
+            return cached
         env = MappingProxyType(dict(bound))
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))

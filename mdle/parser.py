@@ -176,7 +176,7 @@ def _deeper(state: _State, node: Any, parts: Any) -> Any:
 
 
 @v_args(inline=True)
-class _Build(Transformer):  # type: ignore[type-arg]
+class _Build(Transformer):
     """Builds :mod:`mdle.syntax` nodes as the LALR parser reduces each rule."""
 
     def start(self, *statements: st.Statement) -> tuple[st.Statement, ...]:
@@ -258,7 +258,7 @@ class _Build(Transformer):  # type: ignore[type-arg]
 
     def expr(self, *parts: Any) -> st.Expr:
         if len(parts) == 1 and not isinstance(parts[0], _Prefixed):
-            return parts[0]  # type: ignore[no-any-return]
+            return parts[0]
         return _precedence(_STATE.get(), parts)
 
     def group(self, lpar: Token, *parts: Any) -> st.Group:

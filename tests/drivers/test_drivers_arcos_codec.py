@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from typing import Any
 
 import pytest
 from hypothesis import given, settings
@@ -141,7 +142,7 @@ def test_decode_sip_refuses_short_packets() -> None:
         arcos.decode_sip(b"\x20\x00")
 
 
-def _sip(x: int, y: int, theta: int = 0, **kw: int) -> Sip:
+def _sip(x: int, y: int, theta: int = 0, **kw: Any) -> Sip:
     return Sip(x=x & 0x7FFF, y=y & 0x7FFF, theta=theta, **kw)
 
 

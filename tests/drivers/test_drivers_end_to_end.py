@@ -4,16 +4,26 @@ from __future__ import annotations
 
 import json
 import math
+import subprocess
 import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
+from mdle.drivers.pioneer import PioneerOptions
 from mdle.errors import BackendError
 from mdle.loader import load_text
 from mdle.runtime import Cause, element_of, run
+
+if TYPE_CHECKING:
+    from tests.drivers.conftest import FakeArcos
+
+    FakeRobot = Callable[..., FakeArcos]
 
 PLAN = """\
 atom fwd = (go(0.4 m/s), range(0 deg) < 0.8 m, 3 s)
@@ -23,7 +33,7 @@ run main
 """
 
 
-def _wall_ahead(fake):
+def _wall_ahead(fake: FakeArcos) -> Callable[[int], np.ndarray]:
     """Scans of a wall 1 m ahead of where the robot started (it drives towards it)."""
 
     def scan(_: int) -> np.ndarray:
@@ -36,7 +46,7 @@ def _wall_ahead(fake):
     return scan
 
 
-def test_plan_runs_on_the_pioneer_and_stops_it(fake_robot, fast) -> None:
+def test_plan_runs_on_the_pioneer_and_stops_it(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
     fake.scan_mm = _wall_ahead(fake)
     program = load_text(PLAN)
@@ -61,7 +71,8 @@ def test_plan_runs_on_the_pioneer_and_stops_it(fake_robot, fast) -> None:
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
 
 
-def test_dropped_robot_ends_the_run_with_the_robot_stopped(fake_robot, fast) -> None:
+def test_dropped_robot_ends_the_run_with_the_robot_stopped(fake_robot: FakeRobot,
+                                                           fast: PioneerOptions) -> None:
     fake = fake_robot(behaviour="drop", drop_after=0.4)
     fake.scan_mm = _wall_ahead(fake)
     program = load_text(PLAN.replace("0.8 m, 3 s", "0.1 m, 3 s"))
@@ -75,7 +86,7 @@ def test_dropped_robot_ends_the_run_with_the_robot_stopped(fake_robot, fast) -> 
         backend.close()
 
 
-def test_mdle_run_cli_on_the_fake_robot(fake_robot, tmp_path) -> None:
+def test_mdle_run_cli_on_the_fake_robot(fake_robot: FakeRobot, tmp_path: Path) -> None:
     from mdle.cli import main
 
     fake = fake_robot()
@@ -98,7 +109,8 @@ def test_mdle_run_cli_on_the_fake_robot(fake_robot, tmp_path) -> None:
     assert 400 in fake.args(Cmd.VEL)
 
 
-def test_mdle_run_cli_reports_a_lost_robot(fake_robot, tmp_path, capsys) -> None:
+def test_mdle_run_cli_reports_a_lost_robot(fake_robot: FakeRobot, tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
     from mdle.cli import main
 
     fake = fake_robot(behaviour="drop", drop_after=0.5)
@@ -112,7 +124,8 @@ def test_mdle_run_cli_reports_a_lost_robot(fake_robot, tmp_path, capsys) -> None
     assert "Traceback" not in err
 
 
-def test_mdle_run_cli_robot_not_answering(fake_robot, tmp_path, capsys) -> None:
+def test_mdle_run_cli_robot_not_answering(fake_robot: FakeRobot, tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
     from mdle.cli import main
 
     fake = fake_robot(behaviour="silent")
@@ -123,8 +136,7 @@ def test_mdle_run_cli_robot_not_answering(fake_robot, tmp_path, capsys) -> None:
     assert "no answer from a Pioneer" in capsys.readouterr().err
 
 
-def _spawn_run(fake, tmp_path):
-    import subprocess
+def _spawn_run(fake: FakeArcos, tmp_path: Path) -> subprocess.Popen[str]:
     import sys
 
     plan = tmp_path / "long.mdle"
@@ -136,7 +148,8 @@ def _spawn_run(fake, tmp_path):
 
 
 @pytest.mark.parametrize("signame", ["SIGTERM", "SIGINT"])
-def test_mdle_run_process_stopped_by_a_signal_stops_the_robot(fake_robot, tmp_path,
+def test_mdle_run_process_stopped_by_a_signal_stops_the_robot(fake_robot: FakeRobot,
+                                                              tmp_path: Path,
                                                               signame: str) -> None:
     import signal
 
@@ -154,7 +167,7 @@ def test_mdle_run_process_stopped_by_a_signal_stops_the_robot(fake_robot, tmp_pa
 
 
 @pytest.mark.parametrize("serial", [False, True], ids=["tcp", "serial"])
-def test_killed_process_leaves_the_robot_to_stop_itself(fake_robot, tmp_path,
+def test_killed_process_leaves_the_robot_to_stop_itself(fake_robot: FakeRobot, tmp_path: Path,
                                                        serial: bool) -> None:
     # TCP: the simulator sees the connection close and ends the session; serial: the
     # line just goes quiet and the firmware watchdog (0.5 s here, 2 s on a robot) trips

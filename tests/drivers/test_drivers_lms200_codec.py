@@ -32,6 +32,7 @@ def test_lms200_golden_crc(name: str, got: bytes, expected: str) -> None:
     raw = bytes.fromhex(expected)
     assert lms200.crc16(raw[:-2]) == raw[-2] | (raw[-1] << 8)
     (tel,) = TelegramReader(reply=False).feed(raw)
+    assert isinstance(tel, Telegram)
     assert lms200.encode_telegram(tel.cmd, tel.data) == raw
 
 
@@ -87,6 +88,7 @@ def test_measured_values_round_trip_split_anywhere(values: list[int], unit: int,
 def test_measured_values_flags_and_error_codes_are_invalid() -> None:
     words = [1500, 1500 | 0x2000, 8191, 8183, 8182, 0]
     (tel,) = TelegramReader().feed(lms200.encode_measured_values(words))
+    assert isinstance(tel, Telegram)
     mv = lms200.decode_measured_values(tel.data)
     assert mv.valid.tolist() == [True, False, False, False, True, False]
     assert mv.flags.tolist() == [0, 1, 0, 0, 0, 0]

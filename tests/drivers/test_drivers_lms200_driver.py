@@ -4,19 +4,28 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 
-from mdle.backend import Command
+from mdle.backend import Command, Scan
 from mdle.drivers import open_backend
-from mdle.drivers.lms200_driver import Lms200Driver
+from mdle.drivers.lms200_driver import Lms200Driver, Lms200Options
+from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
 from mdle.drivers.transport import SerialTransport
 from mdle.errors import BackendError
 
+if TYPE_CHECKING:
+    from tests.drivers.conftest import FakeArcos, FakeLms200
 
-def _wait_scan(driver: Lms200Driver, timeout: float = 1.0):
+    FakeRobot = Callable[..., FakeArcos]
+    FakeLms = Callable[..., FakeLms200]
+
+
+def _wait_scan(driver: Lms200Driver, timeout: float = 1.0) -> Scan:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         scan = driver.latest()
@@ -26,7 +35,7 @@ def _wait_scan(driver: Lms200Driver, timeout: float = 1.0):
     raise AssertionError("no scan")
 
 
-def test_probe_switch_baud_and_stream(fake_lms, fast_lms) -> None:
+def test_probe_switch_baud_and_stream(fake_lms: FakeLms, fast_lms: Lms200Options) -> None:
     fake = fake_lms(baud=9600)  # just powered up
     driver = Lms200Driver(SerialTransport(fake.device, 9600), replace(fast_lms, baud=38400))
     try:
@@ -55,7 +64,8 @@ def test_probe_switch_baud_and_stream(fake_lms, fast_lms) -> None:
     assert fake.received[-1] == (0x20, b"\x25")  # streaming stopped on close
 
 
-def test_scanner_already_streaming_at_the_target_rate(fake_lms, fast_lms) -> None:
+def test_scanner_already_streaming_at_the_target_rate(fake_lms: FakeLms,
+                                                      fast_lms: Lms200Options) -> None:
     fake = fake_lms(baud=38400, streaming=True)
     driver = Lms200Driver(SerialTransport(fake.device, 9600), fast_lms)
     try:
@@ -65,7 +75,7 @@ def test_scanner_already_streaming_at_the_target_rate(fake_lms, fast_lms) -> Non
         driver.close()
 
 
-def test_probe_finds_500k(fake_lms, fast_lms) -> None:
+def test_probe_finds_500k(fake_lms: FakeLms, fast_lms: Lms200Options) -> None:
     fake = fake_lms(baud=500000)
     driver = Lms200Driver(SerialTransport(fake.device, 9600), replace(fast_lms, baud=9600))
     try:
@@ -75,7 +85,7 @@ def test_probe_finds_500k(fake_lms, fast_lms) -> None:
         driver.close()
 
 
-def test_nak_is_retried(fake_lms, fast_lms) -> None:
+def test_nak_is_retried(fake_lms: FakeLms, fast_lms: Lms200Options) -> None:
     fake = fake_lms(baud=38400, nak_first=True)
     driver = Lms200Driver(SerialTransport(fake.device, 38400), fast_lms)
     try:
@@ -85,7 +95,8 @@ def test_nak_is_retried(fake_lms, fast_lms) -> None:
         driver.close()
 
 
-def test_corrupted_telegrams_are_dropped_and_the_stream_recovers(fake_lms, fast_lms) -> None:
+def test_corrupted_telegrams_are_dropped_and_the_stream_recovers(fake_lms: FakeLms,
+                                                                 fast_lms: Lms200Options) -> None:
     fake = fake_lms(baud=38400, corrupt_every=2)
     driver = Lms200Driver(SerialTransport(fake.device, 38400), fast_lms)
     try:
@@ -99,7 +110,7 @@ def test_corrupted_telegrams_are_dropped_and_the_stream_recovers(fake_lms, fast_
         driver.close()
 
 
-def test_no_scanner_is_a_clear_error(fake_lms, fast_lms) -> None:
+def test_no_scanner_is_a_clear_error(fake_lms: FakeLms, fast_lms: Lms200Options) -> None:
     fake = fake_lms(silent=True)
     t0 = time.monotonic()
     with pytest.raises(BackendError, match=r"no answer from an LMS-200 on .* \(tried 38400, "
@@ -108,7 +119,7 @@ def test_no_scanner_is_a_clear_error(fake_lms, fast_lms) -> None:
     assert time.monotonic() - t0 < 2.0
 
 
-def test_unplugged_scanner_is_reported(fake_lms, fast_lms) -> None:
+def test_unplugged_scanner_is_reported(fake_lms: FakeLms, fast_lms: Lms200Options) -> None:
     fake = fake_lms(baud=38400)
     driver = Lms200Driver(SerialTransport(fake.device, 38400), fast_lms)
     try:
@@ -122,7 +133,8 @@ def test_unplugged_scanner_is_reported(fake_lms, fast_lms) -> None:
         driver.close()
 
 
-def test_pioneer_with_an_lms200_laser(fake_robot, fake_lms, fast, fast_lms) -> None:
+def test_pioneer_with_an_lms200_laser(fake_robot: FakeRobot, fake_lms: FakeLms,
+                                      fast: PioneerOptions, fast_lms: Lms200Options) -> None:
     robot = fake_robot()
     laser = fake_lms(baud=9600)
     backend = open_backend("pioneer", robot.url, laser.url + "?baud=38400", options=fast,
@@ -143,7 +155,7 @@ def test_pioneer_with_an_lms200_laser(fake_robot, fake_lms, fast, fast_lms) -> N
         backend.close()
 
 
-def test_variant_100_degrees_quarter_degree(fake_lms, fast_lms) -> None:
+def test_variant_100_degrees_quarter_degree(fake_lms: FakeLms, fast_lms: Lms200Options) -> None:
     fake = fake_lms(baud=38400, count=401)
     driver = Lms200Driver(SerialTransport(fake.device, 38400),
                           replace(fast_lms, variant=(100, 25)))
@@ -157,12 +169,15 @@ def test_variant_100_degrees_quarter_degree(fake_lms, fast_lms) -> None:
         driver.close()
 
 
-def test_slow_lms_line_widens_the_scan_age_limit(fake_robot, fake_lms, fast, fast_lms) -> None:
+def test_slow_lms_line_widens_the_scan_age_limit(fake_robot: FakeRobot, fake_lms: FakeLms,
+                                                 fast: PioneerOptions,
+                                                 fast_lms: Lms200Options) -> None:
     robot = fake_robot()
     laser = fake_lms(baud=9600, period=0.4)  # a 181-value scan takes 0.39 s at 9600 baud
     backend = open_backend("pioneer", robot.url, laser.url + "?baud=9600", options=fast,
                            laser_options=fast_lms)
     try:
+        assert isinstance(backend, PioneerBackend)
         assert backend._max_scan_age == pytest.approx(2.5 * 372 * 10 / 9600)
         t0 = time.monotonic()
         while time.monotonic() - t0 < 1.2:  # scans 0.4 s apart never count as stale

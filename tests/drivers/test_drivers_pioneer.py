@@ -7,7 +7,9 @@ import signal
 import sys
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
@@ -15,8 +17,21 @@ import pytest
 from mdle.backend import Backend, ClockMode, Command, RobotLimits
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
-from mdle.drivers.pioneer import PioneerBackend
+from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
 from mdle.errors import BackendError
+
+if TYPE_CHECKING:
+    from tests.drivers.conftest import FakeArcos
+
+    FakeRobot = Callable[..., FakeArcos]
+
+
+def _open(connect: str, laser: str | None = None, *, options: PioneerOptions | None = None,
+          limits: RobotLimits | None = None) -> PioneerBackend:
+    """``open_backend("pioneer", ...)``, checked to be the Pioneer backend."""
+    backend = open_backend("pioneer", connect, laser, options=options, limits=limits)
+    assert isinstance(backend, PioneerBackend)
+    return backend
 
 
 def _tick(backend: PioneerBackend, cmd: Command, dt: float = 0.05) -> float:
@@ -25,9 +40,9 @@ def _tick(backend: PioneerBackend, cmd: Command, dt: float = 0.05) -> float:
     return backend.advance(dt)
 
 
-def test_handshake_sips_and_simulator_laser(fake_robot, fast) -> None:
+def test_handshake_sips_and_simulator_laser(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, "sim", options=fast)
+    backend = _open(fake.url, "sim", options=fast)
     try:
         assert isinstance(backend, Backend) and backend.clock is ClockMode.WALL
         assert backend.info.subtype == "p3dx-sh"
@@ -53,10 +68,10 @@ def test_handshake_sips_and_simulator_laser(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_commands_are_clamped_and_converted(fake_robot, fast) -> None:
+def test_commands_are_clamped_and_converted(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
     limits = RobotLimits(max_speed=0.5, max_reverse_speed=0.2, max_turn_rate=math.radians(40))
-    backend = open_backend("pioneer", fake.url, options=fast, limits=limits)
+    backend = _open(fake.url, options=fast, limits=limits)
     try:
         backend.command(Command(2.0, -3.0))
         backend.command(Command(-1.0, 0.1))
@@ -71,9 +86,9 @@ def test_commands_are_clamped_and_converted(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_odometry_units_per_model(fake_robot, fast) -> None:
+def test_odometry_units_per_model(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot(subtype="p3dx")  # 0.485 mm per position unit
-    backend = open_backend("pioneer", fake.url, options=replace(fast, odometry_origin="robot"))
+    backend = _open(fake.url, options=replace(fast, odometry_origin="robot"))
     try:
         assert backend.params.dist_conv == 0.485
         fake.pose_mm = [505.0, -250.0, math.radians(90)]
@@ -86,11 +101,12 @@ def test_odometry_units_per_model(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_odometry_starts_at_the_pose_at_connect(fake_robot, fast) -> None:
+def test_odometry_starts_at_the_pose_at_connect(fake_robot: FakeRobot,
+                                                fast: PioneerOptions) -> None:
     fake = fake_robot()
     fake.pose_mm = [3000.0, -1000.0, math.radians(30)]  # counters left by an earlier run
-    start = open_backend("pioneer", fake.url, options=fast)
-    robot = open_backend("pioneer", fake_robot(pose_mm=[3000.0, -1000.0, 0.5]).url,
+    start = _open(fake.url, options=fast)
+    robot = _open(fake_robot(pose_mm=[3000.0, -1000.0, 0.5]).url,
                          options=replace(fast, odometry_origin="robot"))
     try:
         first = start.observe().pose
@@ -102,9 +118,9 @@ def test_odometry_starts_at_the_pose_at_connect(fake_robot, fast) -> None:
         robot.close()
 
 
-def test_model_override_from_the_url(fake_robot, fast) -> None:
+def test_model_override_from_the_url(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot(subtype="p3dx")
-    backend = open_backend("pioneer", fake.url + "?model=p3dx-sh&max_speed=0.3", options=fast)
+    backend = _open(fake.url + "?model=p3dx-sh&max_speed=0.3", options=fast)
     try:
         assert backend.params.dist_conv == 1.0 and backend.limits.max_speed == 0.3
     finally:
@@ -117,9 +133,9 @@ def test_model_override_from_the_url(fake_robot, fast) -> None:
         open_backend("pioneer", fake.url + "?max_speed=fast", options=fast)
 
 
-def test_robot_drives_and_odometry_follows(fake_robot, fast) -> None:
+def test_robot_drives_and_odometry_follows(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, options=fast)
+    backend = _open(fake.url, options=fast)
     try:
         t0 = time.monotonic()
         while time.monotonic() - t0 < 0.6:
@@ -132,10 +148,10 @@ def test_robot_drives_and_odometry_follows(fake_robot, fast) -> None:
     assert fake.wait_for(lambda: fake.v_mm == 0.0)
 
 
-def test_keepalive_holds_the_watchdog_and_deadman_stops_a_silent_runtime(fake_robot,
-                                                                         fast) -> None:
+def test_keepalive_holds_the_watchdog_and_deadman_stops_a_silent_runtime(
+        fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot(watchdog=0.3)
-    backend = open_backend("pioneer", fake.url, options=fast)
+    backend = _open(fake.url, options=fast)
     try:
         backend.command(Command(0.3, 0.0))
         assert fake.wait_for(lambda: fake.v_mm == 300)
@@ -154,10 +170,11 @@ def test_keepalive_holds_the_watchdog_and_deadman_stops_a_silent_runtime(fake_ro
         backend.close()
 
 
-def test_without_keepalive_the_watchdog_would_trip(fake_robot, fast) -> None:
+def test_without_keepalive_the_watchdog_would_trip(fake_robot: FakeRobot,
+                                                   fast: PioneerOptions) -> None:
     # the control experiment for the test above: the fake's watchdog does trip on silence
     fake = fake_robot(watchdog=0.3)
-    backend = open_backend("pioneer", fake.url, options=replace(fast, keepalive=10.0))
+    backend = _open(fake.url, options=replace(fast, keepalive=10.0))
     try:
         time.sleep(0.8)
         assert fake.watchdog_trips >= 1
@@ -165,9 +182,10 @@ def test_without_keepalive_the_watchdog_would_trip(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_advance_waits_for_the_deadline_and_reports_lateness(fake_robot, fast) -> None:
+def test_advance_waits_for_the_deadline_and_reports_lateness(fake_robot: FakeRobot,
+                                                             fast: PioneerOptions) -> None:
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, options=fast)
+    backend = _open(fake.url, options=fast)
     try:
         dt = 0.05
         t0 = time.monotonic()
@@ -187,9 +205,10 @@ def test_advance_waits_for_the_deadline_and_reports_lateness(fake_robot, fast) -
         backend.close()
 
 
-def test_lost_connection_mid_run_ends_with_clear_error(fake_robot, fast) -> None:
+def test_lost_connection_mid_run_ends_with_clear_error(fake_robot: FakeRobot,
+                                                       fast: PioneerOptions) -> None:
     fake = fake_robot(behaviour="drop", drop_after=0.3)
-    backend = open_backend("pioneer", fake.url, "sim", options=fast)
+    backend = _open(fake.url, "sim", options=fast)
     t0 = time.monotonic()
     with pytest.raises(BackendError, match=r"lost the robot .*closed the connection"):
         while time.monotonic() - t0 < 3.0:
@@ -204,7 +223,7 @@ def test_lost_connection_mid_run_ends_with_clear_error(fake_robot, fast) -> None
     backend.stop()  # harmless after close
 
 
-def test_robot_that_never_answers(fake_robot, fast) -> None:
+def test_robot_that_never_answers(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot(behaviour="silent")
     t0 = time.monotonic()
     with pytest.raises(BackendError, match=r"no answer from a Pioneer .* after 2 handshake "
@@ -225,9 +244,9 @@ def test_nothing_listening_is_a_clear_error() -> None:
         open_backend("pioneer", f"tcp://127.0.0.1:{port}")
 
 
-def test_close_stops_and_ends_the_session(fake_robot, fast) -> None:
+def test_close_stops_and_ends_the_session(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, "sim", options=fast)
+    backend = _open(fake.url, "sim", options=fast)
     backend.command(Command(0.3, 0.5))
     assert fake.wait_for(lambda: fake.v_mm == 300)
     backend.close()
@@ -240,9 +259,9 @@ def test_close_stops_and_ends_the_session(fake_robot, fast) -> None:
     assert len(fake.commands(Cmd.CLOSE)) == 1
 
 
-def test_stale_scan_ends_the_run(fake_robot, fast) -> None:
+def test_stale_scan_ends_the_run(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, "sim", options=fast)
+    backend = _open(fake.url, "sim", options=fast)
     try:
         backend.observe()
         backend.command(Command(0.2, 0.0))
@@ -255,9 +274,9 @@ def test_stale_scan_ends_the_run(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_silent_robot_mid_run_ends_the_run(fake_robot, fast) -> None:
+def test_silent_robot_mid_run_ends_the_run(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, options=fast)
+    backend = _open(fake.url, options=fast)
     try:
         backend.observe()
         fake.send_sips = False
@@ -268,16 +287,17 @@ def test_silent_robot_mid_run_ends_the_run(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_no_laser_packets_is_a_clear_error_at_connect(fake_robot, fast) -> None:
+def test_no_laser_packets_is_a_clear_error_at_connect(fake_robot: FakeRobot,
+                                                      fast: PioneerOptions) -> None:
     fake = fake_robot(send_laser=False)
     with pytest.raises(BackendError, match="no laser scan within 1.0 s"):
         open_backend("pioneer", fake.url, "sim", options=fast)
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
 
 
-def test_corrupted_stream_resynchronises(fake_robot, fast) -> None:
+def test_corrupted_stream_resynchronises(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot(corrupt_every=10)
-    backend = open_backend("pioneer", fake.url, "sim", options=replace(fast, max_scan_age=1.0))
+    backend = _open(fake.url, "sim", options=replace(fast, max_scan_age=1.0))
     try:
         time.sleep(1.0)
         obs = backend.observe()
@@ -288,9 +308,10 @@ def test_corrupted_stream_resynchronises(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_session_left_open_is_closed_and_reopened(fake_robot, fast) -> None:
+def test_session_left_open_is_closed_and_reopened(fake_robot: FakeRobot,
+                                                  fast: PioneerOptions) -> None:
     fake = fake_robot(open_session=True)
-    backend = open_backend("pioneer", fake.url, options=fast)
+    backend = _open(fake.url, options=fast)
     try:
         first_close = fake.commands(Cmd.CLOSE)[0].t  # the stale session was closed first
         assert first_close < fake.commands(Cmd.ENABLE)[0].t
@@ -299,10 +320,11 @@ def test_session_left_open_is_closed_and_reopened(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_serial_line_over_a_pty_with_baud_probing(fake_robot, fast) -> None:
+def test_serial_line_over_a_pty_with_baud_probing(fake_robot: FakeRobot,
+                                                  fast: PioneerOptions) -> None:
     fake = fake_robot(serial=True, baud=115200)
     url = f"serial://{fake.device}"  # no baud: probe 9600, then 115200
-    backend = open_backend("pioneer", url, "sim", options=replace(fast, sync_retries=1))
+    backend = _open(url, "sim", options=replace(fast, sync_retries=1))
     try:
         assert backend.info.subtype == "p3dx-sh"
         assert "115200" in backend._transport.description
@@ -315,9 +337,9 @@ def test_serial_line_over_a_pty_with_baud_probing(fake_robot, fast) -> None:
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
 
 
-def test_serial_line_dropped_mid_run(fake_robot, fast) -> None:
+def test_serial_line_dropped_mid_run(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot(serial=True)
-    backend = open_backend("pioneer", fake.url + "?baud=9600", options=fast)
+    backend = _open(fake.url + "?baud=9600", options=fast)
     try:
         backend.observe()
         fake.drop()
@@ -329,7 +351,9 @@ def test_serial_line_dropped_mid_run(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_serial_without_pyserial_names_the_extra(monkeypatch, fake_robot, fast) -> None:
+def test_serial_without_pyserial_names_the_extra(monkeypatch: pytest.MonkeyPatch,
+                                                 fake_robot: FakeRobot,
+                                                 fast: PioneerOptions) -> None:
     fake = fake_robot(serial=True)
     monkeypatch.setitem(sys.modules, "serial", None)
     with pytest.raises(BackendError, match=r"pip install 'mdle\[serial\]'"):
@@ -356,17 +380,18 @@ def test_bad_laser_and_kind() -> None:
         open_backend("pioneer", "tcp://localhost:8101", "tcp://localhost:1")
 
 
-def test_sigterm_becomes_system_exit_while_connected(fake_robot, fast) -> None:
+def test_sigterm_becomes_system_exit_while_connected(fake_robot: FakeRobot,
+                                                     fast: PioneerOptions) -> None:
     assert threading.current_thread() is threading.main_thread()
     before = signal.getsignal(signal.SIGTERM)
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, options=replace(fast, handle_sigterm=True))
+    backend = _open(fake.url, options=replace(fast, handle_sigterm=True))
     try:
         handler = signal.getsignal(signal.SIGTERM)
         assert callable(handler) and handler is not before
         backend.command(Command(0.3, 0.0))
         with pytest.raises(SystemExit) as info:
-            handler(signal.SIGTERM, None)  # type: ignore[operator]
+            handler(signal.SIGTERM, None)
         assert info.value.code == 143
     finally:
         backend.close()  # what the runtime's finally block does
@@ -374,12 +399,13 @@ def test_sigterm_becomes_system_exit_while_connected(fake_robot, fast) -> None:
     assert fake.wait_for(lambda: fake.v_mm == 0 and fake.commands(Cmd.CLOSE) != [])
 
 
-def test_random_commands_arrive_clamped_and_rounded(fake_robot, fast) -> None:
+def test_random_commands_arrive_clamped_and_rounded(fake_robot: FakeRobot,
+                                                    fast: PioneerOptions) -> None:
     from hypothesis import given, settings
     from hypothesis import strategies as st
 
     fake = fake_robot()
-    backend = open_backend("pioneer", fake.url, options=fast)
+    backend = _open(fake.url, options=fast)
     lim = backend.limits
     finite = st.floats(-10.0, 10.0, allow_nan=False)
 
@@ -400,10 +426,10 @@ def test_random_commands_arrive_clamped_and_rounded(fake_robot, fast) -> None:
         backend.close()
 
 
-def test_simulator_laser_options(fake_robot, fast) -> None:
+def test_simulator_laser_options(fake_robot: FakeRobot, fast: PioneerOptions) -> None:
     fake = fake_robot()
     fake.scan_mm = lambda i: np.full(181, 8000)
-    backend = open_backend("pioneer", fake.url, "sim?max_range=8", options=fast)
+    backend = _open(fake.url, "sim?max_range=8", options=fast)
     try:
         scan = backend.observe().scan
         assert scan is not None and scan.max_range == 8.0 and not scan.valid.any()

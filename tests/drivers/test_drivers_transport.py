@@ -31,7 +31,8 @@ from mdle.errors import BackendError
     ("sim", "sim", "", 0, "", None, {}),
     ("sim?max_range=8", "sim", "", 0, "", None, {"max_range": "8"}),
 ])
-def test_parse_url(url, scheme, host, port, path, baud, options) -> None:
+def test_parse_url(url: str, scheme: str, host: str, port: int, path: str, baud: int | None,
+                   options: dict[str, str]) -> None:
     ep = parse_url(url)
     assert (ep.scheme, ep.host, ep.port, ep.path, ep.baud, ep.options) == (
         scheme, host, port, path, baud, options)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -84,7 +85,7 @@ def reg() -> Registry:
 
 
 @pytest.fixture
-def make_ctx():  # type: ignore[no-untyped-def]
+def make_ctx() -> Callable[..., Context]:
     """``make_ctx(x=0, t=0, stalled=False)``: a Context for evaluating compiled interrupts."""
     return _make_ctx
 

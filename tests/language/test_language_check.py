@@ -3,13 +3,21 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
-from atoms.registry import Registry
-from mdle.errors import CheckError, render_diagnostic
+from atoms.registry import Context, Registry
+from mdle.errors import CheckError, Diagnostic, Span, render_diagnostic
 from mdle.loader import load_text
 from mdle.program import AtomNode, Program, StringKind, StringNode
+
+
+def _at(d: Diagnostic) -> Span:
+    """The place of a diagnostic that must have one."""
+    assert d.span is not None, d.message
+    return d.span
 
 
 def check(text: str, reg: Registry) -> Program:
@@ -64,7 +72,7 @@ def test_interrupt_closures_read_the_sensors(reg: Registry, make_ctx) -> None:  
     ("px > 0", 1.0, 0.0, True),
 ])
 def test_interrupt_expressions(expr: str, x: float, t: float, expected: bool, reg: Registry,
-                               make_ctx) -> None:  # type: ignore[no-untyped-def]
+                               make_ctx: Callable[..., Context]) -> None:
     p = check(f"atom a = (drive(1 m/s), {expr}, inf)", reg)
     assert p.elements["a"].interrupt.test(make_ctx(x=x, t=t)) is expected
 
@@ -147,7 +155,7 @@ def test_unreachable_element_warning(reg: Registry) -> None:
         "timer `inf`)",
         "`b` is never reached: `((b)..., never, inf)` before it never ends (its interrupt is "
         "`never` and its timer `inf`)"]
-    assert [(w.span.line, w.span.column) for w in p.warnings] == [(3, 25), (4, 41)]
+    assert [(_at(w).line, _at(w).column) for w in p.warnings] == [(3, 25), (4, 41)]
 
 
 def test_always_true_interrupt_warning(reg: Registry) -> None:
@@ -260,7 +268,7 @@ def test_clash_names_both_places(reg: Registry) -> None:
         load_text(text, "t.mdle", reg)
     (d,) = err.value.diagnostics
     assert d.message == "`a` is defined twice: t.mdle:1:6 and t.mdle:3:6"
-    assert d.notes[0].span.line == 1
+    assert _at(d.notes[0]).line == 1
 
 
 def test_recursive_definitions(reg: Registry) -> None:
@@ -283,8 +291,8 @@ def test_errors_in_a_use_note_the_call(reg: Registry) -> None:
         load_text("interrupt near(d) = beam(0 deg) < d\natom a = (drive(1 m/s), near(1 s), inf)",
                   "t.mdle", reg)
     (d,) = err.value.diagnostics
-    assert d.span.line == 1 and d.notes[0].message == "in this use of `near`"
-    assert d.notes[0].span.line == 2
+    assert _at(d).line == 1 and d.notes[0].message == "in this use of `near`"
+    assert _at(d.notes[0]).line == 2
 
 
 def test_long_definition_chains_fail_cleanly(reg: Registry) -> None:
@@ -298,12 +306,14 @@ def test_long_definition_chains_fail_cleanly(reg: Registry) -> None:
     assert len(check(short, reg).elements) == 100
 
 
-def test_default_registry_plans(plans_dir) -> None:  # type: ignore[no-untyped-def]
+def test_default_registry_plans(plans_dir: Path) -> None:
     from mdle.loader import load_program
 
     p = load_program(plans_dir / "language" / "tour.mdle")
     assert p.entry == "main" and not p.warnings
-    assert math.isclose(p.elements["spin"].args["rate"], math.radians(30))  # type: ignore[union-attr]
+    spin = p.elements["spin"]
+    assert isinstance(spin, AtomNode)
+    assert math.isclose(float(spin.args["rate"]), math.radians(30))
 
 
 def test_declared_symbols_win_over_definitions_of_the_same_name(reg: Registry) -> None:
@@ -315,7 +325,9 @@ def test_declared_symbols_win_over_definitions_of_the_same_name(reg: Registry) -
     main = p.elements["main"]
     assert isinstance(main, StringNode)
     assert [e.label for e in main.elements] == ["left", "right"]
-    assert [dict(e.args)["side"] for e in main.elements] == ["left", "right"]
+    assert all(isinstance(e, AtomNode) for e in main.elements)
+    assert [dict(e.args)["side"] for e in main.elements if isinstance(e, AtomNode)] == [
+        "left", "right"]
     # Where no symbol is declared the name still means the definition.
     assert "expected a fixed value, but `left` is" in errors(
         "atom left = (hug(), never, 5 s)\natom a = (drive(left), never, 5 s)", reg)[0]

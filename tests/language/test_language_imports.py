@@ -6,8 +6,14 @@ from pathlib import Path
 
 import pytest
 
-from mdle.errors import CheckError, MdleSyntaxError
+from mdle.errors import CheckError, Diagnostic, MdleSyntaxError, Span
 from mdle.loader import load_program
+
+
+def _at(d: Diagnostic) -> Span:
+    """The place of a diagnostic that must have one."""
+    assert d.span is not None, d.message
+    return d.span
 
 
 def write(folder: Path, name: str, text: str) -> Path:
@@ -56,7 +62,7 @@ def test_import_cycle(tmp_path: Path) -> None:
     (d,) = err.value.diagnostics
     a, b = tmp_path / "a.mdle", tmp_path / "b.mdle"
     assert d.message == f"import cycle: {a} \u2192 {b} \u2192 {a}"
-    assert d.span.file == str(b) and d.span.line == 1
+    assert _at(d).file == str(b) and _at(d).line == 1
 
 
 def test_missing_import(tmp_path: Path) -> None:
@@ -65,7 +71,7 @@ def test_missing_import(tmp_path: Path) -> None:
         load_program(main)
     (d,) = err.value.diagnostics
     assert d.message == "cannot import `nowhere.mdle`: no such file"
-    assert (d.span.line, d.span.column) == (1, 1)
+    assert (_at(d).line, _at(d).column) == (1, 1)
     assert str(tmp_path / "nowhere.mdle") in (d.hint or "")
 
 
@@ -74,7 +80,7 @@ def test_syntax_errors_in_several_files_together(tmp_path: Path) -> None:
     main = write(tmp_path, "m.mdle", 'import "lib.mdle"\natom b = (stop, never 1 s)')
     with pytest.raises(MdleSyntaxError) as err:
         load_program(main)
-    assert sorted(Path(d.span.file).name for d in err.value.diagnostics) == ["lib.mdle", "m.mdle"]
+    assert sorted(Path(_at(d).file).name for d in err.value.diagnostics) == ["lib.mdle", "m.mdle"]
 
 
 def test_not_utf8(tmp_path: Path) -> None:
@@ -91,7 +97,7 @@ def test_impossible_import_names(text: str) -> None:
 
     with pytest.raises(MdleError) as err:
         load_text(text)
-    assert err.value.diagnostics[0].span.line == 1
+    assert _at(err.value.diagnostics[0]).line == 1
 
 
 def test_impossible_file_names() -> None:

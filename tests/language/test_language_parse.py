@@ -7,9 +7,15 @@ import math
 import pytest
 
 from mdle import syntax as st
-from mdle.errors import MdleSyntaxError, Span
+from mdle.errors import Diagnostic, MdleSyntaxError, Span
 from mdle.parser import MAX_DEPTH, parse_expression, parse_module
 from mdle.units import ANGLE, LENGTH, NONE, SPEED, TIME, TURN_RATE
+
+
+def _at(d: Diagnostic) -> Span:
+    """The place of a diagnostic that must have one."""
+    assert d.span is not None, d.message
+    return d.span
 
 
 def body(text: str) -> st.Expr:
@@ -113,7 +119,7 @@ def test_keywords_are_reserved_even_where_only_a_name_fits() -> None:
         parse_module("atom run = (stop, never, 1 s)", "k.mdle")
     (d,) = err.value.diagnostics
     assert d.message == "`run` is a keyword of MDLe and cannot be used as a name"
-    assert (d.span.line, d.span.column) == (1, 6)
+    assert (_at(d).line, _at(d).column) == (1, 6)
 
 
 def test_names_may_contain_keywords() -> None:

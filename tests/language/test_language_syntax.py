@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import pytest
 
-from mdle.errors import MdleSyntaxError, render_diagnostic
+from mdle.errors import Diagnostic, MdleSyntaxError, Span, render_diagnostic
 from mdle.loader import load_text
 from mdle.parser import MAX_ERRORS, parse_expression, parse_module
 from mdle.syntax_errors import EXAMPLES, TERMINAL_WORDS
 
 CASES = [(label.message, snippet) for label, snippets in EXAMPLES.items() for snippet in snippets]
+
+
+def _at(d: Diagnostic) -> Span:
+    """The place of a diagnostic that must have one."""
+    assert d.span is not None, d.message
+    return d.span
 
 
 @pytest.mark.parametrize("message, snippet", CASES)
@@ -49,8 +55,8 @@ def test_unclosed_parenthesis_points_at_the_end_and_notes_the_opening() -> None:
         parse_module(text, "u.mdle")
     (d,) = err.value.diagnostics
     assert d.message.startswith("unbalanced parentheses: the file ends before a `(` is closed")
-    assert (d.span.line, d.span.column) == (3, 13)
-    assert d.notes and (d.notes[0].span.line, d.notes[0].span.column) == (1, 10)
+    assert (_at(d).line, _at(d).column) == (3, 13)
+    assert d.notes and (_at(d.notes[0]).line, _at(d.notes[0]).column) == (1, 10)
     assert d.notes[0].message == "this `(` is not closed"
 
 
@@ -62,7 +68,7 @@ def test_several_errors_are_reported_together() -> None:
             "atom c = stalled)\n")
     with pytest.raises(MdleSyntaxError) as err:
         parse_module(text, "m.mdle")
-    lines = [d.span.line for d in err.value.diagnostics]
+    lines = [_at(d).line for d in err.value.diagnostics]
     assert lines == [1, 3, 4, 5]
 
 
@@ -93,7 +99,7 @@ def test_stray_characters_get_a_hint(char: str, hint: str) -> None:
         parse_module(f"interrupt i = x > 1 m {char} stalled")
     (d,) = err.value.diagnostics
     assert d.message.startswith("unexpected character") and hint in (d.hint or "")
-    assert d.span.column == 23
+    assert _at(d).column == 23
 
 
 def test_binary_junk_is_reported_as_such() -> None:

@@ -121,7 +121,9 @@ def test_pose_and_scan(r: Run) -> None:
     assert ok
     lines = out.splitlines()
     assert lines[0].startswith("scan at t = 3.60 s: 181 beams from -90 to 90 deg")
-    ahead = float(re.search(r"ahead ([0-9.]+) m", out).group(1))
+    found = re.search(r"ahead ([0-9.]+) m", out)
+    assert found, out
+    ahead = float(found.group(1))
     assert ahead == pytest.approx(5.40 - 3.95, abs=0.1)
     assert lines[-2].startswith("  right:") and lines[-1].startswith("  left :")
     assert "front ray 1.4" in lines[-2]  # the ellipse ahead, seen by both sides' front ray
@@ -199,7 +201,9 @@ def test_step_prints_each_tick(r: Run) -> None:
     lines = out.splitlines()
     assert ok and lines[0] == "stepping `hug` from the robot's current state"
     assert lines[1].startswith("  #1    t   0.00 s  hug  cmd v +1.000 m/s  omega ")
-    side = float(re.search(r"side_range ([0-9.]+)", lines[2]).group(1))
+    found = re.search(r"side_range ([0-9.]+)", lines[2])
+    assert found, lines[2]
+    side = float(found.group(1))
     assert side == pytest.approx(1.0, abs=0.05) and "side_hit 1" in lines[2]
     assert lines[3].startswith("  #2    t   0.10 s  hug")
     ok, out, _ = r(":step 5")

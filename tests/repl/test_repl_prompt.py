@@ -10,6 +10,7 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import IO
 
 import pytest
 from prompt_toolkit.completion import CompleteEvent
@@ -35,6 +36,12 @@ def data_home(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 @pytest.fixture
 def repl() -> Repl:
     return Repl(Session("ellipse"), io.StringIO(), io.StringIO())
+
+
+def _text(stream: IO[str]) -> str:
+    """What was written to one of the test REPL's in-memory streams."""
+    assert isinstance(stream, io.StringIO)
+    return stream.getvalue()
 
 
 def drive(repl: Repl, *chunks: str) -> int:
@@ -105,7 +112,7 @@ def test_tab_completes_at_the_prompt_and_enter_continues_unfinished_input(repl: 
     assert rc == 0
     assert repl.session.workspace.format() == (
         "atom hug(d = 1 m) = (follow_boundary(rc = d, v = 1 m/s), never, 2 s)\n")
-    out = repl.out.getvalue()  # type: ignore[attr-defined]
+    out = _text(repl.out)
     assert "defined hug\n" in out
     assert "hug (level 0) ended by timer at 2.00 s" in out
     assert repl.failures == 0
@@ -115,7 +122,7 @@ def test_tab_with_several_candidates_inserts_their_common_part(repl: Repl) -> No
     drive(repl, "(go(0.5 m/s), bou\t\tnever, 1 s)\r")
     # `bou` -> `boundary_` (common part of boundary_range/_curvature/_tangent); the second
     # Tab opens the menu without choosing, so the text stays as typed
-    err = repl.err.getvalue()  # type: ignore[attr-defined]
+    err = _text(repl.err)
     assert "boundary_never" in err
 
 
@@ -164,7 +171,7 @@ def test_ctrl_c_during_a_run_stops_the_robot_and_gives_the_prompt_back(
     session.until = None  # the element never ends by itself
     sigint_after(lambda: session.backend.time > 2.0)  # type: ignore[operator]
     drive(repl, "(turn(30 deg/s), never, inf)\r", ":pose\r")
-    out = repl.out.getvalue()  # type: ignore[attr-defined]
+    out = _text(repl.out)
     assert "turn (level 0) ended by stopped at" in out
     assert "(Ctrl-C: robot stopped)" in out
     # the prompt came back: the next input ran
