@@ -1,15 +1,19 @@
-"""Simulator speed: ray-cast scans and full simulated ticks (median of several runs).
+"""Simulator speed: ladar scans and full simulated ticks, robust to a shared machine.
 
-Run:  python benchmarks/sim.py [--runs 7]
+Run:  python benchmarks/sim.py [--runs 15] [--calls 200]
 
-Each figure: the median over the runs of each run's median call, with the median of
-the runs' mean calls in parentheses (the mean includes other processes' interference
-on a shared machine).
+Each figure is measured in ``--runs`` runs of ``--calls`` calls each; a run's figure is
+its median call (robust to other processes taking the CPU for a moment). Printed: the
+median over the runs, the minimum over the runs (the machine at its quietest), and the
+median of the runs' mean calls in parentheses (which includes other processes'
+interference). The load average is printed before and after: compare figures only at
+similar loads.
 
-Prints the cost of one 181-beam LMS-200 scan (ray cast + noise) in worlds of 10, 100,
-1,000 and 10,000 segments, and of a full simulated tick (kinematics, scan with noise,
-collision test) in the 100-segment world. Targets (issue 3): <= 100 us per scan at
-100 segments, <= 1 ms at 10,000, <= 150 us per tick at 100 segments.
+Prints the cost of one 181-beam LMS-200 scan (ray cast + noise, as the simulator takes
+it) in worlds of 10, 100, 1,000 and 10,000 segments, and of a full simulated tick
+(kinematics, scan with noise, collision test and the exact clearance) in the
+100-segment world and in the paper's ellipse scene. Targets (issue 3): <= 100 us per
+scan at 100 segments, <= 1 ms at 10,000, <= 150 us per tick at 100 segments.
 
 The scaled worlds keep the obstacle density fixed (one 4-segment box per 16 m^2,
 inside a closed room) and grow the area, as a building grows; the robot stands in a
@@ -25,6 +29,8 @@ import os
 import statistics
 import sys
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 
 # This file is named like the package it measures: keep its own folder off the path.
 _HERE = os.path.dirname(os.path.abspath(__file__))
@@ -34,6 +40,7 @@ import numpy as np
 
 from mdle.backend import Command, Pose
 from sim.backend import SimBackend
+from sim.catalog import load_world
 from sim.ladar import LMS200, Ladar
 from sim.robot import PIONEER2DX
 from sim.shapes import Curve, Rectangle, Wall
@@ -66,76 +73,98 @@ def dense_world(n_segments: int) -> World:
     return World(f"dense-{n_segments}", (curve,), Pose(0.0, 0.0, 0.0))
 
 
-def median_us(fn, repeat: int, runs: int) -> tuple[float, float]:
-    """(median over runs of each run's median call, median over runs of each run's mean),
-    microseconds. The median call is robust to the other processes on a shared machine;
-    the mean includes their interference."""
-    fn()
+@dataclass(frozen=True)
+class Timing:
+    """Microseconds per call: median and minimum over runs of each run's median call,
+    and the median over runs of each run's mean call."""
+
+    median: float
+    minimum: float
+    mean: float
+
+    def __str__(self) -> str:
+        return f"{self.median:8.1f} us  (min {self.minimum:7.1f}, mean {self.mean:7.1f})"
+
+
+def time_calls(fn: Callable[[], object], calls: int, runs: int) -> Timing:
+    """Time ``fn`` in ``runs`` runs of ``calls`` calls (after a warm-up run)."""
+    for _ in range(min(calls, 20)):
+        fn()
     medians, means = [], []
+    clock = time.perf_counter
     for _ in range(runs):
         times = []
-        for _ in range(repeat):
-            t0 = time.perf_counter()
+        for _ in range(calls):
+            t0 = clock()
             fn()
-            times.append(time.perf_counter() - t0)
+            times.append(clock() - t0)
         medians.append(statistics.median(times) * 1e6)
         means.append(statistics.fmean(times) * 1e6)
-    return statistics.median(medians), statistics.median(means)
+    return Timing(statistics.median(medians), min(medians), statistics.median(means))
 
 
-def scan_cost(world: World, runs: int) -> tuple[float, float]:
+def scan_cost(world: World, calls: int, runs: int) -> Timing:
+    """One scan as :class:`sim.backend.SimBackend` takes it (ray cast, noise, rounding)."""
     ladar = Ladar(LMS200, np.random.default_rng(0), mount=PIONEER2DX.ladar_mount)
-    caster = world.caster
-    headings = np.linspace(-math.pi, math.pi, 64, endpoint=False)
+    fan = ladar.fan(world.caster)
+    headings = np.linspace(-math.pi, math.pi, 64, endpoint=False).tolist()
     k = [0]
 
     def one() -> None:
-        th = float(headings[k[0] % 64])
+        th = headings[k[0] % 64]
         k[0] += 1
-        ox, oy = ladar.origin(0.0, 0.0, th)
-        hits = caster.cast(np.array((ox, oy)), ladar.world_angles(th), LMS200.max_range,
-                           detail=False, rel=ladar.rel)
-        ladar.measure(hits, th, 0.0)
+        ladar.scan(fan, 0.0, 0.0, th, 0.0)
 
-    return median_us(one, 200, runs)
+    return time_calls(one, calls, runs)
 
 
-def tick_cost(world: World, runs: int) -> tuple[float, float]:
+def tick_cost(world: World, calls: int, runs: int) -> Timing:
+    """observe, command, advance(0.1 s): the robot drives ~1 m circles round its start."""
     backend = SimBackend(world, seed=0)
     k = [0]
 
     def tick() -> None:
         backend.observe()
         k[0] += 1
-        backend.command(Command(0.3, 0.3 + 0.05 * math.sin(0.01 * k[0])))  # ~1 m circles
+        backend.command(Command(0.3, 0.3 + 0.05 * math.sin(0.01 * k[0])))
         backend.advance(0.1)
 
-    us = median_us(tick, 200, runs)
+    timing = time_calls(tick, calls, runs)
     assert not backend.observe().truth["collided"], "benchmark robot collided"
-    return us
+    return timing
+
+
+def load() -> str:
+    """The 1, 5 and 15 minute load averages (2 cores here: above 2 means queueing)."""
+    return "load average " + ", ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=7, help="runs per figure (median)")
+    parser.add_argument("--runs", type=int, default=15, help="runs per figure")
+    parser.add_argument("--calls", type=int, default=200, help="calls per run")
     args = parser.parse_args()
-    print(f"sim benchmark: {args.runs} runs of 200 calls; median call (mean call), microseconds")
+    print(f"sim benchmark: {args.runs} runs of {args.calls} calls; median over runs of the "
+          f"run's median call (min over runs, median mean call); {load()}")
     print("one 181-beam scan (ray cast + noise), fixed obstacle density "
           "(targets: <= 100 us at 100 segments, <= 1 ms at 10,000):")
     for n in (10, 100, 1000, 10000):
         w = scattered_world(n)
-        med, mean = scan_cost(w, args.runs)
-        print(f"  {w.parts.n_segments:6d} segments: {med:8.1f} us  ({mean:.1f})")
+        print(f"  {w.parts.n_segments:6d} segments: {scan_cost(w, args.calls, args.runs)}")
     print("one 181-beam scan, every segment within range (worst case):")
     for n in (100, 1000, 10000):
         w = dense_world(n)
-        med, mean = scan_cost(w, args.runs)
-        print(f"  {w.parts.n_segments:6d} segments: {med:8.1f} us  ({mean:.1f})")
+        print(f"  {w.parts.n_segments:6d} segments: {scan_cost(w, args.calls, args.runs)}")
+    print("full simulated tick (observe, command, advance 0.1 s: kinematics, scan with noise, "
+          "collision test, exact clearance):")
     w = scattered_world(100)
-    med, mean = tick_cost(w, args.runs)
-    print(f"full simulated tick (observe, command, advance 0.1 s: kinematics, scan with noise, "
-          f"collision test), {w.parts.n_segments} segments: {med:.1f} us  ({mean:.1f}); "
-          f"{1e5 / med:.0f}x real time at 10 Hz (target: <= 150 us)")
+    t = tick_cost(w, args.calls, args.runs)
+    print(f"  {w.parts.n_segments:6d} segments: {t}; {1e5 / t.median:.0f}x real time at "
+          f"10 Hz (target: <= 150 us)")
+    w = load_world("ellipse")
+    t = tick_cost(w, args.calls, args.runs)
+    print(f"  ellipse scene (1 ellipse, a scan every tick): {t}")
+    print(load())
 
 
 if __name__ == "__main__":

@@ -116,6 +116,9 @@ class SimBackend:
         self._odo_rng = np.random.default_rng(odo_seq)
         self._ladar = Ladar(self.ladar_profile, np.random.default_rng(ladar_seq),
                             mount=self.profile.ladar_mount, oracle=self._oracle)
+        self._fan = (self._ladar.fan(self.world.caster)
+                     if not self._oracle and math.isfinite(self._ladar.profile.max_range)
+                     else None)
         self._t = 0.0
         self._x, self._y, self._th = pose.x, pose.y, pose.theta
         self._ox, self._oy, self._oth = pose.x, pose.y, pose.theta
@@ -248,6 +251,8 @@ class SimBackend:
     # ------------------------------------------------------------------ internals
     def _take_scan(self, x: float, y: float, th: float, stamp: float) -> Scan:
         lad = self._ladar
+        if self._fan is not None:
+            return lad.scan(self._fan, x, y, th, stamp)
         ox, oy = lad.origin(x, y, th)
         angles = lad.world_angles(th)
         hits = self.world.caster.cast(np.array((ox, oy)), angles, lad.profile.max_range,

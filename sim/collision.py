@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.distance import ellipse_nearest, nearest_boundary
+from sim.distance import ellipse_nearest, ellipse_nearest_point, nearest_boundary
 from sim.robot import Phase, integrate
 from sim.shapes import Parts
 
@@ -36,6 +36,7 @@ CONTACT = 1e-4
 _MARGIN = CONTACT / 2  # advancing stops this far short of touching
 _MAX_STEPS = 2000
 _TAU = 2.0 * math.pi
+_FEW_ELLIPSES = 8  # up to this many near ellipses, one at a time in plain floats
 
 
 @dataclass(frozen=True)
@@ -70,63 +71,87 @@ class Collider:
     def __init__(self, parts: Parts, radius: float) -> None:
         self.parts = parts
         self.radius = float(radius)
+        # Per-world constants in complex form (a point is x + iy): a query then costs
+        # about a dozen numpy calls whatever the number of primitives.
         s0, s1 = parts.seg_start, parts.seg_end
-        e = s1 - s0
-        ll = np.einsum("ij,ij->i", e, e)
-        self._sx, self._sy = s0[:, 0].copy(), s0[:, 1].copy()
-        self._ex, self._ey = e[:, 0].copy(), e[:, 1].copy()
-        self._inv_ll = np.divide(1.0, ll, out=np.zeros_like(ll), where=ll > 0)
-        self._buf = np.empty((4, len(ll)))
-        self._ell_cos = np.cos(parts.ell_angle)
-        self._ell_sin = np.sin(parts.ell_angle)
+        self._s0 = s0[:, 0] + 1j * s0[:, 1]
+        self._e = (s1[:, 0] + 1j * s1[:, 1]) - self._s0
+        ll = (self._e * self._e.conjugate()).real
+        # Re(w * conj(e) / |e|^2) is the projection of w on e, in units of the segment.
+        self._proj = np.divide(self._e.conjugate(), ll, out=np.zeros_like(self._e),
+                               where=ll > 0)
+        n = len(ll)
+        self._w, self._r = np.empty(n, dtype=complex), np.empty(n, dtype=complex)
+        self._u, self._d = np.empty(n), np.empty(n)
+        c, r = parts.arc_center, parts.arc_radius
+        self._arc_c = c[:, 0] + 1j * c[:, 1]
+        a0, a1 = parts.arc_start, parts.arc_start + parts.arc_sweep
+        self._arc_e0 = self._arc_c + r * np.exp(1j * a0)
+        self._arc_e1 = self._arc_c + r * np.exp(1j * a1)
+        # The axis-aligned frame of each ellipse: l = conj(u) (q - c).
+        self._ell_c = parts.ell_center[:, 0] + 1j * parts.ell_center[:, 1]
+        self._ell_uconj = np.exp(-1j * parts.ell_angle)
         self._ell_bound = (parts.ell_axes.max(axis=1) if len(parts.ell_angle)
                            else np.zeros(0))
+        self._ell_axes = parts.ell_axes.tolist()
+        self._ell_owner = parts.ell_owner.tolist()
 
     def distance(self, x: float, y: float) -> tuple[float, int]:
         """Distance from the point to the nearest boundary, and that obstacle's index."""
         best, owner = math.inf, -1
         P = self.parts
-        if len(self._sx):
-            wx, wy, u, d = self._buf
-            np.subtract(x, self._sx, out=wx)
-            np.subtract(y, self._sy, out=wy)
-            np.multiply(wx, self._ex, out=u)
-            u += wy * self._ey
-            u *= self._inv_ll
-            np.clip(u, 0.0, 1.0, out=u)
-            wx -= u * self._ex
-            wy -= u * self._ey
-            np.multiply(wx, wx, out=d)
-            d += wy * wy
-            j = int(np.argmin(d))
-            best, owner = math.sqrt(float(d[j])), int(P.seg_owner[j])
+        q = complex(x, y)
+        if self._s0.shape[0]:
+            w = np.subtract(q, self._s0, out=self._w)
+            u = np.multiply(w, self._proj, out=self._r).real
+            np.maximum(u, 0.0, out=self._u)
+            np.minimum(self._u, 1.0, out=self._u)
+            r = np.multiply(self._e, self._u, out=self._r)
+            np.subtract(w, r, out=r)                   # w less its nearest segment point
+            d = np.abs(r, out=self._d)
+            j = int(d.argmin())
+            best, owner = float(d[j]), int(P.seg_owner[j])
         if len(P.arc_radius):
-            wx = x - P.arc_center[:, 0]
-            wy = y - P.arc_center[:, 1]
-            rel = np.mod(np.arctan2(wy, wx) - P.arc_start, _TAU)
-            radial = np.abs(np.hypot(wx, wy) - P.arc_radius)
-            a1 = P.arc_start + P.arc_sweep
-            e0 = np.hypot(wx - P.arc_radius * np.cos(P.arc_start),
-                          wy - P.arc_radius * np.sin(P.arc_start))
-            e1 = np.hypot(wx - P.arc_radius * np.cos(a1), wy - P.arc_radius * np.sin(a1))
-            d = np.where(rel <= P.arc_sweep, radial, np.minimum(e0, e1))
-            j = int(np.argmin(d))
+            w = q - self._arc_c
+            within = np.arctan2(w.imag, w.real)
+            within -= P.arc_start
+            np.mod(within, _TAU, out=within)
+            radial = np.abs(w)
+            radial -= P.arc_radius
+            np.abs(radial, out=radial)
+            ends = np.minimum(np.abs(q - self._arc_e0), np.abs(q - self._arc_e1))
+            d = np.where(within <= P.arc_sweep, radial, ends)
+            j = int(d.argmin())
             if d[j] < best:
                 best, owner = float(d[j]), int(P.arc_owner[j])
         if len(P.ell_angle):
-            wx = x - P.ell_center[:, 0]
-            wy = y - P.ell_center[:, 1]
-            near = np.flatnonzero(np.hypot(wx, wy) - self._ell_bound < best)
-            if near.size:
-                c, s = self._ell_cos[near], self._ell_sin[near]
-                lx = wx[near] * c + wy[near] * s
-                ly = -wx[near] * s + wy[near] * c
-                ex, ey = ellipse_nearest(P.ell_axes[near, 0], P.ell_axes[near, 1], lx, ly)
-                d = np.hypot(lx - ex, ly - ey)
-                j = int(np.argmin(d))
-                if d[j] < best:
-                    best, owner = float(d[j]), int(P.ell_owner[near[j]])
+            w = q - self._ell_c
+            lower = np.abs(w)
+            lower -= self._ell_bound
+            near = np.flatnonzero(lower < best)
+            if near.size > _FEW_ELLIPSES:
+                d, i = self._ellipses_vectorised(w, near)
+                if d < best:
+                    best, owner = d, i
+            elif near.size:
+                local = (w * self._ell_uconj).tolist()     # the query in each frame
+                for i in near.tolist():                     # few: plain floats are fastest
+                    a, b = self._ell_axes[i]
+                    lq = local[i]
+                    ex, ey = ellipse_nearest_point(a, b, lq.real, lq.imag)
+                    d = math.hypot(lq.real - ex, lq.imag - ey)
+                    if d < best:
+                        best, owner = d, self._ell_owner[i]
         return best, owner
+
+    def _ellipses_vectorised(self, w: np.ndarray, near: np.ndarray) -> tuple[float, int]:
+        """(distance, owner) of the nearest of many ellipses ``near``; ``w`` = q - centres."""
+        local = w[near] * self._ell_uconj[near]
+        axes = self.parts.ell_axes[near]
+        ex, ey = ellipse_nearest(axes[:, 0], axes[:, 1], local.real, local.imag)
+        d = np.abs(local - (ex + 1j * ey))
+        j = int(d.argmin())
+        return float(d[j]), int(self.parts.ell_owner[near[j]])
 
     def clearance(self, x: float, y: float) -> tuple[float, int]:
         """Distance from the body (disc) to the nearest obstacle, and that obstacle."""

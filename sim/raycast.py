@@ -28,12 +28,15 @@ import numpy as np
 
 from sim.shapes import Parts
 
-__all__ = ["RayCaster", "RayHits"]
+__all__ = ["MAX_RANGE_SLACK", "FanCaster", "RayCaster", "RayHits"]
 
 _TAU = 2.0 * math.pi
 _EPS_ANGLE = 1e-10   # widen segment intervals so a beam through a vertex is never lost
 _T_MIN = 1e-12       # a hit must lie strictly ahead of the origin
 _CULL_ABOVE = 256    # bounding-box culling pays off only in larger worlds
+#: A hit at ``max_range`` counts, give or take this relative rounding (a few ulps), so
+#: that a hit exactly at the limit counts in every code path, however it was rounded.
+MAX_RANGE_SLACK = 1e-15
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,6 +92,18 @@ class RayCaster:
         ang = parts.ell_angle
         self._ell_u = np.column_stack([np.cos(ang), np.sin(ang)]) if len(ang) else np.zeros((0, 2))
         self._ell_bound = parts.ell_axes.max(axis=1) if len(ang) else np.zeros(0)
+        # Complex form for :class:`FanCaster`, rows (end, start, start, edge): one multiply
+        # and one subtract put all of them in a scan's frame (see FanCaster.cast).
+        z0 = self._s0[:, 0] + 1j * self._s0[:, 1]
+        ze = self._edge[:, 0] + 1j * self._edge[:, 1]
+        self._zrows = np.stack([z0 + ze, z0, z0, ze])
+        # A face whose line passes within _T_MIN of the origin is never hit (t <= _T_MIN).
+        self._front_min = _T_MIN * np.abs(ze)
+        self._seg_ids = np.arange(len(z0))
+
+    def fan(self, rel: np.ndarray, max_range: float) -> FanCaster:
+        """A :class:`FanCaster` for a fixed fan of beams (a ladar's), with its own buffers."""
+        return FanCaster(self, rel, max_range)
 
     # ------------------------------------------------------------------ public
     def cast(self, origin: np.ndarray, angles: np.ndarray, max_range: float = math.inf,
@@ -101,7 +116,8 @@ class RayCaster:
         angles : (B,) float array, radians
             Any order; a sorted fan (such as a ladar's) skips a sort.
         max_range : float, metres
-            Primitives farther than this are culled; hits beyond it are reported as misses.
+            Primitives farther than this are culled; hits beyond it (by more than
+            :data:`MAX_RANGE_SLACK`, relative) are reported as misses.
         detail : bool
             Also compute tangents, curvatures and owners (the oracle's data).
         rel : (B,) float array, radians, optional
@@ -118,7 +134,10 @@ class RayCaster:
         order = None
         if rel is None:
             rel = np.mod(ang - ang[0], _TAU) if n else ang
-        if n > 1 and not bool(np.all(rel[1:] >= rel[:-1])):
+            ascending = n < 2 or bool((rel[1:] >= rel[:-1]).all())
+        else:
+            ascending = True    # the caller's promise (a ladar's fixed fan)
+        if not ascending:
             order = np.argsort(rel, kind="stable")
             ang, rel = ang[order], rel[order]
         cos, sin = np.cos(ang), np.sin(ang)
@@ -134,7 +153,7 @@ class RayCaster:
         if len(self.parts.ell_angle):
             self._ellipses(o, cos, sin, max_range, best, kind, which)
 
-        hit = np.isfinite(best) & (best <= max_range)
+        hit = np.isfinite(best) & (best <= max_range * (1.0 + MAX_RANGE_SLACK))
         ranges = np.where(hit, best, math.inf)
         tangents = curvatures = owner = None
         if detail:
@@ -341,3 +360,163 @@ class RayCaster:
             owner[m] = P.ell_owner[s]
         tangents = np.where(hit, np.mod(tangents + math.pi, _TAU) - math.pi, math.nan)
         return tangents, curv, owner
+
+
+class FanCaster:
+    """Casts one fixed fan of beams (a ladar's) again and again, with few numpy calls.
+
+    The per-scan cost of a small world is the fixed cost of each numpy call, not the
+    arithmetic, so this path works in the fan's own frame (its middle beam along +x),
+    where the beam directions are constants: segments are rotated into it with complex
+    numbers (a point is ``x + iy``), each face's bearing interval comes from one
+    ``arctan2`` call over all faces, and a (beam, face) pair needs one complex product
+    for ``1/t`` (the nearest hit has the largest ``1/t``). Arcs and ellipses use the
+    caster's dense analytic code. Ranges agree with :meth:`RayCaster.cast` to rounding.
+    The buffers are this object's own: make one per ladar.
+
+    Parameters
+    ----------
+    caster : RayCaster
+    rel : (B,) float array, radians
+        Beam angles relative to the first beam, ascending, the last at most 2 pi.
+    max_range : float, metres
+        Finite and positive: hits beyond it are misses.
+
+    Raises
+    ------
+    ValueError
+        A fan that is not ascending, wider than a turn, or an invalid range.
+    """
+
+    def __init__(self, caster: RayCaster, rel: np.ndarray, max_range: float) -> None:
+        rel = np.asarray(rel, dtype=float).reshape(-1)
+        if rel.shape[0] == 0 or rel[0] != 0.0 or bool((np.diff(rel) < 0).any()):
+            raise ValueError("a fan's relative angles must start at 0 and ascend")
+        if rel[-1] > _TAU:
+            raise ValueError(f"a fan spans at most 2 pi radians, not {rel[-1]!r}")
+        if not (math.isfinite(max_range) and max_range > 0):
+            raise ValueError(f"a fan needs a finite, positive max_range, not {max_range!r}")
+        self.caster = caster
+        self.max_range = float(max_range)
+        n = rel.shape[0]
+        self._half = 0.5 * float(rel[-1])
+        self._rel_c = rel - self._half              # beams in [-half, half], fan frame
+        self._dconj = np.exp(-1j * self._rel_c)     # conjugate beam directions, fan frame
+        self._dirs = np.exp(1j * self._rel_c)
+        # The nearest hit has the largest 1/t; a beam is a hit when its 1/t reaches
+        # _inv_hit (t <= max_range within MAX_RANGE_SLACK, as in RayCaster.cast);
+        # _inv_none marks "nothing yet", below that.
+        self._t_hit = self.max_range * (1.0 + MAX_RANGE_SLACK)
+        self._inv_hit = 1.0 / self._t_hit
+        self._inv_none = 0.5 / self.max_range
+        self._best = np.empty(n)
+        m = caster._s0.shape[0]
+        self._z = np.empty((4, m), dtype=complex)
+        self._zoff = np.zeros((4, 1), dtype=complex)
+        self._a = np.empty((2, m))
+        self._f = np.empty(m, dtype=complex)
+        self._front = np.empty(m, dtype=bool)
+        self._wrap = np.empty(m, dtype=bool)
+        self._pair_ids = np.arange(n * max(m, 1))
+        # Interval ends widened by _EPS_ANGLE (rows: hi, lo). Each lo is brought into
+        # [half + eps - 2 pi, half + eps): its interval's copy one turn up then holds no
+        # beam, two turns down neither (hi < lo + pi), and one turn down only when hi
+        # reaches 2 pi - half (rare: checked per scan).
+        self._widen = np.array([[_EPS_ANGLE], [-_EPS_ANGLE]])
+        self._lo_max = self._half + _EPS_ANGLE
+        self._wrap_hi = _TAU - self._half
+        self._kind = np.zeros(n, dtype=np.int8)
+        self._which = np.zeros(n, dtype=np.intp)
+
+    def cast(self, ox: float, oy: float, first: float) -> tuple[np.ndarray, np.ndarray]:
+        """Cast the fan from ``(ox, oy)`` (m) with its first beam at world angle ``first``.
+
+        Returns
+        -------
+        ranges : (B,) float array, metres (a new array)
+            Distance to the first boundary; ``max_range`` where nothing is hit.
+        hit : (B,) bool array (a new array)
+            True where a boundary was hit closer than ``max_range``.
+        """
+        caster = self.caster
+        P = caster.parts
+        phi = first + self._half                    # world angle of the fan's middle
+        rot = complex(math.cos(phi), -math.sin(phi))
+        best = self._best
+        best.fill(self._inv_none)
+        if caster._s0.shape[0]:
+            self._segments(ox, oy, rot, best)
+        t = np.divide(1.0, best)
+        if len(P.arc_radius) or len(P.ell_angle):
+            d = self._dirs * rot.conjugate()        # world directions of the beams
+            o = np.array((ox, oy))
+            if len(P.arc_radius):
+                caster._arcs(o, d.real, d.imag, self.max_range, t, self._kind, self._which)
+            if len(P.ell_angle):
+                caster._ellipses(o, d.real, d.imag, self.max_range, t, self._kind,
+                                 self._which)
+            hit = np.less_equal(t, self._t_hit)
+        else:
+            hit = np.greater_equal(best, self._inv_hit)
+        np.minimum(t, self.max_range, out=t)
+        return t, hit
+
+    def _segments(self, ox: float, oy: float, rot: complex, best: np.ndarray) -> None:
+        caster = self.caster
+        zrows, front_min, ids = caster._zrows, caster._front_min, caster._seg_ids
+        if ids.shape[0] > _CULL_ABOVE:
+            # Large worlds: only the faces whose bounding box comes within range.
+            r = self.max_range
+            lo, hi = caster._bb_lo, caster._bb_hi
+            near = lo[:, 0] <= ox + r
+            near &= hi[:, 0] >= ox - r
+            near &= lo[:, 1] <= oy + r
+            near &= hi[:, 1] >= oy - r
+            idx = np.flatnonzero(near)
+            m = idx.shape[0]
+            if m == 0:
+                return
+            z = zrows[:, idx]
+            z *= rot
+            front_min = front_min[idx]
+            ids = ids[:m]
+            a, f = np.empty((2, m)), np.empty(m, dtype=complex)
+            front, wrap = np.empty(m, dtype=bool), np.empty(m, dtype=bool)
+        else:
+            z = np.multiply(zrows, rot, out=self._z)
+            a, f, front, wrap = self._a, self._f, self._front, self._wrap
+        zoff = self._zoff
+        zoff[:3, 0] = complex(ox, oy) * rot
+        z -= zoff                                   # rows: q, p, p, e (fan frame, origin 0)
+        np.conjugate(z[1], out=z[1])
+        z[1] *= z[0]                                # conj(p) q = (p . q) + i cross(p, e)
+        num = z[1].imag
+        np.arctan2(z[1:3].imag, z[1:3].real, out=a)  # rows: sweep (p to q), bearing of p
+        a[0] += a[1]                                # rows: hi, lo
+        a += self._widen
+        # Back faces (the solid side towards the origin, or the origin on the face's
+        # line) get an empty interval at 0.
+        np.greater(num, front_min, out=front)
+        a *= front
+        np.greater_equal(a[1], self._lo_max, out=wrap)
+        np.subtract(a, _TAU, out=a, where=wrap)
+        if float(np.maximum.reduce(a[0])) >= self._wrap_hi:
+            a = np.concatenate([a, a - _TAU], axis=1)
+            ids = np.concatenate([ids, ids])
+        k = self._rel_c.searchsorted(a)             # rows: first beam >= hi, first >= lo
+        cnt = np.subtract(k[0], k[1])
+        ends = cnt.cumsum()
+        total = int(ends[-1])
+        if total == 0:
+            return
+        # Pairs (beam, face), grouped by face: the face's beams k_lo .. k_hi - 1.
+        pseg = ids.repeat(cnt)
+        np.subtract(k[0], ends, out=ends)           # k_lo less the pairs before the face
+        pbeam = ends.repeat(cnt)
+        if self._pair_ids.shape[0] < total:
+            self._pair_ids = np.arange(2 * total)
+        pbeam += self._pair_ids[:total]
+        # 1/t = cross(d, e) / cross(p, e), with the edge e in the fan frame (row 3).
+        np.divide(z[3], num, out=f, where=front)
+        inv = np.multiply(self._dconj[pbeam], f[pseg]).imag
+        np.maximum.at(best, pbeam, inv)

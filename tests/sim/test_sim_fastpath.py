@@ -1,0 +1,160 @@
+"""The per-tick fast paths agree with the general code they stand in for.
+
+FanCaster (a ladar's scans) against RayCaster.cast, Ladar.scan against cast + measure,
+ellipse_nearest_point against ellipse_nearest, and the Collider's few-ellipse and
+many-ellipse branches against World.nearest_boundary.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sim.collision import Collider
+from sim.distance import ellipse_nearest, ellipse_nearest_point
+from sim.ladar import LMS200, Ladar
+from sim.raycast import FanCaster
+from sim.shapes import Arc, Circle, Curve, Ellipse, Rectangle, Wall
+from sim.world import World
+
+
+def _mixed_world() -> World:
+    return World("mix", obstacles=(
+        Wall(((-6, -6), (6, -6), (6, 6), (-6, 6)), 0.2, True),
+        Circle((1.0, 1.0), 0.5), Ellipse((-2.0, 2.0), (1.0, 0.5), 0.3),
+        Arc((2.0, -2.0), 1.0, 0.5, 3.0, 0.1), Rectangle((0.0, -3.5), (1.0, 0.4), 0.2),
+        Wall(((-4.0, -1.0), (-3.0, 0.5)), 1e-3)))
+
+
+def _big_world() -> World:
+    """More than 256 segments: the fan culls by bounding box first."""
+    rng = np.random.default_rng(7)
+    boxes = [Rectangle(tuple(rng.uniform(-15, 15, 2)), tuple(rng.uniform(0.2, 1.0, 2)),
+                       float(rng.uniform(0, 3))) for _ in range(90)]
+    return World("big", obstacles=(Wall(((-16, -16), (16, -16), (16, 16), (-16, 16)), 0.2,
+                                        True), *boxes))
+
+
+def _ring_world() -> World:
+    pts = tuple((4 * math.cos(a), 3 * math.sin(a))
+                for a in np.linspace(0, 2 * math.pi, 40, endpoint=False))
+    return World("ring", obstacles=(Curve(pts, thickness=0.2, closed=True, spacing=0.05),))
+
+
+@pytest.mark.parametrize("fov", [1.0, math.pi, 4.5, 2 * math.pi])
+@pytest.mark.parametrize("make", [_mixed_world, _big_world, _ring_world])
+def test_fan_matches_the_general_caster(fov: float, make: object) -> None:
+    world = make()  # type: ignore[operator]
+    rel = np.linspace(0.0, fov, 181)
+    fan = world.caster.fan(rel, 10.0)
+    rng = np.random.default_rng(int(fov * 100))
+    checked = 0
+    for _ in range(80):
+        o = rng.uniform(-5.5, 5.5, 2)
+        if world.inside(o):
+            continue
+        first = float(rng.uniform(-4, 4))
+        ranges, hit = fan.cast(float(o[0]), float(o[1]), first)
+        want = world.caster.cast(o, first + rel, 10.0, detail=False, rel=rel)
+        assert np.array_equal(hit, want.hit)
+        np.testing.assert_allclose(ranges[hit], want.ranges[hit], rtol=0, atol=1e-9)
+        assert np.all(ranges[~hit] == 10.0)
+        checked += 1
+    assert checked > 40
+
+
+def test_fan_is_exact_against_analytic_answers() -> None:
+    # An angled thin wall and an ellipse, as in test_sim_raycast, through the fan path.
+    alpha = math.radians(60.0)
+    wall = Wall(((3.0 - 10 * math.cos(alpha), -10 * math.sin(alpha)),
+                 (3.0 + 10 * math.cos(alpha), 10 * math.sin(alpha))), thickness=1e-3)
+    rel = np.linspace(0.0, 1.8, 181)
+    ranges, hit = World("w", obstacles=(wall,)).caster.fan(rel, 50.0).cast(0.0, 0.0, -1.0)
+    n = np.array([math.sin(alpha), -math.cos(alpha)])
+    d = np.column_stack([np.cos(rel - 1.0), np.sin(rel - 1.0)])
+    assert hit.all()
+    np.testing.assert_allclose(ranges, (3.0 * math.sin(alpha) - 0.5e-3) / (d @ n), rtol=0,
+                               atol=1e-9)
+    R, c = 1.3, np.array([4.0, 2.0])
+    o = np.array([-1.0, 0.5])
+    w = c - o
+    dist = float(np.hypot(*w))
+    half = math.asin(R / dist) * 0.999
+    rel = np.linspace(0.0, 2 * half, 101)
+    first = math.atan2(w[1], w[0]) - half
+    ranges, hit = World("c", obstacles=(Circle(tuple(c), R),)).caster.fan(rel, 20.0).cast(
+        float(o[0]), float(o[1]), first)
+    d = np.column_stack([np.cos(first + rel), np.sin(first + rel)])
+    tca = d @ w
+    assert hit.all()
+    np.testing.assert_allclose(ranges, tca - np.sqrt(R * R - (dist * dist - tca * tca)),
+                               rtol=0, atol=1e-9)
+
+
+def test_fan_hit_exactly_at_max_range_counts() -> None:
+    # The beam at -30 degrees from (0, 5) meets the wall y = 0 at 10 m: a hit, as in cast.
+    world = World("wall", obstacles=(Rectangle((0.0, -1.0), (200.0, 2.0)),))
+    rel = np.array([0.0])
+    ranges, hit = world.caster.fan(rel, 10.0).cast(0.0, 5.0, -math.pi / 6)
+    assert hit.tolist() == [True]
+    assert world.caster.cast(np.array([0.0, 5.0]), [-math.pi / 6], 10.0).hit.tolist() == [True]
+    assert math.isclose(float(ranges[0]), 10.0, abs_tol=1e-12)
+
+
+def test_fan_rejects_bad_fans() -> None:
+    caster = _mixed_world().caster
+    with pytest.raises(ValueError, match="ascend"):
+        FanCaster(caster, np.array([0.0, 0.2, 0.1]), 10.0)
+    with pytest.raises(ValueError, match="2 pi"):
+        FanCaster(caster, np.array([0.0, 7.0]), 10.0)
+    with pytest.raises(ValueError, match="max_range"):
+        FanCaster(caster, np.array([0.0, 1.0]), math.inf)
+
+
+def test_ladar_scan_equals_cast_then_measure() -> None:
+    world = _mixed_world()
+    a = Ladar(LMS200, np.random.default_rng(3), mount=(0.017, 0.008, 0.0))
+    b = Ladar(LMS200, np.random.default_rng(3), mount=(0.017, 0.008, 0.0))
+    fan = a.fan(world.caster)
+    for x, y, th in [(0.0, 0.0, 0.0), (-4.5, 3.0, 2.0), (3.0, 3.0, -2.5), (0.0, -5.0, 1.0)]:
+        fast = a.scan(fan, x, y, th, 1.5)
+        ox, oy = b.origin(x, y, th)
+        hits = world.caster.cast(np.array((ox, oy)), b.world_angles(th), 10.0, detail=False,
+                                 rel=b.rel)
+        slow = b.measure(hits, th, 1.5)
+        assert np.array_equal(fast.valid, slow.valid)
+        np.testing.assert_allclose(fast.ranges, slow.ranges, rtol=0, atol=1e-12)
+        assert fast.stamp == 1.5 and not fast.ranges.flags.writeable
+
+
+@pytest.mark.parametrize(("a", "b"), [(4.0, 2.0), (2.0, 4.0), (1.0, 1.0), (5.0, 0.3)])
+def test_ellipse_nearest_point_matches_the_vectorised_form(a: float, b: float) -> None:
+    rng = np.random.default_rng(1)
+    pts = np.vstack([rng.uniform(-8, 8, (400, 2)), rng.uniform(-1, 1, (100, 2)) * (a, b),
+                     [[0.0, 0.0], [0.5 * a, 0.0], [-0.5 * a, 0.0], [0.0, 0.5 * b],
+                      [0.0, -0.5 * b], [a + 1, 0.0], [0.0, -b - 1], [a, 0.0], [0.0, b]]])
+    ex, ey = ellipse_nearest(np.full(len(pts), a), np.full(len(pts), b), pts[:, 0], pts[:, 1])
+    got = np.array([ellipse_nearest_point(a, b, float(x), float(y)) for x, y in pts])
+    np.testing.assert_allclose(got[:, 0], ex, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got[:, 1], ey, rtol=0, atol=1e-12)
+    np.testing.assert_allclose((got[:, 0] / a) ** 2 + (got[:, 1] / b) ** 2, 1.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("n_ellipses", [3, 20])
+def test_collider_with_few_and_many_ellipses(n_ellipses: int) -> None:
+    rng = np.random.default_rng(n_ellipses)
+    shapes = [Ellipse(tuple(rng.uniform(-3, 3, 2)), tuple(rng.uniform(0.2, 0.8, 2)),
+                      float(rng.uniform(0, 3))) for _ in range(n_ellipses)]
+    world = World("eggs", obstacles=tuple(shapes))
+    col = Collider(world.parts, radius=0.1)
+    checked = 0
+    for x, y in rng.uniform(-4, 4, (150, 2)):
+        if world.inside((x, y)):
+            continue
+        d, owner = col.distance(float(x), float(y))
+        n = world.nearest_boundary((x, y))
+        assert math.isclose(d, n.distance, abs_tol=1e-9) and owner == n.obstacle
+        checked += 1
+    assert checked > 50
