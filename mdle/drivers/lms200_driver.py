@@ -19,7 +19,7 @@ import numpy as np
 from mdle.backend import Scan
 from mdle.drivers import lms200
 from mdle.drivers.lms200 import Ack, Telegram, TelegramReader
-from mdle.drivers.transport import Transport, TransportClosed
+from mdle.drivers.transport import Transport, TransportClosed, read_or_fail
 from mdle.errors import BackendError
 
 __all__ = ["Lms200Driver", "Lms200Options", "scan_angle_for"]
@@ -196,13 +196,8 @@ class Lms200Driver:
     def _run(self) -> None:
         """Read telegrams and publish scans; never raises."""
         while not self._halt.is_set():
-            try:
-                data = self._transport.read(self._opt.poll)
-            except TransportClosed as exc:
-                self._set_failure(str(exc))
-                return
-            except Exception as exc:  # noqa: BLE001 - a transport bug must end the scans, loudly
-                self._set_failure(f"reading failed: {exc!r}")
+            data = read_or_fail(self._transport, self._opt.poll, self._set_failure)
+            if data is None:
                 return
             if not data:
                 continue

@@ -31,7 +31,7 @@ from typing import Any, Protocol
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.drivers import arcos, arcos_laser
 from mdle.drivers.arcos import Cmd, OdometryState, PacketReader, RobotParams, SyncInfo
-from mdle.drivers.transport import Transport, TransportClosed
+from mdle.drivers.transport import Transport, TransportClosed, read_or_fail
 from mdle.errors import BackendError
 
 __all__ = ["PioneerBackend", "PioneerOptions", "ScanSource", "limits_from_params"]
@@ -431,13 +431,8 @@ class PioneerBackend:
         reader = PacketReader()
         opt = self._opt
         while not self._halt.is_set():
-            try:
-                data = self._transport.read(opt.poll)
-            except TransportClosed as exc:
-                self._fail(str(exc))
-                return
-            except Exception as exc:  # noqa: BLE001 - a transport bug must end the run, loudly
-                self._fail(f"reading failed: {exc!r}")
+            data = read_or_fail(self._transport, opt.poll, self._fail)
+            if data is None:
                 return
             if data:
                 now = time.monotonic()

@@ -20,6 +20,7 @@ import select
 import socket
 import sys
 import urllib.parse
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -34,6 +35,7 @@ __all__ = [
     "TransportClosed",
     "open_transport",
     "parse_url",
+    "read_or_fail",
 ]
 
 DEFAULT_TCP_PORT = 8101
@@ -142,6 +144,32 @@ class Transport(Protocol):
     def close(self) -> None:
         """Release the stream (idempotent)."""
         ...
+
+
+def read_or_fail(transport: Transport, timeout: float,
+                 fail: Callable[[str], None]) -> bytes | None:
+    """Read for a reader thread, which must never raise.
+
+    Parameters
+    ----------
+    transport : Transport
+    timeout : float
+        Longest wait for bytes, seconds.
+    fail : callable
+        Called with the reason when the stream has ended or the transport itself failed.
+
+    Returns
+    -------
+    bytes or None
+        The bytes read (``b""`` if none came within ``timeout``), or None after ``fail``.
+    """
+    try:
+        return transport.read(timeout)
+    except TransportClosed as exc:
+        fail(str(exc))
+    except Exception as exc:  # noqa: BLE001 - a transport bug must end the reader, loudly
+        fail(f"reading failed: {exc!r}")
+    return None
 
 
 class TcpTransport:
