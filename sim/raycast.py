@@ -412,21 +412,38 @@ class FanCaster:
         self._best = np.empty(n)
         m = caster._s0.shape[0]
         self._z = np.empty((4, m), dtype=complex)
-        self._zoff = np.zeros((4, 1), dtype=complex)
+        # Bearings of face starts are measured from the direction psi (fan frame), so
+        # that arctan2's (-pi, pi] puts them in [half + eps - 2 pi, half + eps): then an
+        # interval's copy one turn up holds no beam, two turns down neither (hi < lo + pi),
+        # and one turn down only when hi reaches 3 pi - fov (rare: checked per scan).
+        psi = self._half + _EPS_ANGLE - math.pi
+        kappa = complex(math.cos(psi), -math.sin(psi))
+        turn = np.array([[1.0], [1.0], [kappa], [1.0]])
+        self._zrows = caster._zrows * turn          # rows: end, start, kappa start, edge
+        self._zoff_unit = turn * np.array([[1.0], [1.0], [1.0], [0.0]])
+        self._zoff = np.empty((4, 1), dtype=complex)
+        self._rel_s = self._rel_c - psi             # the beams as seen from psi
+        self._wrap_hi = 3.0 * math.pi - 2.0 * self._half - 3.0 * _EPS_ANGLE
         self._a = np.empty((2, m))
         self._f = np.empty(m, dtype=complex)
         self._front = np.empty(m, dtype=bool)
-        self._wrap = np.empty(m, dtype=bool)
         self._pair_ids = np.arange(n * max(m, 1))
-        # Interval ends widened by _EPS_ANGLE (rows: hi, lo). Each lo is brought into
-        # [half + eps - 2 pi, half + eps): its interval's copy one turn up then holds no
-        # beam, two turns down neither (hi < lo + pi), and one turn down only when hi
-        # reaches 2 pi - half (rare: checked per scan).
-        self._widen = np.array([[_EPS_ANGLE], [-_EPS_ANGLE]])
-        self._lo_max = self._half + _EPS_ANGLE
-        self._wrap_hi = _TAU - self._half
+        self._widen = np.array([[_EPS_ANGLE], [-_EPS_ANGLE]])   # rows: hi, lo
         self._kind = np.zeros(n, dtype=np.int8)
         self._which = np.zeros(n, dtype=np.intp)
+        # Ellipses: x/a + i y/b = alpha z + beta conj(z) maps an ellipse's frame onto the
+        # unit circle's, so a beam's direction there, for all beams and ellipses at once,
+        # is [dirs, conj(dirs)] @ [[alpha conj(u) R], [beta u conj(R)]] (R: the fan's turn).
+        P = caster.parts
+        ia, ib = 1.0 / P.ell_axes[:, 0], 1.0 / P.ell_axes[:, 1]
+        self._ell_alpha, self._ell_beta = 0.5 * (ia + ib), 0.5 * (ia - ib)
+        self._ell_uconj = np.exp(-1j * P.ell_angle)
+        self._ell_c = P.ell_center[:, 0] + 1j * P.ell_center[:, 1]
+        self._ell_k = np.stack([self._ell_alpha * self._ell_uconj,
+                                self._ell_beta * self._ell_uconj.conjugate()])
+        self._ell_turn = np.empty((2, 1), dtype=complex)
+        self._ell_coef = np.empty_like(self._ell_k)
+        self._dd = np.column_stack([self._dirs, self._dirs.conjugate()])
 
     def cast(self, ox: float, oy: float, first: float) -> tuple[np.ndarray, np.ndarray]:
         """Cast the fan from ``(ox, oy)`` (m) with its first beam at world angle ``first``.
@@ -448,13 +465,12 @@ class FanCaster:
             self._segments(ox, oy, rot, best)
         t = np.divide(1.0, best)
         if len(P.arc_radius) or len(P.ell_angle):
-            d = self._dirs * rot.conjugate()        # world directions of the beams
-            o = np.array((ox, oy))
             if len(P.arc_radius):
+                d = self._dirs * rot.conjugate()    # world directions of the beams
+                o = np.array((ox, oy))
                 caster._arcs(o, d.real, d.imag, self.max_range, t, self._kind, self._which)
             if len(P.ell_angle):
-                caster._ellipses(o, d.real, d.imag, self.max_range, t, self._kind,
-                                 self._which)
+                self._ellipses(complex(ox, oy), rot.conjugate(), t)
             hit = np.less_equal(t, self._t_hit)
         else:
             hit = np.greater_equal(best, self._inv_hit)
@@ -463,7 +479,7 @@ class FanCaster:
 
     def _segments(self, ox: float, oy: float, rot: complex, best: np.ndarray) -> None:
         caster = self.caster
-        zrows, front_min, ids = caster._zrows, caster._front_min, caster._seg_ids
+        zrows, front_min, ids = self._zrows, caster._front_min, caster._seg_ids
         if ids.shape[0] > _CULL_ABOVE:
             # Large worlds: only the faces whose bounding box comes within range.
             r = self.max_range
@@ -480,30 +496,26 @@ class FanCaster:
             z *= rot
             front_min = front_min[idx]
             ids = ids[:m]
-            a, f = np.empty((2, m)), np.empty(m, dtype=complex)
-            front, wrap = np.empty(m, dtype=bool), np.empty(m, dtype=bool)
+            a, f, front = np.empty((2, m)), np.empty(m, dtype=complex), np.empty(m, dtype=bool)
         else:
             z = np.multiply(zrows, rot, out=self._z)
-            a, f, front, wrap = self._a, self._f, self._front, self._wrap
-        zoff = self._zoff
-        zoff[:3, 0] = complex(ox, oy) * rot
-        z -= zoff                                   # rows: q, p, p, e (fan frame, origin 0)
+            a, f, front = self._a, self._f, self._front
+        z -= np.multiply(self._zoff_unit, complex(ox, oy) * rot, out=self._zoff)
+        # rows: q, p, kappa p, e (fan frame, origin at 0)
         np.conjugate(z[1], out=z[1])
         z[1] *= z[0]                                # conj(p) q = (p . q) + i cross(p, e)
         num = z[1].imag
-        np.arctan2(z[1:3].imag, z[1:3].real, out=a)  # rows: sweep (p to q), bearing of p
+        np.arctan2(z[1:3].imag, z[1:3].real, out=a)  # rows: sweep (p to q), p from psi
         a[0] += a[1]                                # rows: hi, lo
         a += self._widen
         # Back faces (the solid side towards the origin, or the origin on the face's
         # line) get an empty interval at 0.
         np.greater(num, front_min, out=front)
         a *= front
-        np.greater_equal(a[1], self._lo_max, out=wrap)
-        np.subtract(a, _TAU, out=a, where=wrap)
         if float(np.maximum.reduce(a[0])) >= self._wrap_hi:
             a = np.concatenate([a, a - _TAU], axis=1)
             ids = np.concatenate([ids, ids])
-        k = self._rel_c.searchsorted(a)             # rows: first beam >= hi, first >= lo
+        k = self._rel_s.searchsorted(a)             # rows: first beam >= hi, first >= lo
         cnt = np.subtract(k[0], k[1])
         ends = cnt.cumsum()
         total = int(ends[-1])
@@ -520,3 +532,33 @@ class FanCaster:
         np.divide(z[3], num, out=f, where=front)
         inv = np.multiply(self._dconj[pbeam], f[pseg]).imag
         np.maximum.at(best, pbeam, inv)
+
+    def _ellipses(self, o: complex, turn: complex, t: np.ndarray) -> None:
+        """Lower ``t`` (B,) to the nearest ellipse hit of each beam (exact, analytic)."""
+        # The origin in each ellipse's frame, scaled to the unit circle (conjugated).
+        v = o - self._ell_c
+        v *= self._ell_uconj
+        oc = v.conjugate()
+        oc *= self._ell_alpha
+        v *= self._ell_beta
+        oc += v                                     # conj(alpha v + beta conj(v))
+        c = np.abs(oc)
+        c *= c
+        c -= 1.0                                    # > 0: the origin is outside
+        sign = np.sign(c)
+        k = self._ell_turn
+        k[0, 0], k[1, 0] = turn, turn.conjugate()
+        m = self._dd @ np.multiply(self._ell_k, k, out=self._ell_coef)   # (B, E)
+        a = np.abs(m)
+        a *= a                                      # |m|^2
+        q = m * oc                                  # real: m . o, imaginary: cross(o, m)
+        disc = np.square(q.imag)
+        np.subtract(a, disc, out=disc)              # (m . o)^2 - |m|^2 (|o|^2 - 1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            root = np.sqrt(disc)                    # NaN for a miss
+            root *= sign
+            root -= q.real
+            # The entry point from outside, the exit from inside; free of cancellation.
+            hit = np.divide(c, root, out=root)
+        hit[~(hit > _T_MIN)] = math.inf              # behind, grazing at the origin, missed
+        np.minimum(t, hit.min(axis=1), out=t)

@@ -158,3 +158,15 @@ def test_collider_with_few_and_many_ellipses(n_ellipses: int) -> None:
         assert math.isclose(d, n.distance, abs_tol=1e-9) and owner == n.obstacle
         checked += 1
     assert checked > 50
+
+
+def test_fan_from_inside_an_ellipse_sees_its_far_side() -> None:
+    # Not a robot's case (its body keeps the ladar outside), but the fan is general.
+    world = World("egg", obstacles=(Ellipse((0.5, -0.2), (3.0, 1.5), 0.4),))
+    rel = np.linspace(0.0, math.pi, 91)
+    fan = world.caster.fan(rel, 10.0)
+    for x, y in [(0.5, -0.2), (1.5, 0.3), (-1.0, -0.5)]:
+        ranges, hit = fan.cast(x, y, 0.7)
+        want = world.caster.cast(np.array((x, y)), 0.7 + rel, 10.0, detail=False)
+        assert hit.all() and want.hit.all()
+        np.testing.assert_allclose(ranges, want.ranges, rtol=0, atol=1e-9)
