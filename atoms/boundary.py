@@ -31,6 +31,7 @@ import enum
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
 from atoms.registry import Args, Context, Param, sensor
@@ -90,8 +91,74 @@ class BoundaryView:
     max_range: float
 
 
-def _side_ray(pts: "np.ndarray", end0: int, r0: float, span: int) -> "Ray":
-    """Side ray from beams 0..n of the first surface (law frame, beam 0 at -90 deg).
+@dataclass(frozen=True, eq=False)
+class _Layout:
+    """Which beams the view reads, for one bearing layout, side, side span and window set.
+
+    Law-frame beam ``j`` is original beam ``j`` (right) or ``n-1-j`` (left). The view reads
+    two runs of beams: the side run ``0 .. n_side-1`` and the front run ``f0 .. f1`` around
+    the front beam ``c``. Both are gathered into one short array (``take``, original-frame
+    indices), with their unit directions, link limits per unit range and a mask of the pairs
+    that are neighbours in the scan (False at the join of the two runs).
+    """
+
+    c: int
+    c_ok: bool
+    s_ok: bool
+    n_span: int
+    n_side: int
+    f0: int
+    take: np.ndarray
+    unit: np.ndarray
+    spacing: np.ndarray
+    adjacent: np.ndarray
+
+
+@lru_cache(maxsize=32)
+def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
+    """The :class:`_Layout` of the bearings ``key`` (a pure function, memoised: one sensor
+    always sends the same bearings)."""
+    import numpy as np
+
+    from atoms.estimators import DEFAULT_GAP_FACTOR
+
+    b = np.frombuffer(key, dtype=np.float64)
+    n = b.size
+    if left:
+        b = -b[::-1]
+    c = int(np.argmin(np.abs(b)))
+    c_ok = bool(abs(b[c]) <= _BEARING_TOL)
+    s_ok = bool(abs(b[0] + np.pi / 2) <= _BEARING_TOL)
+    step = abs(float(b[1] - b[0])) if n > 1 else 1.0
+    n_span = max(4, int(round(side_span / step))) if step > 0 else 4
+    n_side = min(n_span, n - 1) + 1 if s_ok else 0
+    f0, f1 = (max(c - wmax, 0), min(c + wmax, n - 1)) if c_ok else (0, -1)
+    law = np.concatenate((np.arange(n_side), np.arange(f0, f1 + 1)))
+    take = n - 1 - law if left else law
+    bl = b[law]
+    unit = np.empty(bl.size, dtype=np.complex128)
+    np.cos(bl, out=unit.real)
+    np.sin(bl, out=unit.imag)
+    spacing = DEFAULT_GAP_FACTOR * np.abs(bl[1:] - bl[:-1])
+    adjacent = law[1:] == law[:-1] + 1
+    adjacent[n_side - 1: n_side] = False  # the join of the two runs
+    for a in (take, unit, spacing, adjacent):
+        a.setflags(write=False)
+    return _Layout(c, c_ok, s_ok, n_span, n_side, f0, take, unit, spacing, adjacent)
+
+
+def _run(links: list[bool], first: int, last: int, backwards: bool) -> int:
+    """How many consecutive links hold from ``first`` on (towards ``last``, exclusive)."""
+    seg = links[first:last]
+    if backwards:
+        seg.reverse()
+    seg.append(False)
+    return seg.index(False)
+
+
+def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
+    """Side ray from the points ``z`` (complex ``x + iy``, law frame) of beams 0..n of the
+    first surface (beam 0 at -90 deg), all valid.
 
     A quadratic ``h = a + b s + c s^2`` is fitted by least squares in the frame of the
     total-least-squares line through the points (centred, scaled by the span), and its slope
@@ -99,59 +166,96 @@ def _side_ray(pts: "np.ndarray", end0: int, r0: float, span: int) -> "Ray":
     one-sided ``(P0, Pw, P2w)``) are far noisier at the side ray: at 0.5 m with 0.8 % range
     noise they give a curvature std of about 1.3 1/m and a tangent std of 6 deg; the fit over
     ``span = 30`` beams (about 0.27 m of wall) gives 0.22 1/m and 1.9 deg.
+
+    Both fits are closed-form moments (no SVD): the line's direction is half the angle of
+    ``sum(q^2)`` (``q`` the centred points as complex numbers, ``sum(q^2) = sxx - syy +
+    2i sxy``), and the quadratic solves its 3x3 normal equations by Cramer's rule (falling
+    back to ``lstsq`` when they are singular).
     """
     import numpy as np
 
-    from atoms.estimators import principal_direction
     from atoms.steering import MISS, Ray
 
-    n = min(end0, span)
-    if n + 1 < 5:
+    m = z.size
+    if m < 5:
         return MISS
-    p = pts[: n + 1]
-    ang = principal_direction(p)
-    if not math.isfinite(ang):
+    q = z - np.add.reduce(z) / m
+    sq = complex(np.dot(q, q))  # unconjugated: sxx - syy + 2i sxy
+    if not (math.isfinite(sq.real) and math.isfinite(sq.imag)):
         return MISS
-    q = p - p.mean(0)
-    c, sn = math.cos(ang), math.sin(ang)
-    s = q[:, 0] * c + q[:, 1] * sn
-    h = q[:, 1] * c - q[:, 0] * sn
-    scale = float(np.max(np.abs(s)))
-    if scale <= 0:
+    ang = 0.5 * math.atan2(sq.imag, sq.real)
+    d = complex(z[-1] - z[0])  # orient the line first -> last point
+    if math.cos(ang) * d.real + math.sin(ang) * d.imag < 0:
+        ang += math.pi
+    ang = math.atan2(math.sin(ang), math.cos(ang))
+    w = q * complex(math.cos(ang), -math.sin(ang))  # s + i h in the line's frame
+    s, h = w.real, w.imag
+    scale = float(np.abs(s).max())
+    if not scale > 0:
         return MISS
-    x = s / scale
-    coef, *_ = np.linalg.lstsq(np.stack((np.ones_like(x), x, x * x), axis=1), h, rcond=None)
-    slope = (coef[1] + 2.0 * coef[2] * x[0]) / scale
-    kappa = 2.0 * coef[2] / scale ** 2 / (1.0 + slope * slope) ** 1.5
+    x = np.empty((3, m))
+    x[0] = 1.0
+    np.divide(s, scale, out=x[1])
+    np.multiply(x[1], x[1], out=x[2])
+    (a00, a01, a02), (_, a11, a12), (_, _, a22) = (x @ x.T).tolist()
+    b0, b1, b2 = (x @ h).tolist()
+    # Cramer's rule on the symmetric normal equations [[a00 a01 a02] [a01 a11 a12] [a02 a12 a22]]
+    m00 = a11 * a22 - a12 * a12
+    m01 = a01 * a22 - a12 * a02
+    m02 = a01 * a12 - a11 * a02
+    det = a00 * m00 - a01 * m01 + a02 * m02
+    if abs(det) > 1e-12 * a00 * a11 * a22:
+        c1 = (a00 * (b1 * a22 - a12 * b2) - b0 * (a01 * a22 - a12 * a02)
+              + a02 * (a01 * b2 - b1 * a02)) / det
+        c2 = (a00 * (a11 * b2 - b1 * a12) - a01 * (a01 * b2 - b1 * a02)
+              + b0 * m02) / det
+    else:  # fewer than three distinct abscissae: the minimum-norm solution, as lstsq gives
+        coef = np.linalg.lstsq(x.T, h, rcond=None)[0]
+        c1, c2 = float(coef[1]), float(coef[2])
+    slope = (c1 + 2.0 * c2 * float(x[1, 0])) / scale
+    kappa = 2.0 * c2 / scale ** 2 / (1.0 + slope * slope) ** 1.5
     return Ray(True, r0, ang + math.atan(slope), float(kappa))
 
 
-def _front_ray(pts: "np.ndarray", start: int, c: int, end: int, r0: float,
-               windows: Sequence[int]) -> "Ray":
-    """Front ray at beam ``c`` on the surface ``start..end`` (law frame)."""
+def _front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
+               windows: tuple[int, ...], exact: bool = False) -> "Ray | None":
+    """Front ray at local beam ``c`` of the points ``z`` (complex, law frame), whose surface
+    extends ``right`` beams before and ``left`` beams after it.
+
+    The averaged geometric estimate over the windows that fit, all at once (the tangent of
+    each window's circle at its middle point, as in :func:`atoms.estimators.geometric_curvature`).
+    ``right`` and ``left`` may be capped at ``max(windows)`` (all the estimate reads) unless
+    ``exact``; None when no window gives an estimate and the one-sided chord needs the
+    surface's true extent on both sides (only for degenerate, coincident points).
+    """
     import numpy as np
 
-    from atoms.estimators import menger
     from atoms.steering import Ray
 
-    reach = min(c - start, end - c)
-    ws = np.asarray([w for w in windows if w <= reach] or ([reach] if reach >= 1 else []))
-    if ws.size:
-        k = menger(pts[c - ws], pts[c], pts[c + ws])
-        ok = np.isfinite(k)
+    reach = min(right, left)
+    ws = [w for w in windows if w <= reach] or ([reach] if reach >= 1 else [])
+    if ws:
+        wa = np.asarray(ws)
+        p = z[c]
+        u = p - z[c - wa]
+        v = z[c + wa] - p
+        au = np.abs(u)
+        av_c = np.abs(v) * np.abs(u + v)
+        den = au * av_c
+        ok = den > 0
         if ok.any():
-            u = pts[c] - pts[c - ws[ok]]
-            au = np.hypot(u[:, 0], u[:, 1])
-            s = np.clip(0.5 * au * k[ok], -1.0, 1.0)
-            # tangent of the circle through the window at its middle point (see estimators)
-            tx = (u[:, 0] * np.sqrt(1 - s * s) - u[:, 1] * s).sum()
-            ty = (u[:, 1] * np.sqrt(1 - s * s) + u[:, 0] * s).sum()
-            return Ray(True, r0, math.atan2(ty, tx), float(k[ok].mean()))
-    right, left = c - start, end - c
+            u, v, au, av_c, den = u[ok], v[ok], au[ok], av_c[ok], den[ok]
+            rot = -(v.conjugate() * (u + v))  # -(u+v).v + i u x v
+            k = 2.0 * rot.imag / den
+            np.abs(rot.real, out=rot.real)
+            t = complex((u * rot / av_c).sum())  # each weighted by |u|
+            return Ray(True, r0, math.atan2(t.imag, t.real), float(k.mean()))
     m = min(max(right, left), max(windows))
     if m >= 1:
-        chord = pts[c + m] - pts[c] if left >= right else pts[c] - pts[c - m]
-        return Ray(True, r0, math.atan2(chord[1], chord[0]), 0.0)
+        if not exact and min(left, right) >= max(windows):
+            return None  # both capped: the side with the longer surface is not known here
+        chord = complex(z[c + m] - z[c] if left >= right else z[c] - z[c - m])
+        return Ray(True, r0, math.atan2(chord.imag, chord.real), 0.0)
     return Ray(True, r0, math.pi / 2.0, 0.0)  # an isolated return: a surface facing the robot
 
 
@@ -159,6 +263,10 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
                   windows: Sequence[int] = (7, 8, 9),
                   side_span: float = math.radians(30.0)) -> BoundaryView:
     """The front and side rays for following ``side``, from one scan.
+
+    Only the beams the two rays need are read (the side fit's span from -90 deg, the front
+    beam and its windows), with the scan's connectivity rule (:func:`atoms.estimators.surfaces`)
+    applied to them.
 
     Parameters
     ----------
@@ -189,42 +297,77 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
     """
     import numpy as np
 
-    from atoms.estimators import surfaces
+    from atoms.estimators import DEFAULT_GAP
     from atoms.steering import MISS, Ray
 
     side = parse_side(side)
     if scan is None or scan.ranges.size == 0:
         return BoundaryView(MISS, MISS, False, math.inf if scan is None else scan.max_range)
     ranges = np.asarray(scan.ranges, dtype=float)
-    bearings = np.asarray(scan.bearings, dtype=float)
+    bearings = np.ascontiguousarray(scan.bearings, dtype=float)
     valid = np.asarray(scan.valid, dtype=bool)
-    tangents, curvatures = scan.tangents, scan.curvatures
-    if side is Side.LEFT:  # mirror y -> -y and reverse the beam order
-        ranges, bearings, valid = ranges[::-1], -bearings[::-1], valid[::-1]
-        if tangents is not None:
-            tangents = np.pi - np.asarray(tangents)[::-1]
-        if curvatures is not None:
-            curvatures = np.asarray(curvatures)[::-1]
-    valid = valid & np.isfinite(ranges) & (ranges > 0)
-    c = int(np.argmin(np.abs(bearings)))
-    c_ok = abs(bearings[c]) <= _BEARING_TOL and valid[c]
-    s_ok = abs(bearings[0] + np.pi / 2) <= _BEARING_TOL and valid[0]
-    exact = tangents is not None and curvatures is not None
-    if exact:
+    left = side is Side.LEFT
+    wins = tuple(int(w) for w in windows)
+    lay = _layout(bearings.tobytes(), left, float(side_span), max(wins))
+    n = ranges.size
+    if scan.tangents is not None and scan.curvatures is not None:
+        tangents, curvatures = scan.tangents, scan.curvatures
+
         def oracle(j: int) -> Ray:
-            t, k = float(tangents[j]), float(curvatures[j])  # type: ignore[index]
+            i = n - 1 - j if left else j  # law-frame beam j is original beam i
+            r = float(ranges[i])
+            if not (valid[i] and math.isfinite(r) and r > 0):
+                return MISS
+            t, k = float(tangents[i]), float(curvatures[i])
+            if left:  # mirrored: the tangent reflects, the curvature keeps its sign
+                t = math.pi - t
             if not (math.isfinite(t) and math.isfinite(k)):
                 return MISS
-            return Ray(True, float(ranges[j]), math.atan2(math.sin(t), math.cos(t)), k)
-        return BoundaryView(oracle(c) if c_ok else MISS, oracle(0) if s_ok else MISS, True,
-                            scan.max_range)
-    s = surfaces(ranges, bearings, valid)
-    front = _front_ray(s.points, int(s.start[c]), c, int(s.end[c]), float(ranges[c]), windows) \
-        if c_ok else MISS
-    step = abs(float(bearings[1] - bearings[0])) if bearings.size > 1 else 1.0
-    n_span = max(4, int(round(side_span / step))) if step > 0 else 4
-    side_ray = _side_ray(s.points, int(s.end[0]), float(ranges[0]), n_span) if s_ok else MISS
+            return Ray(True, r, math.atan2(math.sin(t), math.cos(t)), k)
+        return BoundaryView(oracle(lay.c) if lay.c_ok else MISS,
+                            oracle(0) if lay.s_ok else MISS, True, scan.max_range)
+    r = ranges[lay.take]
+    ok = np.isfinite(r)
+    ok &= r > 0
+    ok &= valid[lay.take]
+    r = np.where(ok, r, np.nan)
+    z = r * lay.unit
+    lim = lay.spacing * r[:-1]
+    np.maximum(lim, DEFAULT_GAP, out=lim)
+    link = np.abs(z[1:] - z[:-1]) < lim  # NaN (an invalid end) compares False
+    link &= lay.adjacent
+    links = link.tolist()
+    ns = lay.n_side
+    side_ray = MISS
+    if ns and ok[0]:
+        end0 = _run(links, 0, ns - 1, backwards=False)
+        side_ray = _side_ray(z[:min(end0, lay.n_span) + 1], float(r[0]))
+    front = MISS
+    cl = ns + lay.c - lay.f0
+    if lay.c_ok and ok[cl]:
+        right = _run(links, ns, cl, backwards=True)
+        ahead = _run(links, cl, len(links), backwards=False)
+        ray = _front_ray(z[ns:], cl - ns, right, ahead, float(r[cl]), wins)
+        if ray is None:  # degenerate window (coincident points): read the whole scan
+            ray = _front_full(ranges, bearings, valid, left, lay.c, float(r[cl]), wins)
+        front = ray
     return BoundaryView(front, side_ray, False, scan.max_range)
+
+
+def _front_full(ranges: "np.ndarray", bearings: "np.ndarray", valid: "np.ndarray", left: bool,
+                c: int, r0: float, windows: tuple[int, ...]) -> "Ray":
+    """:func:`_front_ray` with the true extent of the front beam's surface (whole scan)."""
+    import numpy as np
+
+    from atoms.estimators import surfaces
+
+    if left:
+        ranges, bearings, valid = ranges[::-1], -bearings[::-1], valid[::-1]
+    s = surfaces(ranges, bearings, valid)
+    z = np.ascontiguousarray(s.points).view(np.complex128).reshape(-1)
+    ray = _front_ray(z, c, c - int(s.start[c]), int(s.end[c]) - c, r0, windows, exact=True)
+    assert ray is not None
+    return ray
 
 
 def cached_view(ctx: Context, side: Side | str, windows: Sequence[int] = (7, 8, 9),

@@ -127,6 +127,42 @@ class Estimate:
     valid: np.ndarray
 
 
+@lru_cache(maxsize=16)
+def _bearing_terms(key: bytes, gap_factor: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-bearing constants of a scan layout (a pure function of the bearings, memoised:
+    one sensor always sends the same bearings): the unit directions ``cos a + i sin a`` and
+    the link limit per beam spacing ``gap_factor * |a[j+1] - a[j]|``. Returned read-only."""
+    a = np.frombuffer(key, dtype=np.float64)
+    unit = np.empty(a.size, dtype=np.complex128)
+    np.cos(a, out=unit.real)
+    np.sin(a, out=unit.imag)
+    spacing = gap_factor * np.abs(a[1:] - a[:-1])
+    unit.setflags(write=False)
+    spacing.setflags(write=False)
+    return unit, spacing
+
+
+def _unit_directions(a: np.ndarray, gap_factor: float = DEFAULT_GAP_FACTOR
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_bearing_terms` of a 1-D float64 bearing array."""
+    return _bearing_terms(np.ascontiguousarray(a).tobytes(), float(gap_factor))
+
+
+def _complex_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None,
+                    gap_factor: float = DEFAULT_GAP_FACTOR
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Points of a 1-D scan as complex ``x + iy`` (NaN where invalid), the valid mask, the
+    NaN-masked ranges and the per-spacing link limits of :func:`_bearing_terms`."""
+    r = np.asarray(ranges, dtype=float)
+    ok = np.isfinite(r)
+    ok &= r > 0
+    if valid is not None:
+        ok &= np.asarray(valid, dtype=bool)
+    r = np.where(ok, r, np.nan)
+    unit, spacing = _unit_directions(np.asarray(bearings, dtype=float), gap_factor)
+    return r * unit, ok, r, spacing
+
+
 def scan_points(ranges: np.ndarray, bearings: np.ndarray,
                 valid: np.ndarray | None = None) -> np.ndarray:
     """Robot-frame points of a scan.
@@ -146,6 +182,9 @@ def scan_points(ranges: np.ndarray, bearings: np.ndarray,
     [[1.0, 0.0], [0.0, 2.0]]
     """
     r = np.asarray(ranges, dtype=float)
+    if r.ndim == 1 and np.shape(bearings) == r.shape:
+        z = _complex_points(r, bearings, valid)[0]
+        return z.view(np.float64).reshape(r.shape + (2,))
     a = np.asarray(bearings, dtype=float)
     ok = np.isfinite(r) & (r > 0)
     if valid is not None:
@@ -157,17 +196,24 @@ def scan_points(ranges: np.ndarray, bearings: np.ndarray,
     return pts
 
 
-def _segment_bounds(link: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """First and last index of each beam's run of linked neighbours."""
+@lru_cache(maxsize=16)
+def _beam_index(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``arange(n)``, its tail ``1..n-1`` and its head ``0..n-2`` (memoised, read-only)."""
     idx = np.arange(n)
-    brk = np.empty(n, dtype=np.intp)
-    brk[0] = 0
-    brk[1:] = np.where(link, 0, idx[1:])
-    start = np.maximum.accumulate(brk)
-    brk[-1] = n - 1
-    brk[:-1] = np.where(link, n - 1, idx[:-1])
-    end = np.minimum.accumulate(brk[::-1])[::-1]
-    return start, end
+    idx.setflags(write=False)
+    return idx, idx[1:], idx[:-1]
+
+
+def _segment_bounds(link: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """First and last index of each beam's run of linked neighbours, and the reach."""
+    idx, tail, head = _beam_index(n)
+    start = np.empty(n, dtype=np.intp)
+    start[0] = 0  # a run starts where a beam is not linked to the one before it
+    np.maximum.accumulate(tail * ~link, out=start[1:])
+    end = np.empty(n, dtype=np.intp)
+    end[-1] = n - 1  # ... and ends where it is not linked to the next one
+    np.minimum.accumulate(np.where(link, n - 1, head)[::-1], out=end[-2::-1])
+    return start, end, np.minimum(idx - start, end - idx)
 
 
 def surfaces(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None = None, *,
@@ -193,23 +239,17 @@ def surfaces(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None 
     >>> s.labels.tolist(), s.start.tolist(), s.end.tolist()
     ([0, 0, 1, 1, -1], [0, 0, 2, 2, 4], [1, 1, 3, 3, 4])
     """
-    pts = scan_points(ranges, bearings, valid)
-    x = pts[:, 0]
-    y = pts[:, 1]
-    ok = x == x  # not NaN
+    z, ok, r, spacing = _complex_points(ranges, bearings, valid, gap_factor)
     n = ok.size
+    pts = z.view(np.float64).reshape(n, 2)
     if n < 2:
         e = np.arange(n)
         return Surfaces(pts, ok, e, e, np.zeros(n, dtype=np.intp))
-    dx = x[1:] - x[:-1]
-    dy = y[1:] - y[:-1]
-    r = np.asarray(ranges, dtype=float)[:-1]
-    da = np.asarray(bearings, dtype=float)
-    lim = np.maximum(gap_factor * np.abs(da[1:] - da[:-1]) * r, gap)
-    link = dx * dx + dy * dy < lim * lim  # NaN (an invalid end) compares False
-    start, end = _segment_bounds(link, n)
-    idx = np.arange(n)
-    return Surfaces(pts, ok, start, end, np.minimum(idx - start, end - idx))
+    lim = spacing * r[:-1]
+    np.maximum(lim, gap, out=lim)
+    link = np.abs(z[1:] - z[:-1]) < lim  # NaN (an invalid end) compares False
+    start, end, reach = _segment_bounds(link, n)
+    return Surfaces(pts, ok, start, end, reach)
 
 
 def smooth_positions(s: Surfaces, sigma: float = 1.0, truncate: float = 3.0) -> Surfaces:
@@ -277,58 +317,80 @@ def menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
 
 
 @lru_cache(maxsize=64)
-def _window_index(n: int, windows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _window_index(n: int, windows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Index arrays of every window for an N-beam scan (a pure function, memoised: scans of
-    one sensor always have the same N). Returned read-only."""
+    one sensor always have the same N). Returned read-only.
+
+    Returns the (W, 1) windows and the (4, W, N) indices ``(n+w, n, n-w, n+w)`` (clipped to
+    the scan), so one gather and one subtraction of neighbouring rows give all three sides
+    of every window's triangle.
+    """
     w = np.asarray(windows, dtype=np.intp).reshape(-1, 1)
     idx = np.arange(n)
     lo = np.maximum(idx - w, 0)
     hi = np.minimum(idx + w, max(n - 1, 0))
-    for a in (w, lo, hi):
+    ring = np.stack((hi, np.broadcast_to(idx, hi.shape), lo, hi))
+    for a in (w, ring):
         a.setflags(write=False)
-    return w, lo, hi
+    return w, ring
 
 
-def _windows(s: Surfaces, windows: Sequence[int] | int
-             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every window at once, as complex numbers ``x + iy``.
+def _window_key(windows: Sequence[int] | int) -> tuple[int, ...]:
+    if isinstance(windows, (int, np.integer)):
+        return (int(windows),)
+    return tuple(map(int, windows))
 
-    Returns the chords u = P[n]-P[n-w] and v = P[n+w]-P[n], each (W, N), and the (W, N) mask
-    of windows that fit on one surface.
+
+def _sides(s: Surfaces, windows: Sequence[int] | int
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The sides of every window's triangle at once, as complex numbers ``x + iy``.
+
+    Returns ``d`` (3, W, N): ``v = P[n+w]-P[n]``, ``u = P[n]-P[n-w]`` and ``-(u+v)``; their
+    lengths (3, W, N); and the (W, N) mask of windows that fit on one surface. Invalid points
+    are zeroed first so that windows that do not fit carry no NaN into the masked sums.
     """
-    key = (int(windows),) if isinstance(windows, (int, np.integer)) else tuple(map(int, windows))
     n = s.valid.size
-    w, lo, hi = _window_index(n, key)
-    ok = s.reach >= w
-    z = np.ascontiguousarray(s.points).view(np.complex128).reshape(n)
-    return z - z[lo], z[hi] - z, ok
+    w, ring = _window_index(n, _window_key(windows))
+    pts = s.points
+    if not (pts.dtype == np.float64 and pts.flags.c_contiguous):
+        pts = np.ascontiguousarray(pts, dtype=np.float64)
+    z = np.where(s.valid, pts.view(np.complex128).reshape(n), 0.0)
+    g = z[ring]
+    d = g[:-1] - g[1:]
+    return d, np.abs(d), s.reach >= w
 
 
-def _finish(k: np.ndarray, u: np.ndarray, au: np.ndarray, ok: np.ndarray) -> Estimate:
-    """Average the windows that fit (``k`` is 0 elsewhere) and give the tangent at ``P[n]``.
+def _average(kt: np.ndarray, ok: np.ndarray) -> Estimate:
+    """Mean over the windows that fit, NaN where none does.
 
-    The tangent of the circle through the window's points, at its middle point, is the chord
-    ``u = P[n] - P[n-w]`` turned by half the arc it spans, ``asin(|u| k / 2)``: exact on a
-    circle even when the beams sample it unevenly (the chord ``P[n+w] - P[n-w]`` is not).
+    ``kt`` (2, W, N) complex holds half the curvature of each window in ``kt[0].real`` and
+    its tangent, weighted by ``|u|`` (longer windows weigh more), in ``kt[1]``; both are 0
+    where the window does not fit. ``kt[0].imag`` is scratch: it receives the mask, so one
+    sum over the windows gives the curvature, the tangent and the count together.
     """
-    s = 0.5 * au * k  # |s| <= 1: a chord is never longer than the diameter (up to rounding)
-    s2 = s * s
-    np.minimum(s2, 1.0, out=s2)
-    t = u * (np.sqrt(1.0 - s2) + 1j * s)  # |t| = |u|: longer windows weigh more
-    if k.shape[0] == 1:
-        valid = ok[0]
-        kappa = k[0]
-        t = t[0]
-    else:
-        cnt = ok.sum(0)
-        valid = cnt > 0
-        kappa = k.sum(0) / np.maximum(cnt, 1)
-        t = np.where(ok, t, 0.0).sum(0)
-    invalid = ~valid
-    kappa[invalid] = np.nan
-    tangent = np.angle(t)
-    tangent[invalid] = np.nan
-    return Estimate(kappa, tangent, valid)
+    with np.errstate(invalid="ignore", divide="ignore"):  # 0/0 -> NaN marks "no window"
+        if ok.shape[0] == 1:  # one window: nothing to sum
+            valid = ok[0]
+            kappa = kt[0, 0].real / valid
+            t = kt[1, 0] / valid
+        else:
+            np.copyto(kt[0].imag, ok)
+            sums = np.add.reduce(kt, axis=1)
+            cnt = sums[0].imag
+            valid = cnt > 0
+            sums /= cnt
+            kappa = sums[0].real
+            t = sums[1]
+    kappa = kappa * 2.0
+    kappa += 0.0  # an exact straight line reads 0.0, not -0.0
+    return Estimate(kappa, np.arctan2(t.imag, t.real), valid)
+
+
+def _masked_inverse(den: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """``1 / den`` where ``ok``, 0 elsewhere (``den`` finite and > 0 where ``ok``)."""
+    inv = np.zeros(den.shape)
+    np.divide(1.0, den, out=inv, where=ok)
+    return inv
 
 
 def classical_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
@@ -341,6 +403,9 @@ def classical_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
     angle ``psi`` apart the chords turn by ``psi`` while ``|P[n+w]-P[n-w]| ~ 2 R psi``). With a
     sequence of windows, the estimates are averaged (as equation 11 does for the geometric one).
 
+    The tangent at ``P[n]`` is the chord ``u = P[n] - P[n-w]`` turned by ``asin(|u| k / 2)``
+    (as for the geometric estimate, with this estimate's ``k``).
+
     Parameters
     ----------
     s : Surfaces
@@ -350,12 +415,25 @@ def classical_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
     -------
     Estimate with (N,) arrays; beams whose window leaves the surface are NaN / invalid.
     """
-    u, v, ok = _windows(s, w)
-    cl = np.abs(u + v)
+    d, a, ok = _sides(s, w)
+    v, u = d[0], d[1]
     turn = v * u.conjugate()  # its argument is the signed turn from u to v
-    ok &= (cl > 0) & (turn != 0)
-    k = np.divide(2.0 * np.angle(turn), cl, out=np.zeros_like(cl), where=ok)
-    return _finish(k, u, np.abs(u), ok)
+    ok &= a[2] > 0
+    ok &= turn != 0
+    kt = np.empty((2,) + ok.shape, dtype=np.complex128)
+    half = kt[0].real
+    np.arctan2(turn.imag, turn.real, out=half)
+    half *= _masked_inverse(a[2], ok)  # k / 2
+    sn = a[1] * half  # |sn| <= 1 up to rounding for a circle; clamp the cosine's argument
+    c2 = sn * sn
+    np.minimum(c2, 1.0, out=c2)
+    np.subtract(1.0, c2, out=c2)
+    rot = kt[1]
+    np.sqrt(c2, out=rot.real)
+    rot.imag[...] = sn
+    rot *= u
+    rot *= ok
+    return _average(kt, ok)
 
 
 def geometric_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
@@ -366,6 +444,13 @@ def geometric_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
     turning direction of the three points. With a sequence of windows the estimates are
     averaged (equation 11).
 
+    The tangent of that circle at its middle point ``P[n]`` is the chord
+    ``u = P[n] - P[n-w]`` turned by half the arc it spans, ``asin(|u| k / 2)``: exact on a
+    circle even when the beams sample it unevenly (the chord ``P[n+w] - P[n-w]`` is not). That
+    rotation is computed without trigonometry, as the unit complex number
+    ``(|(u+v).v| + i u x v) / (|v| |u+v|)`` (sine and cosine of the triangle's angle at
+    ``P[n+w]``, the cosine taken non-negative as ``asin`` does).
+
     Parameters
     ----------
     s : Surfaces
@@ -375,12 +460,20 @@ def geometric_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
     -------
     Estimate with (N,) arrays.
     """
-    u, v, ok = _windows(s, w)
-    au = np.abs(u)
-    den = au * np.abs(v) * np.abs(u + v)
-    ok &= den > 0
-    k = np.divide(2.0 * (v * u.conjugate()).imag, den, out=np.zeros_like(den), where=ok)
-    return _finish(k, u, au, ok)
+    d, a, fit = _sides(s, w)
+    den = a[0] * a[1]
+    den *= a[2]
+    ok = den > 0
+    ok &= fit
+    inv = _masked_inverse(den, ok)
+    m = d[0].conjugate()
+    m *= d[2]  # -(u+v).v + i u x v
+    np.abs(m.real, out=m.real)
+    kt = np.empty((2,) + den.shape, dtype=np.complex128)
+    np.multiply(m.imag, inv, out=kt[0].real)  # k / 2
+    t = np.multiply(m, d[1], out=kt[1])
+    t *= inv * a[1]  # / (|v| |u+v|): u turned by the unit rotation, weighted by |u|
+    return _average(kt, ok)
 
 
 def averaged_curvature(s: Surfaces, windows: Sequence[int] = DEFAULT_WINDOWS) -> Estimate:

@@ -26,11 +26,12 @@ from atoms.boundary import boundary_view
 from mdle.backend import Scan
 
 
-def _scan(rng: np.random.Generator) -> Scan:
+def _scan(rng: np.random.Generator, centre: tuple[float, float] = (2.0, 0.5)) -> Scan:
+    """A wall 0.6 m to the right and a cylinder of radius 0.5 m at ``centre``, 0.8 % noise."""
     b = np.radians(np.arange(-90.0, 90.5, 1.0))
     d = np.stack((np.cos(b), np.sin(b)), axis=1)
     wall = np.where(np.sin(b) < -0.05, -0.6 / np.minimum(np.sin(b), -0.05), np.inf)
-    c = np.array([2.0, 0.5])
+    c = np.array(centre)
     bb = d @ c
     disc = bb * bb - (c @ c - 0.25)
     cyl = np.where(disc > 0, bb - np.sqrt(np.abs(disc)), np.inf)
@@ -45,6 +46,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2000, help="calls per timing round")
     args = parser.parse_args()
     scan = _scan(np.random.default_rng(0))
+    ahead = _scan(np.random.default_rng(0), centre=(1.5, 0.0))  # the front ray hits it too
     s = E.surfaces(scan.ranges, scan.bearings, scan.valid)
     cases = {
         "surfaces (points + connectivity)": lambda: E.surfaces(scan.ranges, scan.bearings,
@@ -55,9 +57,11 @@ def main() -> None:
         "geometric w 1": lambda: E.geometric_curvature(s, 1),
         "classical w 8": lambda: E.classical_curvature(s, 8),
         "Gaussian smoothing (sigma 1)": lambda: E.smooth_positions(s, 1.0),
-        "boundary view (front + side rays)": lambda: boundary_view(scan, "right"),
+        "boundary view (side ray hits)": lambda: boundary_view(scan, "right"),
+        "boundary view (both rays hit)": lambda: boundary_view(ahead, "right"),
     }
     print(f"{'estimator':36} {'us per scan':>12}")
+    assert boundary_view(ahead, "right").front.hit and boundary_view(ahead, "right").side.hit
     for name, fn in cases.items():
         best = min(timeit.repeat(fn, number=args.repeat, repeat=7)) / args.repeat
         print(f"{name:36} {best * 1e6:12.1f}")
