@@ -159,7 +159,7 @@ class Ladar:
         ``fan`` comes from :meth:`fan`. The same as casting :meth:`world_angles` from
         :meth:`origin` and calling :meth:`measure`, with about a third of the numpy calls.
         """
-        mx, my, mth = self.mount
+        mx, my, _ = self.mount                      # the mount's angle is in bearings
         c, s = math.cos(th), math.sin(th)
         ranges, hit = fan.cast(x + c * mx - s * my, y + s * mx + c * my,
                                th + float(self.bearings[0]))
