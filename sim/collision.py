@@ -37,6 +37,8 @@ _MARGIN = CONTACT / 2  # advancing stops this far short of touching
 _MAX_STEPS = 2000
 _TAU = 2.0 * math.pi
 _FEW_ELLIPSES = 8  # up to this many near ellipses, one at a time in plain floats
+_CULL_ABOVE = 256  # segments: larger worlds keep a list of the candidates near the robot
+_NEAR_SLACK = 0.5  # m: the list stays valid while the robot is this close to where it was made
 
 
 @dataclass(frozen=True)
@@ -80,9 +82,11 @@ class Collider:
         # Re(w * conj(e) / |e|^2) is the projection of w on e, in units of the segment.
         self._proj = np.divide(self._e.conjugate(), ll, out=np.zeros_like(self._e),
                                where=ll > 0)
-        n = len(ll)
-        self._w, self._r = np.empty(n, dtype=complex), np.empty(n, dtype=complex)
-        self._u, self._d = np.empty(n), np.empty(n)
+        self._bufs = self._buffers(len(ll))
+        # Large worlds: the segments that can be nearest anywhere within _NEAR_SLACK of
+        # _near_at (indices, then their s0, e, proj and buffers); made on demand.
+        self._near_at: complex | None = None
+        self._near: tuple = ()
         c, r = parts.arc_center, parts.arc_radius
         self._arc_c = c[:, 0] + 1j * c[:, 1]
         a0, a1 = parts.arc_start, parts.arc_start + parts.arc_sweep
@@ -102,15 +106,18 @@ class Collider:
         P = self.parts
         q = complex(x, y)
         if self._s0.shape[0]:
-            w = np.subtract(q, self._s0, out=self._w)
-            u = np.multiply(w, self._proj, out=self._r).real
-            np.maximum(u, 0.0, out=self._u)
-            np.minimum(self._u, 1.0, out=self._u)
-            r = np.multiply(self._e, self._u, out=self._r)
-            np.subtract(w, r, out=r)                   # w less its nearest segment point
-            d = np.abs(r, out=self._d)
-            j = int(d.argmin())
-            best, owner = float(d[j]), int(P.seg_owner[j])
+            if self._s0.shape[0] <= _CULL_ABOVE:
+                d = self._segments(q, self._s0, self._e, self._proj, self._bufs)
+                j = int(d.argmin())
+                best = float(d[j])
+            elif self._near_at is not None and abs(q - self._near_at) <= _NEAR_SLACK:
+                keep, s0, e, proj, bufs = self._near
+                d = self._segments(q, s0, e, proj, bufs)
+                i = int(d.argmin())
+                best, j = float(d[i]), int(keep[i])
+            else:
+                j, best = self._remake_near(q)
+            owner = int(P.seg_owner[j])
         if len(P.arc_radius):
             w = q - self._arc_c
             within = np.arctan2(w.imag, w.real)
@@ -143,6 +150,36 @@ class Collider:
                     if d < best:
                         best, owner = d, self._ell_owner[i]
         return best, owner
+
+    @staticmethod
+    def _buffers(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return np.empty(n, dtype=complex), np.empty(n, dtype=complex), np.empty(n)
+
+    @staticmethod
+    def _segments(q: complex, s0: np.ndarray, e: np.ndarray, proj: np.ndarray,
+                  bufs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+        """Distances from ``q`` to the segments ``s0 + [0, 1] e`` (written into a buffer)."""
+        w, r, u = bufs
+        np.subtract(q, s0, out=w)
+        ur = np.multiply(w, proj, out=r).real          # position of q along each segment
+        np.maximum(ur, 0.0, out=u)
+        np.minimum(u, 1.0, out=u)
+        np.multiply(e, u, out=r)
+        np.subtract(w, r, out=r)                       # w less its nearest segment point
+        return np.abs(r, out=u)
+
+    def _remake_near(self, q: complex) -> tuple[int, float]:
+        """Distances to all segments from ``q``; keep those that can be nearest within
+        _NEAR_SLACK of ``q`` (a segment farther than the nearest by 2 slack never is, the
+        distance changing no faster than the point moves). Returns (nearest, distance)."""
+        d = self._segments(q, self._s0, self._e, self._proj, self._bufs)
+        j = int(d.argmin())
+        best = float(d[j])
+        keep = np.flatnonzero(d <= best + 2.0 * _NEAR_SLACK)
+        self._near = (keep, self._s0[keep], self._e[keep], self._proj[keep],
+                      self._buffers(keep.shape[0]))
+        self._near_at = q
+        return j, best
 
     def _ellipses_vectorised(self, w: np.ndarray, near: np.ndarray) -> tuple[float, int]:
         """(distance, owner) of the nearest of many ellipses ``near``; ``w`` = q - centres."""

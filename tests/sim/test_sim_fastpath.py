@@ -170,3 +170,25 @@ def test_fan_from_inside_an_ellipse_sees_its_far_side() -> None:
         want = world.caster.cast(np.array((x, y)), 0.7 + rel, 10.0, detail=False)
         assert hit.all() and want.hit.all()
         np.testing.assert_allclose(ranges, want.ranges, rtol=0, atol=1e-9)
+
+
+def test_collider_near_list_in_a_large_world_is_exact() -> None:
+    # More than 256 segments: the collider keeps the segments near the robot and remakes
+    # the list when the robot has moved away; along a walk with small steps and jumps the
+    # answers equal the full computation.
+    world = _big_world()
+    assert world.parts.n_segments > 256
+    col = Collider(world.parts, radius=0.25)
+    rng = np.random.default_rng(11)
+    p = np.array([0.3, -0.4])
+    checked = 0
+    for k in range(300):
+        p = p + (rng.normal(0, 0.08, 2) if k % 25 else rng.uniform(-6, 6, 2))
+        p = np.clip(p, -14.0, 14.0)
+        if world.inside(p):
+            continue
+        d, owner = col.distance(float(p[0]), float(p[1]))
+        n = world.nearest_boundary(p)
+        assert math.isclose(d, n.distance, abs_tol=1e-12) and owner == n.obstacle
+        checked += 1
+    assert checked > 150
