@@ -161,6 +161,8 @@ def main() -> None:
     t = tick_cost(w, args.calls, args.runs)
     print(f"  {w.parts.n_segments:6d} segments: {t}; {1e5 / t.median:.0f}x real time at "
           f"10 Hz (target: <= 150 us)")
+    w = scattered_world(10000)
+    print(f"  {w.parts.n_segments:6d} segments: {tick_cost(w, args.calls, args.runs)}")
     w = load_world("ellipse")
     t = tick_cost(w, args.calls, args.runs)
     print(f"  ellipse scene (1 ellipse, a scan every tick): {t}")

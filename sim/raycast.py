@@ -486,7 +486,9 @@ class FanCaster:
     def _segments(self, ox: float, oy: float, rot: complex, best: np.ndarray) -> None:
         caster = self.caster
         zrows, front_min, ids = self._zrows, caster._front_min, caster._seg_ids
-        if ids.shape[0] > _CULL_ABOVE:
+        n_seg = ids.shape[0]
+        m = n_seg
+        if n_seg > _CULL_ABOVE:
             # Large worlds: only the faces whose bounding box comes within range.
             r = self.max_range
             lo, hi = caster._bb_lo, caster._bb_hi
@@ -498,9 +500,10 @@ class FanCaster:
             m = idx.shape[0]
             if m == 0:
                 return
-            z = zrows[:, idx]
+        if m < n_seg:
+            z = zrows.take(idx, axis=1)             # take: far faster than [:, idx] here
             z *= rot
-            front_min = front_min[idx]
+            front_min = front_min.take(idx)
             ids = ids[:m]
             a, f, front = np.empty((2, m)), np.empty(m, dtype=complex), np.empty(m, dtype=bool)
         else:
