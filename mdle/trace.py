@@ -2,13 +2,13 @@
 
 One JSON object per line, each with a ``type``: one ``header`` (program, world, seed,
 versions), an ``event`` for every element start and end, a ``sample`` per tick, and an
-``end`` record with the run's result. Records reach the file (the operating system) at
-once for the header, events and the end record, and within :data:`FLUSH_PERIOD` of wall
-time for samples; the writer flushes whenever the run ends, whatever the cause (error,
-Ctrl-C, SIGTERM), so only a process killed outright (SIGKILL, a crash of the
-interpreter itself) can lose samples, at most the last ``flush_period`` seconds of them.
-The reader accepts a trace whose last line was cut short. Non-finite numbers (NaN, inf) are written as ``null`` so the file is
-strict JSON. The schema is documented in ``docs/trace.md``.
+``end`` record with the run's result. The header, events and the end record reach the file
+(the operating system) at once, samples in batches within :data:`FLUSH_PERIOD` of wall
+time; the writer flushes whenever the run ends, whatever the cause (error, Ctrl-C,
+SIGTERM), so only a process killed outright (SIGKILL, a crash of the interpreter
+itself) can lose samples, at most the last ``flush_period`` seconds of them. The reader
+accepts a trace whose last line was cut short. Non-finite numbers (NaN, inf) are
+written as ``null`` so the file is strict JSON. The schema is documented in ``docs/trace.md``.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import platform
 import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from math import isfinite
 from typing import IO, TYPE_CHECKING, Any
 
 from mdle.errors import Diagnostic, MdleError, Span
@@ -30,8 +31,8 @@ if TYPE_CHECKING:
 
     from mdle.runtime.scheduler import Scheduler
 
-__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError", "read_trace",
-           "versions"]
+__all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
+           "read_trace", "versions"]
 
 TRACE_FORMAT = "mdle-trace"
 TRACE_VERSION = 1
@@ -176,32 +177,40 @@ class TraceWriter:
             self.flush()
 
     def _sample_line(self, s: Sample) -> str:
-        """The sample as one JSON line (floats formatted directly, fast)."""
-        path = self._paths.get(s.path)
-        if path is None:
-            path = self._quoted(s.path)
+        """The sample as one JSON line (floats formatted directly, fast).
+
+        Raises TypeError or ValueError for a value that is not a number (the caller then
+        falls back to :func:`json.dumps`).
+        """
+        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
+         diag, clearance, collided, true_x, true_y, true_theta) = s
+        # one test for the fields every sample has: a sum of finite numbers is finite
+        # (short of overflow, which the slow path then handles too)
+        if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
+            return _dumps(_sample_dict(s))
+        quoted = self._paths.get(path)
+        if quoted is None:
+            quoted = self._quoted(path)
         # time keeps every digit (hardware clocks may be large); the rest 9 significant
         line = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,'
                 '"omega":%.9g,"cmd_v":%.9g,"cmd_omega":%.9g,"path":%s,"lateness":%.9g,'
                 '"stalled":%s'
-                % (float(s.time), s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega,
-                   path, s.lateness, "true" if s.stalled else "false"))
-        if s.scan_age is not None:
-            line += ',"scan_age":%.9g' % s.scan_age
-        if s.clearance is not None:
-            line += ',"clearance":%.9g' % s.clearance
-        if s.collided is not None:
-            line += ',"collided":%s' % ("true" if s.collided else "false")
-        if s.true_x is not None and s.true_y is not None and s.true_theta is not None:
-            line += ',"true_x":%.9g,"true_y":%.9g,"true_theta":%.9g' % (
-                s.true_x, s.true_y, s.true_theta)
-        if s.diag:
-            line += ',"diag":{%s}' % ",".join(['%s:%.9g' % (self._quoted(k), v)
-                                               for k, v in s.diag.items()])
-        line += "}"
-        if "nan" in line or "inf" in line:  # %-format writes non-finite floats so
-            line = _dumps(_sample_dict(s))  # rare: redo with nulls (also for such a path)
-        return line
+                % (float(t), x, y, theta, v, omega, cmd_v, cmd_omega, quoted, lateness,
+                   "true" if stalled else "false"))
+        if scan_age is not None:
+            line += ',"scan_age":' + _number(scan_age)
+        if clearance is not None:
+            line += ',"clearance":' + _number(clearance)
+        if collided is not None:
+            line += ',"collided":true' if collided else ',"collided":false'
+        if true_x is not None and true_y is not None and true_theta is not None:
+            line += (',"true_x":' + _number(true_x) + ',"true_y":' + _number(true_y)
+                     + ',"true_theta":' + _number(true_theta))
+        if diag:
+            q = self._quoted
+            line += ',"diag":{%s}' % ",".join([q(k) + ":" + _number(d)
+                                               for k, d in diag.items()])
+        return line + "}"
 
     def on_end(self, result: RunResult) -> None:
         """Write the ``end`` record and close the file."""
@@ -237,6 +246,11 @@ class TraceWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def _number(value: Any) -> str:
+    """Format a finite number with 9 significant digits, NaN and infinities as ``null``."""
+    return "%.9g" % value if isfinite(value) else "null"
 
 
 def _sample_dict(s: Sample) -> dict[str, Any]:

@@ -361,13 +361,15 @@ class Scheduler:
         if self.observers:
             trace = ctx.cache.get("trace")
             scan = obs.scan
-            sample = Sample(
+            # every field given, so the tuple is built directly (the named tuple's own
+            # __new__ is a Python function: a frame per tick for nothing)
+            sample = _new_sample(Sample, (
                 now, pose.x, pose.y, pose.theta, obs.v, obs.omega, cmd.v, cmd.omega,
                 stack[-1].slot.path if stack else "", lateness,
                 None if scan is None else now - scan.stamp, obs.stalled,
                 MappingProxyType(dict(trace)) if trace else _EMPTY,
                 *(_truth_fields(truth) if truth else _NO_TRUTH),
-            )
+            ))
             for o in self.observers:
                 o.on_tick(sample)
         if not running:
@@ -376,6 +378,7 @@ class Scheduler:
 
     def _settle(self, ctx: Context, now: float, tick: int) -> None:
         """Test the active elements outermost first until none fires (rules 3-6)."""
+        # `checked` names the level under test for the error message
         stack = self._stack
         level = 0
         while True:
@@ -389,7 +392,7 @@ class Scheduler:
             checked: _Slot | None = None
             t = 0.0
             try:
-                for lvl, start, limit, test, checked in checks:
+                for lvl, start, limit, test, checked in checks:  # noqa: B007
                     if lvl < level:
                         continue
                     t = now - start
@@ -554,6 +557,7 @@ class Scheduler:
 
 
 _NO_TRUTH = (None, None, None, None, None)
+_new_sample = tuple.__new__
 
 
 def _truth_fields(truth: Mapping[str, Any]) -> tuple[Any, ...]:
