@@ -355,7 +355,7 @@ def _sides(s: Surfaces, windows: Sequence[int] | int
     if not (pts.dtype == np.float64 and pts.flags.c_contiguous):
         pts = np.ascontiguousarray(pts, dtype=np.float64)
     z = np.where(s.valid, pts.view(np.complex128).reshape(n), 0.0)
-    g = z[ring]
+    g = z.take(ring)
     d = g[:-1] - g[1:]
     return d, np.abs(d), s.reach >= w
 
@@ -368,20 +368,16 @@ def _average(kt: np.ndarray, ok: np.ndarray) -> Estimate:
     where the window does not fit. ``kt[0].imag`` is scratch: it receives the mask, so one
     sum over the windows gives the curvature, the tangent and the count together.
     """
-    with np.errstate(invalid="ignore", divide="ignore"):  # 0/0 -> NaN marks "no window"
-        if ok.shape[0] == 1:  # one window: nothing to sum
-            valid = ok[0]
-            kappa = kt[0, 0].real / valid
-            t = kt[1, 0] / valid
-        else:
-            np.copyto(kt[0].imag, ok)
-            sums = np.add.reduce(kt, axis=1)
-            cnt = sums[0].imag
-            valid = cnt > 0
-            sums /= cnt
-            kappa = sums[0].real
-            t = sums[1]
-    kappa = kappa * 2.0
+    np.copyto(kt[0].imag, ok)
+    sums = kt[:, 0] if ok.shape[0] == 1 else np.add.reduce(kt, axis=1)  # (2, N)
+    cnt = sums[0].imag
+    valid = cnt > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = 1.0 / cnt  # inf where no window fits: 0 * inf = NaN marks "no estimate"
+        # divide the real and imaginary parts by the count, in real arithmetic
+        sums.view(np.float64).reshape(2, -1, 2)[...] *= share[:, None]
+    t = sums[1]
+    kappa = sums[0].real * 2.0
     kappa += 0.0  # an exact straight line reads 0.0, not -0.0
     return Estimate(kappa, np.arctan2(t.imag, t.real), valid)
 
