@@ -116,8 +116,10 @@ class _Layout:
 
 @lru_cache(maxsize=32)
 def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
-    """The :class:`_Layout` of the bearings ``key`` (a pure function, memoised: one sensor
-    always sends the same bearings)."""
+    """Return the :class:`_Layout` of the bearings ``key``.
+
+    A pure function, memoised: one sensor always sends the same bearings.
+    """
     import numpy as np
 
     from atoms.estimators import DEFAULT_GAP_FACTOR
@@ -157,8 +159,9 @@ def _run(links: list[bool], first: int, last: int, backwards: bool) -> int:
 
 
 def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
-    """Side ray from the points ``z`` (complex ``x + iy``, law frame) of beams 0..n of the
-    first surface (beam 0 at -90 deg), all valid.
+    """Side ray from the first surface's beams 0..n (beam 0 at -90 deg), all valid.
+
+    ``z`` holds their points as complex ``x + iy`` in the law frame.
 
     A quadratic ``h = a + b s + c s^2`` is fitted by least squares in the frame of the
     total-least-squares line through the points (centred, scaled by the span), and its slope
@@ -219,37 +222,43 @@ def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
 
 def _front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
                windows: tuple[int, ...], exact: bool = False) -> "Ray | None":
-    """Front ray at local beam ``c`` of the points ``z`` (complex, law frame), whose surface
-    extends ``right`` beams before and ``left`` beams after it.
+    """Front ray at local beam ``c`` of the points ``z`` (complex ``x + iy``, law frame).
 
-    The averaged geometric estimate over the windows that fit, all at once (the tangent of
-    each window's circle at its middle point, as in :func:`atoms.estimators.geometric_curvature`).
+    Its surface extends ``right`` beams before and ``left`` beams after it.
+
+    The averaged geometric estimate over the windows that fit (curvature of each window's
+    circle and its tangent at the middle point, as :func:`atoms.estimators.geometric_curvature`
+    computes them for the whole scan).
     ``right`` and ``left`` may be capped at ``max(windows)`` (all the estimate reads) unless
     ``exact``; None when no window gives an estimate and the one-sided chord needs the
     surface's true extent on both sides (only for degenerate, coincident points).
     """
-    import numpy as np
-
     from atoms.steering import Ray
 
     reach = min(right, left)
     ws = [w for w in windows if w <= reach] or ([reach] if reach >= 1 else [])
     if ws:
-        wa = np.asarray(ws)
-        p = z[c]
-        u = p - z[c - wa]
-        v = z[c + wa] - p
-        au = np.abs(u)
-        av_c = np.abs(v) * np.abs(u + v)
-        den = au * av_c
-        ok = den > 0
-        if ok.any():
-            u, v, au, av_c, den = u[ok], v[ok], au[ok], av_c[ok], den[ok]
-            rot = -(v.conjugate() * (u + v))  # -(u+v).v + i u x v
-            k = 2.0 * rot.imag / den
-            np.abs(rot.real, out=rot.real)
-            t = complex((u * rot / av_c).sum())  # each weighted by |u|
-            return Ray(True, r0, math.atan2(t.imag, t.real), float(k.mean()))
+        # at most a few windows at one beam: Python complex arithmetic, where numpy's
+        # per-call overhead on 3-element arrays would cost several times more
+        pts = z[c - max(ws): c + max(ws) + 1].tolist()
+        mid = max(ws)
+        p = pts[mid]
+        t_sum, k_sum, count = 0j, 0.0, 0
+        for w in ws:
+            u, v = p - pts[mid - w], pts[mid + w] - p
+            chord = u + v
+            av_c = abs(v) * abs(chord)
+            den = abs(u) * av_c
+            if not den > 0:  # coincident points: no circle
+                continue
+            cross = u.real * v.imag - u.imag * v.real
+            dot = chord.real * v.real + chord.imag * v.imag
+            # the circle's tangent at p: u turned by half the arc it spans (see estimators)
+            t_sum += u * complex(abs(dot), cross) / av_c
+            k_sum += 2.0 * cross / den
+            count += 1
+        if count:
+            return Ray(True, r0, math.atan2(t_sum.imag, t_sum.real), k_sum / count)
     m = min(max(right, left), max(windows))
     if m >= 1:
         if not exact and min(left, right) >= max(windows):

@@ -129,9 +129,12 @@ class Estimate:
 
 @lru_cache(maxsize=16)
 def _bearing_terms(key: bytes, gap_factor: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per-bearing constants of a scan layout (a pure function of the bearings, memoised:
-    one sensor always sends the same bearings): the unit directions ``cos a + i sin a`` and
-    the link limit per beam spacing ``gap_factor * |a[j+1] - a[j]|``. Returned read-only."""
+    """Per-bearing constants of a scan layout, memoised and read-only.
+
+    The unit directions ``cos a + i sin a`` and the link limit per unit range of each beam
+    spacing, ``gap_factor * |a[j+1] - a[j]|``: a pure function of the bearings, and one
+    sensor always sends the same bearings.
+    """
     a = np.frombuffer(key, dtype=np.float64)
     unit = np.empty(a.size, dtype=np.complex128)
     np.cos(a, out=unit.real)
@@ -151,8 +154,11 @@ def _unit_directions(a: np.ndarray, gap_factor: float = DEFAULT_GAP_FACTOR
 def _complex_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None,
                     gap_factor: float = DEFAULT_GAP_FACTOR
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Points of a 1-D scan as complex ``x + iy`` (NaN where invalid), the valid mask, the
-    NaN-masked ranges and the per-spacing link limits of :func:`_bearing_terms`."""
+    """Points of a 1-D scan as complex ``x + iy`` (NaN where invalid).
+
+    Also returns the valid mask, the NaN-masked ranges and the link limits per unit range of
+    :func:`_bearing_terms`.
+    """
     r = np.asarray(ranges, dtype=float)
     ok = np.isfinite(r)
     ok &= r > 0
@@ -318,8 +324,9 @@ def menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def _window_index(n: int, windows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Index arrays of every window for an N-beam scan (a pure function, memoised: scans of
-    one sensor always have the same N). Returned read-only.
+    """Index arrays of every window for an N-beam scan, memoised and read-only.
+
+    A pure function (scans of one sensor always have the same N).
 
     Returns the (W, 1) windows and the (4, W, N) indices ``(n+w, n, n-w, n+w)`` (clipped to
     the scan), so one gather and one subtraction of neighbouring rows give all three sides
@@ -343,7 +350,7 @@ def _window_key(windows: Sequence[int] | int) -> tuple[int, ...]:
 
 def _sides(s: Surfaces, windows: Sequence[int] | int
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The sides of every window's triangle at once, as complex numbers ``x + iy``.
+    """Return the sides of every window's triangle at once, as complex numbers ``x + iy``.
 
     Returns ``d`` (3, W, N): ``v = P[n+w]-P[n]``, ``u = P[n]-P[n-w]`` and ``-(u+v)``; their
     lengths (3, W, N); and the (W, N) mask of windows that fit on one surface. Invalid points

@@ -27,7 +27,7 @@ from mdle.backend import Scan
 
 
 def _scan(rng: np.random.Generator, centre: tuple[float, float] = (2.0, 0.5)) -> Scan:
-    """A wall 0.6 m to the right and a cylinder of radius 0.5 m at ``centre``, 0.8 % noise."""
+    """Scan a wall 0.6 m to the right and a cylinder of radius 0.5 m at ``centre`` (0.8 % noise)."""
     b = np.radians(np.arange(-90.0, 90.5, 1.0))
     d = np.stack((np.cos(b), np.sin(b)), axis=1)
     wall = np.where(np.sin(b) < -0.05, -0.6 / np.minimum(np.sin(b), -0.05), np.inf)
