@@ -362,7 +362,7 @@ def _sides(s: Surfaces, windows: Sequence[int] | int
     if not (pts.dtype == np.float64 and pts.flags.c_contiguous):
         pts = np.ascontiguousarray(pts, dtype=np.float64)
     z = np.where(s.valid, pts.view(np.complex128).reshape(n), 0.0)
-    g = z.take(ring)
+    g = z[ring]
     d = g[:-1] - g[1:]
     return d, np.abs(d), s.reach >= w
 
@@ -382,7 +382,8 @@ def _average(kt: np.ndarray, ok: np.ndarray) -> Estimate:
     with np.errstate(divide="ignore", invalid="ignore"):
         share = 1.0 / cnt  # inf where no window fits: 0 * inf = NaN marks "no estimate"
         # divide the real and imaginary parts by the count, in real arithmetic
-        sums.view(np.float64).reshape(2, -1, 2)[...] *= share[:, None]
+        parts = sums.view(np.float64).reshape(2, -1, 2)
+        np.multiply(parts, share[:, None], out=parts)
     t = sums[1]
     kappa = sums[0].real * 2.0
     kappa += 0.0  # an exact straight line reads 0.0, not -0.0
