@@ -75,8 +75,11 @@ def dense_world(n_segments: int) -> World:
 
 @dataclass(frozen=True)
 class Timing:
-    """Microseconds per call: median and minimum over runs of each run's median call,
-    and the median over runs of each run's mean call."""
+    """Microseconds per call.
+
+    Median and minimum over runs of each run's median call, and the median over runs of
+    each run's mean call.
+    """
 
     median: float
     minimum: float
@@ -135,7 +138,7 @@ def tick_cost(world: World, calls: int, runs: int) -> Timing:
 
 
 def load() -> str:
-    """The 1, 5 and 15 minute load averages (2 cores here: above 2 means queueing)."""
+    """Return the 1, 5 and 15 minute load averages (2 cores here: above 2 means queueing)."""
     return "load average " + ", ".join(f"{x:.2f}" for x in os.getloadavg())
 
 

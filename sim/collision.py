@@ -173,9 +173,12 @@ class Collider:
         return np.abs(r, out=u)
 
     def _remake_near(self, q: complex) -> tuple[int, float]:
-        """Distances to all segments from ``q``; keep those that can be nearest within
-        _NEAR_SLACK of ``q`` (a segment farther than the nearest by 2 slack never is, the
-        distance changing no faster than the point moves). Returns (nearest, distance)."""
+        """Measure all segments from ``q`` and keep those that can be nearest near it.
+
+        Within _NEAR_SLACK of ``q`` a segment farther than the nearest by twice the slack
+        never is (a distance changes no faster than the point moves). Returns (index of
+        the nearest segment, its distance).
+        """
         d = self._segments(q, self._s0, self._e, self._proj, self._bufs)
         j = int(d.argmin())
         best = float(d[j])

@@ -150,11 +150,11 @@ class Ladar:
         return np.add(self.bearings, th, out=self._angles)
 
     def fan(self, caster: RayCaster) -> FanCaster:
-        """A fan caster for this ladar's beams in ``caster``'s world (for :meth:`scan`)."""
+        """Make a fan caster for this ladar's beams in ``caster``'s world (for :meth:`scan`)."""
         return caster.fan(self.rel, self.profile.max_range)
 
     def scan(self, fan: FanCaster, x: float, y: float, th: float, stamp: float) -> Scan:
-        """A noisy scan from a robot at ``(x, y, th)`` (the fast path; not in oracle mode).
+        """Take a noisy scan from a robot at ``(x, y, th)`` (fast path; not in oracle mode).
 
         ``fan`` comes from :meth:`fan`. The same as casting :meth:`world_angles` from
         :meth:`origin` and calling :meth:`measure`, with about a third of the numpy calls.
@@ -190,8 +190,11 @@ class Ladar:
                     max_range=p.max_range, tangents=tangents, curvatures=curvatures)
 
     def _finish(self, ranges: np.ndarray, valid: np.ndarray, stamp: float) -> Scan:
-        """Noise, quantisation and clipping, in place on ``ranges`` (``max_range`` where
-        not ``valid``, both new arrays that the scan then owns)."""
+        """Add noise, quantise and clip, in place; return the scan.
+
+        ``ranges`` (``max_range`` where not ``valid``) and ``valid`` are new arrays that
+        the scan then owns.
+        """
         p = self.profile
         if p.noise != "none" and p.sigma > 0:
             noise = self.rng.standard_normal(out=self._noise)

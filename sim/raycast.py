@@ -107,7 +107,7 @@ class RayCaster:
         self._seg_ids = np.arange(len(z0))
 
     def fan(self, rel: np.ndarray, max_range: float) -> FanCaster:
-        """A :class:`FanCaster` for a fixed fan of beams (a ladar's), with its own buffers."""
+        """Make a :class:`FanCaster` for a fixed fan of beams (a ladar's), with its buffers."""
         return FanCaster(self, rel, max_range)
 
     # ------------------------------------------------------------------ public
