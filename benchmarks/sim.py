@@ -33,18 +33,20 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 # This file is named like the package it measures: keep its own folder off the path.
+# The imports below must follow this (else ``import sim`` finds this very file), hence
+# their E402 waivers.
 _HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 
-import numpy as np
+import numpy as np  # noqa: E402 (after the path fix above)
 
-from mdle.backend import Command, Pose
-from sim.backend import SimBackend
-from sim.catalog import load_world
-from sim.ladar import LMS200, Ladar
-from sim.robot import PIONEER2DX
-from sim.shapes import Curve, Rectangle, Wall
-from sim.world import World
+from mdle.backend import Command, Pose  # noqa: E402 (after the path fix above)
+from sim.backend import SimBackend  # noqa: E402 (after the path fix above)
+from sim.catalog import load_world  # noqa: E402 (after the path fix above)
+from sim.ladar import LMS200, Ladar  # noqa: E402 (after the path fix above)
+from sim.robot import PIONEER2DX  # noqa: E402 (after the path fix above)
+from sim.shapes import Curve, Rectangle, Wall  # noqa: E402 (after the path fix above)
+from sim.world import World  # noqa: E402 (after the path fix above)
 
 
 def scattered_world(n_segments: int, seed: int = 0) -> World:
@@ -53,7 +55,8 @@ def scattered_world(n_segments: int, seed: int = 0) -> World:
     boxes = max(0, math.ceil((n_segments - 8) / 4))
     side = max(8.0, 4.0 * math.sqrt(max(boxes, 1)))
     half = side / 2
-    shapes: list = [Wall(((-half, -half), (half, -half), (half, half), (-half, half)), 0.2, True)]
+    room = Wall(((-half, -half), (half, -half), (half, half), (-half, half)), 0.2, True)
+    shapes: list[Wall | Rectangle] = [room]
     while len(shapes) - 1 < boxes:
         c = rng.uniform(-half + 1, half - 1, 2)
         if np.hypot(*c) < 3.0 + 1.0:           # keep a clear disc round the robot
@@ -67,7 +70,7 @@ def dense_world(n_segments: int) -> World:
     """Every segment within range: a wavy closed curve sampled around the robot."""
     a = np.linspace(0, 2 * math.pi, 48, endpoint=False)
     r = 5.0 + 0.5 * np.sin(5 * a)
-    pts = tuple((float(x), float(y)) for x, y in zip(r * np.cos(a), r * np.sin(a)))
+    pts = tuple((float(x), float(y)) for x, y in zip(r * np.cos(a), r * np.sin(a), strict=True))
     length = 2 * math.pi * 5.0 * 1.1
     curve = Curve(pts, thickness=0.2, closed=False, spacing=length / (n_segments / 2))
     return World(f"dense-{n_segments}", (curve,), Pose(0.0, 0.0, 0.0))
@@ -143,6 +146,7 @@ def load() -> str:
 
 
 def main() -> None:
+    """Parse the command line, time every figure and print the report."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=15, help="runs per figure")
     parser.add_argument("--calls", type=int, default=200, help="calls per run")

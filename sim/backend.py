@@ -48,8 +48,11 @@ def _wrap(a: float) -> float:
 
 @dataclass(frozen=True)
 class SimEvent:
-    """Something the simulator noticed: ``kind`` ``"collision"`` (the body touched an
-    obstacle and stalled), at sim ``time`` (s), true position (m), obstacle index and label."""
+    """Something the simulator noticed, with where and when.
+
+    ``kind`` is ``"collision"`` (the body touched an obstacle and stalled), at sim
+    ``time`` (s), true position ``x``, ``y`` (m), obstacle index and label.
+    """
 
     kind: str
     time: float

@@ -40,7 +40,7 @@ def _reference(name: str) -> World:
 
 
 def load_world(spec: str | os.PathLike[str]) -> World:
-    """A reference world by name (``corridor``, ``ellipse``, ...) or a YAML file by path.
+    """Load a reference world by name (``corridor``, ``ellipse``, ...) or a YAML file by path.
 
     Raises
     ------

@@ -141,18 +141,18 @@ class Collider:
             lower -= self._ell_bound
             near = np.flatnonzero(lower < best)
             if near.size > _FEW_ELLIPSES:
-                d, i = self._ellipses_vectorised(w, near)
-                if d < best:
-                    best, owner = d, i
+                de, i = self._ellipses_vectorised(w, near)
+                if de < best:
+                    best, owner = de, i
             elif near.size:
                 local = (w * self._ell_uconj).tolist()     # the query in each frame
                 for i in near.tolist():                     # few: plain floats are fastest
                     a, b = self._ell_axes[i]
                     lq = local[i]
                     ex, ey = ellipse_nearest_point(a, b, lq.real, lq.imag)
-                    d = math.hypot(lq.real - ex, lq.imag - ey)
-                    if d < best:
-                        best, owner = d, self._ell_owner[i]
+                    de = math.hypot(lq.real - ex, lq.imag - ey)
+                    if de < best:
+                        best, owner = de, self._ell_owner[i]
         return best, owner
 
     @staticmethod
@@ -253,7 +253,7 @@ class Collider:
         return SweepResult(tau, cx, cy, th1, False, c, owner)
 
     def _outward(self, x: float, y: float) -> tuple[float, float]:
-        """Unit vector from the nearest boundary point to ``(x, y)``."""
+        """Return the unit vector from the nearest boundary point to ``(x, y)``."""
         _, p, _ = nearest_boundary(self.parts, np.array([[x, y]]))
         dx, dy = x - float(p[0, 0]), y - float(p[0, 1])
         n = math.hypot(dx, dy)

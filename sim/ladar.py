@@ -78,7 +78,7 @@ class LadarProfile:
         return np.linspace(-self.fov / 2.0, self.fov / 2.0, self.beams)
 
     def with_overrides(self, **changes: Any) -> LadarProfile:
-        """A copy with some fields replaced (values already in SI)."""
+        """Return a copy with some fields replaced (values already in SI)."""
         return replace(self, **changes)
 
     @property
@@ -101,7 +101,13 @@ LADAR_PROFILES: dict[str, LadarProfile] = {p.name: p for p in (LMS200, LMS200_ID
 
 
 def ladar_profile(name: str) -> LadarProfile:
-    """The named ladar profile; raises WorldError listing the known names."""
+    """Return the named ladar profile.
+
+    Raises
+    ------
+    WorldError
+        Unknown name; the message lists the known names.
+    """
     try:
         return LADAR_PROFILES[name]
     except KeyError:

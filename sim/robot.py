@@ -34,7 +34,7 @@ __all__ = [
     "robot_profile",
 ]
 
-_GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(8)))
+_GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(8), strict=True))
 _MAX_TURN_PER_PIECE = 0.25  # rad: keeps the quadrature error far below 1e-12
 
 
@@ -98,7 +98,7 @@ class RobotProfile:
                            radius=self.radius)
 
     def with_overrides(self, **changes: Any) -> RobotProfile:
-        """A copy with some fields replaced (values already in SI)."""
+        """Return a copy with some fields replaced (values already in SI)."""
         return replace(self, **changes)
 
 
@@ -138,7 +138,13 @@ ROBOT_PROFILES: dict[str, RobotProfile] = {p.name: p for p in (PIONEER2DX, IDEAL
 
 
 def robot_profile(name: str) -> RobotProfile:
-    """The named robot profile; raises WorldError listing the known names."""
+    """Return the named robot profile.
+
+    Raises
+    ------
+    WorldError
+        Unknown name; the message lists the known names.
+    """
     try:
         return ROBOT_PROFILES[name]
     except KeyError:

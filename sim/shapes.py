@@ -90,8 +90,10 @@ class Parts:
     def make(segments: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
              arcs: list[tuple[Point, float, float, float, float]] | None = None,
              ellipses: list[tuple[Point, float, float, float]] | None = None) -> Parts:
-        """Build parts from segment arrays, arc tuples ``(center, r, start, sweep, side)``
-        and ellipse tuples ``(center, a, b, angle)``."""
+        """Build parts from segment arrays, arc tuples and ellipse tuples.
+
+        Arcs are ``(center, r, start, sweep, side)``; ellipses ``(center, a, b, angle)``.
+        """
         if segments is None:
             segments = (np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0))
         arcs = arcs or []
@@ -184,7 +186,7 @@ class Polygon:
     kind = "polygon"
 
     def geometry(self) -> BaseGeometry:
-        """The shapely polygon."""
+        """Return the shapely polygon."""
         import shapely
 
         return shapely.Polygon(self.points)
@@ -211,7 +213,7 @@ class Rectangle:
         return local @ _rot(self.angle).T + np.asarray(self.center, dtype=float)
 
     def geometry(self) -> BaseGeometry:
-        """The shapely polygon."""
+        """Return the shapely polygon."""
         import shapely
 
         return shapely.Polygon(self.corners())
@@ -231,7 +233,7 @@ class Circle:
     kind = "circle"
 
     def geometry(self) -> BaseGeometry:
-        """A shapely polygon approximating the disc (plots only)."""
+        """Return a shapely polygon approximating the disc (plots only)."""
         import shapely
 
         return shapely.Point(self.center).buffer(self.radius, quad_segs=_CIRCLE_QUAD_SEGS)
@@ -252,7 +254,7 @@ class Ellipse:
     kind = "ellipse"
 
     def geometry(self) -> BaseGeometry:
-        """A shapely polygon approximating the ellipse (plots only)."""
+        """Return a shapely polygon approximating the ellipse (plots only)."""
         import shapely
 
         t = np.linspace(0.0, _TAU, 4 * _CIRCLE_QUAD_SEGS, endpoint=False)
@@ -279,7 +281,7 @@ class Wall:
     kind = "wall"
 
     def geometry(self) -> BaseGeometry:
-        """The shapely polygon of the wall (with a hole when closed)."""
+        """Return the shapely polygon of the wall (with a hole when closed)."""
         import shapely
 
         pts = list(self.points)
@@ -294,8 +296,11 @@ class Wall:
 
 @dataclass(frozen=True)
 class Arc:
-    """A curved wall: the ring sector between ``radius -+ thickness/2`` around ``center``,
-    from angle ``start`` counter-clockwise to ``end`` (radians)."""
+    """A curved wall: a ring sector around ``center``.
+
+    The sector lies between ``radius -+ thickness/2``, from angle ``start``
+    counter-clockwise to ``end`` (radians).
+    """
 
     center: Point
     radius: float
@@ -312,7 +317,7 @@ class Arc:
         return s if s > 0 else _TAU
 
     def geometry(self) -> BaseGeometry:
-        """A shapely polygon approximating the ring sector (plots only)."""
+        """Return a shapely polygon approximating the ring sector (plots only)."""
         import shapely
 
         n = max(8, int(4 * _CIRCLE_QUAD_SEGS * self.sweep / _TAU))
@@ -381,9 +386,10 @@ def _menger(prev: np.ndarray, cur: np.ndarray, nxt: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Curve:
-    """A smooth curve through control points (centripetal Catmull-Rom), sampled every
-    ``spacing`` metres: a wall of the given thickness, or, when ``closed`` and without a
-    thickness, a solid smooth blob.
+    """A smooth curve through control points (centripetal Catmull-Rom).
+
+    Sampled every ``spacing`` metres: a wall of the given thickness, or, when ``closed``
+    and without a thickness, a solid smooth blob.
 
     Faces are straight segments between samples; each carries the curvature of the
     sampled face (circle through neighbouring samples) as ground truth, accurate to
@@ -429,7 +435,7 @@ class Curve:
         return ring, corner
 
     def geometry(self) -> BaseGeometry:
-        """The shapely polygon of the sampled curve (exactly the faces the rays see)."""
+        """Return the shapely polygon of the sampled curve (exactly the faces the rays see)."""
         import shapely
 
         if self.closed and self.thickness is not None:

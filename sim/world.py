@@ -142,7 +142,7 @@ class World:
         return Nearest(d, p, own)
 
     def inside(self, xy: np.ndarray | tuple[float, float]) -> bool | np.ndarray:
-        """True where ``xy`` lies inside an obstacle."""
+        """Tell where ``xy`` lies inside an obstacle (True inside)."""
         import shapely
 
         q = np.asarray(xy, dtype=float)

@@ -1,4 +1,4 @@
-"""World files: YAML (metres and degrees) to a validated :class:`sim.world.World`.
+r"""World files: YAML (metres and degrees) to a validated :class:`sim.world.World`.
 
 Loading validates everything and reports the first problem as a
 :class:`mdle.errors.WorldError` naming the file, the line and column, and the key path
@@ -14,7 +14,7 @@ The format is documented in ``docs/worlds.md``.
 >>> w.name, round(w.start_pose.theta, 6), type(w.obstacles[0]).__name__
 ('demo', 1.570796, 'Circle')
 >>> try:
-...     parse_world("obstacles:\\n  - {type: circle, center: [3, 0]}\\n", file="bad.yaml")
+...     parse_world("obstacles:\n  - {type: circle, center: [3, 0]}\n", file="bad.yaml")
 ... except WorldError as err:
 ...     print(err)
 bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, radius)
@@ -291,7 +291,9 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
     else:
         raise doc.fail(path, "missing key `thickness` (an open curve is a wall and needs one)")
     spacing = _number(doc, P("spacing"), v.get("spacing", 0.05), size=True)
-    length = sum(math.dist(a, b) for a, b in zip(pts, pts[1:] + (pts[:1] if closed else ())))
+    # An open curve has one chord fewer than points: the shorter side ends the pairs.
+    ends = pts[1:] + (pts[:1] if closed else ())
+    length = sum(math.dist(a, b) for a, b in zip(pts, ends, strict=False))
     if 2 * length / spacing > _MAX_CURVE_SAMPLES:   # Catmull-Rom runs up to ~2x the chords
         least = 2 * length / _MAX_CURVE_SAMPLES
         raise doc.fail(P("spacing"), f"too fine for a curve {length:.3g} m long (at most "
