@@ -378,16 +378,13 @@ def _average(kt: np.ndarray, ok: np.ndarray) -> Estimate:
     np.copyto(kt[0].imag, ok)
     sums = kt[:, 0] if ok.shape[0] == 1 else np.add.reduce(kt, axis=1)  # (2, N)
     cnt = sums[0].imag
-    valid = cnt > 0
     with np.errstate(divide="ignore", invalid="ignore"):
-        share = 1.0 / cnt  # inf where no window fits: 0 * inf = NaN marks "no estimate"
-        # divide the real and imaginary parts by the count, in real arithmetic
-        parts = sums.view(np.float64).reshape(2, -1, 2)
-        np.multiply(parts, share[:, None], out=parts)
-    t = sums[1]
-    kappa = sums[0].real * 2.0
+        share = 2.0 / cnt  # inf where no window fits: 0 * inf = NaN marks "no estimate"
+        kappa = sums[0].real * share
+        hole = share * 0.0  # 0, or NaN where no window fits
     kappa += 0.0  # an exact straight line reads 0.0, not -0.0
-    return Estimate(kappa, np.arctan2(t.imag, t.real), valid)
+    t = sums[1]  # the angle of the sum is the angle of the mean
+    return Estimate(kappa, np.arctan2(t.imag + hole, t.real), cnt > 0)
 
 
 def _masked_inverse(den: np.ndarray, ok: np.ndarray) -> np.ndarray:
