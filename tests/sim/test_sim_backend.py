@@ -12,14 +12,22 @@ from mdle.backend import Backend, ClockMode, Command, Pose
 from mdle.errors import BackendError, WorldError
 from sim.backend import SimBackend
 from sim.ladar import Ladar, LadarProfile
-from sim.robot import IDEAL, PIONEER2DX, OdometryNoise, Phase, integrate, plan_phases
+from sim.robot import (
+    IDEAL,
+    PIONEER2DX,
+    OdometryNoise,
+    Phase,
+    RobotProfile,
+    integrate,
+    plan_phases,
+)
 from sim.shapes import Circle, Rectangle, Wall
 from sim.world import World
 
 
-def wall_world(**kw: object) -> World:
+def wall_world(robot: RobotProfile = PIONEER2DX) -> World:
     """A thin (1 mm) wall across the x axis at x = 5."""
-    return World("thin", obstacles=(Rectangle((5.0, 0.0), (0.001, 20.0)),), **kw)  # type: ignore[arg-type]
+    return World("thin", obstacles=(Rectangle((5.0, 0.0), (0.001, 20.0)),), robot=robot)
 
 
 def test_implements_the_backend_protocol() -> None:
@@ -249,14 +257,18 @@ def test_scan_rate_and_stamps() -> None:
     stamps = []
     for _ in range(50):
         b.advance(0.02)
-        stamps.append(b.observe().scan.stamp)           # type: ignore[union-attr]
+        scan = b.observe().scan
+        assert scan is not None                         # the corridor's robot has a ladar
+        stamps.append(scan.stamp)
     distinct = sorted(set(stamps))
     np.testing.assert_allclose(distinct, [0.1 * k for k in range(11)], atol=1e-12)
     # A scan taken mid-step sees the robot where it was at the scan instant.
     b2 = SimBackend(sim.load_world("corridor"))
     b2.command(Command(0.3, 0.0))
     b2.advance(0.15)                                    # scan at 0.1, robot at 0.15
-    assert b2.observe().scan.stamp == pytest.approx(0.1)  # type: ignore[union-attr]
+    scan = b2.observe().scan
+    assert scan is not None
+    assert scan.stamp == pytest.approx(0.1)
 
 
 def _run(seed: int, drift: bool) -> list[tuple[float, ...]]:
@@ -266,13 +278,13 @@ def _run(seed: int, drift: bool) -> list[tuple[float, ...]]:
         world = World(world.name, world.obstacles, world.start_pose, world.seed, noisy,
                       world.ladar)
     b = SimBackend(world, seed=seed)
-    out = []
+    out: list[tuple[float, ...]] = []
     for k in range(40):
         b.command(Command(0.4, 0.3 * math.sin(0.2 * k)))
         b.advance(0.1)
         o = b.observe()
-        out.append((o.pose.x, o.pose.y, o.pose.theta, o.truth["x"],
-                    float(o.scan.ranges.sum())))  # type: ignore[union-attr]
+        assert o.scan is not None
+        out.append((o.pose.x, o.pose.y, o.pose.theta, o.truth["x"], float(o.scan.ranges.sum())))
     return out
 
 

@@ -55,6 +55,7 @@ def test_world_clearance_and_nearest_boundary() -> None:
     assert math.isclose(world.clearance((0.0, 3.0), radius=0.5), 0.5, abs_tol=1e-12)
     assert math.isclose(world.clearance((5.0, 0.5), radius=0.0), -0.5, abs_tol=1e-12)
     many = world.nearest_boundary(np.array([[0.0, 0.0], [-3.0, 0.0]]))
+    assert isinstance(many.distance, np.ndarray)
     assert many.distance.shape == (2,) and many.point.shape == (2, 2)
 
 

@@ -8,14 +8,14 @@ import numpy as np
 import pytest
 
 from sim.raycast import RayCaster
-from sim.shapes import Arc, Circle, Curve, Ellipse, Parts, Polygon, Rectangle, Wall
+from sim.shapes import Arc, Circle, Curve, Ellipse, Parts, Polygon, Rectangle, Shape, Wall
 from sim.world import World
 
 TOL = 1e-9
 
 
-def caster_of(*shapes: object) -> RayCaster:
-    return RayCaster(Parts.concat([s.parts() for s in shapes]))  # type: ignore[attr-defined]
+def caster_of(*shapes: Shape) -> RayCaster:
+    return RayCaster(Parts.concat([s.parts() for s in shapes]))
 
 
 def test_circle_range_tangent_curvature_exact() -> None:
@@ -32,6 +32,7 @@ def test_circle_range_tangent_curvature_exact() -> None:
     tca = d @ w
     expected = tca - np.sqrt(R * R - (dist * dist - tca * tca))
     assert hits.hit.all()
+    assert hits.curvatures is not None and hits.tangents is not None   # detail is the default
     np.testing.assert_allclose(hits.ranges, expected, rtol=0, atol=TOL)
     np.testing.assert_allclose(hits.curvatures, -1.0 / R, rtol=0, atol=TOL)
     # Clockwise tangent: perpendicular to the radius, rotated by -pi/2.
@@ -45,6 +46,7 @@ def test_circle_misses_outside_cone() -> None:
     hits = caster_of(Circle((5.0, 0.0), 1.0)).cast(np.zeros(2), np.array([0.3, -0.3, math.pi]))
     assert not hits.hit.any()
     assert np.isinf(hits.ranges).all()
+    assert hits.tangents is not None and hits.curvatures is not None
     assert np.isnan(hits.tangents).all() and np.isnan(hits.curvatures).all()
 
 
@@ -74,6 +76,7 @@ def test_ellipse_range_and_curvature_exact() -> None:
     np.testing.assert_allclose(hits.ranges, hi, rtol=0, atol=TOL)
     np.testing.assert_allclose(f(o + hits.ranges[:, None] * d), 0.0, atol=1e-12)
     # Curvature from the parametric formula at the hit point.
+    assert hits.curvatures is not None
     q = o + hits.ranges[:, None] * d - c
     t = np.arctan2((q @ v) / b, (q @ u) / a)
     kappa = -a * b / (a * a * np.sin(t) ** 2 + b * b * np.cos(t) ** 2) ** 1.5
@@ -93,6 +96,7 @@ def test_angled_wall_exact() -> None:
     d = np.column_stack([np.cos(angles), np.sin(angles)])
     expected = c0 / (d @ n)
     assert hits.hit.all()
+    assert hits.curvatures is not None and hits.tangents is not None
     np.testing.assert_allclose(hits.ranges, expected, rtol=0, atol=TOL)
     np.testing.assert_allclose(hits.curvatures, 0.0, atol=0)
     # Obstacle on the right: travelling along the near face, the wall is to the right.
@@ -110,6 +114,7 @@ def test_concave_arc_inside_ring() -> None:
     tca = d @ np.array([-1.0, 0.0])
     expected = tca + np.sqrt(r * r - (1.0 - tca * tca))
     np.testing.assert_allclose(hits.ranges, expected, atol=TOL)
+    assert hits.curvatures is not None
     np.testing.assert_allclose(hits.curvatures, 1.0 / r, atol=TOL)
 
 
@@ -183,12 +188,14 @@ def test_curve_faces_carry_sampled_curvature() -> None:
     blob = Curve(pts, thickness=None, closed=True, spacing=0.02)
     hits = caster_of(blob).cast(np.array([-6.0, 0.0]), np.linspace(-0.2, 0.2, 21))
     assert hits.hit.all()
+    assert hits.curvatures is not None
     assert np.all(np.abs(hits.curvatures + 0.5) < 0.03)
 
 
 def test_rectangle_owner_and_orientation() -> None:
     world = World("two", obstacles=(Circle((0.0, 5.0), 1.0), Rectangle((5.0, 0.0), (1.0, 1.0))))
     hits = world.cast((0.0, 0.0), [0.0, math.pi / 2, math.pi])
+    assert hits.owner is not None and hits.tangents is not None
     assert hits.owner.tolist() == [1, 0, -1]
     # Facing the rectangle's west face (x = 4.5) from the west: obstacle on the right means
     # travelling north along it.
@@ -202,9 +209,11 @@ def test_closed_curve_wall_faces_curvature_both_sides() -> None:
     world = World("ring", obstacles=(ring,))
     inside = world.cast((0.0, 0.0), np.linspace(0, 6, 13))
     assert inside.hit.all()
+    assert inside.curvatures is not None
     np.testing.assert_allclose(inside.ranges, 2.9, atol=2e-3)
     np.testing.assert_allclose(inside.curvatures, 1 / 2.9, atol=0.02)     # concave inner face
     outside = world.cast((5.0, 0.0), [math.pi])
+    assert outside.curvatures is not None
     np.testing.assert_allclose(outside.curvatures, -1 / 3.1, atol=0.02)   # convex outer face
 
 
@@ -224,7 +233,7 @@ def test_polygons_agree_with_shapely_intersections() -> None:
         o = o + 0.5
     angles = np.linspace(-math.pi, math.pi, 721)
     hits = world.cast(o, angles)
-    for a, r, h in zip(angles, hits.ranges, hits.hit):
+    for a, r, h in zip(angles, hits.ranges, hits.hit, strict=True):
         ray = shapely.LineString([o, o + 50 * np.array([math.cos(a), math.sin(a)])])
         inter = ray.intersection(union.boundary)
         if inter.is_empty:

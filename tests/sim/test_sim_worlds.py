@@ -9,6 +9,7 @@ import pytest
 
 import sim
 from mdle.errors import WorldError
+from sim.shapes import Circle, Ellipse
 from sim.world_yaml import parse_world
 
 REFERENCE = {"arrow", "cabinet", "corridor", "default", "ellipse", "empty", "garden", "hexagon",
@@ -46,6 +47,7 @@ def test_paper_shapes_start_on_a_collision_course(name: str) -> None:
 
 def test_paper_shape_dimensions() -> None:
     ell = sim.load_world("ellipse").obstacles[0]
+    assert isinstance(ell, Ellipse)
     assert ell.axes == (4.0, 2.0)
     u = sim.load_world("u-shape").geometry
     x0, y0, x1, y1 = u.bounds
@@ -76,7 +78,8 @@ def test_load_world_by_path(tmp_path: Path) -> None:
     p.write_text("obstacles:\n  - {type: circle, center: [3, 0], radius: 1}\n")
     world = sim.load_world(p)
     assert world.name == "mine" and world.source == str(p)
-    assert sim.load_world(str(p)).obstacles[0].radius == 1.0
+    circle = sim.load_world(str(p)).obstacles[0]
+    assert isinstance(circle, Circle) and circle.radius == 1.0
 
 
 def test_numbers_written_without_a_dot_are_numbers() -> None:
@@ -179,7 +182,7 @@ def test_missing_world_file() -> None:
 def test_world_is_immutable() -> None:
     world = sim.load_world("square")
     with pytest.raises(AttributeError):
-        world.name = "other"  # type: ignore[misc]
+        world.name = "other"  # type: ignore[misc]  # writing a frozen field is the point
 
 
 def test_ladar_must_sit_on_the_body() -> None:
