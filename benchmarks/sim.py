@@ -50,7 +50,7 @@ from sim.world import World  # noqa: E402 (after the path fix above)
 
 
 def scattered_world(n_segments: int, seed: int = 0) -> World:
-    """About ``n_segments`` segments: a room (8) plus 4-segment boxes at fixed density."""
+    """Build about ``n_segments`` segments: a room (8) plus 4-segment boxes at fixed density."""
     rng = np.random.default_rng(seed)
     boxes = max(0, math.ceil((n_segments - 8) / 4))
     side = max(8.0, 4.0 * math.sqrt(max(boxes, 1)))
@@ -67,7 +67,7 @@ def scattered_world(n_segments: int, seed: int = 0) -> World:
 
 
 def dense_world(n_segments: int) -> World:
-    """Every segment within range: a wavy closed curve sampled around the robot."""
+    """Build a world with every segment within range: a wavy closed curve round the robot."""
     a = np.linspace(0, 2 * math.pi, 48, endpoint=False)
     r = 5.0 + 0.5 * np.sin(5 * a)
     pts = tuple((float(x), float(y)) for x, y in zip(r * np.cos(a), r * np.sin(a), strict=True))
@@ -110,7 +110,7 @@ def time_calls(fn: Callable[[], object], calls: int, runs: int) -> Timing:
 
 
 def scan_cost(world: World, calls: int, runs: int) -> Timing:
-    """One scan as :class:`sim.backend.SimBackend` takes it (ray cast, noise, rounding)."""
+    """Time one scan as :class:`sim.backend.SimBackend` takes it (ray cast, noise, rounding)."""
     ladar = Ladar(LMS200, np.random.default_rng(0), mount=PIONEER2DX.ladar_mount)
     fan = ladar.fan(world.caster)
     headings = np.linspace(-math.pi, math.pi, 64, endpoint=False).tolist()
@@ -125,7 +125,7 @@ def scan_cost(world: World, calls: int, runs: int) -> Timing:
 
 
 def tick_cost(world: World, calls: int, runs: int) -> Timing:
-    """observe, command, advance(0.1 s): the robot drives ~1 m circles round its start."""
+    """Time observe, command, advance(0.1 s): the robot drives ~1 m circles round its start."""
     backend = SimBackend(world, seed=0)
     k = [0]
 

@@ -146,7 +146,7 @@ class SimBackend:
 
     # ------------------------------------------------------------------ protocol
     def observe(self) -> Observation:
-        """Odometry pose, measured velocities, newest scan, flags and ground truth."""
+        """Report odometry pose, measured velocities, newest scan, flags and ground truth."""
         return Observation(
             time=self._t,
             pose=Pose(self._ox, self._oy, _wrap(self._oth)),
@@ -169,7 +169,7 @@ class SimBackend:
         self._cmd = Command(v, w)
 
     def advance(self, dt: float) -> float:
-        """Let ``dt`` seconds of simulated time pass; returns 0 (never late)."""
+        """Let ``dt`` seconds of simulated time pass; return 0 (never late)."""
         if not (dt >= 0.0 and math.isfinite(dt)):
             raise BackendError(f"advance(dt) needs a finite dt >= 0, got {dt}")
         if dt == 0.0:

@@ -28,7 +28,7 @@ def _folder() -> resources.abc.Traversable:
 
 
 def list_worlds() -> list[str]:
-    """Names of the reference worlds, sorted."""
+    """Return the names of the reference worlds, sorted."""
     return sorted(p.name[:-5] for p in _folder().iterdir() if p.name.endswith(".yaml"))
 
 
@@ -63,5 +63,5 @@ def load_world(spec: str | os.PathLike[str]) -> World:
 
 
 def world_descriptions() -> list[tuple[str, str]]:
-    """(name, one-line description) of every reference world."""
+    """Return (name, one-line description) of every reference world."""
     return [(n, _reference(n).description) for n in list_worlds()]

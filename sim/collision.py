@@ -105,7 +105,7 @@ class Collider:
         self._ell_owner = parts.ell_owner.tolist()
 
     def distance(self, x: float, y: float) -> tuple[float, int]:
-        """Distance from the point to the nearest boundary, and that obstacle's index."""
+        """Return the distance from the point to the nearest boundary, and that obstacle's index."""
         best, owner = math.inf, -1
         P = self.parts
         q = complex(x, y)
@@ -162,7 +162,7 @@ class Collider:
     @staticmethod
     def _segments(q: complex, s0: np.ndarray, e: np.ndarray, proj: np.ndarray,
                   bufs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
-        """Distances from ``q`` to the segments ``s0 + [0, 1] e`` (written into a buffer)."""
+        """Measure from ``q`` to the segments ``s0 + [0, 1] e`` (written into a buffer)."""
         w, r, u = bufs
         np.subtract(q, s0, out=w)
         ur = np.multiply(w, proj, out=r).real          # position of q along each segment
@@ -189,7 +189,7 @@ class Collider:
         return j, best
 
     def _ellipses_vectorised(self, w: np.ndarray, near: np.ndarray) -> tuple[float, int]:
-        """(distance, owner) of the nearest of many ellipses ``near``; ``w`` = q - centres."""
+        """Return (distance, owner) of the nearest of ellipses ``near``; ``w`` = q - centres."""
         local = w[near] * self._ell_uconj[near]
         axes = self.parts.ell_axes[near]
         ex, ey = ellipse_nearest(axes[:, 0], axes[:, 1], local.real, local.imag)
@@ -198,7 +198,7 @@ class Collider:
         return float(d[j]), int(self.parts.ell_owner[near[j]])
 
     def clearance(self, x: float, y: float) -> tuple[float, int]:
-        """Distance from the body (disc) to the nearest obstacle, and that obstacle."""
+        """Return the distance from the body (disc) to the nearest obstacle, and that obstacle."""
         d, owner = self.distance(x, y)
         return d - self.radius, owner
 

@@ -29,7 +29,7 @@ _NEWTON_STEPS = 60  # an upper bound; outside points converge in a handful
 
 def ellipse_nearest(a: np.ndarray, b: np.ndarray, y0: np.ndarray, y1: np.ndarray
                     ) -> tuple[np.ndarray, np.ndarray]:
-    """Nearest point on the axis-aligned ellipse ``(x/a)^2 + (y/b)^2 = 1`` to ``(y0, y1)``.
+    """Find the nearest point on the axis-aligned ellipse ``(x/a)^2 + (y/b)^2 = 1`` to ``(y0, y1)``.
 
     Works for points inside and outside. Arrays broadcast together; returns ``(x, y)``.
     For one point, :func:`ellipse_nearest_point` gives the same answer about twenty
@@ -85,7 +85,7 @@ def ellipse_nearest(a: np.ndarray, b: np.ndarray, y0: np.ndarray, y1: np.ndarray
 
 
 def ellipse_nearest_point(a: float, b: float, y0: float, y1: float) -> tuple[float, float]:
-    """:func:`ellipse_nearest` for one point, in plain floats (the per-tick clearance).
+    """Run :func:`ellipse_nearest` for one point, in plain floats (the per-tick clearance).
 
     Parameters
     ----------
@@ -131,7 +131,7 @@ def ellipse_nearest_point(a: float, b: float, y0: float, y1: float) -> tuple[flo
 
 def nearest_boundary(parts: Parts, xy: np.ndarray, bound: float = math.inf
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Distance from each point to the nearest boundary, that point, and its obstacle.
+    """Find the distance from each point to the nearest boundary, that point, and its obstacle.
 
     Parameters
     ----------

@@ -74,7 +74,7 @@ class LadarProfile:
     source: str = ""
 
     def bearings(self) -> np.ndarray:
-        """(beams,) bearings in the ladar frame, radians, from ``-fov/2`` to ``+fov/2``."""
+        """Return the (beams,) bearings in the ladar frame, radians, ``-fov/2`` to ``+fov/2``."""
         return np.linspace(-self.fov / 2.0, self.fov / 2.0, self.beams)
 
     def with_overrides(self, **changes: Any) -> LadarProfile:
@@ -146,13 +146,13 @@ class Ladar:
         self._angles = np.empty(self.profile.beams)
 
     def origin(self, x: float, y: float, th: float) -> tuple[float, float]:
-        """World position of the ladar on a robot at ``(x, y, th)``."""
+        """Return the world position of the ladar on a robot at ``(x, y, th)``."""
         mx, my, _ = self.mount
         c, s = math.cos(th), math.sin(th)
         return x + c * mx - s * my, y + s * mx + c * my
 
     def world_angles(self, th: float) -> np.ndarray:
-        """Beam directions in the world frame for heading ``th`` (reused buffer)."""
+        """Return the beam directions in the world frame for heading ``th`` (reused buffer)."""
         return np.add(self.bearings, th, out=self._angles)
 
     def fan(self, caster: RayCaster) -> FanCaster:

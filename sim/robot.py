@@ -166,11 +166,11 @@ class Phase:
     a_w: float
 
     def v_at(self, t: float) -> float:
-        """Speed at time ``t`` into the phase."""
+        """Return the speed at time ``t`` into the phase."""
         return self.v0 + self.a_v * t
 
     def w_at(self, t: float) -> float:
-        """Turn rate at time ``t`` into the phase."""
+        """Return the turn rate at time ``t`` into the phase."""
         return self.w0 + self.a_w * t
 
     @property
@@ -180,7 +180,7 @@ class Phase:
 
 
 def _ramp(cur: float, target: float, accel: float, decel: float) -> tuple[float, float]:
-    """(rate, time to reach) for one axis; slowing down uses ``decel``."""
+    """Return (rate, time to reach) for one axis; slowing down uses ``decel``."""
     diff = target - cur
     if diff == 0.0:
         return 0.0, 0.0
@@ -224,7 +224,7 @@ def _sinc(x: float) -> float:
 
 def integrate(x: float, y: float, th: float, phase: Phase, tau: float
               ) -> tuple[float, float, float]:
-    """Pose after ``tau`` seconds of ``phase`` from ``(x, y, th)`` (exact)."""
+    """Return the pose after ``tau`` seconds of ``phase`` from ``(x, y, th)`` (exact)."""
     if tau <= 0.0:
         return x, y, th
     if phase.a_v == 0.0 and phase.a_w == 0.0:

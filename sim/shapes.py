@@ -141,7 +141,7 @@ class Parts:
 
 
 def polygon_parts(geom: BaseGeometry, smooth: bool = False) -> Parts:
-    """Segments of a shapely (Multi)Polygon's rings, oriented with the solid on the right.
+    """Split a shapely (Multi)Polygon's rings into segments, solid on the right.
 
     shapely's ``orient(sign=1)`` puts the interior on the left of every ring (exterior
     counter-clockwise, holes clockwise); reversing each ring puts it on the right.
@@ -192,7 +192,7 @@ class Polygon:
         return shapely.Polygon(self.points)
 
     def parts(self) -> Parts:
-        """Boundary segments, clockwise (solid on the right), curvature 0."""
+        """Return the boundary segments, clockwise (solid on the right), curvature 0."""
         return polygon_parts(self.geometry())
 
 
@@ -207,7 +207,7 @@ class Rectangle:
     kind = "rectangle"
 
     def corners(self) -> np.ndarray:
-        """(4, 2) corners, counter-clockwise."""
+        """Return the (4, 2) corners, counter-clockwise."""
         w, h = self.size[0] / 2.0, self.size[1] / 2.0
         local = np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
         return local @ _rot(self.angle).T + np.asarray(self.center, dtype=float)
@@ -219,7 +219,7 @@ class Rectangle:
         return shapely.Polygon(self.corners())
 
     def parts(self) -> Parts:
-        """Four boundary segments, clockwise, curvature 0."""
+        """Return the four boundary segments, clockwise, curvature 0."""
         return polygon_parts(self.geometry())
 
 
@@ -239,7 +239,7 @@ class Circle:
         return shapely.Point(self.center).buffer(self.radius, quad_segs=_CIRCLE_QUAD_SEGS)
 
     def parts(self) -> Parts:
-        """One full convex arc."""
+        """Return one full convex arc."""
         return Parts.make(arcs=[(self.center, self.radius, 0.0, _TAU, -1.0)])
 
 
@@ -262,7 +262,7 @@ class Ellipse:
         return shapely.Polygon(local @ _rot(self.angle).T + np.asarray(self.center))
 
     def parts(self) -> Parts:
-        """One analytic ellipse."""
+        """Return one analytic ellipse."""
         return Parts.make(ellipses=[(self.center, self.axes[0], self.axes[1], self.angle)])
 
 
@@ -290,7 +290,7 @@ class Wall:
                            mitre_limit=10.0)
 
     def parts(self) -> Parts:
-        """Boundary segments of the buffered polyline, solid on the right."""
+        """Return the boundary segments of the buffered polyline, solid on the right."""
         return polygon_parts(self.geometry())
 
 
@@ -331,7 +331,7 @@ class Arc:
         return shapely.Polygon(np.vstack([outer, inner]))
 
     def parts(self) -> Parts:
-        """Outer arc (convex), inner arc (concave) and, unless closed, two end caps."""
+        """Return the outer arc (convex), inner arc (concave) and, unless closed, two end caps."""
         ro, ri = self.radius + self.thickness / 2, self.radius - self.thickness / 2
         arcs = [(self.center, ro, self.start, self.sweep, -1.0),
                 (self.center, ri, self.start, self.sweep, +1.0)]
@@ -375,7 +375,7 @@ def _catmull_rom(points: np.ndarray, closed: bool, spacing: float) -> np.ndarray
 
 
 def _menger(prev: np.ndarray, cur: np.ndarray, nxt: np.ndarray) -> np.ndarray:
-    """Signed curvature of the circle through three points (positive for a left turn)."""
+    """Return the signed curvature of the circle through three points (positive: left turn)."""
     a = cur - prev
     b = nxt - cur
     cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
@@ -404,11 +404,11 @@ class Curve:
     kind = "curve"
 
     def samples(self) -> np.ndarray:
-        """(K, 2) samples of the centre line (without repeating the first when closed)."""
+        """Return (K, 2) samples of the centre line (without repeating the first when closed)."""
         return _catmull_rom(np.asarray(self.points, dtype=float), self.closed, self.spacing)
 
     def _ring(self) -> tuple[np.ndarray, np.ndarray]:
-        """Clockwise boundary ring (K, 2), and a mask of vertices that are sharp corners."""
+        """Return the clockwise boundary ring (K, 2) and a mask of its sharp corners."""
         c = self.samples()
         if self.thickness is None:  # a closed solid blob
             ring, corner = c, np.zeros(len(c), dtype=bool)
@@ -445,7 +445,7 @@ class Curve:
         return shapely.Polygon(ring)
 
     def parts(self) -> Parts:
-        """Faces as segments, each with its sampled curvature; flat end caps get 0."""
+        """Return the faces as segments, each with its sampled curvature; flat end caps get 0."""
         if self.closed and self.thickness is not None:
             return polygon_parts(self.geometry(), smooth=True)
         ring, corner = self._ring()

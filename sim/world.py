@@ -122,7 +122,7 @@ class World:
     # ------------------------------------------------------------- ground truth
     def cast(self, origin_xy: np.ndarray | tuple[float, float], angles: np.ndarray | list[float],
              max_range: float = math.inf) -> RayHits:
-        """Exact ray cast from ``origin_xy`` at world-frame ``angles`` (radians).
+        """Cast exact rays from ``origin_xy`` at world-frame ``angles`` (radians).
 
         Returns ranges (inf for misses), hit mask, boundary tangents (obstacle on the
         right, world frame), signed curvatures and the obstacle index of every ray. Rays
@@ -134,7 +134,7 @@ class World:
                                 detail=True)
 
     def nearest_boundary(self, xy: np.ndarray | tuple[float, float]) -> Nearest:
-        """Nearest obstacle boundary point to ``xy`` ((2,) or (N, 2), metres)."""
+        """Find the nearest obstacle boundary point to ``xy`` ((2,) or (N, 2), metres)."""
         q = np.asarray(xy, dtype=float)
         d, p, own = nearest_boundary(self.parts, q.reshape(-1, 2))
         if q.ndim == 1:
@@ -154,7 +154,7 @@ class World:
 
     def clearance(self, xy: np.ndarray | tuple[float, float], radius: float = 0.0
                   ) -> float | np.ndarray:
-        """Distance from a disc of ``radius`` at ``xy`` to the nearest obstacle, metres.
+        """Measure from a disc of ``radius`` at ``xy`` to the nearest obstacle, metres.
 
         Negative when the disc overlaps an obstacle (by the overlap depth, or minus the
         distance to the boundary plus the radius when the centre is inside one).

@@ -401,7 +401,7 @@ def _start(doc: _Doc, path: str, v: Any) -> Pose:
 
 
 def parse_world(text: str, file: str = "<string>", default_name: str = "world") -> Any:
-    """Parse and validate world YAML text; returns a :class:`sim.world.World`.
+    """Parse and validate world YAML text into a :class:`sim.world.World`.
 
     Raises
     ------
@@ -472,7 +472,7 @@ def _describe(shape: Any, index: int) -> str:
 
 
 def read_world(path: str | os.PathLike[str]) -> Any:
-    """Read and validate a world file; raises WorldError if unreadable or invalid."""
+    """Read and validate a world file (WorldError if unreadable or invalid)."""
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")

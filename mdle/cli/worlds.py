@@ -29,7 +29,7 @@ def add_parser(subparsers: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """List or draw; returns the exit code."""
+    """List or draw worlds; return the exit code."""
     if getattr(args, "action", None) == "show":
         return _show(args)
     from sim.catalog import DEFAULT_WORLD, world_descriptions
