@@ -94,6 +94,29 @@ def test_failing_interrupt_names_its_source(ir):
     assert backend.stops
 
 
+def test_failing_interrupt_deep_below_untested_levels_names_its_element_and_time(ir):
+    # levels without anything to test (never, no timer) are skipped by the tick; the
+    # error still names the level whose interrupt failed and its own local time
+    from mdle.program import Interrupt
+
+    def broken(ctx):
+        if ctx.obs.time > 0.25:
+            raise ValueError("bad beam")
+        return False
+
+    inner = ir.atom("a", 1.0, when=Interrupt(broken, "range(0 deg) < 1 m"))
+    main = ir.string("main", ir.string("p", ir.string("q", inner), timer=10.0),
+                     ir.atom("b", 0.0))
+    rec = Recorder()
+    with pytest.raises(MdleRuntimeError,
+                       match=r"interrupt `range\(0 deg\) < 1 m` of `main/p/q/a` failed at "
+                             r"t = 0\.300 s: ValueError: bad beam"):
+        run(main, ScriptedBackend(), observers=[rec])
+    assert rec.result is not None and rec.result.cause is Cause.ERROR
+    assert [t.path for t in rec.result.terminations] == ["main/p/q/a", "main/p/q", "main/p",
+                                                         "main"]
+
+
 def test_dropped_connection_aborts_with_error_and_stops(ir):
     backend = ScriptedBackend(drop_at=0.35)
     rec = Recorder()
