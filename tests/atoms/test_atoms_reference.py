@@ -9,6 +9,7 @@ loop, an eigenvector line fit and ``np.polyfit`` on noisy scans, and on degenera
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -17,15 +18,13 @@ from atoms import estimators as E
 from atoms.boundary import boundary_view
 from mdle.backend import Scan
 
-from .conftest import BEARINGS, cast_circle, cast_line, make_scan
 
-
-def _noisy_scene(seed: int, centre: tuple[float, float] = (1.5, 0.0),
+def _noisy_scene(raycast: Any, seed: int, centre: tuple[float, float] = (1.5, 0.0),
                  radius: float = 0.5) -> Scan:
     """A wall 0.6 m to the right and a cylinder ahead, 0.8 % range noise."""
     rng = np.random.default_rng(seed)
-    r = np.minimum(cast_line((0.0, -0.6), (0.0, -1.0)), cast_circle(centre, radius))
-    return make_scan(r * (1.0 + rng.normal(0.0, 0.008, r.shape)))
+    r = np.minimum(raycast.line((0.0, -0.6), (0.0, -1.0)), raycast.circle(centre, radius))
+    return raycast.scan(r * (1.0 + rng.normal(0.0, 0.008, r.shape)))
 
 
 def _reference_geometric(pts: np.ndarray, start: np.ndarray, end: np.ndarray,
@@ -56,8 +55,9 @@ def _reference_geometric(pts: np.ndarray, start: np.ndarray, end: np.ndarray,
 
 @pytest.mark.parametrize("seed", range(5))
 @pytest.mark.parametrize("windows", [(7, 8, 9), (1,), (2, 5)])
-def test_averaged_estimate_matches_a_per_window_loop(seed: int, windows: tuple[int, ...]) -> None:
-    scan = _noisy_scene(seed, centre=(2.0, 0.5))
+def test_averaged_estimate_matches_a_per_window_loop(raycast: Any, seed: int,
+                                                     windows: tuple[int, ...]) -> None:
+    scan = _noisy_scene(raycast, seed, centre=(2.0, 0.5))
     s = E.surfaces(scan.ranges, scan.bearings, scan.valid)
     est = E.geometric_curvature(s, windows)
     kappa, tangent = _reference_geometric(s.points, s.start, s.end, windows)
@@ -69,10 +69,11 @@ def test_averaged_estimate_matches_a_per_window_loop(seed: int, windows: tuple[i
     assert np.isnan(est.tangent[~est.valid]).all() and np.isnan(est.curvature[~est.valid]).all()
 
 
-def test_bearing_memo_follows_the_bearings() -> None:
+def test_bearing_memo_follows_the_bearings(raycast: Any) -> None:
     # two layouts of the same size, one after the other: each gets its own directions
     r = np.full(181, 2.0)
-    for b in (BEARINGS, BEARINGS[::-1].copy(), np.radians(np.linspace(-60, 60, 181))):
+    for b in (raycast.bearings, raycast.bearings[::-1].copy(),
+              np.radians(np.linspace(-60, 60, 181))):
         pts = E.scan_points(r, b)
         np.testing.assert_allclose(pts, np.stack((2 * np.cos(b), 2 * np.sin(b)), 1), atol=1e-15)
         s = E.surfaces(r, b)
@@ -94,8 +95,8 @@ def _reference_side_fit(pts: np.ndarray) -> tuple[float, float]:
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_view_matches_the_full_scan_estimates(seed: int) -> None:
-    scan = _noisy_scene(seed)
+def test_view_matches_the_full_scan_estimates(raycast: Any, seed: int) -> None:
+    scan = _noisy_scene(raycast, seed)
     view = boundary_view(scan, "right")
     assert view.front.hit and view.side.hit
     # front ray: the averaged estimate of the whole scan at the 0-degree beam
@@ -112,15 +113,15 @@ def test_view_matches_the_full_scan_estimates(seed: int) -> None:
 
 
 @pytest.mark.parametrize("last", [140, 94])
-def test_all_window_points_equal_gives_the_longer_sides_chord(last: int) -> None:
+def test_all_window_points_equal_gives_the_longer_sides_chord(raycast: Any, last: int) -> None:
     # 41 beams on one bearing and range: every window at the front beam (70) is degenerate,
     # so the view falls back to the one-sided chord towards the longer side of the surface,
     # which reaches beyond every window on both sides (the view must look further to know)
-    b = BEARINGS.copy()
+    b = raycast.bearings.copy()
     b[70:111] = 0.0
     r = np.full(181, 10.0)
     r[40:last + 1] = 1.0 / np.maximum(np.cos(b[40:last + 1]), 0.2)
-    scan = make_scan(r, b)
+    scan = raycast.scan(r, b)
     s = E.surfaces(scan.ranges, b, scan.valid)
     c = int(np.argmin(np.abs(b)))
     right, left = c - int(s.start[c]), int(s.end[c]) - c
@@ -139,12 +140,13 @@ def _mirror(scan: Scan) -> Scan:
                 scan.stamp, scan.max_range)
 
 
-def test_side_fit_with_two_distinct_abscissae_uses_the_minimum_norm_solution() -> None:
-    b = BEARINGS.copy()
+def test_side_fit_with_two_distinct_abscissae_uses_the_minimum_norm_solution(
+        raycast: Any) -> None:
+    b = raycast.bearings.copy()
     b[1:40] = math.radians(-89.0)   # beam 0 and then one point repeated
     r = np.full(181, 10.0)
     r[:40] = 0.5
-    view = boundary_view(make_scan(r, b), "right")
+    view = boundary_view(raycast.scan(r, b), "right")
     p0 = 0.5 * np.array([math.cos(b[0]), math.sin(b[0])])
     p1 = 0.5 * np.array([math.cos(b[1]), math.sin(b[1])])
     assert view.side.hit and abs(view.side.kappa) < 1e-9
