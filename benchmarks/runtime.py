@@ -59,7 +59,7 @@ class TrivialBackend:
         self._k = 0
 
     def observe(self) -> Observation:
-        """The next prepared observation."""
+        """Return the next prepared observation."""
         return self._obs[self._k]
 
     def command(self, cmd: Command) -> None:

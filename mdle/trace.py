@@ -177,7 +177,7 @@ class TraceWriter:
             self.flush()
 
     def _sample_line(self, s: Sample) -> str:
-        """The sample as one JSON line (floats formatted directly, fast).
+        """Format the sample as one JSON line (floats formatted directly, fast).
 
         Raises TypeError or ValueError for a value that is not a number (the caller then
         falls back to :func:`json.dumps`).
@@ -288,7 +288,7 @@ class Trace:
     extra: tuple[Mapping[str, Any], ...] = field(default=())
 
     def column(self, name: str) -> "np.ndarray":
-        """A sample field as a float array, shape (len(samples),); missing or null is NaN.
+        """Return a sample field as a float array, shape (len(samples),); missing/null is NaN.
 
         ``diag.NAME`` reads a control-law diagnostic (``diag.curvature``).
         """
@@ -302,7 +302,7 @@ class Trace:
         return np.array([np.nan if v is None else float(v) for v in vals], dtype=float)
 
     def paths(self) -> list[str]:
-        """The active path of each sample."""
+        """Return the active path of each sample."""
         return [str(s.get("path", "")) for s in self.samples]
 
     def diag_names(self) -> list[str]:

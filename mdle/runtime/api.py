@@ -74,7 +74,7 @@ def run(element: Element, backend: Backend, *, rate: float = 10.0, until: float 
 
 
 def element_of(program: Program, name: str | None = None) -> Element:
-    """The element called ``name`` in ``program`` (its entry when None).
+    """Return the element called ``name`` in ``program`` (its entry when None).
 
     Raises
     ------

@@ -24,16 +24,16 @@ class Observer(Protocol):
     """Anything with the four observer hooks."""
 
     def on_start(self, scheduler: "Scheduler") -> None:
-        """The run is about to tick for the first time."""
+        """Handle the start of the run, just before its first tick."""
 
     def on_event(self, event: Event) -> None:
-        """An element started or ended."""
+        """Handle an element starting or ending."""
 
     def on_tick(self, sample: Sample) -> None:
-        """A tick was completed (the command has been sent)."""
+        """Handle a completed tick (its command has been sent)."""
 
     def on_end(self, result: RunResult) -> None:
-        """The run ended (whatever the cause); the robot has been stopped."""
+        """Handle the end of the run (whatever the cause), after the robot was stopped."""
 
 
 class BaseObserver:

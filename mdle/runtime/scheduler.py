@@ -498,7 +498,7 @@ class Scheduler:
             o.on_event(event)
 
     def _stall_check(self, obs: Observation, now: float) -> str | None:
-        """The fault when the robot has been stalled or refusing to move for too long."""
+        """Return the fault when the robot has been stalled or refusing to move too long."""
         assert self.stall_timeout is not None
         refusing = not obs.motors_enabled and (self._last_cmd.v != 0.0
                                                or self._last_cmd.omega != 0.0)

@@ -106,7 +106,7 @@ class ScriptedBackend:
     # ------------------------------------------------------------------ Backend protocol
 
     def observe(self) -> Observation:
-        """The scripted observation for the current tick."""
+        """Return the scripted observation for the current tick."""
         self._check_link("observe")
         if self._scan_fn is not None and self.time >= self._next_scan - 1e-12:
             self._scan = self._scan_fn(self.time - self._scan_delay)
@@ -164,7 +164,7 @@ class ScriptedBackend:
         return self._held
 
     def commanded(self) -> list[Command]:
-        """The commands received, in order, without their times."""
+        """Return the commands received, in order, without their times."""
         return [c for _, c in self.commands]
 
     def _override(self) -> Mapping[str, Any]:

@@ -13,11 +13,11 @@ from types import SimpleNamespace
 from typing import Any
 
 import pytest
+
 from atoms.registry import Context, LawSpec
 from mdle.backend import Command
 from mdle.program import INF, NEVER, AtomNode, Element, Interrupt, StringKind, StringNode
 from mdle.runtime import Event, EventKind
-
 
 
 def const_law(name: str, v: float = 0.0, omega: float = 0.0,

@@ -11,8 +11,8 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -34,25 +34,26 @@ plan main = ((spin), never, inf)
 run main
 """
 
-
-def _mdle() -> list[str]:
-    exe = Path(sys.executable).with_name("mdle")
-    if exe.exists():
-        return [str(exe)]
-    found = shutil.which("mdle")
-    assert found, "the `mdle` command is not installed"
-    return [found]
-
-
-def mdle(*args: str, cwd: Path | None = None, timeout: float = 120
-         ) -> subprocess.CompletedProcess[str]:
-    env = dict(os.environ, MPLBACKEND="Agg")
-    return subprocess.run([*_mdle(), *args], capture_output=True, text=True, cwd=cwd,
-                          timeout=timeout, env=env)
+RunMdle = Callable[..., subprocess.CompletedProcess[str]]  # the run_mdle fixture
+WritePlan = Callable[..., Path]  # the plan fixture: (text, name="plan.mdle") -> path
 
 
 @pytest.fixture
-def plan(tmp_path):
+def run_mdle(mdle_command: list[str]) -> RunMdle:
+    """Run the installed ``mdle`` with ``args``, output captured, plots on the Agg backend."""
+
+    def call(*args: str, cwd: Path | None = None, timeout: float = 120
+             ) -> subprocess.CompletedProcess[str]:
+        env = dict(os.environ, MPLBACKEND="Agg")
+        return subprocess.run([*mdle_command, *args], capture_output=True, text=True, cwd=cwd,
+                              timeout=timeout, env=env)
+
+    return call
+
+
+@pytest.fixture
+def plan(tmp_path: Path) -> WritePlan:
+    """Write ``text`` to a plan file in ``tmp_path`` and return its path."""
     def write(text: str, name: str = "plan.mdle") -> Path:
         p = tmp_path / name
         p.write_text(text)
@@ -61,9 +62,10 @@ def plan(tmp_path):
     return write
 
 
-def test_run_writes_trace_and_plot_and_summary(plan, tmp_path):
+def test_run_writes_trace_and_plot_and_summary(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
     trace, png = tmp_path / "t.jsonl", tmp_path / "p.png"
-    res = mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "--trace", str(trace),
+    res = run_mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "--trace", str(trace),
                "--plot", str(png))
     assert res.returncode == 0, res.stderr
     assert "\x1b" not in res.stdout  # off a terminal: plain lines, no control codes
@@ -72,6 +74,7 @@ def test_run_writes_trace_and_plot_and_summary(plan, tmp_path):
     t = read_trace(trace)
     assert t.header["world"]["name"] == "ellipse" and t.header["seed"] == 0
     assert t.header["program"]["element"] == "main"
+    assert t.end is not None
     assert t.end["cause"] == "completed" and not t.end["collided"]
     assert [(e["path"], e["cause"]) for e in t.events if e["kind"] == "end"] == [
         ("main/cruise", "interrupt"), ("main/follow", "timer"), ("main", "completed")]
@@ -80,70 +83,76 @@ def test_run_writes_trace_and_plot_and_summary(plan, tmp_path):
     assert png.read_bytes().startswith(b"\x89PNG")
 
 
-def test_world_beside_the_plan_is_used(plan, tmp_path):
+def test_world_beside_the_plan_is_used(plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
     import sim
 
     world_file = Path(sim.__file__).parent / "worlds" / "ellipse.yaml"
     shutil.copy(world_file, tmp_path / "plan.world.yaml")
     trace = tmp_path / "t.jsonl"
-    res = mdle("run", str(plan(FOLLOW)), "--quiet", "--until", "2", "--trace", str(trace))
+    res = run_mdle("run", str(plan(FOLLOW)), "--quiet", "--until", "2", "--trace", str(trace))
     assert res.returncode == 0, res.stderr
     assert res.stdout == ""
     head = read_trace(trace).header
     assert head["world"]["spec"] == str(tmp_path / "plan.world.yaml")
-    assert read_trace(trace).end["cause"] == "stopped"
+    end = read_trace(trace).end
+    assert end is not None and end["cause"] == "stopped"
 
 
-def test_default_world_when_none_is_given(plan, tmp_path):
+def test_default_world_when_none_is_given(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
     trace = tmp_path / "t.jsonl"
-    res = mdle("run", str(plan(SPIN)), "-q", "--until", "1", "--trace", str(trace))
+    res = run_mdle("run", str(plan(SPIN)), "-q", "--until", "1", "--trace", str(trace))
     assert res.returncode == 0, res.stderr
     t = read_trace(trace)
     assert t.header["world"]["spec"] == "default" and len(t.samples) == 11
 
 
-def test_plan_errors_exit_1_with_check_style_messages(plan):
+def test_plan_errors_exit_1_with_check_style_messages(plan: WritePlan, run_mdle: RunMdle) -> None:
     p = plan("plan main = ((cruise), never, inf)\n")
-    res = mdle("run", str(p))
+    res = run_mdle("run", str(p))
     assert res.returncode == 1
     assert f"{p}:1:" in res.stderr and "error:" in res.stderr and "cruise" in res.stderr
 
 
-def test_unknown_element_and_world_exit_1(plan):
+def test_unknown_element_and_world_exit_1(plan: WritePlan, run_mdle: RunMdle) -> None:
     p = plan(FOLLOW)
-    res = mdle("run", str(p), "--plan", "cruse")
+    res = run_mdle("run", str(p), "--plan", "cruse")
     assert res.returncode == 1 and "did you mean `cruise`" in res.stderr
-    res = mdle("run", str(p), "--world", "elipse")
+    res = run_mdle("run", str(p), "--world", "elipse")
     assert res.returncode == 1 and "ellipse" in res.stderr and "Traceback" not in res.stderr
 
 
-def test_bad_plot_or_trace_file_is_refused_before_running(plan, tmp_path):
-    res = mdle("run", str(plan(FOLLOW)), "--plot", str(tmp_path / "p.jpg"))
+def test_bad_plot_or_trace_file_is_refused_before_running(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
+    res = run_mdle("run", str(plan(FOLLOW)), "--plot", str(tmp_path / "p.jpg"))
     assert res.returncode == 1 and ".png, .svg or .pdf" in res.stderr
     assert res.stdout == ""  # nothing ran
-    res = mdle("run", str(plan(FOLLOW)), "--trace", str(tmp_path / "no" / "t.jsonl"))
+    res = run_mdle("run", str(plan(FOLLOW)), "--trace", str(tmp_path / "no" / "t.jsonl"))
     assert res.returncode == 1 and "cannot write the trace" in res.stderr
     assert res.stdout == ""
 
 
-def test_pioneer_backend_needs_a_connection(plan):
-    res = mdle("run", str(plan(FOLLOW)), "--backend", "pioneer")
+def test_pioneer_backend_needs_a_connection(plan: WritePlan, run_mdle: RunMdle) -> None:
+    res = run_mdle("run", str(plan(FOLLOW)), "--backend", "pioneer")
     assert res.returncode == 1 and "--connect" in res.stderr
 
 
-def test_collision_exits_3(plan, tmp_path):
+def test_collision_exits_3(plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
     trace = tmp_path / "t.jsonl"
-    res = mdle("run", str(plan(RAM)), "--world", "ellipse", "--trace", str(trace), "-q")
+    res = run_mdle("run", str(plan(RAM)), "--world", "ellipse", "--trace", str(trace), "-q")
     assert res.returncode == 3
     assert "collided" in res.stderr
-    assert read_trace(trace).end["collided"] is True
+    end = read_trace(trace).end
+    assert end is not None and end["collided"] is True
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_signal_stops_the_robot_and_leaves_a_valid_trace(plan, tmp_path, sig, code):
+def test_signal_stops_the_robot_and_leaves_a_valid_trace(
+        plan: WritePlan, tmp_path: Path, sig: signal.Signals, code: int,
+        mdle_command: list[str]) -> None:
     trace = tmp_path / "t.jsonl"
     env = dict(os.environ, MPLBACKEND="Agg")
-    proc = subprocess.Popen([*_mdle(), "run", str(plan(SPIN)), "--world", "empty",
+    proc = subprocess.Popen([*mdle_command, "run", str(plan(SPIN)), "--world", "empty",
                              "--realtime", "--trace", str(trace)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     try:
@@ -168,17 +177,18 @@ def test_signal_stops_the_robot_and_leaves_a_valid_trace(plan, tmp_path, sig, co
     assert "elements run:" in out
 
 
-def test_plot_command_writes_svg_and_reports_errors(plan, tmp_path):
+def test_plot_command_writes_svg_and_reports_errors(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
     trace = tmp_path / "t.jsonl"
-    assert mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "-q", "--until", "5",
+    assert run_mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "-q", "--until", "5",
                 "--trace", str(trace)).returncode == 0
     svg = tmp_path / "p.svg"
-    res = mdle("plot", str(trace), "-o", str(svg))
+    res = run_mdle("plot", str(trace), "-o", str(svg))
     assert res.returncode == 0, res.stderr
     assert svg.read_text().lstrip().startswith("<?xml")
-    res = mdle("plot", str(trace), "-o", str(tmp_path / "p.gif"))
+    res = run_mdle("plot", str(trace), "-o", str(tmp_path / "p.gif"))
     assert res.returncode == 1 and ".png, .svg or .pdf" in res.stderr
-    res = mdle("plot", str(tmp_path / "missing.jsonl"), "-o", str(svg))
+    res = run_mdle("plot", str(tmp_path / "missing.jsonl"), "-o", str(svg))
     assert res.returncode == 1 and "cannot read trace" in res.stderr
 
 
@@ -187,13 +197,14 @@ PLANS = sorted((REPO / "plans").rglob("*.mdle"))
 
 
 @pytest.mark.parametrize("plan_file", PLANS, ids=lambda p: str(p.relative_to(REPO)))
-def test_every_plan_in_plans_runs_in_the_simulator(plan_file, tmp_path):
+def test_every_plan_in_plans_runs_in_the_simulator(
+        plan_file: Path, tmp_path: Path, run_mdle: RunMdle) -> None:
     from mdle.loader import load_program
 
     program = load_program(plan_file)
     extra = [] if program.entry else ["--plan", sorted(program.elements)[0]]
     trace, png = tmp_path / "t.jsonl", tmp_path / "p.png"
-    res = mdle("run", str(plan_file), *extra, "--until", "30", "--trace", str(trace),
+    res = run_mdle("run", str(plan_file), *extra, "--until", "30", "--trace", str(trace),
                "--plot", str(png), cwd=REPO)
     # Every example runs in its own world (the one beside it, or the default) without
     # touching anything: a collision here is a bad example or a regression.
@@ -204,38 +215,39 @@ def test_every_plan_in_plans_runs_in_the_simulator(plan_file, tmp_path):
     assert png.read_bytes().startswith(b"\x89PNG")
 
 
-def test_plans_folder_is_not_empty():
+def test_plans_folder_is_not_empty() -> None:
     # the parametrised test above runs one case per plan: it must have something to run
     assert PLANS, "no plans in plans/"
 
 
-def test_simulation_options_reach_the_backend(plan, tmp_path):
+def test_simulation_options_reach_the_backend(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
     trace = tmp_path / "t.jsonl"
-    res = mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "--seed", "5", "--robot",
+    res = run_mdle("run", str(plan(FOLLOW)), "--world", "ellipse", "--seed", "5", "--robot",
                "ideal", "--sensing", "exact", "--rate", "20", "--until", "1", "-q",
                "--trace", str(trace))
     assert res.returncode == 0, res.stderr
     t = read_trace(trace)
     assert (t.header["seed"], t.header["robot"], t.header["sensing"]) == (5, "ideal", "exact")
     assert t.column("t").tolist() == pytest.approx([k * 0.05 for k in range(21)])
-    res = mdle("run", str(plan(FOLLOW)), "--robot", "segway", "-q", "--until", "1")
+    res = run_mdle("run", str(plan(FOLLOW)), "--robot", "segway", "-q", "--until", "1")
     assert res.returncode == 1 and "segway" in res.stderr and "Traceback" not in res.stderr
 
 
-def test_realtime_runs_at_wall_clock_speed(plan):
+def test_realtime_runs_at_wall_clock_speed(plan: WritePlan, run_mdle: RunMdle) -> None:
     # a lower bound only: paced runs must not go faster than the wall clock
     start = time.monotonic()
-    res = mdle("run", str(plan(SPIN)), "--world", "empty", "--realtime", "--until", "1.5", "-q")
+    res = run_mdle("run", str(plan(SPIN)), "--world", "empty", "--realtime", "--until", "1.5", "-q")
     assert res.returncode == 0, res.stderr
     assert time.monotonic() - start >= 1.4
 
 
-def test_live_view_on_a_terminal(plan):
+def test_live_view_on_a_terminal(plan: WritePlan, mdle_command: list[str]) -> None:
     import pty
 
     master, slave = pty.openpty()
     env = dict(os.environ, MPLBACKEND="Agg", COLUMNS="100", TERM="xterm")
-    proc = subprocess.Popen([*_mdle(), "run", str(plan(SPIN)), "--world", "empty", "--until",
+    proc = subprocess.Popen([*mdle_command, "run", str(plan(SPIN)), "--world", "empty", "--until",
                              "2", "--realtime"], stdout=slave, stderr=slave, env=env)
     os.close(slave)
     chunks = []

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import io
+from types import SimpleNamespace
 
 from mdle.live import LiveView, summary_rows
+from mdle.program import StringNode
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
 
@@ -14,13 +16,13 @@ class _Tty(io.StringIO):
         return True
 
 
-def _plan(ir):
+def _plan(ir: SimpleNamespace) -> StringNode:
     r = ir.string("r", ir.atom("a", 1.0, timer=0.2), ir.atom("b", 0.0, 0.5, timer=0.1),
                   repeat=True, timer=0.7)
     return ir.string("main", r, ir.atom("c", timer=0.1))
 
 
-def test_plain_lines_off_a_terminal(ir):
+def test_plain_lines_off_a_terminal(ir: SimpleNamespace) -> None:
     out = io.StringIO()
     view = LiveView(stream=out)
     assert view.plain
@@ -39,7 +41,7 @@ def test_plain_lines_off_a_terminal(ir):
     assert "ticks: 9" in lines
 
 
-def test_rich_panel_on_a_terminal_shows_levels_and_summary(ir):
+def test_rich_panel_on_a_terminal_shows_levels_and_summary(ir: SimpleNamespace) -> None:
     out = _Tty()
     view = LiveView(stream=out)
     assert not view.plain
@@ -51,7 +53,7 @@ def test_rich_panel_on_a_terminal_shows_levels_and_summary(ir):
     assert "real-time factor" in text
 
 
-def test_summary_rows_report_faults_and_collisions(ir):
+def test_summary_rows_report_faults_and_collisions(ir: SimpleNamespace) -> None:
     backend = ScriptedBackend(lambda t, k: {"stalled": True, "truth": {"collided": True}})
     result = run(ir.atom("push", 1.0), backend, stall_timeout=0.3)
     rows = dict(summary_rows(result, wall_seconds=0.01))

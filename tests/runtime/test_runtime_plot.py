@@ -4,20 +4,27 @@ from __future__ import annotations
 
 import math
 import types
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
+import numpy as np
 import pytest
+from matplotlib.collections import LineCollection
 
+from atoms.registry import Context
 from mdle.backend import Command
 from mdle.plot import PlotError, boundary_points, plot_trace, trace_figure
+from mdle.program import AtomNode, Element
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
 from mdle.trace import TraceWriter, read_trace
 
 
-def _wall_follower(ir):
+def _wall_follower(ir: SimpleNamespace) -> AtomNode:
     """An atom driving an arc that records a side range and curvature like follow_boundary."""
 
-    def step(args, ctx, state):
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         ctx.cache["trace"] = {"side_hit": 1.0, "side_range": 0.5,
                               "side_curvature": -1.0 if ctx.t > 1.0 else 0.0}
         return Command(0.5, 0.3 if ctx.t > 1.0 else 0.0)
@@ -25,7 +32,8 @@ def _wall_follower(ir):
     return ir.atom("follow", law=ir.const_law("follow_boundary", step=step), timer=3.0)
 
 
-def _traced(ir, tmp_path, element, backend=None, truth=False):
+def _traced(ir: SimpleNamespace, tmp_path: Path, element: Element,
+            backend: ScriptedBackend | None = None, truth: bool = False) -> Path:
     path = tmp_path / "run.jsonl"
     if backend is None:
         script = (lambda t, k: {"truth": {"x": 0.5 * t, "y": 0.01, "theta": 0.0,
@@ -36,7 +44,7 @@ def _traced(ir, tmp_path, element, backend=None, truth=False):
     return path
 
 
-def test_boundary_points_lie_beside_the_path(ir, tmp_path):
+def test_boundary_points_lie_beside_the_path(ir: SimpleNamespace, tmp_path: Path) -> None:
     path = _traced(ir, tmp_path, _wall_follower(ir))
     pts = boundary_points(read_trace(path))
     # first second: driving along +x, the boundary 0.5 m to the right (y = -0.5)
@@ -46,7 +54,7 @@ def test_boundary_points_lie_beside_the_path(ir, tmp_path):
 
 
 @pytest.mark.parametrize("ext", ["png", "svg", "pdf"])
-def test_plot_is_written_in_each_format(ir, tmp_path, ext):
+def test_plot_is_written_in_each_format(ir: SimpleNamespace, tmp_path: Path, ext: str) -> None:
     trace = _traced(ir, tmp_path, ir.string("main", ir.atom("go", 1.0, timer=1.0),
                                             _wall_follower(ir)))
     out = tmp_path / f"plot.{ext}"
@@ -57,17 +65,19 @@ def test_plot_is_written_in_each_format(ir, tmp_path, ext):
     assert data.startswith(magic)
 
 
-def test_figure_has_curvature_panel_when_the_law_measured_it(ir, tmp_path):
+def test_figure_has_curvature_panel_when_the_law_measured_it(ir: SimpleNamespace,
+                                                             tmp_path: Path) -> None:
     fig = trace_figure(read_trace(_traced(ir, tmp_path, _wall_follower(ir))))
     path_ax, curv_ax = fig.axes
     assert curv_ax.get_xlabel() == "distance travelled (m)"
-    dist, kappa = curv_ax.lines[0].get_data()
+    dist, kappa = (np.asarray(a) for a in curv_ax.lines[0].get_data())
     assert dist[-1] == pytest.approx(1.5, abs=0.06) and min(kappa) == -1.0
     labels = path_ax.get_legend_handles_labels()[1]
     assert "atom follow" in labels and "detected boundary" in labels
 
 
-def test_figure_without_curvature_has_one_panel_and_marks_events(ir, tmp_path):
+def test_figure_without_curvature_has_one_panel_and_marks_events(ir: SimpleNamespace,
+                                                                 tmp_path: Path) -> None:
     main = ir.string("main", ir.atom("go", 1.0, when="hit"), ir.atom("spin", 0, 1.0, timer=0.5))
     trace = _traced(ir, tmp_path, main, ScriptedBackend(ir.signals(30, hit=[5])))
     fig = trace_figure(read_trace(trace))
@@ -77,7 +87,7 @@ def test_figure_without_curvature_has_one_panel_and_marks_events(ir, tmp_path):
             "start"} <= set(labels)
 
 
-def test_world_obstacles_are_drawn_and_truth_is_used(ir, tmp_path):
+def test_world_obstacles_are_drawn_and_truth_is_used(ir: SimpleNamespace, tmp_path: Path) -> None:
     import shapely
 
     geometry = shapely.GeometryCollection([shapely.box(0, -1, 3, -0.6),
@@ -87,13 +97,15 @@ def test_world_obstacles_are_drawn_and_truth_is_used(ir, tmp_path):
     fig = trace_figure(read_trace(trace), world)
     ax = fig.axes[0]
     assert len(ax.patches) == 1  # the box
-    path_line = ax.collections[0].get_segments()
+    path_collection = ax.collections[0]
+    assert isinstance(path_collection, LineCollection)
+    path_line = path_collection.get_segments()
     assert path_line[0][0][1] == pytest.approx(0.01)  # true y, not odometry's 0
     x0, x1 = ax.get_xlim()
     assert x0 <= -0.5 and x1 >= 3.5
 
 
-def test_plot_errors_are_clear(ir, tmp_path):
+def test_plot_errors_are_clear(ir: SimpleNamespace, tmp_path: Path) -> None:
     trace = _traced(ir, tmp_path, ir.atom("go", 1.0, timer=0.2))
     with pytest.raises(PlotError, match=r"must end in \.png, \.svg or \.pdf"):
         plot_trace(trace, tmp_path / "plot.gif")
@@ -104,9 +116,9 @@ def test_plot_errors_are_clear(ir, tmp_path):
     assert not math.isnan(read_trace(trace).column("x")[0])
 
 
-def test_first_collision_is_marked(ir, tmp_path):
+def test_first_collision_is_marked(ir: SimpleNamespace, tmp_path: Path) -> None:
     script = lambda t, k: {"truth": {"collided": k >= 3, "clearance": 0.0}}  # noqa: E731
     trace = _traced(ir, tmp_path, ir.atom("go", 1.0, timer=0.6), ScriptedBackend(script))
     ax = trace_figure(read_trace(trace)).axes[0]
     [star] = [ln for ln in ax.lines if ln.get_label() == "first collision"]
-    assert star.get_xdata()[0] == pytest.approx(0.3)
+    assert np.asarray(star.get_xdata())[0] == pytest.approx(0.3)

@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import itertools
 import math
+from types import SimpleNamespace
+from typing import Any
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mdle.backend import Command
-from mdle.program import INF, NEVER, AtomNode, StringNode
-from mdle.runtime import Cause, EventKind, run
+from mdle.program import INF, NEVER, AtomNode, Element, StringNode
+from mdle.runtime import Cause, EventKind, RunResult, run
 from mdle.runtime.scripted import ScriptedBackend
 
 SIGNALS = ("a", "b", "c")
@@ -26,18 +28,22 @@ TICKS = 25
 DT = 0.1
 
 
+def _speed(label: str) -> float:
+    """Return the speed atom ``label`` commands: distinct per atom, so commands name it."""
+    return float(len(label) + int(label[1:]))
+
+
 @st.composite
-def trees(draw, ir, depth=3):
+def trees(draw: st.DrawFn, ir: SimpleNamespace, depth: int = 3) -> Element:
     counter = itertools.count()
 
-    def node(d):
+    def node(d: int) -> Element:
         label = f"n{next(counter)}"
         xi_name = draw(st.sampled_from((None, *SIGNALS)))
         xi = NEVER if xi_name is None else ir.sig(xi_name)
         timer = draw(st.sampled_from(TIMERS))
         if d == 0 or draw(st.integers(0, 2)) == 0:
-            return AtomNode(label, ir.const_law(label, float(len(label) + int(label[1:]))), {},
-                            xi, timer)
+            return AtomNode(label, ir.const_law(label, _speed(label)), {}, xi, timer)
         n = draw(st.integers(0, 3))
         return StringNode(label, tuple(node(d - 1) for _ in range(n)), xi, timer,
                           draw(st.booleans()))
@@ -45,11 +51,12 @@ def trees(draw, ir, depth=3):
     return node(depth)
 
 
-def _index(root):
+def _index(root: Element) -> tuple[dict[str, Element], dict[str, str | None]]:
     """Path -> node, and path -> parent path."""
-    nodes, parents = {}, {}
+    nodes: dict[str, Element] = {}
+    parents: dict[str, str | None] = {}
 
-    def walk(n, path, parent):
+    def walk(n: Element, path: str, parent: str | None) -> None:
         nodes[path] = n
         parents[path] = parent
         for c in getattr(n, "elements", ()):
@@ -59,14 +66,14 @@ def _index(root):
     return nodes, parents
 
 
-def _fires(node, signals, t_local):
+def _fires(node: Element, signals: set[str], t_local: float) -> tuple[bool, bool]:
     """(timer expired, interrupt true) for ``node`` at a tick with ``signals``."""
     timer = t_local >= node.timer - 1e-9
     xi = (not node.interrupt.never) and node.interrupt.source in signals
     return timer, xi
 
 
-def check(root, script):
+def check(root: Element, script: list[dict[str, Any]]) -> RunResult:
     backend = ScriptedBackend(script)
     result = run(root, backend, until=TICKS * DT - DT / 2, stall_timeout=None)
     nodes, parents = _index(root)
@@ -74,8 +81,9 @@ def check(root, script):
     signals = [set(k for k, v in s["truth"].items() if v) for s in script]
 
     # 1. events nest, and everything started has ended
-    stack, starts = [], {}
-    running_at = {}  # tick -> active paths after that tick's events
+    stack: list[str] = []
+    starts: dict[str, float] = {}
+    running_at: dict[int, list[str]] = {}  # tick -> active paths after that tick's events
     by_tick = itertools.groupby(result.events, key=lambda e: tick_of(e.time))
     for k, events in by_tick:
         for e in events:
@@ -94,7 +102,8 @@ def check(root, script):
                 elif e.cause is Cause.INTERRUPT:
                     assert xi and not timer, e
                 elif e.cause is Cause.COMPLETED:
-                    assert isinstance(nodes[e.path], StringNode) and not nodes[e.path].repeat
+                    ended = nodes[e.path]
+                    assert isinstance(ended, StringNode) and not ended.repeat
                 if e.cause in (Cause.TIMER, Cause.INTERRUPT):
                     # 3. outermost wins: no running ancestor fired at this tick
                     p = parents[e.path]
@@ -121,7 +130,7 @@ def check(root, script):
         active = running_at[k]
         top = nodes[active[-1]] if active else None
         if isinstance(top, AtomNode):
-            assert cmd == top.law.step({}, None, None), (k, active)
+            assert cmd == Command(_speed(top.label), 0.0), (k, active)
         else:
             assert cmd == Command(), (k, active)
 
@@ -142,13 +151,13 @@ def check(root, script):
     return result
 
 
-def starts_at(result, path, k):
+def starts_at(result: RunResult, path: str, k: int) -> float:
     """Start time of the run of ``path`` active at tick ``k``."""
     return max(e.time for e in result.events
                if e.path == path and e.kind is EventKind.START and round(e.time / DT) <= k)
 
 
-def scripts():
+def scripts() -> st.SearchStrategy[list[dict[str, dict[str, bool]]]]:
     tick = st.fixed_dictionaries({"truth": st.fixed_dictionaries(
         {s: st.booleans() for s in SIGNALS})})
     return st.lists(tick, min_size=TICKS + 1, max_size=TICKS + 1)
@@ -157,7 +166,7 @@ def scripts():
 @settings(max_examples=200, deadline=None, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_random_trees_obey_the_semantics(ir, data):
+def test_random_trees_obey_the_semantics(ir: SimpleNamespace, data: st.DataObject) -> None:
     root = data.draw(trees(ir))
     script = data.draw(scripts())
     result = check(root, script)

@@ -7,49 +7,63 @@ observers and the supervisor API.
 from __future__ import annotations
 
 import types
+from types import SimpleNamespace
+from typing import Any
 
 import pytest
 
+from atoms.registry import Context
 from mdle.backend import ClockMode, Command, Pose, Scan
 from mdle.errors import BackendError, MdleRuntimeError
 from mdle.program import Program
-from mdle.runtime import (BaseObserver, Cause, Recorder, Scheduler, element_of, run,
-                          run_named)
+from mdle.runtime import (
+    BaseObserver,
+    Cause,
+    Event,
+    Recorder,
+    RunResult,
+    Sample,
+    Scheduler,
+    element_of,
+    run,
+    run_named,
+)
 from mdle.runtime.scripted import ScriptedBackend
 
 
-def test_per_atom_state_is_made_at_start_and_dropped_at_end(ir):
+def test_per_atom_state_is_made_at_start_and_dropped_at_end(ir: SimpleNamespace) -> None:
     made = []
 
-    def start(args, ctx):
+    def start(args: Any, ctx: Context) -> types.SimpleNamespace:
         state = types.SimpleNamespace(n=0, t_start=ctx.t, at=ctx.obs.time)
         made.append(state)
         return state
 
-    def step(args, ctx, state):
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         state.n += 1
         return Command(float(state.n), 0.0)
 
     law = ir.const_law("count", start=start, step=step)
     a = ir.atom("a", law=law, timer=0.3)
     r = ir.string("r", a, repeat=True, timer=0.6)
-    sch = Scheduler(ir.string("main", r), ScriptedBackend())
+    backend = ScriptedBackend()
+    sch = Scheduler(ir.string("main", r), backend)
     while sch.tick():
         pass
     # two runs of `a`, each with its own fresh state counting its own ticks
     assert [(s.n, s.t_start, round(s.at, 9)) for s in made] == [(3, 0.0, 0.0), (3, 0.0, 0.3)]
-    assert [c.v for c in sch.backend.commanded()] == [1, 2, 3, 1, 2, 3, 0]
+    assert [c.v for c in backend.commanded()] == [1, 2, 3, 1, 2, 3, 0]
 
 
-def test_context_is_fresh_each_tick_with_local_time_per_element(ir):
+def test_context_is_fresh_each_tick_with_local_time_per_element(ir: SimpleNamespace) -> None:
     seen = []
 
-    def probe(ctx):
+    def probe(ctx: Context) -> bool:
         seen.append(("xi", round(ctx.obs.time, 9), round(ctx.t, 9), dict(ctx.cache)))
         ctx.cache["probe"] = ctx.obs.time
         return False
 
-    def step(args, ctx, state):
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         seen.append(("U", round(ctx.obs.time, 9), round(ctx.t, 9), dict(ctx.cache)))
         return Command()
 
@@ -64,8 +78,8 @@ def test_context_is_fresh_each_tick_with_local_time_per_element(ir):
     ]
 
 
-def test_failing_control_law_stops_robot_and_names_the_element(ir):
-    def bad(args, ctx, state):
+def test_failing_control_law_stops_robot_and_names_the_element(ir: SimpleNamespace) -> None:
+    def bad(args: Any, ctx: Context, state: Any) -> Command:
         if ctx.t > 0.15:
             raise ZeroDivisionError("division by zero")
         return Command(1.0, 0.0)
@@ -77,14 +91,14 @@ def test_failing_control_law_stops_robot_and_names_the_element(ir):
         run(main, backend, observers=[rec])
     assert backend.stops and backend.held == Command()
     assert rec.result is not None and rec.result.cause is Cause.ERROR
-    assert "ZeroDivisionError" in rec.result.fault
+    assert rec.result.fault is not None and "ZeroDivisionError" in rec.result.fault
     assert [t.cause for t in rec.result.terminations] == [Cause.ERROR] * 3
 
 
-def test_failing_interrupt_names_its_source(ir):
+def test_failing_interrupt_names_its_source(ir: SimpleNamespace) -> None:
     from mdle.program import Interrupt
 
-    def broken(ctx):
+    def broken(ctx: Context) -> bool:
         raise KeyError("beam")
 
     main = ir.string("main", ir.atom("a", 1.0, when=Interrupt(broken, "range(0 deg) < 1 m")))
@@ -94,12 +108,13 @@ def test_failing_interrupt_names_its_source(ir):
     assert backend.stops
 
 
-def test_failing_interrupt_deep_below_untested_levels_names_its_element_and_time(ir):
+def test_failing_interrupt_deep_below_untested_levels_names_its_element_and_time(
+        ir: SimpleNamespace) -> None:
     # levels without anything to test (never, no timer) are skipped by the tick; the
     # error still names the level whose interrupt failed and its own local time
     from mdle.program import Interrupt
 
-    def broken(ctx):
+    def broken(ctx: Context) -> bool:
         if ctx.obs.time > 0.25:
             raise ValueError("bad beam")
         return False
@@ -117,17 +132,18 @@ def test_failing_interrupt_deep_below_untested_levels_names_its_element_and_time
                                                          "main"]
 
 
-def test_dropped_connection_aborts_with_error_and_stops(ir):
+def test_dropped_connection_aborts_with_error_and_stops(ir: SimpleNamespace) -> None:
     backend = ScriptedBackend(drop_at=0.35)
     rec = Recorder()
     with pytest.raises(BackendError, match="connection to the robot lost"):
         run(ir.string("main", ir.atom("a", 1.0)), backend, observers=[rec])
+    assert rec.result is not None
     assert rec.result.cause is Cause.ERROR and rec.result.ticks == 4
     assert backend.stops == [pytest.approx(0.4)]
 
 
-def test_keyboard_interrupt_inside_a_tick_stops_robot(ir):
-    def ctrl_c(args, ctx, state):
+def test_keyboard_interrupt_inside_a_tick_stops_robot(ir: SimpleNamespace) -> None:
+    def ctrl_c(args: Any, ctx: Context, state: Any) -> Command:
         if ctx.t >= 0.2:
             raise KeyboardInterrupt
         return Command(1.0, 0.0)
@@ -137,21 +153,23 @@ def test_keyboard_interrupt_inside_a_tick_stops_robot(ir):
     with pytest.raises(KeyboardInterrupt):
         run(ir.string("main", ir.atom("a", law=ir.const_law("a", step=ctrl_c))), backend,
             observers=[rec])
+    assert rec.result is not None
     assert backend.stops and rec.result.cause is Cause.STOPPED and rec.result.fault is None
 
 
-def test_request_stop_ends_the_run_at_the_next_tick(ir):
+def test_request_stop_ends_the_run_at_the_next_tick(ir: SimpleNamespace) -> None:
     backend = ScriptedBackend()
     sch = Scheduler(ir.string("main", ir.atom("a", 1.0)), backend)
     sch.tick()
     sch.tick()
     sch.request_stop()
     assert not sch.tick()
+    assert sch.result is not None
     assert sch.result.cause is Cause.STOPPED and sch.result.ticks == 2
     assert len(backend.stops) == 1
 
 
-def test_stop_is_idempotent_and_works_before_any_tick(ir):
+def test_stop_is_idempotent_and_works_before_any_tick(ir: SimpleNamespace) -> None:
     backend = ScriptedBackend()
     sch = Scheduler(ir.atom("a", 1.0), backend)
     first = sch.stop()
@@ -159,7 +177,7 @@ def test_stop_is_idempotent_and_works_before_any_tick(ir):
     assert len(backend.stops) == 1
 
 
-def test_stalled_robot_aborts_after_the_stall_timeout(ir):
+def test_stalled_robot_aborts_after_the_stall_timeout(ir: SimpleNamespace) -> None:
     backend = ScriptedBackend(lambda t, k: {"stalled": t > 0.25})
     result = run(ir.atom("push", 1.0), backend, stall_timeout=1.0)
     assert result.cause is Cause.ERROR
@@ -168,7 +186,7 @@ def test_stalled_robot_aborts_after_the_stall_timeout(ir):
     assert backend.stops
 
 
-def test_a_stall_the_plan_handles_is_not_fatal(ir):
+def test_a_stall_the_plan_handles_is_not_fatal(ir: SimpleNamespace) -> None:
     # the plan backs away when stalled: the stall lasts one tick
     backend = ScriptedBackend(lambda t, k: {"stalled": 0.25 < t < 0.35})
     main = ir.string("main", ir.atom("push", 1.0, when="__never__", timer=0.3),
@@ -177,20 +195,21 @@ def test_a_stall_the_plan_handles_is_not_fatal(ir):
     assert result.cause is Cause.COMPLETED and result.fault is None
 
 
-def test_robot_refusing_to_move_is_a_fault(ir):
+def test_robot_refusing_to_move_is_a_fault(ir: SimpleNamespace) -> None:
     backend = ScriptedBackend(motors_enabled=False)
     result = run(ir.atom("go", 0.5), backend, stall_timeout=0.5)
-    assert result.cause is Cause.ERROR and "motors disabled" in result.fault
+    assert result.cause is Cause.ERROR
+    assert result.fault is not None and "motors disabled" in result.fault
     assert backend.pose == Pose()
 
 
-def test_idle_robot_with_motors_disabled_is_not_a_fault(ir):
+def test_idle_robot_with_motors_disabled_is_not_a_fault(ir: SimpleNamespace) -> None:
     result = run(ir.atom("wait", 0.0, timer=1.0), ScriptedBackend(motors_enabled=False),
                  stall_timeout=0.5)
     assert result.cause is Cause.TIMER and result.fault is None
 
 
-def test_result_measures_distance_clearance_collision_and_lateness(ir):
+def test_result_measures_distance_clearance_collision_and_lateness(ir: SimpleNamespace) -> None:
     script = lambda t, k: {"truth": {"clearance": 1.0 - t, "collided": k == 3}}  # noqa: E731
     backend = ScriptedBackend(script, lateness=lambda k: 0.01 * k, clock=ClockMode.WALL)
     rec = Recorder()
@@ -203,8 +222,8 @@ def test_result_measures_distance_clearance_collision_and_lateness(ir):
     assert [s.collided for s in rec.samples] == [False, False, False, True, False, False]
 
 
-def test_samples_carry_pose_command_path_and_law_diagnostics(ir):
-    def step(args, ctx, state):
+def test_samples_carry_pose_command_path_and_law_diagnostics(ir: SimpleNamespace) -> None:
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         ctx.cache["trace"] = {"front": 2.0 - ctx.t, "curvature": -1.0}
         return Command(1.0, 0.5)
 
@@ -219,33 +238,38 @@ def test_samples_carry_pose_command_path_and_law_diagnostics(ir):
     assert s0.clearance is None and s0.collided is None and s0.scan_age is None
 
 
-def test_scan_older_than_the_tick_is_reported(ir):
+def test_scan_older_than_the_tick_is_reported(ir: SimpleNamespace) -> None:
     import numpy as np
 
-    def scan(stamp):
+    def scan(stamp: float) -> Scan:
         b = np.linspace(-np.pi / 2, np.pi / 2, 5)
         return Scan(np.full(5, 3.0), b, np.ones(5, bool), stamp, 8.0)
 
     backend = ScriptedBackend(scan=scan, scan_period=0.2, scan_delay=0.05)
     rec = Recorder()
     run(ir.atom("a", timer=0.5), backend, observers=[rec])
-    assert [round(s.scan_age, 9) for s in rec.samples] == [0.05, 0.15, 0.05, 0.15, 0.05, 0.15]
+
+    def age(s: Sample) -> float:
+        assert s.scan_age is not None
+        return round(s.scan_age, 9)
+
+    assert [age(s) for s in rec.samples] == [0.05, 0.15, 0.05, 0.15, 0.05, 0.15]
 
 
-def test_observer_hooks_are_called_in_order(ir):
-    calls = []
+def test_observer_hooks_are_called_in_order(ir: SimpleNamespace) -> None:
+    calls: list[tuple[str, object]] = []
 
     class Log(BaseObserver):
-        def on_start(self, scheduler):
+        def on_start(self, scheduler: Scheduler) -> None:
             calls.append(("start", scheduler.path))
 
-        def on_event(self, event):
+        def on_event(self, event: Event) -> None:
             calls.append(("event", event.path))
 
-        def on_tick(self, sample):
+        def on_tick(self, sample: Sample) -> None:
             calls.append(("tick", sample.path))
 
-        def on_end(self, result):
+        def on_end(self, result: RunResult) -> None:
             calls.append(("end", result.cause.value))
 
     run(ir.atom("a", timer=0.1), ScriptedBackend(), observers=[Log()])
@@ -253,7 +277,7 @@ def test_observer_hooks_are_called_in_order(ir):
                      ("tick", ""), ("end", "timer")]
 
 
-def test_supervisor_runs_named_elements_one_after_another(ir):
+def test_supervisor_runs_named_elements_one_after_another(ir: SimpleNamespace) -> None:
     program = Program({"explore": ir.atom("explore", 1.0, when="wall"),
                        "home": ir.atom("home", -1.0, timer=0.2)}, entry="explore")
     backend = ScriptedBackend(lambda t, k: {"truth": {"wall": t > 0.45}})
@@ -266,7 +290,7 @@ def test_supervisor_runs_named_elements_one_after_another(ir):
     assert backend.pose.x == pytest.approx(0.3) and not backend.closed
 
 
-def test_element_of_explains_unknown_names(ir):
+def test_element_of_explains_unknown_names(ir: SimpleNamespace) -> None:
     program = Program({"patrol": ir.atom("patrol")}, entry=None)
     with pytest.raises(MdleRuntimeError, match="no runnable element named `patrl`") as err:
         element_of(program, "patrl")
@@ -275,16 +299,16 @@ def test_element_of_explains_unknown_names(ir):
         element_of(program)
 
 
-def test_bad_rate_is_refused(ir):
+def test_bad_rate_is_refused(ir: SimpleNamespace) -> None:
     with pytest.raises(ValueError, match="rate"):
         Scheduler(ir.atom("a"), ScriptedBackend(), rate=0)
 
 
-def test_realtime_pacing_uses_an_injected_clock():
+def test_realtime_pacing_uses_an_injected_clock() -> None:
     from mdle.runtime.pacing import Pacer
 
     now = [100.0]
-    slept = []
+    slept: list[float] = []
     pacer = Pacer(clock=lambda: now[0], sleep=slept.append)
     assert pacer.wait(0.0) == 0.0
     now[0] = 100.05
@@ -293,7 +317,7 @@ def test_realtime_pacing_uses_an_injected_clock():
     assert pacer.wait(0.2) == pytest.approx(0.1)
 
 
-def test_scheduler_logic_never_reads_the_wall_clock():
+def test_scheduler_logic_never_reads_the_wall_clock() -> None:
     import pathlib
 
     import mdle.runtime as rt

@@ -15,11 +15,11 @@ from mdle.errors import BackendError
 from mdle.runtime.scripted import ScriptedBackend
 
 
-def test_it_is_a_backend():
+def test_it_is_a_backend() -> None:
     assert isinstance(ScriptedBackend(), Backend)
 
 
-def test_arc_is_integrated_exactly():
+def test_arc_is_integrated_exactly() -> None:
     b = ScriptedBackend()
     b.command(Command(1.0, math.pi / 2))  # quarter circle of radius 2/pi in 1 s
     for _ in range(10):
@@ -29,7 +29,7 @@ def test_arc_is_integrated_exactly():
     assert b.time == pytest.approx(1.0)
 
 
-def test_commands_are_clamped_and_recorded():
+def test_commands_are_clamped_and_recorded() -> None:
     b = ScriptedBackend(limits=RobotLimits(0.5, 0.2, 1.0))
     b.command(Command(2.0, -3.0))
     b.advance(0.1)
@@ -37,7 +37,7 @@ def test_commands_are_clamped_and_recorded():
     assert b.commands == [(0.0, Command(0.5, -1.0)), (pytest.approx(0.1), Command(-0.2, 0.5))]
 
 
-def test_watchdog_stops_a_robot_left_without_commands():
+def test_watchdog_stops_a_robot_left_without_commands() -> None:
     b = ScriptedBackend(watchdog=0.25)
     b.command(Command(1.0, 0.0))
     for _ in range(5):
@@ -45,7 +45,7 @@ def test_watchdog_stops_a_robot_left_without_commands():
     assert b.held == Command() and b.pose.x == pytest.approx(0.2)
 
 
-def test_refusing_robot_records_but_does_not_move():
+def test_refusing_robot_records_but_does_not_move() -> None:
     b = ScriptedBackend(motors_enabled=False)
     b.command(Command(1.0, 0.0))
     b.advance(1.0)
@@ -53,7 +53,7 @@ def test_refusing_robot_records_but_does_not_move():
     assert b.pose == Pose() and obs.v == 0.0 and not obs.motors_enabled
 
 
-def test_dropped_link_raises_backend_error_but_stop_never_raises():
+def test_dropped_link_raises_backend_error_but_stop_never_raises() -> None:
     b = ScriptedBackend(drop_at=0.2)
     b.observe()
     b.advance(0.1)
@@ -67,7 +67,7 @@ def test_dropped_link_raises_backend_error_but_stop_never_raises():
     assert b.closed and len(b.stops) == 2
 
 
-def test_script_overrides_and_clock_mode():
+def test_script_overrides_and_clock_mode() -> None:
     b = ScriptedBackend([{"stalled": True}, {"battery": 12.5}], clock=ClockMode.WALL,
                         start_time=100.0)
     assert b.clock is ClockMode.WALL

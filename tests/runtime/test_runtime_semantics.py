@@ -8,8 +8,12 @@ compare node statuses per tick.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+from typing import Any
+
 import pytest
 
+from atoms.registry import Context
 from mdle.backend import Command
 from mdle.program import StringKind
 from mdle.runtime import Cause, Recorder, Scheduler, run
@@ -20,7 +24,7 @@ def vs(backend: ScriptedBackend) -> list[float]:
     return [round(c.v, 9) for c in backend.commanded()]
 
 
-def test_string_runs_left_to_right_and_completes_upwards(ir):
+def test_string_runs_left_to_right_and_completes_upwards(ir: SimpleNamespace) -> None:
     # rules 1, 2: each element starts its own clock; the last one's end ends the string.
     main = ir.string("main", ir.atom("a", 1.0, timer=0.2), ir.atom("b", 2.0, timer=0.3),
                      kind=StringKind.PLAN)
@@ -40,7 +44,7 @@ def test_string_runs_left_to_right_and_completes_upwards(ir):
     assert backend.stops == [pytest.approx(0.5)]
 
 
-def test_outermost_firing_element_wins(ir):
+def test_outermost_firing_element_wins(ir: SimpleNamespace) -> None:
     # rules 3, 4: parent and child fire at the same tick: the parent's record wins, the
     # child is ended by its parent, control passes to the parent's successor.
     inner = ir.string("p", ir.atom("c", 1.0, when="c"), ir.atom("c2", 5.0), when="p")
@@ -58,7 +62,7 @@ def test_outermost_firing_element_wins(ir):
                     "main/d": (1, Cause.TIMER), "main": (0, Cause.COMPLETED)}
 
 
-def test_outermost_of_three_firing_levels_wins(ir):
+def test_outermost_of_three_firing_levels_wins(ir: SimpleNamespace) -> None:
     inner = ir.string("mid", ir.string("low", ir.atom("leaf", 1.0, when="x"), when="x"),
                       when="x")
     main = ir.string("top", inner, ir.atom("next", 3.0, timer=0.1))
@@ -69,7 +73,7 @@ def test_outermost_of_three_firing_levels_wins(ir):
         "-top/mid:interrupt", "+top/next"]
 
 
-def test_inner_element_ends_alone_when_only_it_fires(ir):
+def test_inner_element_ends_alone_when_only_it_fires(ir: SimpleNamespace) -> None:
     main = ir.string("main", ir.string("p", ir.atom("c", 1.0, when="c"), ir.atom("e", 4.0)),
                      when="stop")
     backend = ScriptedBackend(ir.signals(6, c=[1], stop=[3]))
@@ -82,12 +86,12 @@ def test_inner_element_ends_alone_when_only_it_fires(ir):
     assert vs(backend) == [1.0, 4.0, 4.0, 0.0]
 
 
-def test_zero_time_element_gets_no_control(ir):
+def test_zero_time_element_gets_no_control(ir: SimpleNamespace) -> None:
     # rule 5: `a` starts with its interrupt true: it ends in zero time, `b` is tested and
     # runs in the same tick; a's law is never evaluated.
     steps = []
 
-    def a_step(args, ctx, state):
+    def a_step(args: Any, ctx: Context, state: Any) -> Command:
         steps.append(ctx.obs.time)
         return Command(9.0, 0.0)
 
@@ -103,7 +107,7 @@ def test_zero_time_element_gets_no_control(ir):
     assert vs(backend) == [2.0, 2.0, 0.0]
 
 
-def test_zero_timer_is_zero_time(ir):
+def test_zero_timer_is_zero_time(ir: SimpleNamespace) -> None:
     main = ir.string("main", ir.atom("a", 9.0, timer=0.0), ir.atom("b", 1.0, timer=0.1))
     backend = ScriptedBackend()
     result = run(main, backend)
@@ -111,7 +115,7 @@ def test_zero_timer_is_zero_time(ir):
     assert vs(backend) == [1.0, 0.0]
 
 
-def test_string_of_zero_time_elements_completes_in_one_tick(ir):
+def test_string_of_zero_time_elements_completes_in_one_tick(ir: SimpleNamespace) -> None:
     s = ir.string("s", ir.atom("a", 9.0, when="z"), ir.atom("b", 9.0, when="z"))
     main = ir.string("main", s, ir.atom("c", 1.0, timer=0.1))
     backend = ScriptedBackend(ir.signals(3, z=[0]))
@@ -122,7 +126,7 @@ def test_string_of_zero_time_elements_completes_in_one_tick(ir):
     assert vs(backend) == [1.0, 0.0]
 
 
-def test_repetition_of_zero_time_elements_does_not_spin_within_a_tick(ir):
+def test_repetition_of_zero_time_elements_does_not_spin_within_a_tick(ir: SimpleNamespace) -> None:
     # rule 5: a repeated string whose whole pass takes no time makes one pass per tick,
     # with the robot held still, until its elements can run or an interrupt ends it.
     r = ir.string("r", ir.atom("a", 1.0, when="z"), ir.atom("b", 9.0, when="z"), repeat=True,
@@ -140,7 +144,7 @@ def test_repetition_of_zero_time_elements_does_not_spin_within_a_tick(ir):
     assert vs(backend) == [0.0, 0.0, 1.0, 0.0]
 
 
-def test_child_timer_is_bounded_by_parent_timer(ir):
+def test_child_timer_is_bounded_by_parent_timer(ir: SimpleNamespace) -> None:
     # rule 6: the parent's 0.3 s bounds its child's 5 s.
     p = ir.string("p", ir.atom("c", 1.0, timer=5.0), timer=0.3)
     main = ir.string("main", p, ir.atom("d", 2.0, timer=0.1))
@@ -153,20 +157,20 @@ def test_child_timer_is_bounded_by_parent_timer(ir):
     }
 
 
-def test_parent_and_child_timers_expiring_together_report_the_parent(ir):
+def test_parent_and_child_timers_expiring_together_report_the_parent(ir: SimpleNamespace) -> None:
     p = ir.string("p", ir.atom("c", 1.0, timer=0.2), timer=0.2)
     result = run(ir.string("main", p), ScriptedBackend())
     assert ir.table(result.events)[2] == [
         "-main/p/c:ended-by-parent", "-main/p:timer", "-main:completed"]
 
 
-def test_timer_is_reported_when_timer_and_interrupt_hold_together(ir):
+def test_timer_is_reported_when_timer_and_interrupt_hold_together(ir: SimpleNamespace) -> None:
     result = run(ir.string("main", ir.atom("a", 1.0, when="x", timer=0.2)),
                  ScriptedBackend(ir.signals(4, x=[2])))
     assert ir.table(result.events)[2] == ["-main/a:timer", "-main:completed"]
 
 
-def test_repetition_is_ended_by_an_outer_interrupt(ir):
+def test_repetition_is_ended_by_an_outer_interrupt(ir: SimpleNamespace) -> None:
     r = ir.string("r", ir.atom("a", 1.0, timer=0.2), ir.atom("b", 2.0, timer=0.1),
                   repeat=True)
     g = ir.string("g", r, when="q", kind=StringKind.GROUP)
@@ -186,7 +190,7 @@ def test_repetition_is_ended_by_an_outer_interrupt(ir):
     assert vs(backend) == [1.0, 1.0, 2.0, 1.0, 1.0, 2.0, 1.0, 3.0, 0.0]
 
 
-def test_repetition_is_ended_by_its_own_timer(ir):
+def test_repetition_is_ended_by_its_own_timer(ir: SimpleNamespace) -> None:
     r = ir.string("r", ir.atom("a", 1.0, timer=0.2), repeat=True, timer=0.5)
     result = run(ir.string("main", r), ScriptedBackend())
     assert ir.table(result.events) == {
@@ -197,7 +201,7 @@ def test_repetition_is_ended_by_its_own_timer(ir):
     }
 
 
-def test_scaled_atom_scales_both_control_channels(ir):
+def test_scaled_atom_scales_both_control_channels(ir: SimpleNamespace) -> None:
     # (alpha, beta, sigma): alpha scales v and omega; beta is already in the timer
     # (the checker writes beta * T), so a 0.2 s atom with beta 2 carries timer 0.4.
     a = ir.atom("a", 0.4, 0.3, timer=2 * 0.2, scale=(0.5, 2.0))
@@ -207,14 +211,14 @@ def test_scaled_atom_scales_both_control_channels(ir):
     assert ir.table(result.events)[4] == ["-main/a:timer", "-main:completed"]
 
 
-def test_element_labels_are_disambiguated_in_paths(ir):
+def test_element_labels_are_disambiguated_in_paths(ir: SimpleNamespace) -> None:
     a = ir.atom("a", 1.0, timer=0.1)
     result = run(ir.string("main", a, a, ir.atom("b", timer=0.1), a), ScriptedBackend())
     starts = [e for e in map(ir.fmt, result.events) if e.startswith("+")]
     assert starts == ["+main", "+main/a", "+main/a#2", "+main/b", "+main/a#3"]
 
 
-def test_an_atom_can_be_run_alone(ir):
+def test_an_atom_can_be_run_alone(ir: SimpleNamespace) -> None:
     backend = ScriptedBackend(ir.signals(5, hit=[3]))
     result = run(ir.atom("go", 0.5, when="hit"), backend)
     assert ir.table(result.events) == {0: ["+go"], 3: ["-go:interrupt"]}
@@ -222,7 +226,7 @@ def test_an_atom_can_be_run_alone(ir):
     assert vs(backend) == [0.5, 0.5, 0.5, 0.0]
 
 
-def test_every_start_and_end_is_an_event_with_pose_and_level(ir):
+def test_every_start_and_end_is_an_event_with_pose_and_level(ir: SimpleNamespace) -> None:
     # rule 8: events carry the odometry pose at their tick.
     main = ir.string("main", ir.atom("a", 1.0, timer=0.5), ir.atom("b", timer=0.1))
     rec = Recorder()
@@ -236,7 +240,7 @@ def test_every_start_and_end_is_an_event_with_pose_and_level(ir):
 
 
 @pytest.mark.parametrize("ending", ["completed", "outer interrupt", "outer timer", "until"])
-def test_robot_is_stopped_whatever_ends_the_program(ir, ending):
+def test_robot_is_stopped_whatever_ends_the_program(ir: SimpleNamespace, ending: str) -> None:
     # rule 7
     main = ir.string("main", ir.atom("a", 1.0, timer=0.3 if ending == "completed" else 9.0),
                      when="q", timer=0.5 if ending == "outer timer" else float("inf"))
@@ -250,7 +254,7 @@ def test_robot_is_stopped_whatever_ends_the_program(ir, ending):
     assert backend.commanded()[-1] == Command(0.0, 0.0) or ending == "until"
 
 
-def test_until_stops_every_active_element(ir):
+def test_until_stops_every_active_element(ir: SimpleNamespace) -> None:
     main = ir.string("main", ir.string("p", ir.atom("a", 1.0)))
     result = run(main, ScriptedBackend(), until=0.3)
     assert ir.table(result.events)[3] == ["-main/p/a:stopped", "-main/p:stopped",
@@ -258,7 +262,7 @@ def test_until_stops_every_active_element(ir):
     assert result.ticks == 4
 
 
-def test_scheduler_steps_tick_by_tick(ir):
+def test_scheduler_steps_tick_by_tick(ir: SimpleNamespace) -> None:
     main = ir.string("main", ir.string("p", ir.atom("a", 1.0, timer=0.2), timer=5.0),
                      ir.atom("b", 2.0, timer=0.1))
     sch = Scheduler(main, ScriptedBackend())

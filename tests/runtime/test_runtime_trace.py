@@ -5,9 +5,13 @@ from __future__ import annotations
 import gc
 import json
 import math
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
 import pytest
 
+from atoms.registry import Context
 from mdle.backend import Command
 from mdle.errors import MdleRuntimeError
 from mdle.runtime import Cause, Scheduler, run
@@ -15,7 +19,7 @@ from mdle.runtime.scripted import ScriptedBackend
 from mdle.trace import TraceError, TraceWriter, read_trace
 
 
-def test_trace_has_header_events_samples_and_end(ir, tmp_path):
+def test_trace_has_header_events_samples_and_end(ir: SimpleNamespace, tmp_path: Path) -> None:
     path = tmp_path / "run.jsonl"
     main = ir.string("main", ir.atom("a", 1.0, timer=0.2), ir.atom("b", 0.0, 0.5, timer=0.1))
     script = lambda t, k: {"truth": {"clearance": 2.0 - t, "collided": False}}  # noqa: E731
@@ -36,12 +40,14 @@ def test_trace_has_header_events_samples_and_end(ir, tmp_path):
     assert trace.column("x").tolist() == pytest.approx([0.0, 0.1, 0.2, 0.2])
     assert trace.column("clearance").tolist() == pytest.approx([2.0, 1.9, 1.8, 1.7])
     assert trace.column("cmd_omega").tolist() == [0.0, 0.0, 0.5, 0.0]
+    assert trace.end is not None
     assert trace.end["cause"] == "completed" and trace.end["ticks"] == 4
     assert len(trace.end["terminations"]) == 3 and not trace.truncated
 
 
-def test_non_finite_values_become_null_and_diagnostics_are_kept(ir, tmp_path):
-    def step(args, ctx, state):
+def test_non_finite_values_become_null_and_diagnostics_are_kept(ir: SimpleNamespace,
+                                                                tmp_path: Path) -> None:
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         ctx.cache["trace"] = {"front": math.inf, "curvature": -0.5 if ctx.t else math.nan}
         return Command(0.2, 0.0)
 
@@ -57,12 +63,13 @@ def test_non_finite_values_become_null_and_diagnostics_are_kept(ir, tmp_path):
     assert math.isnan(trace.column("diag.front")[1])
 
 
-def test_without_a_flush_period_every_record_is_on_disk_at_once(ir, tmp_path):
+def test_without_a_flush_period_every_record_is_on_disk_at_once(ir: SimpleNamespace,
+                                                                tmp_path: Path) -> None:
     # flush_period=0: one write per record, the file is complete before each law step
     seen = []
     path = tmp_path / "t.jsonl"
 
-    def step(args, ctx, state):
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         seen.append(len(path.read_text().splitlines()))
         return Command()
 
@@ -82,12 +89,13 @@ class _Clock:
         return self.now
 
 
-def test_samples_wait_at_most_the_flush_period_and_events_none(ir, tmp_path):
+def test_samples_wait_at_most_the_flush_period_and_events_none(ir: SimpleNamespace,
+                                                               tmp_path: Path) -> None:
     clock = _Clock()
     seen = []
     path = tmp_path / "t.jsonl"
 
-    def step(args, ctx, state):
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         seen.append([json.loads(x)["type"] for x in path.read_text().splitlines()])
         clock.now += 0.004  # each tick takes 4 ms of wall time
         return Command()
@@ -108,11 +116,12 @@ def test_samples_wait_at_most_the_flush_period_and_events_none(ir, tmp_path):
 
 
 @pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
-def test_a_run_ended_by_ctrl_c_or_a_crash_leaves_every_sample_on_disk(ir, tmp_path, error):
+def test_a_run_ended_by_ctrl_c_or_a_crash_leaves_every_sample_on_disk(
+        ir: SimpleNamespace, tmp_path: Path, error: type[BaseException]) -> None:
     # a long flush period: only the run's end can have written the samples
     calls = []
 
-    def step(args, ctx, state):
+    def step(args: Any, ctx: Context, state: Any) -> Command:
         calls.append(ctx.t)
         if len(calls) == 5:
             raise error("boom")
@@ -129,7 +138,8 @@ def test_a_run_ended_by_ctrl_c_or_a_crash_leaves_every_sample_on_disk(ir, tmp_pa
     assert trace.end["cause"] == ("stopped" if error is KeyboardInterrupt else "error")
 
 
-def test_a_writer_dropped_without_close_still_writes_what_it_queued(ir, tmp_path):
+def test_a_writer_dropped_without_close_still_writes_what_it_queued(ir: SimpleNamespace,
+                                                                    tmp_path: Path) -> None:
     path = tmp_path / "t.jsonl"
     writer = TraceWriter(path, flush_period=3600.0)
     sch = Scheduler(ir.atom("a", 0.1), ScriptedBackend(), observers=[writer])
@@ -141,12 +151,12 @@ def test_a_writer_dropped_without_close_still_writes_what_it_queued(ir, tmp_path
     assert len(trace.samples) == 3 and trace.end is None and not trace.truncated
 
 
-def test_flush_period_must_not_be_negative(tmp_path):
+def test_flush_period_must_not_be_negative(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="flush_period"):
         TraceWriter(tmp_path / "t.jsonl", flush_period=-1.0)
 
 
-def test_reader_accepts_a_cut_off_last_line(ir, tmp_path):
+def test_reader_accepts_a_cut_off_last_line(ir: SimpleNamespace, tmp_path: Path) -> None:
     path = tmp_path / "t.jsonl"
     run(ir.atom("a", 1.0, timer=0.3), ScriptedBackend(), observers=[TraceWriter(path)])
     text = path.read_text()
@@ -164,21 +174,22 @@ def test_reader_accepts_a_cut_off_last_line(ir, tmp_path):
      ":2:1: error: not JSON"),
     ('{"type":"header","format":"mdle-trace","version":1}\n[1, 2]\n', "JSON object"),
 ])
-def test_reader_rejects_what_is_not_a_trace(tmp_path, text, message):
+def test_reader_rejects_what_is_not_a_trace(tmp_path: Path, text: str, message: str) -> None:
     path = tmp_path / "bad.jsonl"
     path.write_text(text)
     with pytest.raises(TraceError, match=message):
         read_trace(path)
 
 
-def test_missing_trace_is_a_clear_error(tmp_path):
+def test_missing_trace_is_a_clear_error(tmp_path: Path) -> None:
     with pytest.raises(TraceError, match="cannot read trace"):
         read_trace(tmp_path / "nope.jsonl")
 
 
-def test_trace_of_an_aborted_run_ends_with_the_abort(ir, tmp_path):
+def test_trace_of_an_aborted_run_ends_with_the_abort(ir: SimpleNamespace, tmp_path: Path) -> None:
     path = tmp_path / "t.jsonl"
     result = run(ir.atom("a", 1.0), ScriptedBackend(), until=0.3, observers=[TraceWriter(path)])
     trace = read_trace(path)
+    assert trace.end is not None
     assert result.cause is Cause.STOPPED and trace.end["cause"] == "stopped"
     assert trace.events[-1]["cause"] == "stopped"
