@@ -60,7 +60,7 @@ _BEARING_TOL = math.radians(1.5)
 
 
 def parse_side(value: Any) -> Side:
-    """``right``/``left`` (a symbol or a :class:`Side`) as a :class:`Side`.
+    """Convert ``right``/``left`` (a symbol or a :class:`Side`) to a :class:`Side`.
 
     >>> parse_side("left")
     <Side.LEFT: 'left'>
@@ -150,7 +150,7 @@ def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
 
 
 def _run(links: list[bool], first: int, last: int, backwards: bool) -> int:
-    """How many consecutive links hold from ``first`` on (towards ``last``, exclusive)."""
+    """Count the consecutive links that hold from ``first`` on (towards ``last``, exclusive)."""
     seg = links[first:last]
     if backwards:
         seg.reverse()
@@ -159,7 +159,7 @@ def _run(links: list[bool], first: int, last: int, backwards: bool) -> int:
 
 
 def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
-    """Side ray from the first surface's beams 0..n (beam 0 at -90 deg), all valid.
+    """Fit the side ray to the first surface's beams 0..n (beam 0 at -90 deg), all valid.
 
     ``z`` holds their points as complex ``x + iy`` in the law frame.
 
@@ -222,7 +222,7 @@ def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
 
 def _front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
                windows: tuple[int, ...], exact: bool = False) -> "Ray | None":
-    """Front ray at local beam ``c`` of the points ``z`` (complex ``x + iy``, law frame).
+    """Compute the front ray at local beam ``c`` of the points ``z`` (complex, law frame).
 
     Its surface extends ``right`` beams before and ``left`` beams after it.
 
@@ -271,7 +271,7 @@ def _front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
 def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
                   windows: Sequence[int] = (7, 8, 9),
                   side_span: float = math.radians(30.0)) -> BoundaryView:
-    """The front and side rays for following ``side``, from one scan.
+    """Compute the front and side rays for following ``side`` from one scan.
 
     Only the beams the two rays need are read (the side fit's span from -90 deg, the front
     beam and its windows), with the scan's connectivity rule (:func:`atoms.estimators.surfaces`)
@@ -365,7 +365,7 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
 
 def _front_full(ranges: "np.ndarray", bearings: "np.ndarray", valid: "np.ndarray", left: bool,
                 c: int, r0: float, windows: tuple[int, ...]) -> "Ray":
-    """:func:`_front_ray` with the true extent of the front beam's surface (whole scan)."""
+    """Run :func:`_front_ray` with the true extent of the front beam's surface (whole scan)."""
     import numpy as np
 
     from atoms.estimators import surfaces
@@ -381,14 +381,14 @@ def _front_full(ranges: "np.ndarray", bearings: "np.ndarray", valid: "np.ndarray
 
 def cached_view(ctx: Context, side: Side | str, windows: Sequence[int] = (7, 8, 9),
                 side_span: float = math.radians(30.0)) -> BoundaryView:
-    """:func:`boundary_view` of this tick's scan, computed once per tick and side."""
+    """Return :func:`boundary_view` of this tick's scan, computed once per tick and side."""
     side = parse_side(side)
     key = ("boundary", side, tuple(windows), side_span)
     view = ctx.cache.get(key)
     if view is None:
         view = boundary_view(ctx.obs.scan, side, windows, side_span)
         ctx.cache[key] = view
-    return view  # type: ignore[no-any-return]
+    return view
 
 
 _SIDE = Param("side", default="right", choices=SIDES,
@@ -397,7 +397,7 @@ _SIDE = Param("side", default="right", choices=SIDES,
 
 @sensor(_SIDE, result=LENGTH)
 def boundary_range(args: Args, ctx: Context) -> float:
-    """Range to the boundary along the side ray (-90 deg for right, +90 deg for left).
+    """Return the range to the boundary along the side ray (-90 deg for right, +90 deg for left).
 
     The sensor's maximum range when that ray sees no surface (or no scan has arrived).
     """
@@ -407,7 +407,7 @@ def boundary_range(args: Args, ctx: Context) -> float:
 
 @sensor(_SIDE, result=CURVATURE)
 def boundary_curvature(args: Args, ctx: Context) -> float:
-    """Signed curvature of the boundary where the side ray hits it, 1/m.
+    """Return the signed curvature of the boundary where the side ray hits it, 1/m.
 
     Right: the boundary oriented with the obstacle on its right (convex negative); left:
     obstacle on its left (convex positive). 0 (the paper's virtual boundary) with no hit.
@@ -421,7 +421,7 @@ def boundary_curvature(args: Args, ctx: Context) -> float:
 
 @sensor(_SIDE, result=ANGLE)
 def boundary_tangent(args: Args, ctx: Context) -> float:
-    """Angle of the boundary's tangent at the side ray's hit, from the heading, radians.
+    """Return the angle of the boundary's tangent at the side ray's hit from the heading, rad.
 
     Oriented as for :func:`boundary_curvature`; 0 when following it exactly, and 0 (the
     virtual boundary, aligned with the heading) with no hit.

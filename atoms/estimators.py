@@ -41,7 +41,7 @@ Example: five beams on a wall 1 m ahead (x = 1), seen from -20 to +20 degrees.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -129,7 +129,7 @@ class Estimate:
 
 @lru_cache(maxsize=16)
 def _bearing_terms(key: bytes, gap_factor: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per-bearing constants of a scan layout, memoised and read-only.
+    """Compute the per-bearing constants of a scan layout, memoised and read-only.
 
     The unit directions ``cos a + i sin a`` and the link limit per unit range of each beam
     spacing, ``gap_factor * |a[j+1] - a[j]|``: a pure function of the bearings, and one
@@ -147,14 +147,14 @@ def _bearing_terms(key: bytes, gap_factor: float) -> tuple[np.ndarray, np.ndarra
 
 def _unit_directions(a: np.ndarray, gap_factor: float = DEFAULT_GAP_FACTOR
                      ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_bearing_terms` of a 1-D float64 bearing array."""
+    """Return :func:`_bearing_terms` of a 1-D float64 bearing array."""
     return _bearing_terms(np.ascontiguousarray(a).tobytes(), float(gap_factor))
 
 
 def _complex_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None,
                     gap_factor: float = DEFAULT_GAP_FACTOR
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Points of a 1-D scan as complex ``x + iy`` (NaN where invalid).
+    """Return the points of a 1-D scan as complex ``x + iy`` (NaN where invalid).
 
     Also returns the valid mask, the NaN-masked ranges and the link limits per unit range of
     :func:`_bearing_terms`.
@@ -171,7 +171,7 @@ def _complex_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray 
 
 def scan_points(ranges: np.ndarray, bearings: np.ndarray,
                 valid: np.ndarray | None = None) -> np.ndarray:
-    """Robot-frame points of a scan.
+    """Compute the robot-frame points of a scan.
 
     Parameters
     ----------
@@ -204,14 +204,14 @@ def scan_points(ranges: np.ndarray, bearings: np.ndarray,
 
 @lru_cache(maxsize=16)
 def _beam_index(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``arange(n)``, its tail ``1..n-1`` and its head ``0..n-2`` (memoised, read-only)."""
+    """Return ``arange(n)``, its tail ``1..n-1`` and its head ``0..n-2`` (memoised, read-only)."""
     idx = np.arange(n)
     idx.setflags(write=False)
     return idx, idx[1:], idx[:-1]
 
 
 def _segment_bounds(link: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """First and last index of each beam's run of linked neighbours, and the reach."""
+    """Find the first and last index of each beam's run of linked neighbours, and the reach."""
     idx, tail, head = _beam_index(n)
     start = np.empty(n, dtype=np.intp)
     start[0] = 0  # a run starts where a beam is not linked to the one before it
@@ -295,7 +295,7 @@ def smooth_positions(s: Surfaces, sigma: float = 1.0, truncate: float = 3.0) -> 
 
 
 def menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
-    """Signed curvature of the circle through three points (Heron/Menger, equation 10).
+    """Compute the signed curvature of the circle through three points (Heron/Menger, eq. 10).
 
     ``4 * area / (a b c)``, with the area from the cross product (exactly Heron's value, but
     without its cancellation for thin triangles) and the sign of the turn ``p0 -> p1 -> p2``
@@ -324,7 +324,7 @@ def menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
 
 @lru_cache(maxsize=64)
 def _window_index(n: int, windows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """Index arrays of every window for an N-beam scan, memoised and read-only.
+    """Build the index arrays of every window for an N-beam scan, memoised and read-only.
 
     A pure function (scans of one sensor always have the same N).
 
@@ -368,7 +368,7 @@ def _sides(s: Surfaces, windows: Sequence[int] | int
 
 
 def _average(kt: np.ndarray, ok: np.ndarray) -> Estimate:
-    """Mean over the windows that fit, NaN where none does.
+    """Average over the windows that fit, NaN where none does.
 
     ``kt`` (2, W, N) complex holds half the curvature of each window in ``kt[0].real`` and
     its tangent, weighted by ``|u|`` (longer windows weigh more), in ``kt[1]``; both are 0
@@ -388,14 +388,14 @@ def _average(kt: np.ndarray, ok: np.ndarray) -> Estimate:
 
 
 def _masked_inverse(den: np.ndarray, ok: np.ndarray) -> np.ndarray:
-    """``1 / den`` where ``ok``, 0 elsewhere (``den`` finite and > 0 where ``ok``)."""
+    """Return ``1 / den`` where ``ok``, 0 elsewhere (``den`` finite and > 0 where ``ok``)."""
     inv = np.zeros(den.shape)
     np.divide(1.0, den, out=inv, where=ok)
     return inv
 
 
 def classical_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
-    """Classical estimate: turning angle over arc length (equations 7-9), window ``w``.
+    """Estimate classically: turning angle over arc length (equations 7-9), window ``w``.
 
     ``delta_theta`` is the signed angle from the chord ``P[n]-P[n-w]`` to ``P[n+w]-P[n]``
     (equation 8 gives its magnitude, the sign is the turn's). The turn is spread over the arc
@@ -438,7 +438,7 @@ def classical_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
 
 
 def geometric_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
-    """Geometric estimate: the circle through ``P[n-w], P[n], P[n+w]`` (equation 10).
+    """Estimate geometrically: the circle through ``P[n-w], P[n], P[n+w]`` (equation 10).
 
     ``kappa = 4 * area / (a b c)`` (Heron's formula, with the area from the cross product,
     which is the same number without Heron's cancellation on thin triangles), signed by the
@@ -477,8 +477,9 @@ def geometric_curvature(s: Surfaces, w: int | Sequence[int] = 1) -> Estimate:
     return _average(kt, ok)
 
 
-def averaged_curvature(s: Surfaces, windows: Sequence[int] = DEFAULT_WINDOWS) -> Estimate:
-    """Averaged geometric estimate over ``windows`` (equation 11; the paper's choice 7-9).
+def averaged_curvature(s: Surfaces, windows: int | Sequence[int] = DEFAULT_WINDOWS
+                       ) -> Estimate:
+    """Average the geometric estimate over ``windows`` (equation 11; the paper's choice 7-9).
 
     A beam is valid when at least one window fits on its surface; the mean is over those that
     fit (near a surface's end the larger windows drop out first).
@@ -486,7 +487,8 @@ def averaged_curvature(s: Surfaces, windows: Sequence[int] = DEFAULT_WINDOWS) ->
     Parameters
     ----------
     s : Surfaces
-    windows : sequence of int, beams
+    windows : int or sequence of int, beams
+        One window is :func:`geometric_curvature` with that window.
 
     Returns
     -------
@@ -495,14 +497,15 @@ def averaged_curvature(s: Surfaces, windows: Sequence[int] = DEFAULT_WINDOWS) ->
     return geometric_curvature(s, windows)
 
 
-_METHODS = {"classical": classical_curvature, "geometric": geometric_curvature,
-            "averaged": averaged_curvature}
+_METHODS: dict[str, Callable[[Surfaces, int | Sequence[int]], Estimate]] = {
+    "classical": classical_curvature, "geometric": geometric_curvature,
+    "averaged": averaged_curvature}
 
 
 def estimate_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None = None, *,
                   method: str = "averaged", windows: int | Sequence[int] = DEFAULT_WINDOWS,
                   sigma: float = 0.0) -> Estimate:
-    """One call from a scan's arrays to per-beam curvature and tangent.
+    """Estimate per-beam curvature and tangent from a scan's arrays in one call.
 
     Parameters
     ----------
@@ -530,11 +533,11 @@ def estimate_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | 
     s = surfaces(ranges, bearings, valid)
     if sigma > 0:
         s = smooth_positions(s, sigma)
-    return fn(s, windows)  # type: ignore[operator,arg-type]
+    return fn(s, windows)
 
 
 def principal_direction(points: np.ndarray) -> float:
-    """Direction of the total-least-squares line through points, oriented first -> last.
+    """Return the direction of the total-least-squares line through points, first -> last.
 
     The points are centred (and the fit is scale-free), so the answer does not depend on how
     far they are from the origin. NaN for fewer than two distinct points.

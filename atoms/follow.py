@@ -52,7 +52,7 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
 
 
 def scan_points_cached(ctx: Context) -> Any:
-    """Robot-frame points (M, 2) of this tick's valid beams, computed once per tick."""
+    """Return the robot-frame points (M, 2) of this tick's valid beams, once per tick."""
     pts = ctx.cache.get("scan_points")
     if pts is None:
         import numpy as np

@@ -235,5 +235,5 @@ class Registry:
                                     *other.laws.values(), *other.sensors.values()])
 
     def names(self) -> list[str]:
-        """Every registered name, sorted (for completion and 'did you mean')."""
+        """Return every registered name, sorted (for completion and 'did you mean')."""
         return sorted([*self.laws, *self.sensors])

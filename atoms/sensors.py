@@ -22,7 +22,7 @@ _NO_SCAN_RANGE = math.inf
 @sensor(Param("angle", ANGLE, doc="bearing from the heading, counter-clockwise positive"),
         result=LENGTH, name="range")
 def range_(args: Args, ctx: Context) -> float:
-    """Range of the ladar beam nearest the bearing ``angle``; max range if it saw nothing."""
+    """Return the range of the ladar beam nearest the bearing ``angle`` (max range: no return)."""
     import numpy as np
 
     scan = ctx.obs.scan
@@ -35,7 +35,7 @@ def range_(args: Args, ctx: Context) -> float:
 @sensor(Param("start", ANGLE, doc="one end of the sector"),
         Param("end", ANGLE, doc="the other end of the sector"), result=LENGTH)
 def min_range(args: Args, ctx: Context) -> float:
-    """Smallest valid range over the beams whose bearings lie in the sector [start, end]."""
+    """Return the smallest valid range over the beams with bearings in the sector [start, end]."""
     import numpy as np
 
     scan = ctx.obs.scan
@@ -48,48 +48,48 @@ def min_range(args: Args, ctx: Context) -> float:
 
 @sensor(result=LENGTH)
 def x(args: Args, ctx: Context) -> float:
-    """Odometry x, metres."""
+    """Return the odometry x, metres."""
     return ctx.obs.pose.x
 
 
 @sensor(result=LENGTH)
 def y(args: Args, ctx: Context) -> float:
-    """Odometry y, metres."""
+    """Return the odometry y, metres."""
     return ctx.obs.pose.y
 
 
 @sensor(result=ANGLE)
 def theta(args: Args, ctx: Context) -> float:
-    """Odometry heading, radians in (-pi, pi]."""
+    """Return the odometry heading, radians in (-pi, pi]."""
     return ctx.obs.pose.theta
 
 
 @sensor(result=SPEED)
 def speed(args: Args, ctx: Context) -> float:
-    """Measured forward speed, m/s."""
+    """Return the measured forward speed, m/s."""
     return ctx.obs.v
 
 
 @sensor(result=TURN_RATE)
 def turn_rate(args: Args, ctx: Context) -> float:
-    """Measured turn rate, rad/s."""
+    """Return the measured turn rate, rad/s."""
     return ctx.obs.omega
 
 
 @sensor(result=TIME)
 def t(args: Args, ctx: Context) -> float:
-    """Local time of the element whose interrupt is being tested, seconds."""
+    """Return the local time of the element whose interrupt is being tested, seconds."""
     return ctx.t
 
 
 @sensor(result=BOOL)
 def stalled(args: Args, ctx: Context) -> bool:
-    """Whether the robot pushes against something and cannot move (Pioneer stall flag)."""
+    """Tell whether the robot pushes against something and cannot move (Pioneer stall flag)."""
     return ctx.obs.stalled
 
 
 @sensor(Param("x", LENGTH), Param("y", LENGTH), result=LENGTH)
 def dist_to(args: Args, ctx: Context) -> float:
-    """Distance from the robot (odometry) to the point (x, y), metres."""
+    """Return the distance from the robot (odometry) to the point (x, y), metres."""
     p = ctx.obs.pose
     return math.hypot(float(args["x"]) - p.x, float(args["y"]) - p.y)

@@ -58,7 +58,7 @@ CORNER = "corner"
 
 
 def wrap(a: float) -> float:
-    """Angle wrapped to (-pi, pi]."""
+    """Wrap an angle to (-pi, pi]."""
     return math.atan2(math.sin(a), math.cos(a))
 
 
@@ -229,7 +229,7 @@ def _valid_side(side: Ray, g: Gains) -> Ray:
 
 def follow_law(front: Ray, side: Ray, v: float, rc: float, g: Gains,
                umax: float | None = None) -> float:
-    """Grazing rejection, the front gate and blend, the CLF law and the front floor.
+    """Apply grazing rejection, the front gate and blend, the CLF law and the front floor.
 
     Parameters
     ----------
@@ -281,7 +281,7 @@ def corner_law(d: float, e: float, v: float, rc: float, g: Gains, umax: float) -
 def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: float,
          mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
          filter_kappa: bool = True) -> float:
-    """One tick of right-hand following with the corner mode and the curvature filter.
+    """Run one tick of right-hand following with the corner mode and the curvature filter.
 
     Parameters
     ----------
@@ -351,7 +351,7 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
 
 def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookahead: float,
                    samples: int) -> "np.ndarray":
-    """Clearance (m, before the body radius) of arcs driven at ``speed`` and ``rates``.
+    """Compute the clearance (m, before the body radius) of arcs at ``speed`` and ``rates``.
 
     Each arc lasts ``lookahead`` seconds and is sampled at ``samples`` points after the start.
     """

@@ -9,17 +9,17 @@ control-law.md suggests (50 Hz scan, 100 Hz exact). Prints one line per shape.
 
 from __future__ import annotations
 
+import argparse
 import sys
+import time
 from pathlib import Path
 
 # A script's folder comes first on sys.path: keep benchmarks/*.py (benchmarks/sim.py, say)
 # from shadowing the packages of the same name.
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
 
-import argparse  # noqa: E402 (after the sys.path fix above)
-import time  # noqa: E402
-
-from mdle.experiments.following import SHAPES, random_starts, table  # noqa: E402
+# After the sys.path fix: a run imports ``sim``, which benchmarks/sim.py would shadow.
+from mdle.experiments.following import SHAPES, random_starts, table  # noqa: E402 (see above)
 
 
 def main() -> None:

@@ -76,7 +76,7 @@ def _estimate(row: Row, scan: Any) -> Any:
 
 
 def object_scans(world: str, draws: int, seed: int) -> tuple[list[Any], Any]:
-    """``draws`` noisy scans of a reference world from its start pose, and the exact one."""
+    """Scan a reference world from its start pose: ``draws`` noisy scans and the exact one."""
     from sim import SimBackend, load_world
 
     w = load_world(world)
@@ -91,7 +91,7 @@ def object_scans(world: str, draws: int, seed: int) -> tuple[list[Any], Any]:
 
 
 def run_table(draws: int = 200, seed: int = 0, rows: Sequence[Row] = ROWS) -> Result:
-    """Table 1 from ``draws`` noisy scans of each object."""
+    """Compute Table 1 from ``draws`` noisy scans of each object."""
     import numpy as np
 
     out: dict[Row, dict[str, float]] = {r: {} for r in rows}
@@ -110,7 +110,7 @@ def run_table(draws: int = 200, seed: int = 0, rows: Sequence[Row] = ROWS) -> Re
 
 
 def format_table(result: Result) -> str:
-    """Table 1 as plain text: ours beside the paper's, per object."""
+    """Format Table 1 as plain text: ours beside the paper's, per object."""
     head = (f"{'estimate':36} {'trash can':>9} {'(paper)':>8} {'cabinet':>9} {'(paper)':>8}")
     lines = [head, "-" * len(head)]
     for row, vals in result.rms.items():

@@ -11,6 +11,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the runtime is imported inside run_follow, when a run needs it
+    from mdle.runtime.observer import Recorder
 
 __all__ = ["FollowRun", "follow_plan", "run_follow", "random_starts", "SHAPES"]
 
@@ -43,7 +47,7 @@ class FollowRun:
 
 
 def follow_plan(side: str, rc: float, v: float, duration: float, extra: str = "") -> str:
-    """MDLe text of a plan that follows a boundary for ``duration`` seconds."""
+    """Write the MDLe text of a plan that follows a boundary for ``duration`` seconds."""
     return (f"atom follow = (follow_boundary(side = {side}, rc = {rc:g} m, v = {v:g} m/s{extra}),"
             f" never, {duration:g} s)\nplan main = ((follow), never, inf)\n")
 
@@ -53,7 +57,7 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
                duration: float = 60.0, rate: float | None = None,
                pose: tuple[float, float, float] | None = None, extra: str = "",
                plan: str | None = None, element: str = "main",
-               recorder: object | None = None) -> FollowRun:
+               recorder: Recorder | None = None) -> FollowRun:
     """Run a following plan in a world (reference name or YAML path) and measure it.
 
     ``rate`` defaults to control-law.md section 5: 100 Hz with exact sensing, 50 Hz with
@@ -81,8 +85,8 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
     if pose is not None:
         backend.reset(Pose(*pose))
     rec = recorder if recorder is not None else Recorder()
-    result = run(program.elements[element], backend, rate=rate, observers=[rec])  # type: ignore[list-item]
-    samples = rec.samples  # type: ignore[attr-defined]
+    result = run(program.elements[element], backend, rate=rate, observers=[rec])
+    samples = rec.samples
     t = np.array([s.time for s in samples])
     radius = backend.limits.radius
     d = np.array([s.clearance for s in samples]) + radius
@@ -97,7 +101,7 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
 
 def _start_poses(world: str, n: int, seed: int, distance: float = 8.0
                  ) -> list[tuple[float, float, float]]:
-    """Seeded starts ``distance`` from the obstacle's centre, heading at it +-17 deg.
+    """Draw seeded starts ``distance`` from the obstacle's centre, heading at it +-17 deg.
 
     The wall: a random position 1-6 m above it, heading -11 to -169 deg.
     """
@@ -125,7 +129,7 @@ def _start_poses(world: str, n: int, seed: int, distance: float = 8.0
 def random_starts(world: str, n: int = 50, *, seed: int = 0, side: str = "right",
                   sensing: str = "scan", duration: float = 40.0, rate: float | None = None,
                   v: float = 1.0) -> list[FollowRun]:
-    """``n`` seeded random starts headed roughly at the obstacle; one FollowRun each."""
+    """Run ``n`` seeded random starts headed roughly at the obstacle; one FollowRun each."""
     runs = []
     for i, pose in enumerate(_start_poses(world, n, seed)):
         runs.append(run_follow(world, side=side, sensing=sensing, seed=seed * 1000 + i,

@@ -7,8 +7,8 @@ robot's right), maximum range 10 m, beams with no return at max range and ``vali
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,7 +16,7 @@ import pytest
 from mdle.backend import Scan
 
 MAX_RANGE = 10.0
-BEARINGS = np.radians(np.arange(-90.0, 90.5, 1.0))
+BEARINGS: np.ndarray = np.radians(np.arange(-90.0, 90.5, 1.0))
 
 
 def cast_circle(center: tuple[float, float], radius: float,
@@ -56,8 +56,13 @@ class Case:
 
     name: str
     scan: Scan
-    curvature: Callable[[np.ndarray], np.ndarray] | None  # truth per beam index, None: no beam valid
+    # truth per beam index; None: no beam valid
+    curvature: Callable[[np.ndarray], np.ndarray] | None
     min_valid: int  # beams at least this many must be valid for a 1-beam window
+
+
+def _zero(idx: np.ndarray) -> np.ndarray:
+    return np.zeros(idx.shape)
 
 
 def _catalogue() -> dict[str, Case]:
@@ -68,14 +73,13 @@ def _catalogue() -> dict[str, Case]:
     circle = make_scan(cast_circle((2.0, 0.0), 1.0))                # R = 1 m, 1 m ahead
     corner_r = np.minimum(cast_line((1.5, 0.0), (1.0, 0.0)), cast_line((0.0, -0.8), (0.0, -1.0)))
     corner = make_scan(corner_r)                                     # concave right-angle corner
-    zero = lambda idx: np.zeros(idx.shape)  # noqa: E731
     return {
         "empty": Case("empty", empty, None, 0),
         "all_invalid": Case("all_invalid", invalid, None, 0),
         "all_max_range": Case("all_max_range", at_max, None, 0),
-        "straight_wall": Case("straight_wall", wall, zero, 80),
+        "straight_wall": Case("straight_wall", wall, _zero, 80),
         "circle_R1": Case("circle_R1", circle, lambda idx: np.full(idx.shape, -1.0), 50),
-        "right_angle_corner": Case("right_angle_corner", corner, zero, 150),
+        "right_angle_corner": Case("right_angle_corner", corner, _zero, 150),
     }
 
 
@@ -88,13 +92,21 @@ def case(request: pytest.FixtureRequest) -> Case:
     return CATALOGUE[request.param]
 
 
-@pytest.fixture
-def raycast() -> object:
+class Raycast:
     """The analytic ray-cast helpers, for tests that build their own scans."""
-    import types
 
-    return types.SimpleNamespace(circle=cast_circle, line=cast_line, scan=make_scan,
-                                 bearings=BEARINGS, max_range=MAX_RANGE, catalogue=CATALOGUE)
+    circle = staticmethod(cast_circle)
+    line = staticmethod(cast_line)
+    scan = staticmethod(make_scan)
+    bearings: np.ndarray = BEARINGS
+    max_range: float = MAX_RANGE
+    catalogue: dict[str, Case] = CATALOGUE
+
+
+@pytest.fixture
+def raycast() -> Raycast:
+    """The analytic ray-cast helpers, for tests that build their own scans."""
+    return Raycast()
 
 
 # ---- a tiny exact world for closed-loop tests of the law (no simulator needed) --------------
@@ -217,9 +229,15 @@ def closed_loop(shape: Shape, args: dict[str, Any], pose: tuple[float, float, fl
     return LoopResult(np.array(ts), np.array(xs), np.array(cl), modes)
 
 
-@pytest.fixture
-def world2d() -> object:
+class World2D:
     """Exact shapes and the closed-loop runner for law tests."""
-    import types
 
-    return types.SimpleNamespace(Shape=Shape, scan=oracle_scan, run=closed_loop)
+    Shape = Shape
+    scan = staticmethod(oracle_scan)
+    run = staticmethod(closed_loop)
+
+
+@pytest.fixture
+def world2d() -> World2D:
+    """Exact shapes and the closed-loop runner for law tests."""
+    return World2D()

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
@@ -12,6 +12,9 @@ from atoms import default_registry
 from atoms.boundary import Side, boundary_view, cached_view, parse_side
 from atoms.registry import Context
 from mdle.backend import Observation, Pose, RobotLimits, Scan
+
+if TYPE_CHECKING:
+    from tests.atoms.conftest import Case, Raycast, World2D
 
 LIMITS = RobotLimits(1.0, 1.0, 3.0)
 SENSORS = ("boundary_range", "boundary_curvature", "boundary_tangent")
@@ -29,7 +32,7 @@ def _mirror(scan: Scan) -> Scan:
 
 @pytest.mark.parametrize("name", SENSORS)
 @pytest.mark.parametrize("side", ["right", "left"])
-def test_sensor_functions_over_the_catalogue(case: Any, name: str, side: str) -> None:
+def test_sensor_functions_over_the_catalogue(case: Case, name: str, side: str) -> None:
     fn = default_registry().sensors[name].fn
     value = fn({"side": side}, _ctx(case.scan))
     assert isinstance(value, float) and math.isfinite(value)
@@ -43,7 +46,7 @@ def test_no_scan_yet_is_a_miss_not_an_error() -> None:
     assert reg.sensors["boundary_curvature"].fn({"side": "left"}, _ctx(None)) == 0.0
 
 
-def test_wall_on_the_right(raycast: Any) -> None:
+def test_wall_on_the_right(raycast: Raycast) -> None:
     view = boundary_view(raycast.catalogue["straight_wall"].scan, "right")
     assert view.side.hit and view.side.r == pytest.approx(0.5)
     assert view.side.beta == pytest.approx(0.0, abs=1e-9)
@@ -53,7 +56,7 @@ def test_wall_on_the_right(raycast: Any) -> None:
 
 
 @pytest.mark.parametrize("radius", [1.0, 2.0])
-def test_circle_on_the_right_is_convex_negative(raycast: Any, radius: float) -> None:
+def test_circle_on_the_right_is_convex_negative(raycast: Raycast, radius: float) -> None:
     # the circle's top at 0.5 m to the right: its tangent there is the heading
     scan = raycast.scan(raycast.circle((0.0, -0.5 - radius), radius))
     view = boundary_view(scan, "right")
@@ -64,7 +67,7 @@ def test_circle_on_the_right_is_convex_negative(raycast: Any, radius: float) -> 
     assert reg.sensors["boundary_curvature"].fn({"side": "right"}, ctx) == view.side.kappa
 
 
-def test_left_is_the_mirror_of_right(raycast: Any) -> None:
+def test_left_is_the_mirror_of_right(raycast: Raycast) -> None:
     scan = raycast.scan(raycast.circle((1.0, -1.0), 1.2))
     right = boundary_view(scan, "right")
     assert right.side.hit and right.front.hit
@@ -80,7 +83,7 @@ def test_left_is_the_mirror_of_right(raycast: Any) -> None:
     assert k_left == pytest.approx(-right.side.kappa) and k_left > 0
 
 
-def test_front_ray_on_a_facing_wall(raycast: Any) -> None:
+def test_front_ray_on_a_facing_wall(raycast: Raycast) -> None:
     scan = raycast.scan(raycast.line((2.0, 0.0), (1.0, 0.0)))
     view = boundary_view(scan, "right")
     assert view.front.hit and view.front.r == pytest.approx(2.0)
@@ -89,7 +92,7 @@ def test_front_ray_on_a_facing_wall(raycast: Any) -> None:
     assert boundary_view(scan, "left").front.beta == pytest.approx(math.pi / 2, abs=1e-9)
 
 
-def test_oracle_scan_values_are_used_as_given(world2d: Any) -> None:
+def test_oracle_scan_values_are_used_as_given(world2d: World2D) -> None:
     shape = world2d.Shape("circle", center=(0.0, -1.5), radius=1.0)
     scan = world2d.scan(shape, 0.0, 0.0, 0.0)
     view = boundary_view(scan, "right")
@@ -100,7 +103,7 @@ def test_oracle_scan_values_are_used_as_given(world2d: Any) -> None:
     assert left.side.kappa == -1.0 and left.side.beta == pytest.approx(0.0, abs=1e-9)
 
 
-def test_depth_jump_at_the_side_ray_is_not_smoothed_over(raycast: Any) -> None:
+def test_depth_jump_at_the_side_ray_is_not_smoothed_over(raycast: Raycast) -> None:
     # a short near post at -90..-85 deg in front of a far wall: too few beams for a surface
     r = raycast.line((0.0, -3.0), (0.0, -1.0))
     r = np.where(raycast.bearings < np.radians(-86.5), 0.5, r)
@@ -108,7 +111,7 @@ def test_depth_jump_at_the_side_ray_is_not_smoothed_over(raycast: Any) -> None:
     assert not view.side.hit
 
 
-def test_view_is_computed_once_per_tick(raycast: Any) -> None:
+def test_view_is_computed_once_per_tick(raycast: Raycast) -> None:
     ctx = _ctx(raycast.catalogue["circle_R1"].scan)
     assert cached_view(ctx, "right") is cached_view(ctx, Side.RIGHT)
 

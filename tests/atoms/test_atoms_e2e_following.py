@@ -8,14 +8,13 @@ section 5 (100 Hz exact rays, 50 Hz noisy scan; the Pioneer at its 10 Hz cycle).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 
 from mdle.experiments.following import random_starts, run_follow
 from mdle.runtime import run
-from mdle.runtime.events import Cause
+from mdle.runtime.events import Cause, RunResult, Sample
 from mdle.runtime.observer import Recorder
 
 PLANS = Path(__file__).resolve().parents[2] / "plans" / "paper"
@@ -39,7 +38,7 @@ def test_figures_1_to_3_avoid_then_follow(name: str, rc: float, sensing: str,
     assert res.max_err < 0.5 * rc + 0.05, res  # it follows, it never lets go
 
 
-def _run_pioneer(name: str) -> tuple[Any, list[Any]]:
+def _run_pioneer(name: str) -> tuple[RunResult, list[Sample]]:
     from mdle.loader import load_program
     from sim import SimBackend, load_world
 
@@ -53,7 +52,9 @@ def _run_pioneer(name: str) -> tuple[Any, list[Any]]:
 
 def test_corridor_pioneer_with_door_jamb_spikes() -> None:
     result, samples = _run_pioneer("fig6-corridor")
-    assert not result.collided and result.min_clearance > 0.1
+    assert not result.collided
+    assert result.min_clearance is not None  # the simulator knows the truth
+    assert result.min_clearance > 0.1
     assert result.termination.cause is Cause.COMPLETED  # the x > 19 m interrupt, not the timer
     x = np.array([s.true_x for s in samples])
     hit = np.array([s.diag.get("side_hit", 0.0) for s in samples]) > 0
@@ -67,7 +68,9 @@ def test_corridor_pioneer_with_door_jamb_spikes() -> None:
 
 def test_garden_wall_pioneer_with_the_bump_of_the_legs() -> None:
     result, samples = _run_pioneer("fig8-garden")
-    assert not result.collided and result.min_clearance > 0.05
+    assert not result.collided
+    assert result.min_clearance is not None  # the simulator knows the truth
+    assert result.min_clearance > 0.05
     assert result.termination.cause is Cause.COMPLETED
     x = np.array([s.true_x for s in samples])
     rs = np.array([s.diag.get("side_range", np.nan) for s in samples])

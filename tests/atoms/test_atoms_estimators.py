@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 
 from atoms import estimators as E
+from mdle.backend import Scan
+
+if TYPE_CHECKING:
+    from tests.atoms.conftest import Case, Raycast
 
 # Every estimator configuration the paper's Table 1 uses, unfiltered and filtered.
-ESTIMATORS = {
+ESTIMATORS: dict[str, Callable[[E.Surfaces], E.Estimate]] = {
     "classical_w1": lambda s: E.classical_curvature(s, 1),
     "classical_w5": lambda s: E.classical_curvature(s, 5),
     "classical_w8": lambda s: E.classical_curvature(s, 8),
@@ -29,16 +34,18 @@ MAXW = {**REACH, "geometric_w1-3": 3, "geometric_w4-6": 6, "averaged_w7-9": 9,
 
 
 @pytest.fixture(params=sorted(ESTIMATORS))
-def estimator(request: pytest.FixtureRequest) -> tuple[str, Any]:
+def estimator(request: pytest.FixtureRequest
+              ) -> tuple[str, Callable[[E.Surfaces], E.Estimate]]:
     return request.param, ESTIMATORS[request.param]
 
 
-def _surfaces(scan: Any) -> E.Surfaces:
+def _surfaces(scan: Scan) -> E.Surfaces:
     return E.surfaces(scan.ranges, scan.bearings, scan.valid)
 
 
 @pytest.mark.filterwarnings("error")
-def test_catalogue_shapes_dtypes_and_masks(case: Any, estimator: tuple[str, Any]) -> None:
+def test_catalogue_shapes_dtypes_and_masks(
+        case: Case, estimator: tuple[str, Callable[[E.Surfaces], E.Estimate]]) -> None:
     name, fn = estimator
     scan = case.scan
     n = scan.ranges.size
@@ -70,14 +77,14 @@ def test_catalogue_shapes_dtypes_and_masks(case: Any, estimator: tuple[str, Any]
         assert np.max(np.abs(err)) < tol
 
 
-def test_wall_tangent_points_along_the_wall_in_beam_order(raycast: Any) -> None:
+def test_wall_tangent_points_along_the_wall_in_beam_order(raycast: Raycast) -> None:
     s = _surfaces(raycast.catalogue["straight_wall"].scan)
     est = E.averaged_curvature(s)
     # wall on the right at y = -0.5: beam order runs forward along it (+x), obstacle on the right
     assert np.allclose(est.tangent[est.valid], 0.0, atol=1e-9)
 
 
-def test_circle_tangent_is_perpendicular_to_the_radius(raycast: Any) -> None:
+def test_circle_tangent_is_perpendicular_to_the_radius(raycast: Raycast) -> None:
     s = _surfaces(raycast.catalogue["circle_R1"].scan)
     est = E.geometric_curvature(s, 3)
     i = np.flatnonzero(est.valid)
@@ -90,7 +97,7 @@ def test_circle_tangent_is_perpendicular_to_the_radius(raycast: Any) -> None:
 
 
 @pytest.mark.parametrize("radius,dist", [(1.0, 1.5), (0.5, 1.0), (2.0, 2.5)])
-def test_curvature_round_trip_noisy_circle(raycast: Any, radius: float, dist: float) -> None:
+def test_curvature_round_trip_noisy_circle(raycast: Raycast, radius: float, dist: float) -> None:
     """Ray-cast a circle with seeded range noise (sigma 2 mm), estimate with windows 7-9,
     compare with -1/R: the median over the visible arc within 5 %, and the per-beam RMS
     error within 0.25 / R (noise propagates as sigma / chord^2)."""
@@ -110,7 +117,7 @@ def test_curvature_round_trip_noisy_circle(raycast: Any, radius: float, dist: fl
     assert rms < 0.25 / radius + 0.25
 
 
-def test_round_trip_filtering_reduces_small_window_noise(raycast: Any) -> None:
+def test_round_trip_filtering_reduces_small_window_noise(raycast: Raycast) -> None:
     """Table 1's trend: Gaussian filtering helps the small windows."""
     rng = np.random.default_rng(7)
     r = raycast.circle((1.5, 0.0), 0.5)
@@ -119,14 +126,17 @@ def test_round_trip_filtering_reduces_small_window_noise(raycast: Any) -> None:
         s = E.surfaces(r * (1 + rng.normal(0.0, 0.008, r.shape)), raycast.bearings)
         raw.append(E.geometric_curvature(s, (1, 2, 3)).curvature + 2.0)
         filt.append(E.geometric_curvature(E.smooth_positions(s, 1.5), (1, 2, 3)).curvature + 2.0)
-    rms = lambda e: np.sqrt(np.nanmean(np.concatenate(e) ** 2))  # noqa: E731
+
+    def rms(e: list[np.ndarray]) -> float:
+        return float(np.sqrt(np.nanmean(np.concatenate(e) ** 2)))
+
     assert rms(filt) < 0.5 * rms(raw)
 
 
 # ---- degenerate cases, one each, asserting the reason ---------------------------------------
 
 @pytest.mark.filterwarnings("error")
-def test_fewer_than_three_valid_beams_gives_nothing(raycast: Any) -> None:
+def test_fewer_than_three_valid_beams_gives_nothing(raycast: Raycast) -> None:
     r = np.full(181, np.inf)
     r[[50, 51]] = 1.0  # two neighbouring returns: no window of three points exists
     s = E.surfaces(r, raycast.bearings)
@@ -146,7 +156,7 @@ def test_coincident_points_are_undefined_not_an_error() -> None:
 
 
 @pytest.mark.filterwarnings("error")
-def test_windows_never_straddle_a_depth_jump(raycast: Any) -> None:
+def test_windows_never_straddle_a_depth_jump(raycast: Raycast) -> None:
     # a near wall segment in front of a far wall: the depth jumps at both ends of the near one
     far = raycast.line((4.0, 0.0), (1.0, 0.0))
     near = raycast.line((1.5, 0.0), (1.0, 0.0))
@@ -160,7 +170,7 @@ def test_windows_never_straddle_a_depth_jump(raycast: Any) -> None:
         assert np.nanmax(np.abs(est.curvature)) < 0.2
 
 
-def test_isolated_return_and_out_of_range_beams(raycast: Any) -> None:
+def test_isolated_return_and_out_of_range_beams(raycast: Raycast) -> None:
     r = np.full(181, 10.0)
     r[90] = 2.0
     scan = raycast.scan(r)
@@ -181,7 +191,7 @@ def test_estimate_scan_rejects_unknown_method() -> None:
         E.estimate_scan(np.ones(5), np.zeros(5), method="spline")
 
 
-def test_estimate_scan_smoothing_keeps_shapes(raycast: Any) -> None:
+def test_estimate_scan_smoothing_keeps_shapes(raycast: Raycast) -> None:
     scan = raycast.catalogue["circle_R1"].scan
     est = E.estimate_scan(scan.ranges, scan.bearings, scan.valid, method="geometric",
                           windows=(4, 5, 6), sigma=1.0)

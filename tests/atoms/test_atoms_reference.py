@@ -9,7 +9,7 @@ loop, an eigenvector line fit and ``np.polyfit`` on noisy scans, and on degenera
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
@@ -18,8 +18,11 @@ from atoms import estimators as E
 from atoms.boundary import boundary_view
 from mdle.backend import Scan
 
+if TYPE_CHECKING:
+    from tests.atoms.conftest import Raycast
 
-def _noisy_scene(raycast: Any, seed: int, centre: tuple[float, float] = (1.5, 0.0),
+
+def _noisy_scene(raycast: Raycast, seed: int, centre: tuple[float, float] = (1.5, 0.0),
                  radius: float = 0.5) -> Scan:
     """A wall 0.6 m to the right and a cylinder ahead, 0.8 % range noise."""
     rng = np.random.default_rng(seed)
@@ -55,7 +58,7 @@ def _reference_geometric(pts: np.ndarray, start: np.ndarray, end: np.ndarray,
 
 @pytest.mark.parametrize("seed", range(5))
 @pytest.mark.parametrize("windows", [(7, 8, 9), (1,), (2, 5)])
-def test_averaged_estimate_matches_a_per_window_loop(raycast: Any, seed: int,
+def test_averaged_estimate_matches_a_per_window_loop(raycast: Raycast, seed: int,
                                                      windows: tuple[int, ...]) -> None:
     scan = _noisy_scene(raycast, seed, centre=(2.0, 0.5))
     s = E.surfaces(scan.ranges, scan.bearings, scan.valid)
@@ -69,7 +72,7 @@ def test_averaged_estimate_matches_a_per_window_loop(raycast: Any, seed: int,
     assert np.isnan(est.tangent[~est.valid]).all() and np.isnan(est.curvature[~est.valid]).all()
 
 
-def test_bearing_memo_follows_the_bearings(raycast: Any) -> None:
+def test_bearing_memo_follows_the_bearings(raycast: Raycast) -> None:
     # two layouts of the same size, one after the other: each gets its own directions
     r = np.full(181, 2.0)
     for b in (raycast.bearings, raycast.bearings[::-1].copy(),
@@ -95,7 +98,7 @@ def _reference_side_fit(pts: np.ndarray) -> tuple[float, float]:
 
 
 @pytest.mark.parametrize("seed", range(6))
-def test_view_matches_the_full_scan_estimates(raycast: Any, seed: int) -> None:
+def test_view_matches_the_full_scan_estimates(raycast: Raycast, seed: int) -> None:
     scan = _noisy_scene(raycast, seed)
     view = boundary_view(scan, "right")
     assert view.front.hit and view.side.hit
@@ -113,7 +116,7 @@ def test_view_matches_the_full_scan_estimates(raycast: Any, seed: int) -> None:
 
 
 @pytest.mark.parametrize("last", [140, 94])
-def test_all_window_points_equal_gives_the_longer_sides_chord(raycast: Any, last: int) -> None:
+def test_all_window_points_equal_gives_the_longer_sides_chord(raycast: Raycast, last: int) -> None:
     # 41 beams on one bearing and range: every window at the front beam (70) is degenerate,
     # so the view falls back to the one-sided chord towards the longer side of the surface,
     # which reaches beyond every window on both sides (the view must look further to know)
@@ -141,7 +144,7 @@ def _mirror(scan: Scan) -> Scan:
 
 
 def test_side_fit_with_two_distinct_abscissae_uses_the_minimum_norm_solution(
-        raycast: Any) -> None:
+        raycast: Raycast) -> None:
     b = raycast.bearings.copy()
     b[1:40] = math.radians(-89.0)   # beam 0 and then one point repeated
     r = np.full(181, 10.0)

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
 
 from atoms import steering as S
+
+if TYPE_CHECKING:
+    from tests.atoms.conftest import LoopResult, World2D
 
 G = S.Gains()
 ARGS = dict(side="right", rc=0.5, v=1.0, zeta=1.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.15,
@@ -126,13 +129,13 @@ def test_safety_filter_slows_down_in_a_dead_end() -> None:
 
 # ---- closed loops on exact shapes (tests/atoms/conftest.py), real atom, no simulator --------
 
-def _steady(res: Any, rc: float, t0: float) -> tuple[float, float]:
+def _steady(res: LoopResult, rc: float, t0: float) -> tuple[float, float]:
     half = res.t >= t0
     return float(res.clearance.min()), float(np.mean(np.abs(res.clearance[half] - rc)))
 
 
 @pytest.mark.parametrize("side", ["right", "left"])
-def test_closed_loop_circle_exact_rays(world2d: Any, side: str) -> None:
+def test_closed_loop_circle_exact_rays(world2d: World2D, side: str) -> None:
     shape = world2d.Shape("circle", center=(0.0, 0.0), radius=2.0)
     y0 = 0.3 if side == "right" else -0.3
     res = world2d.run(shape, {**ARGS, "side": side, "rc": 1.0}, (-8.0, y0, 0.0),
@@ -145,7 +148,7 @@ def test_closed_loop_circle_exact_rays(world2d: Any, side: str) -> None:
     assert (ang[-1] - ang[len(ang) // 2]) * (1 if side == "left" else -1) > 2.0
 
 
-def test_closed_loop_square_noisy_scan_uses_corner_mode(world2d: Any) -> None:
+def test_closed_loop_square_noisy_scan_uses_corner_mode(world2d: World2D) -> None:
     shape = world2d.Shape("poly", vertices=[(-2, -2), (2, -2), (2, 2), (-2, 2)])
     res = world2d.run(shape, ARGS, (-8.0, 0.3, 0.0), duration=50.0, dt=0.02, exact=False,
                       noise=0.008, seed=1)
