@@ -1,9 +1,16 @@
-"""Interrupt expressions compiled once into closures.
+"""Interrupt expressions compiled once into flat closures.
 
 The checker types each sub-expression (:class:`Typed`: a condition, or a number of
-some dimension) and combines closures bottom-up; constant parts are folded at check
-time, so ``range(0 deg) < 2 * 0.5 m`` becomes one call of the sensor function and one
-comparison per tick. The runtime calls ``Interrupt.test(ctx)`` and nothing else.
+some dimension) and combines them bottom-up into an expression tree; constant parts are
+folded at check time. :func:`to_interrupt` then turns the tree into ONE Python function:
+``range(0 deg) < 2 * 0.5 m or stalled`` becomes
+``lambda ctx: (True if s0(a0, ctx) < k0 else False) or (True if s1(a1, ctx) else False)``
+with the sensor functions, their arguments and the constants bound as names, so a tick
+pays one call plus the sensor calls, not a closure per operator (interrupts are most of
+the interpreter's per-tick work). The generated code evaluates exactly what nested
+closures would: the same operations in the same order, ``and``/``or`` short-circuiting,
+every condition normalised to a Python bool. The runtime calls ``Interrupt.test(ctx)``
+and nothing else.
 """
 
 from __future__ import annotations
@@ -24,13 +31,36 @@ __all__ = ["Typed", "constant", "sensor_reading", "negate", "logic", "compare", 
 Kind = Any  # Dim (a number), None (a number of unknown dimension) or BOOL (a condition)
 Fn = Callable[[Context], Any]
 
+_COMPARE: dict[str, Callable[[Any, Any], bool]] = {
+    "<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge,
+    "==": operator.eq, "!=": operator.ne,
+}
+_ARITH: dict[str, Callable[[Any, Any], Any]] = {
+    "+": operator.add, "-": operator.sub, "*": operator.mul,
+}
+#: Nodes whose value is always a Python bool: no normalisation needed around them.
+_BOOL_NODES = frozenset({"not", "cmp", "and", "or", "xor"})
+
+
+@dataclass(frozen=True)
+class Node:
+    """A node of an expression read at run time: ``op`` applied to ``parts``.
+
+    ``op`` is ``sensor`` (parts: function, arguments), ``const`` (value), ``not`` or
+    ``neg`` (operand), ``cmp`` or ``arith`` (operator, left, right), or ``and``, ``or``,
+    ``xor`` (left, right).
+    """
+
+    op: str
+    parts: tuple[Any, ...]
+
 
 @dataclass(frozen=True)
 class Typed:
-    """A typed expression: its kind, and either a constant or a closure ``fn(ctx)``."""
+    """A typed expression: its kind, and either a constant or a tree read at run time."""
 
     kind: Kind
-    fn: Fn | None = None
+    node: Node | None = None
     const: Any = None
 
     @property
@@ -41,19 +71,28 @@ class Typed:
     @property
     def is_const(self) -> bool:
         """True when the value is known at check time."""
-        return self.fn is None
+        return self.node is None
 
     @property
     def dim(self) -> Dim | None:
         """The dimension of a number (None when unknown)."""
         return None if self.kind is BOOL else self.kind
 
+    @property
+    def fn(self) -> Fn | None:
+        """The expression compiled to ``fn(ctx)`` (None for a constant)."""
+        return None if self.node is None else _compile(self.node, as_bool=False)
+
     def call(self) -> Fn:
-        """Return a closure for this expression (constants become a function returning them)."""
-        if self.fn is not None:
-            return self.fn
+        """Return a function of ``ctx`` for this expression (constants return themselves)."""
+        if self.node is not None:
+            return _compile(self.node, as_bool=False)
         value = self.const
         return lambda ctx: value
+
+
+def _operand(t: Typed) -> Node:
+    return Node("const", (t.const,)) if t.node is None else t.node
 
 
 def constant(kind: Kind, value: Any) -> Typed:
@@ -63,27 +102,20 @@ def constant(kind: Kind, value: Any) -> Typed:
 
 def sensor_reading(spec: SensorSpec, args: Mapping[str, Any]) -> Typed:
     """Return a sensor function read each time the interrupt is tested."""
-    fn = spec.fn
-
-    def read(ctx: Context) -> Any:
-        return fn(args, ctx)
-
-    return Typed(spec.result, read)
+    return Typed(spec.result, Node("sensor", (spec.fn, args)))
 
 
 def negate(op: str, a: Typed) -> Typed:
-    """``not a``, ``-a`` or ``+a`` (already type-checked)."""
+    """Apply ``not a``, ``-a`` or ``+a`` (already type-checked)."""
     if op == "not":
         if a.is_const:
             return constant(BOOL, not a.const)
-        f = a.fn
-        return Typed(BOOL, lambda ctx: not f(ctx))  # type: ignore[misc]
+        return Typed(BOOL, Node("not", (_operand(a),)))
     if op == "+":
         return a
     if a.is_const:
         return constant(a.kind, -a.const)
-    g = a.fn
-    return Typed(a.kind, lambda ctx: -g(ctx))  # type: ignore[misc]
+    return Typed(a.kind, Node("neg", (_operand(a),)))
 
 
 def logic(op: str, a: Typed, b: Typed) -> Typed:
@@ -99,21 +131,9 @@ def logic(op: str, a: Typed, b: Typed) -> Typed:
             if op == "or":
                 return constant(BOOL, True) if fixed.const else other
             return negate("not", other) if fixed.const else other
-    f, g = a.call(), b.call()
-    if op == "and":
-        return Typed(BOOL, lambda ctx: bool(f(ctx)) and bool(g(ctx)))
-    if op == "or":
-        return Typed(BOOL, lambda ctx: bool(f(ctx)) or bool(g(ctx)))
-    return Typed(BOOL, lambda ctx: bool(f(ctx)) != bool(g(ctx)))
-
-
-_COMPARE: dict[str, Callable[[Any, Any], bool]] = {
-    "<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge,
-    "==": operator.eq, "!=": operator.ne,
-}
-_ARITH: dict[str, Callable[[Any, Any], Any]] = {
-    "+": operator.add, "-": operator.sub, "*": operator.mul,
-}
+    if op not in ("and", "or"):
+        op = "xor"
+    return Typed(BOOL, Node(op, (_operand(a), _operand(b))))
 
 
 def _divide(x: float, y: float) -> float:
@@ -127,14 +147,7 @@ def compare(op: str, a: Typed, b: Typed) -> Typed:
     cmp = _COMPARE[op]
     if a.is_const and b.is_const:
         return constant(BOOL, bool(cmp(a.const, b.const)))
-    if b.is_const:
-        f, k = a.call(), b.const
-        return Typed(BOOL, lambda ctx: bool(cmp(f(ctx), k)))
-    if a.is_const:
-        k, g = a.const, b.call()
-        return Typed(BOOL, lambda ctx: bool(cmp(k, g(ctx))))
-    f, g = a.call(), b.call()
-    return Typed(BOOL, lambda ctx: bool(cmp(f(ctx), g(ctx))))
+    return Typed(BOOL, Node("cmp", (op, _operand(a), _operand(b))))
 
 
 def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
@@ -142,8 +155,57 @@ def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
     fn = _divide if op == "/" else _ARITH[op]
     if a.is_const and b.is_const:
         return constant(kind, fn(a.const, b.const))
-    f, g = a.call(), b.call()
-    return Typed(kind, lambda ctx: fn(f(ctx), g(ctx)))
+    return Typed(kind, Node("arith", (op, _operand(a), _operand(b))))
+
+
+class _Source:
+    """Python source of one expression tree, and the objects it names."""
+
+    def __init__(self) -> None:
+        self.names: dict[str, Any] = {}
+
+    def bind(self, prefix: str, value: Any) -> str:
+        name = f"{prefix}{len(self.names)}"
+        self.names[name] = value
+        return name
+
+    def value(self, n: Node) -> str:
+        """Return source evaluating ``n`` exactly as nested closures would."""
+        op, p = n.op, n.parts
+        if op == "const":
+            return self.bind("k", p[0])
+        if op == "sensor":
+            return f"{self.bind('s', p[0])}({self.bind('a', p[1])}, ctx)"
+        if op == "not":
+            return f"(not {self.value(p[0])})"
+        if op == "neg":
+            return f"(-{self.value(p[0])})"
+        if op == "cmp":  # operator.lt(x, y) is x < y; bool() of it is `True if .. else False`
+            return f"(True if {self.value(p[1])} {p[0]} {self.value(p[2])} else False)"
+        if op == "arith":
+            left, right = self.value(p[1]), self.value(p[2])
+            if p[0] == "/":
+                return f"{self.bind('d', _divide)}({left}, {right})"
+            return f"({left} {p[0]} {right})"
+        x, y = self.truth(p[0]), self.truth(p[1])
+        return f"({x} != {y})" if op == "xor" else f"({x} {op} {y})"
+
+    def truth(self, n: Node) -> str:
+        """Return source for ``bool(n)``."""
+        code = self.value(n)
+        return code if n.op in _BOOL_NODES else f"(True if {code} else False)"
+
+
+def _compile(node: Node, as_bool: bool) -> Fn:
+    """Return one function of ``ctx`` evaluating ``node`` (as a bool when ``as_bool``)."""
+    src = _Source()
+    body = src.truth(node) if as_bool else src.value(node)
+    # the bound objects become closure cells of the lambda: the fastest lookups there are
+    code = f"def make({', '.join(src.names)}):\n    return lambda ctx: {body}\n"
+    namespace: dict[str, Any] = {"__builtins__": {}}
+    exec(compile(code, "<interrupt>", "exec"), namespace)
+    fn: Fn = namespace["make"](**src.names)
+    return fn
 
 
 def to_interrupt(t: Typed, source: str) -> Interrupt:
@@ -152,5 +214,5 @@ def to_interrupt(t: Typed, source: str) -> Interrupt:
         if not t.const:
             return NEVER if source == "never" else Interrupt(NEVER.test, source, never=True)
         return Interrupt(lambda ctx: True, source)
-    fn = t.fn
-    return Interrupt(lambda ctx: bool(fn(ctx)), source)  # type: ignore[misc]
+    assert t.node is not None
+    return Interrupt(_compile(t.node, as_bool=True), source)
