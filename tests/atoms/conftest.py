@@ -21,7 +21,7 @@ BEARINGS: np.ndarray = np.radians(np.arange(-90.0, 90.5, 1.0))
 
 def cast_circle(center: tuple[float, float], radius: float,
                 bearings: np.ndarray = BEARINGS) -> np.ndarray:
-    """Range to a circle from the origin along each bearing (inf where the ray misses)."""
+    """Cast rays from the origin at a circle: range per bearing (inf where the ray misses)."""
     d = np.stack((np.cos(bearings), np.sin(bearings)), axis=1)
     c = np.asarray(center, dtype=float)
     b = d @ c
@@ -32,7 +32,7 @@ def cast_circle(center: tuple[float, float], radius: float,
 
 def cast_line(point: tuple[float, float], normal: tuple[float, float],
               bearings: np.ndarray = BEARINGS) -> np.ndarray:
-    """Range to the infinite line through ``point`` with ``normal`` (inf where parallel/behind)."""
+    """Cast rays at the line through ``point`` with ``normal`` (inf where parallel/behind)."""
     n = np.asarray(normal, dtype=float)
     d = np.stack((np.cos(bearings), np.sin(bearings)), axis=1)
     den = d @ n
@@ -43,7 +43,7 @@ def cast_line(point: tuple[float, float], normal: tuple[float, float],
 
 def make_scan(ranges: np.ndarray, bearings: np.ndarray = BEARINGS,
               max_range: float = MAX_RANGE) -> Scan:
-    """A Scan from ranges (inf/NaN or beyond max range: no return)."""
+    """Build a Scan from ranges (inf/NaN or beyond max range: no return)."""
     r = np.asarray(ranges, dtype=float)
     valid = np.isfinite(r) & (r < max_range)
     return Scan(np.where(valid, r, max_range), np.asarray(bearings, dtype=float), valid, 0.0,
@@ -88,7 +88,7 @@ CATALOGUE = _catalogue()
 
 @pytest.fixture(params=sorted(CATALOGUE))
 def case(request: pytest.FixtureRequest) -> Case:
-    """Each catalogue scan in turn."""
+    """Give each catalogue scan in turn."""
     return CATALOGUE[request.param]
 
 
@@ -105,7 +105,7 @@ class Raycast:
 
 @pytest.fixture
 def raycast() -> Raycast:
-    """The analytic ray-cast helpers, for tests that build their own scans."""
+    """Provide the analytic ray-cast helpers, for tests that build their own scans."""
     return Raycast()
 
 
@@ -131,7 +131,7 @@ class Shape:
 
     def cast(self, x: float, y: float, theta: float, bearings: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Ranges (inf: miss), robot-frame tangent angles and curvatures per beam."""
+        """Cast the beams: ranges (inf: miss), robot-frame tangent angles and curvatures."""
         ang = theta + bearings
         d = np.stack((np.cos(ang), np.sin(ang)), axis=1)
         if self.kind == "circle":
@@ -174,7 +174,7 @@ class Shape:
 
 def oracle_scan(shape: Shape, x: float, y: float, theta: float, *, exact: bool = True,
                 noise: float = 0.0, rng: np.random.Generator | None = None) -> Scan:
-    """A 181-beam scan of ``shape`` from the pose; exact adds oracle tangents/curvatures."""
+    """Scan ``shape`` from the pose with 181 beams; exact adds oracle tangents/curvatures."""
     r, tang, kap = shape.cast(x, y, theta, BEARINGS)
     if noise > 0 and rng is not None:
         r = r * (1.0 + rng.normal(0.0, noise, r.shape))
@@ -239,5 +239,5 @@ class World2D:
 
 @pytest.fixture
 def world2d() -> World2D:
-    """Exact shapes and the closed-loop runner for law tests."""
+    """Provide exact shapes and the closed-loop runner for law tests."""
     return World2D()
