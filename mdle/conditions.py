@@ -158,11 +158,17 @@ def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
     return Typed(kind, Node("arith", (op, _operand(a), _operand(b))))
 
 
+#: Nesting depth of one generated function: deeper subtrees (a chain of named interrupts,
+#: say) become functions of their own, since Python's parser allows 200 parentheses.
+_SPLIT_DEPTH = 24
+
+
 class _Source:
     """Python source of one expression tree, and the objects it names."""
 
     def __init__(self) -> None:
         self.names: dict[str, Any] = {}
+        self.depth = 0
 
     def bind(self, prefix: str, value: Any) -> str:
         name = f"{prefix}{len(self.names)}"
@@ -171,6 +177,15 @@ class _Source:
 
     def value(self, n: Node) -> str:
         """Return source evaluating ``n`` exactly as nested closures would."""
+        if self.depth >= _SPLIT_DEPTH and n.op not in ("const", "sensor"):
+            return f"{self.bind('f', _compile(n, as_bool=False))}(ctx)"
+        self.depth += 1
+        try:
+            return self._value(n)
+        finally:
+            self.depth -= 1
+
+    def _value(self, n: Node) -> str:
         op, p = n.op, n.parts
         if op == "const":
             return self.bind("k", p[0])

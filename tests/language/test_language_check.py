@@ -331,3 +331,15 @@ def test_declared_symbols_win_over_definitions_of_the_same_name(reg: Registry) -
     # Where no symbol is declared the name still means the definition.
     assert "expected a fixed value, but `left` is" in errors(
         "atom left = (hug(), never, 5 s)\natom a = (drive(left), never, 5 s)", reg)[0]
+
+
+def test_long_chains_of_named_interrupts_compile_and_evaluate(
+        reg: Registry, make_ctx: Callable[..., Context]) -> None:
+    # Inlined, the chain is one 300-deep expression: deeper than one generated Python
+    # function may nest, so the compiler splits it; the answer must not change.
+    lines = ["interrupt i0 = px > 1 m"]
+    lines += [f"interrupt i{i} = i{i - 1} and px < {i + 1} m" for i in range(1, 300)]
+    lines.append("atom a = (drive(1 m/s), not i299, 1 s)")
+    test = check("\n".join(lines), reg).elements["a"].interrupt.test
+    assert test(make_ctx(x=0.5)) is True     # px > 1 m fails at the bottom of the chain
+    assert test(make_ctx(x=1.5)) is False    # every link holds
