@@ -170,7 +170,11 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.grid(True, lw=0.3, alpha=0.5)
-    ax.legend(loc="best", fontsize="small", framealpha=0.8)
+    if path_h < 4.0:  # a wide, low scene (a corridor) has no room for the legend inside
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                  fontsize="small")
+    else:
+        ax.legend(loc="best", fontsize="small", framealpha=0.8)
     ax.set_title(title or _title(trace), fontsize="medium")
 
     if curv and axk is not None:
