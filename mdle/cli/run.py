@@ -156,7 +156,9 @@ def run(args: argparse.Namespace) -> int:
                 while scheduler.tick():
                     pass
             except KeyboardInterrupt:
-                pass  # a second Ctrl-C: the tick already stopped the robot and told observers
+                # A second Ctrl-C: inside a tick the scheduler has already ended the run;
+                # between two ticks it has not, so end it here (stop() does nothing twice).
+                scheduler.stop()
         result = scheduler.result
         assert result is not None
         if args.plot:

@@ -269,3 +269,30 @@ def test_live_view_on_a_terminal(plan: WritePlan, mdle_command: list[str]) -> No
     assert "\x1b[" in text  # drawn with control codes
     assert "mdle run" in text and "timer left" in text  # the live panel was drawn
     assert "spin" in text and "elements run" in text and "real-time factor" in text
+
+
+def test_second_ctrl_c_between_ticks_still_ends_the_run(
+        plan: WritePlan, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Two SIGINTs while no tick is running: the first asks for a stop, the second raises
+    # KeyboardInterrupt outside the scheduler, which must still end the run cleanly.
+    from mdle.cli import main
+    from mdle.runtime import Scheduler
+
+    original = Scheduler.tick
+    calls = {"n": 0}
+
+    def tick(self: Scheduler) -> bool:
+        calls["n"] += 1
+        if calls["n"] == 3:
+            os.kill(os.getpid(), signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGINT)
+        return original(self)
+
+    monkeypatch.setattr(Scheduler, "tick", tick)
+    trace = tmp_path / "t.jsonl"
+    code = main(["run", str(plan(FOLLOW)), "--world", "ellipse", "--quiet",
+                 "--trace", str(trace)])
+    assert code == 130
+    t = read_trace(trace)
+    assert t.end is not None and t.end["cause"] == "stopped"
+    assert len(t.samples) == 2
