@@ -122,6 +122,11 @@ class RobotLimits:
     max_turn_accel: float = float("inf")
     radius: float = 0.0
     """Radius of the disc that bounds the robot's body, metres (0 for a point robot)."""
+    command_latency: float = 0.0
+    """Seconds from a command leaving the controller until the wheels start to follow it
+    (transport, firmware cycle, status-packet delay; the ramp is not included). 0: ideal."""
+    scan_latency: float = 0.0
+    """Typical age of a scan when a tick reads it, seconds (0: the scan is taken at the tick)."""
 
 
 class ClockMode(enum.Enum):
