@@ -87,21 +87,33 @@ def _own_never(e: Element) -> bool:
     return e.interrupt.never and math.isinf(e.timer)
 
 
-def never_ends(e: Element) -> bool:
+def never_ends(e: Element, memo: dict[int, bool] | None = None) -> bool:
     """Whether an element can only be ended by an enclosing interrupt or timer.
 
     That is: its own interrupt never fires, its timer is ``inf``, and it is an atom, a
-    repeated string, or a string holding an element that never ends.
+    repeated string, or a string holding an element that never ends. Shared elements
+    are visited once (``memo``, by identity, may be kept across calls), so a chain of
+    behaviors each holding the previous one twice costs its length, not 2**length.
     """
+    memo = {} if memo is None else memo
     if not _own_never(e):
         return False
-    stack = [e]
+    # Post-order without recursion: (node, children pushed?).
+    stack: list[tuple[Element, bool]] = [(e, False)]
     while stack:
-        x = stack.pop()
+        x, expanded = stack.pop()
+        if id(x) in memo:
+            continue
         if isinstance(x, AtomNode) or x.repeat:
-            return True
-        stack.extend(c for c in x.elements if _own_never(c))
-    return False
+            memo[id(x)] = True
+            continue
+        kids = [c for c in x.elements if _own_never(c)]
+        if not expanded:
+            stack.append((x, True))
+            stack.extend((c, False) for c in kids if id(c) not in memo)
+            continue
+        memo[id(x)] = any(memo[id(c)] for c in kids)
+    return memo[id(e)]
 
 
 class Checker:
@@ -123,6 +135,7 @@ class Checker:
         self._depths: dict[int, int] = {}
         self._too_deep = False
         self._keep: list[Element] = []
+        self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
 
     # ------------------------------------------------------------------ diagnostics
 
@@ -723,7 +736,7 @@ class Checker:
                 failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
         for i in range(len(elements) - 1):
-            if never_ends(elements[i]):
+            if never_ends(elements[i], self._never_memo):
                 self.warn(items[i + 1].span,
                           f"{_called(items[i + 1])} is never reached: "
                           f"{_called(items[i])} before it never ends (its interrupt is `never` "

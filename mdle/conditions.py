@@ -162,13 +162,46 @@ def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
 #: say) become functions of their own, since Python's parser allows 200 parentheses.
 _SPLIT_DEPTH = 24
 
+#: Marks a shared sub-expression not yet evaluated during the current test.
+_UNSET = object()
+
+
+def _shared(root: Node) -> set[int]:
+    """Return the ids of the nodes reached from more than one place (the DAG's joins).
+
+    A named interrupt used twice is one node with two parents; generated inline it would
+    double at every level of a chain (``interrupt iN = iN-1 or iN-1``).
+    """
+    refs: dict[int, int] = {}
+    seen = {id(root)}
+    stack = [root]
+    while stack:
+        n = stack.pop()
+        for part in n.parts:
+            if isinstance(part, Node) and part.op != "const":
+                refs[id(part)] = refs.get(id(part), 0) + 1
+                if id(part) not in seen:
+                    seen.add(id(part))
+                    stack.append(part)
+    return {k for k, count in refs.items() if count > 1}
+
 
 class _Source:
-    """Python source of one expression tree, and the objects it names."""
+    """Python source of one expression DAG, and the objects it names.
 
-    def __init__(self) -> None:
+    A node reached from several places is generated once, as a function of its own
+    whose value is kept for the rest of the test (``_m``, one slot per such node); a
+    subtree nested deeper than :data:`_SPLIT_DEPTH` becomes a function of its own too.
+    The code therefore grows with the number of distinct nodes, and a test evaluates
+    each of them at most once.
+    """
+
+    def __init__(self, shared: set[int]) -> None:
         self.names: dict[str, Any] = {}
         self.depth = 0
+        self.shared = shared
+        self.slots: dict[int, int] = {}
+        self.functions: list[str] = []
 
     def bind(self, prefix: str, value: Any) -> str:
         name = f"{prefix}{len(self.names)}"
@@ -177,13 +210,35 @@ class _Source:
 
     def value(self, n: Node) -> str:
         """Return source evaluating ``n`` exactly as nested closures would."""
+        if id(n) in self.shared:
+            return self._memo(n)
         if self.depth >= _SPLIT_DEPTH and n.op not in ("const", "sensor"):
-            return f"{self.bind('f', _compile(n, as_bool=False))}(ctx)"
+            name = f"_h{len(self.functions)}"
+            self.functions.append("")  # reserve the name before generating the body
+            index = len(self.functions) - 1
+            self.functions[index] = f"def {name}(ctx, _m):\n    return {self._body(n)}\n"
+            return f"{name}(ctx, _m)"
         self.depth += 1
         try:
             return self._value(n)
         finally:
             self.depth -= 1
+
+    def _body(self, n: Node) -> str:
+        """Return the source of ``n`` as the whole body of a new function."""
+        saved, self.depth = self.depth, 1
+        try:
+            return self._value(n)
+        finally:
+            self.depth = saved
+
+    def _memo(self, n: Node) -> str:
+        index = self.slots.get(id(n))
+        if index is None:
+            index = self.slots[id(n)] = len(self.slots)
+            self.functions.append(f"def _g{index}(ctx, _m):\n    v = _m[{index}] = "
+                                  f"{self._body(n)}\n    return v\n")
+        return f"(_m[{index}] if _m[{index}] is not _U else _g{index}(ctx, _m))"
 
     def _value(self, n: Node) -> str:
         op, p = n.op, n.parts
@@ -213,10 +268,19 @@ class _Source:
 
 def _compile(node: Node, as_bool: bool) -> Fn:
     """Return one function of ``ctx`` evaluating ``node`` (as a bool when ``as_bool``)."""
-    src = _Source()
+    src = _Source(_shared(node))
     body = src.truth(node) if as_bool else src.value(node)
-    # the bound objects become closure cells of the lambda: the fastest lookups there are
-    code = f"def make({', '.join(src.names)}):\n    return lambda ctx: {body}\n"
+    params = ", ".join(src.names)
+    if not src.functions:
+        # the bound objects become closure cells of the lambda: the fastest lookups there are
+        code = f"def make({params}):\n    return lambda ctx: {body}\n"
+    else:
+        inner = "".join("    " + line + "\n" for f in src.functions for line in f.splitlines())
+        memo = f"[_U] * {len(src.slots)}" if src.slots else "None"
+        code = (f"def make(_U, {params}):\n{inner}"
+                f"    def test(ctx):\n        _m = {memo}\n        return {body}\n"
+                "    return test\n")
+        src.names["_U"] = _UNSET
     namespace: dict[str, Any] = {"__builtins__": {}}
     exec(compile(code, "<interrupt>", "exec"), namespace)
     fn: Fn = namespace["make"](**src.names)

@@ -49,28 +49,34 @@ def format_time(seconds: float) -> str:
 
 
 def structure(element: Element) -> Structure:
-    """Count atoms, laws and depth, and bound the duration, of an element."""
-    atoms = 0
-    laws: set[str] = set()
-    depth = 0
-    # Post-order without recursion: (node, level, children done?).
-    duration: dict[int, float] = {}
-    stack: list[tuple[Element, int, bool]] = [(element, 1, False)]
+    """Count atoms, laws and depth, and bound the duration, of an element.
+
+    Each distinct element is visited once (memoised by identity), so a definition used
+    many times costs one visit: a chain of behaviors each holding the previous one twice
+    is counted in time linear in its length, however many atoms it expands to.
+    """
+    figures: dict[int, tuple[int, frozenset[str], int, float]] = {}
+    # Post-order without recursion: (node, children pushed?).
+    stack: list[tuple[Element, bool]] = [(element, False)]
     while stack:
-        node, level, done = stack.pop()
+        node, expanded = stack.pop()
+        if id(node) in figures:
+            continue
         if isinstance(node, AtomNode):
-            atoms += 1
-            laws.add(node.law.name)
-            depth = max(depth, level)
-            duration[id(node)] = node.timer
+            figures[id(node)] = (1, frozenset((node.law.name,)), 1, node.timer)
             continue
-        if not done:
-            stack.append((node, level, True))
-            stack.extend((child, level + 1, False) for child in node.elements)
+        if not expanded:
+            stack.append((node, True))
+            stack.extend((c, False) for c in node.elements if id(c) not in figures)
             continue
-        inner = math.inf if node.repeat else sum(duration[id(c)] for c in node.elements)
-        duration[id(node)] = min(node.timer, inner)
-    return Structure(atoms, tuple(sorted(laws)), depth, duration[id(element)])
+        kids = [figures[id(c)] for c in node.elements]
+        laws = frozenset().union(*(k[1] for k in kids)) if kids else frozenset()
+        inner = math.inf if node.repeat else sum(k[3] for k in kids)
+        below = max((k[2] for k in kids), default=0)  # 0: no atom below to count down to
+        figures[id(node)] = (sum(k[0] for k in kids), laws, 1 + below if below else 0,
+                             min(node.timer, inner))
+    atoms, laws, depth, duration = figures[id(element)]
+    return Structure(atoms, tuple(sorted(laws)), depth, duration)
 
 
 def _show_arg(value: object, dim: Dim) -> str:
@@ -107,13 +113,23 @@ def _head(e: Element) -> str:
 
 
 def show_element(element: Element) -> str:
-    """Return the tree of an element, one line per element, with box-drawing guides."""
+    """Return the tree of an element, one line per element, with box-drawing guides.
+
+    A behavior or plan met again (the same definition with the same arguments) is shown
+    once in full; later uses are one line ending ``(as above)``, so the text grows with
+    the program, not with its expansion.
+    """
     lines: list[str] = []
+    shown: set[int] = set()
     stack: list[tuple[Element, str, str]] = [(element, "", "")]
     while stack:
         node, lead, child_lead = stack.pop()
+        if isinstance(node, StringNode) and node.elements and id(node) in shown:
+            lines.append(lead + _head(node) + "  (as above)")
+            continue
         lines.append(lead + _head(node))
         if isinstance(node, StringNode):
+            shown.add(id(node))
             kids = node.elements
             for i in range(len(kids) - 1, -1, -1):
                 last = i == len(kids) - 1

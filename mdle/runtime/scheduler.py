@@ -59,10 +59,16 @@ class ActiveElement:
 
 
 class _Slot:
-    """An element at one place in the tree, with everything a tick needs precomputed."""
+    """An element at one place in the tree, with everything a tick needs precomputed.
+
+    A string's child slots are made when it first starts and dropped when it ends
+    (:meth:`release`): a shared definition is one node of the program however many
+    places use it, and instantiating every place up front would cost 2**N slots for a
+    chain of N behaviors each holding the previous one twice.
+    """
 
     __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "limit",
-                 "test", "source", "children", "repeat", "step", "start", "args", "alpha_v",
+                 "test", "source", "_children", "repeat", "step", "start", "args", "alpha_v",
                  "alpha_w", "law", "span", "tested")
 
     def __init__(self, node: Element, path: str, label: str, level: int) -> None:
@@ -80,7 +86,7 @@ class _Slot:
         self.tested = self.test is not None or self.limit < math.inf
         self.source = node.interrupt.source
         self.span: Span | None = node.span
-        self.children: tuple[_Slot, ...] = ()
+        self._children: tuple[_Slot, ...] | None = ()
         self.repeat = False
         self.step: Any = None
         self.start: Any = None
@@ -100,7 +106,21 @@ class _Slot:
             self.is_atom = False
             self.kind = node.kind.value
             self.repeat = node.repeat
-            self.children = tuple(_child_slots(node, path, level + 1))
+            self._children = None if node.elements else ()
+
+    @property
+    def children(self) -> tuple[_Slot, ...]:
+        """The slots of a string's elements, made on first use."""
+        kids = self._children
+        if kids is None:
+            assert isinstance(self.node, StringNode)
+            kids = self._children = tuple(_child_slots(self.node, self.path, self.level + 1))
+        return kids
+
+    def release(self) -> None:
+        """Drop the child slots of a string that has ended (made again if it restarts)."""
+        if not self.is_atom and self._children:
+            self._children = None
 
 
 def _child_slots(node: StringNode, path: str, level: int) -> list[_Slot]:
@@ -488,6 +508,7 @@ class Scheduler:
             slot = frame.slot
             c = cause if all_levels or len(stack) == level else Cause.ENDED_BY_PARENT
             frame.state = None  # per-atom state is dropped with the atom
+            slot.release()
             self._terminations.append(Termination(slot.path, slot.level, c, now))
             self._emit(Event(now, EventKind.END, slot.path, slot.level, slot.kind,
                              self._pose, c))
@@ -529,6 +550,7 @@ class Scheduler:
                     self._checks = None
                     slot = frame.slot
                     frame.state = None
+                    slot.release()
                     self._terminations.append(Termination(slot.path, slot.level, cause, now))
                     self._emit(Event(now, EventKind.END, slot.path, slot.level, slot.kind,
                                      self._pose, cause))

@@ -70,7 +70,19 @@ def test_xor_not_and_arithmetic_with_division_by_zero() -> None:
     assert _test(below) is False
     flag = _reader("f", [np.bool_(True)] * 2, calls, BOOL)
     assert _test(cond.logic("xor", flag, cond.negate("not", flag))) is True
-    assert calls == ["x", "x", "x", "f", "f"]
+    # `flag` is one node used twice: a test reads it once and reuses the value
+    assert calls == ["x", "x", "x", "f"]
+
+
+def test_a_shared_node_is_read_once_per_test_and_again_at_the_next() -> None:
+    calls: list[str] = []
+    one = cond.constant(LENGTH, 1.0)
+    low = cond.compare("<", _reader("r", [2.0, 0.5], calls), one)
+    both = cond.logic("or", cond.logic("and", low, low), cond.negate("not", low))
+    test = cond.to_interrupt(both, "test").test
+    ctx: Any = None
+    assert test(ctx) is True and calls == ["r"]  # r = 2: low false, `not low` true
+    assert test(ctx) is True and calls == ["r", "r"]  # a new test reads again
 
 
 def test_constants_are_folded_at_check_time() -> None:
