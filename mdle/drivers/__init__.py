@@ -45,7 +45,7 @@ def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: flo
         and any :class:`~mdle.drivers.arcos.RobotParams` field, e.g. ``dist_conv=0.485``.
     laser : str or None
         ``sim`` (the simulators' laser over the robot connection; ``sim?max_range=8``
-        sets the no-return range in metres), ``lms200:///dev/ttyUSB1?baud=38400``
+        sets the no-return value in metres, 32.767 by default), ``lms200:///dev/ttyUSB1?baud=38400``
         (a SICK LMS-200 on its own serial line) or None (no laser).
     rate : float
         The control rate the runtime ticks at, Hz.
@@ -63,11 +63,13 @@ def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: flo
     Raises
     ------
     BackendError
-        Unknown kind, malformed URL, nothing answering, missing pyserial, ...
+        Unknown kind, malformed URL, an option unknown or out of its range (checked
+        before anything is opened), nothing answering, missing pyserial, ...
     """
-    from dataclasses import fields, replace
+    from dataclasses import replace
 
-    from mdle.drivers.arcos import RobotParams
+    from mdle.drivers.arcos import ROBOT_PARAMS
+    from mdle.drivers.limits import LASER_MAX_RANGE, ROBOT_PARAM_RANGES, read_number
     from mdle.drivers.lms200_driver import Lms200Driver, Lms200Options
     from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
     from mdle.drivers.transport import open_transport, parse_url
@@ -83,18 +85,17 @@ def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: flo
         handle_sigterm=True)
     robot_opts = dict(robot.options)
     model = robot_opts.pop("model", None)
-    known = {f.name for f in fields(RobotParams)}
+    if model is not None and model.strip().lower() not in ROBOT_PARAMS:
+        raise BackendError(f"--connect `{connect}`: unknown Pioneer model `{model}`; known: "
+                           f"{', '.join(sorted(ROBOT_PARAMS))}")
     overrides = []
     for key, raw in robot_opts.items():
-        if key not in known:
+        allowed = ROBOT_PARAM_RANGES.get(key)
+        if allowed is None:
             raise BackendError(f"--connect `{connect}`: unknown option `{key}`; known: model, "
-                               f"{', '.join(sorted(known))}")
-        try:
-            overrides.append((key, float(raw)))
-        except ValueError:
-            raise BackendError(f"--connect `{connect}`: `{key}` must be a number, "
-                               f"got `{raw}`") from None
-    opt = replace(opt, model=model or opt.model,
+                               f"{', '.join(sorted(ROBOT_PARAM_RANGES))}")
+        overrides.append((key, read_number("--connect", connect, key, raw, allowed)))
+    opt = replace(opt, model=model.strip() if model else opt.model,
                   param_overrides=tuple(overrides) or opt.param_overrides)
     if robot.scheme == "serial" and not opt.bauds:
         opt = replace(opt, bauds=(robot.baud,) if robot.baud else (9600, 115200))
@@ -107,11 +108,9 @@ def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: flo
             sim_laser = True
             extra = dict(lep.options)
             if "max_range" in extra:
-                try:
-                    opt = replace(opt, laser_max_range_mm=int(float(extra.pop("max_range"))
-                                                              * 1000))
-                except ValueError:
-                    raise BackendError(f"--laser `{laser}`: max_range must be metres") from None
+                metres = read_number("--laser", laser, "max_range", extra.pop("max_range"),
+                                     LASER_MAX_RANGE)
+                opt = replace(opt, laser_max_range_mm=round(metres * 1000))
             if extra:
                 raise BackendError(f"--laser `{laser}`: unknown option(s) "
                                    f"{', '.join(sorted(extra))}; known: max_range")

@@ -21,6 +21,7 @@ from mdle.drivers.arcos import Cmd, encode_command, frame
 __all__ = [
     "LASER_IDS",
     "MAX_READINGS_PER_PACKET",
+    "NO_RETURN_MM",
     "AssembledScan",
     "LaserPacket",
     "ScanAssembler",
@@ -31,6 +32,9 @@ __all__ = [
 ]
 
 LASER_IDS = frozenset({0x60, 0x61})
+#: What MobileSim/AMRISim send for a beam without a return (mm): a range at or above it
+#: is no reading at all, never a hit 32 m away.
+NO_RETURN_MM = 32767
 MAX_READINGS_PER_PACKET = 32
 
 _HEAD60 = struct.Struct("<hhhHHB")  # x y theta(deg) total first n
@@ -134,13 +138,14 @@ class ScanAssembler:
     Parameters
     ----------
     max_range_mm : int
-        The value the simulator sends for no return; readings at or beyond it are
+        The value the simulator sends for no return (:data:`NO_RETURN_MM` unless the
+        simulator is configured otherwise); readings at or beyond it, and zero, are
         invalid (and hold ``max_range`` metres).
     fov_deg : float
         The laser's field of view.
     """
 
-    def __init__(self, max_range_mm: int = 32000, fov_deg: float = 180.0) -> None:
+    def __init__(self, max_range_mm: int = NO_RETURN_MM, fov_deg: float = 180.0) -> None:
         self.max_range_mm = max_range_mm
         self.fov_deg = fov_deg
         self.dropped = 0

@@ -114,7 +114,7 @@ class Lms200Driver:
             self._transport.write(lms200.mode_command(lms200.MODE_REQUEST))
         except (TransportClosed, OSError):
             pass
-        self._transport.close()
+        self._transport.finish(0.2)  # let the stop-streaming request leave the line
 
     # ------------------------------------------------------------------ setup
 
@@ -171,14 +171,16 @@ class Lms200Driver:
             try:
                 self._transport.write(packet)
             except TransportClosed as exc:
-                raise BackendError(f"the LMS-200 line failed: {exc}") from None
+                raise BackendError(f"the LMS-200 line {self._transport.description} "
+                                   f"failed: {exc}") from None
             deadline = time.monotonic() + timeout
             nak = False
             while not nak and time.monotonic() < deadline:
                 try:
                     data = self._transport.read(min(0.05, max(0.0, deadline - time.monotonic())))
                 except TransportClosed as exc:
-                    raise BackendError(f"the LMS-200 line failed: {exc}") from None
+                    raise BackendError(f"the LMS-200 line {self._transport.description} "
+                                       f"failed: {exc}") from None
                 for item in self._reader.feed(data):
                     if isinstance(item, Ack):
                         nak = nak or not item.ok
@@ -235,4 +237,4 @@ class Lms200Driver:
     def _set_failure(self, why: str) -> None:
         with self._lock:
             if self._failure is None:
-                self._failure = why
+                self._failure = f"{self._transport.description}: {why}"

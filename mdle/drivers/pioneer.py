@@ -10,9 +10,14 @@ has not commanded it for ``command_timeout`` seconds. The runtime's calls only r
 newest data and write commands, so none of them blocks for longer than a tick.
 
 Safety: every way out stops the robot. :meth:`PioneerBackend.close` (idempotent, safe
-from ``finally`` blocks and signal handlers) sends STOP, zero velocities and CLOSE;
-stale data or a lost connection raise :class:`~mdle.errors.BackendError` after a
-best-effort stop; the runtime stops the robot at the end of every run.
+from ``finally`` blocks and signal handlers) says a clean goodbye: STOP and zero
+velocities, a wait (bounded by ``goodbye_timeout``) until a SIP shows the wheels stopped
+or the link is gone, then CLOSE, and the stream is ended gracefully (every byte handed
+over, the peer's last packets drained) before it is released. The SIGTERM handler and
+the exit hook are in place before the first motor command, so a signal while connecting
+also stops the robot. Stale data or a lost connection raise
+:class:`~mdle.errors.BackendError` after a best-effort stop; the runtime stops the robot
+at the end of every run.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from typing import Any, Protocol
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.drivers import arcos, arcos_laser
 from mdle.drivers.arcos import Cmd, OdometryState, PacketReader, RobotParams, SyncInfo
+from mdle.drivers.limits import check_limits, check_robot_params
 from mdle.drivers.transport import Transport, TransportClosed, read_or_fail
 from mdle.errors import BackendError
 
@@ -66,8 +72,9 @@ class PioneerOptions:
     """The reader thread's read timeout (bounds its reaction time)."""
     laser_mode: int = 1
     """Simulator laser packets: 1 for 0x60, 2 for the extended 0x61."""
-    laser_max_range_mm: int = 32000
-    """The simulator laser's no-return value."""
+    laser_max_range_mm: int = arcos_laser.NO_RETURN_MM
+    """The simulator laser's no-return code (mm): AMRISim and MobileSim send 32767 for a
+    beam without a return; readings at or above it are invalid."""
     laser_fov_deg: float = 180.0
     odometry_origin: str = "start"
     """``start``: the pose at connect is (0, 0, 0), as the simulators' odometry restarts
@@ -80,6 +87,9 @@ class PioneerOptions:
     """Serial rates to try in turn (empty: the transport's current rate)."""
     handle_sigterm: bool = False
     """Turn SIGTERM into SystemExit while connected, so ``finally`` blocks stop the robot."""
+    goodbye_timeout: float = 0.5
+    """On close, wait this long at most for a SIP showing the wheels stopped, and again
+    for the stream to end gracefully."""
 
 
 class ScanSource(Protocol):
@@ -112,6 +122,10 @@ def limits_from_params(p: RobotParams) -> RobotLimits:
 
 _STOP_PACKETS = arcos.encode_command(Cmd.VEL, 0) + arcos.encode_command(Cmd.RVEL, 0)
 _PULSE = arcos.encode_command(Cmd.PULSE)
+#: Below these a SIP's speeds count as stopped (wheel speeds come in whole mm/s, the
+#: turn rate in 0.1 deg/s).
+_STOPPED_V = 0.002
+_STOPPED_OMEGA = 0.005
 
 
 @dataclass
@@ -189,6 +203,11 @@ class PioneerBackend:
         self._t0 = time.monotonic()
         self._assembler = arcos_laser.ScanAssembler(opt.laser_max_range_mm, opt.laser_fov_deg)
         self._old_sigterm: Any = None
+        self._atexit: Any = None
+        self.goodbye: str | None = None
+        """How the last close went: ``stopped`` (a SIP showed the wheels stopped),
+        ``link lost``, ``not confirmed`` (no such SIP within ``goodbye_timeout``) or
+        ``not connected``; None while open."""
         self.deadman_stops = 0
         """How often the dead-man switch stopped the robot (runtime silent too long)."""
         try:
@@ -202,8 +221,14 @@ class PioneerBackend:
             except ValueError as exc:
                 raise BackendError(str(exc)) from None
             self.limits: RobotLimits = limits or limits_from_params(self.params)
+            # never a negative, infinite or absurd speed on the wire, however they came
+            problem = check_robot_params(self.params) or check_limits(self.limits)
+            if problem is not None:
+                raise BackendError(problem)
             self._odometer = arcos.Odometer(self.params,
                                             relative=opt.odometry_origin == "start")
+            # from here on the motors may move: a signal or an exit must stop them
+            self._register_exit_hooks()
             self._write(arcos.encode_command(Cmd.OPEN))
             self._write(_PULSE + arcos.encode_command(Cmd.ENABLE, 1))
             if self._sim_laser:
@@ -213,9 +238,9 @@ class PioneerBackend:
             self._thread.start()
             self._await_first_data()
         except BaseException:
+            self._closed = True
             self._shutdown(send=not self._lost.is_set())
             raise
-        self._register_exit_hooks()
 
     # ------------------------------------------------------------------ Backend API
 
@@ -234,7 +259,7 @@ class PioneerBackend:
             s = self._shared
             odo, sip_stamp, failure, scan = s.odometry, s.sip_stamp, s.failure, s.scan
         if failure is not None:
-            self._abort(f"lost the robot ({self._transport.description}): {failure}")
+            self._abort(f"lost the robot on {self._transport.description}: {failure}")
         if odo is None or now - sip_stamp > self._opt.sip_timeout:
             self._abort(f"the robot sent no data for {now - sip_stamp:.2f} s (limit "
                         f"{self._opt.sip_timeout:.2f} s) on {self._transport.description}")
@@ -352,7 +377,8 @@ class PioneerBackend:
             try:
                 self._transport.write(arcos.encode_command(step))
             except TransportClosed as exc:
-                raise BackendError(f"the connection to the robot failed during the "
+                raise BackendError(f"the connection to the robot on "
+                                   f"{self._transport.description} failed during the "
                                    f"handshake: {exc}") from None
             deadline = time.monotonic() + self._opt.sync_timeout
             reply = None
@@ -363,8 +389,8 @@ class PioneerBackend:
                 try:
                     data = self._transport.read(min(remaining, 0.05))
                 except TransportClosed as exc:
-                    raise BackendError(f"the robot closed the connection during the "
-                                       f"handshake: {exc}") from None
+                    raise BackendError(f"the robot on {self._transport.description} stopped "
+                                       f"answering during the handshake: {exc}") from None
                 for body in reader.feed(data):
                     if body[0] in arcos.SIP_IDS:
                         # a session left open: close it, let the SIPs in flight
@@ -386,8 +412,8 @@ class PioneerBackend:
                 if not self._transport.read(quiet):
                     return
             except TransportClosed as exc:
-                raise BackendError(f"the robot closed the connection during the "
-                                   f"handshake: {exc}") from None
+                raise BackendError(f"the robot on {self._transport.description} stopped "
+                                   f"answering during the handshake: {exc}") from None
 
     def _await_first_data(self) -> None:
         opt = self._opt
@@ -396,7 +422,8 @@ class PioneerBackend:
             with self._lock:
                 got, failure = self._shared.odometry is not None, self._shared.failure
             if failure is not None:
-                raise BackendError(f"lost the robot right after connecting: {failure}")
+                raise BackendError(f"lost the robot on {self._transport.description} right "
+                                   f"after connecting: {failure}")
             if got:
                 break
             if time.monotonic() > deadline:
@@ -499,45 +526,99 @@ class PioneerBackend:
             self._write(data)
         except TransportClosed as exc:
             self._fail(str(exc))
-            self._abort(f"lost the robot ({self._transport.description}): {exc}")
+            self._abort(f"lost the robot on {self._transport.description}: {exc}")
 
     def _raise_if_lost(self) -> None:
         with self._lock:
             failure = self._shared.failure
         if failure is not None:
-            self._abort(f"lost the robot ({self._transport.description}): {failure}")
+            self._abort(f"lost the robot on {self._transport.description}: {failure}")
 
     def _abort(self, message: str) -> None:
         self.stop()
         raise BackendError(message)
 
     def _shutdown(self, send: bool) -> None:
-        """Stop, close the session and release the line; swallows every I/O error."""
-        if send:
-            try:
+        """Say goodbye and release everything; swallows every I/O error.
+
+        With ``send``: STOP and zero velocities, a wait until a SIP shows the wheels
+        stopped (or the link is gone; at most ``goodbye_timeout``), the laser off, CLOSE.
+        Then the reader thread ends and the stream is finished gracefully.
+        """
+        opt = self._opt
+        self.goodbye = "link lost"
+        greet = send and not self._lost.is_set()
+        try:
+            if greet:
+                with self._lock:
+                    sips = self._shared.sips
                 self._write(arcos.encode_command(Cmd.STOP) + _STOP_PACKETS)
+                self._moving = False
+                self.goodbye = self._await_stopped(sips, opt.goodbye_timeout)
+        except (TransportClosed, OSError):
+            greet = False
+        finally:
+            # a second Ctrl-C during the wait lands here too: the session still ends
+            self._release(greet)
+
+    def _release(self, greet: bool) -> None:
+        """Send CLOSE (with ``greet``), end the reader, finish the stream, free the rest."""
+        opt = self._opt
+        try:
+            if greet:
                 if self._sim_laser:
                     self._write(arcos_laser.enable_command(0, 0))
                 self._write(arcos.encode_command(Cmd.CLOSE))
-            except (TransportClosed, OSError):
-                pass
-        self._halt.set()
-        thread = self._thread
-        if thread is not None and thread is not threading.current_thread():
-            thread.join(timeout=1.0)
-        try:
-            self._transport.close()
-        except Exception:  # noqa: BLE001 - closing must go on whatever the stream says
-            _log.debug("closing the robot's stream failed", exc_info=True)
-        if self._laser_source is not None:
+        except (TransportClosed, OSError):
+            greet = False
+            self.goodbye = "link lost"
+        finally:
+            if self.goodbye == "not confirmed":
+                _log.warning("no SIP showed the robot's wheels stopped within %.1f s of "
+                             "the final stop", opt.goodbye_timeout)
+            self._halt.set()
+            thread = self._thread
+            if thread is not None and thread is not threading.current_thread():
+                thread.join(timeout=1.0)
             try:
-                self._laser_source.close()
-            except Exception:  # noqa: BLE001
-                _log.debug("closing the laser failed", exc_info=True)
-        self._restore_sigterm()
-        hook = getattr(self, "_atexit", None)
-        if hook is not None:
-            atexit.unregister(hook)
+                if greet:
+                    self._transport.finish(opt.goodbye_timeout)
+                else:
+                    self._transport.close()
+            except Exception:  # noqa: BLE001 - closing must go on whatever the stream says
+                _log.debug("closing the robot's stream failed", exc_info=True)
+            if self._laser_source is not None:
+                try:
+                    self._laser_source.close()
+                except Exception:  # noqa: BLE001
+                    _log.debug("closing the laser failed", exc_info=True)
+            self._restore_sigterm()
+            hook, self._atexit = self._atexit, None
+            if hook is not None:
+                atexit.unregister(hook)
+
+    def _await_stopped(self, sips_before: int, timeout: float) -> str:
+        """Wait until a SIP newer than ``sips_before`` shows the wheels stopped.
+
+        Returns ``stopped``, ``link lost`` or ``not confirmed`` (none within ``timeout``;
+        also when the reader thread never ran).
+        """
+        thread = self._thread
+        if thread is None or not thread.is_alive():
+            return "not confirmed" if thread is not None else "not connected"
+        deadline = time.monotonic() + timeout
+        while True:
+            with self._lock:
+                odo, sips = self._shared.odometry, self._shared.sips
+            if self._lost.is_set():
+                return "link lost"
+            if (odo is not None and sips > sips_before and abs(odo.v) < _STOPPED_V
+                    and abs(odo.omega) < _STOPPED_OMEGA):
+                return "stopped"
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return "not confirmed"
+            self._lost.wait(min(left, 0.01))
 
     def _register_exit_hooks(self) -> None:
         ref = weakref.ref(self)
@@ -551,6 +632,14 @@ class PioneerBackend:
         atexit.register(_close_at_exit)
         if (self._opt.handle_sigterm
                 and threading.current_thread() is threading.main_thread()):
+
+            def _sigterm_to_exit(signum: int, frame: object) -> None:
+                # SIGTERM as SystemExit(143): ``finally`` blocks run and stop the robot;
+                # a second one while the goodbye is under way must not cut it short
+                backend = ref()
+                if backend is None or not backend._closed:
+                    raise SystemExit(128 + signum)
+
             self._old_sigterm = signal.signal(signal.SIGTERM, _sigterm_to_exit)
 
     def _restore_sigterm(self) -> None:
@@ -576,9 +665,3 @@ def _check_arguments(laser: object, rate: float, opt: PioneerOptions) -> str | N
     if opt.laser_mode not in (1, 2):
         return f"simulator laser mode must be 1 (0x60) or 2 (0x61), got {opt.laser_mode}"
     return None
-
-
-def _sigterm_to_exit(signum: int, frame: object) -> None:
-    """SIGTERM as SystemExit(143): ``finally`` blocks run and the robot is stopped."""
-    raise SystemExit(128 + signum)
-

@@ -19,6 +19,8 @@ from __future__ import annotations
 import select
 import socket
 import sys
+import threading
+import time
 import urllib.parse
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -40,6 +42,8 @@ __all__ = [
 
 DEFAULT_TCP_PORT = 8101
 _SCHEMES = ("tcp", "serial", "lms200", "sim")
+#: Fastest serial rate a URL may ask for (beyond any UART a robot or laser has).
+_MAX_BAUD = 4_000_000
 
 
 @dataclass(frozen=True)
@@ -72,7 +76,10 @@ def parse_url(url: str) -> Endpoint:
     if text == "sim" or text.startswith("sim?"):
         query = text[4:]
         return Endpoint("sim", text, options=_options(text, query))
-    parts = urllib.parse.urlsplit(text)
+    try:
+        parts = urllib.parse.urlsplit(text)
+    except ValueError as exc:  # e.g. an unclosed IPv6 bracket: tcp://[::1
+        raise BackendError(f"cannot use connection `{url}`: {exc}") from None
     scheme = parts.scheme.lower()
     if scheme not in _SCHEMES or "://" not in text:
         raise BackendError(f"cannot use connection `{url}`: expected tcp://HOST:PORT, "
@@ -88,14 +95,21 @@ def parse_url(url: str) -> Endpoint:
                                f"whole number") from None
         if baud <= 0:
             raise BackendError(f"cannot use connection `{url}`: baud must be positive")
+        if baud > _MAX_BAUD:
+            raise BackendError(f"cannot use connection `{url}`: baud must be at most "
+                               f"{_MAX_BAUD}, got {raw}")
     if scheme == "tcp":
         if not parts.hostname:
             raise BackendError(f"cannot use connection `{url}`: no host (tcp://HOST:PORT)")
         try:
-            port = parts.port or DEFAULT_TCP_PORT
+            port = parts.port
         except ValueError:
+            port = 0
+        if port is None:
+            port = DEFAULT_TCP_PORT
+        elif not 1 <= port <= 65535:
             raise BackendError(f"cannot use connection `{url}`: the port is not a number "
-                               f"in 1..65535") from None
+                               f"in 1..65535")
         return Endpoint("tcp", text, host=parts.hostname, port=port, options=options)
     # serial:///dev/ttyUSB0 has an empty netloc; serial://COM3 keeps the device there
     path = (parts.netloc + parts.path) if parts.netloc else parts.path
@@ -115,7 +129,7 @@ def _options(url: str, query: str) -> dict[str, str]:
 
 
 class TransportClosed(Exception):
-    """The stream ended or failed; the message says how."""
+    """The stream ended or failed; the message says how (callers name the stream)."""
 
 
 class Transport(Protocol):
@@ -143,6 +157,14 @@ class Transport(Protocol):
 
     def close(self) -> None:
         """Release the stream (idempotent)."""
+        ...
+
+    def finish(self, timeout: float) -> None:
+        """End the stream gracefully, then release it (idempotent, never raises).
+
+        Everything written reaches the other end before the stream closes: waits at most
+        ``timeout`` seconds for the bytes to leave and for the other end to finish.
+        """
         ...
 
 
@@ -198,9 +220,9 @@ class TcpTransport:
                 return b""
             data = self._sock.recv(65536)
         except (OSError, ValueError) as exc:
-            raise TransportClosed(f"{self.description}: {exc}") from None
+            raise TransportClosed(_why(exc)) from None
         if not data:
-            raise TransportClosed(f"{self.description} closed the connection")
+            raise TransportClosed("the other end closed the connection")
         return data
 
     def write(self, data: bytes) -> None:
@@ -210,7 +232,7 @@ class TcpTransport:
         try:
             self._sock.sendall(data)
         except OSError as exc:
-            raise TransportClosed(f"{self.description}: {exc}") from None
+            raise TransportClosed(_why(exc)) from None
 
     def set_baud(self, baud: int) -> None:
         """Do nothing: a TCP stream has no line rate."""
@@ -225,6 +247,34 @@ class TcpTransport:
         except OSError:
             pass
         self._sock.close()
+
+    def finish(self, timeout: float) -> None:
+        """Send FIN after the last bytes, read until the peer closes, then close.
+
+        Closing a socket whose input was not all read makes the kernel send a reset (RST)
+        instead of a FIN, and a reset can destroy the bytes the peer has not read yet: a
+        server reading slowly would lose the final STOP and CLOSE. So: shut the sending
+        side (the peer reads everything, then end of stream), then read and discard what
+        still comes (SIPs in flight) until the peer closes its side or ``timeout`` passes.
+        """
+        if self._closed:
+            return
+        try:
+            self._sock.shutdown(socket.SHUT_WR)
+            deadline = time.monotonic() + timeout
+            while (left := deadline - time.monotonic()) > 0:
+                ready, _, _ = select.select([self._sock], [], [], left)
+                if ready and not self._sock.recv(65536):
+                    break  # the peer has read everything and closed: a clean end
+        except (OSError, ValueError):
+            pass  # reset or already gone: nothing more to hand over
+        self.close()
+
+
+def _why(exc: BaseException) -> str:
+    """Say what an I/O error was, without the errno prefix when there is a text."""
+    text = getattr(exc, "strerror", None)
+    return str(text).lower() if text else str(exc)
 
 
 def _import_serial() -> Any:
@@ -279,7 +329,7 @@ class SerialTransport:
             self._ser.timeout = 0
             return data
         except self._errors as exc:
-            raise TransportClosed(f"{self._path}: {exc}") from None
+            raise TransportClosed(_why(exc)) from None
 
     def write(self, data: bytes) -> None:
         """See :meth:`Transport.write`."""
@@ -289,7 +339,7 @@ class SerialTransport:
             # no flush(): waiting for the bytes to leave (tcdrain) would block the tick
             self._ser.write(data)
         except self._errors as exc:
-            raise TransportClosed(f"{self._path}: {exc}") from None
+            raise TransportClosed(_why(exc)) from None
 
     def set_baud(self, baud: int) -> None:
         """See :meth:`Transport.set_baud`."""
@@ -297,7 +347,7 @@ class SerialTransport:
             self._ser.reset_input_buffer()
             self._ser.baudrate = baud
         except self._errors as exc:
-            raise TransportClosed(f"{self._path}: cannot set {baud} baud: {exc}") from None
+            raise TransportClosed(f"cannot set {baud} baud: {_why(exc)}") from None
         self.description = f"{self._path} at {baud} baud"
 
     def close(self) -> None:
@@ -309,6 +359,28 @@ class SerialTransport:
             self._ser.close()
         except self._errors:
             pass
+
+    def finish(self, timeout: float) -> None:
+        """Let the written bytes leave the line (bounded), then close.
+
+        A serial line has no end-of-stream to send: waiting until the output queue is
+        empty is all there is. pyserial's ``flush`` (tcdrain) has no timeout, so it runs
+        in a helper thread and is waited for ``timeout`` seconds at most.
+        """
+        if self._closed:
+            return
+        done = threading.Event()
+
+        def drain() -> None:
+            try:
+                self._ser.flush()
+            except self._errors:
+                pass
+            done.set()
+
+        threading.Thread(target=drain, name="mdle-serial-drain", daemon=True).start()
+        done.wait(timeout)
+        self.close()
 
 
 def open_transport(endpoint: Endpoint, *, baud: int | None = None,

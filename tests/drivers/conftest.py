@@ -35,6 +35,9 @@ FAST = PioneerOptions(sync_timeout=0.15, sync_retries=2, first_sip_timeout=1.0,
                       keepalive=0.1, command_timeout=0.4, poll=0.01)
 FAST_LMS = Lms200Options(reply_timeout=0.2, mode_timeout=0.3, retries=2, poll=0.01)
 
+#: What AMRISim sends for a laser beam without a return (mm).
+NO_RETURN_MM = 32767
+
 _BAUD_CONST = {9600: termios.B9600, 19200: termios.B19200, 38400: termios.B38400,
                115200: termios.B115200, 500000: getattr(termios, "B500000", -1)}
 
@@ -152,6 +155,19 @@ class FakeArcos:
     laser_mode: int = 0
     send_laser: bool = True
     send_sips: bool = True
+    read_every: float = 0.0
+    """Read the client's bytes only this often (a server busy elsewhere), while SIPs go
+    out on time; like AMRISim, a failed write ends the session before reading more."""
+    stop_lag: float = 0.0
+    """The wheels keep turning this long after STOP or zero velocities (a ramp down)."""
+    ignore_stop: bool = False
+    """Never stop the wheels (a robot that does not obey: the goodbye must not hang)."""
+    vanish_on_stop: bool = False
+    """Cut the link the moment a STOP arrives (the robot switched off mid-goodbye)."""
+    write_failed: bool = False
+    """A write to the client failed (it reset the connection)."""
+    client_gone: bool = False
+    """The client's end of stream (or reset) was read."""
     pose_mm: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])  # x, y, theta rad
     v_mm: float = 0.0
     w_deg: float = 0.0
@@ -160,6 +176,7 @@ class FakeArcos:
     def __post_init__(self) -> None:
         self.t0 = time.monotonic()
         self._halt = threading.Event()
+        self._stop_due: float | None = None
         self.link: _Link | None = None
         self.dist_conv = arcos.robot_params(self.subtype).dist_conv
         if self.serial:
@@ -172,6 +189,7 @@ class FakeArcos:
             self._server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             self._server.bind(("127.0.0.1", 0))
             self._server.listen(1)
+            self._server.settimeout(0.05)  # here: stop() may close it before the thread runs
             self.port = self._server.getsockname()[1]
             self.url = f"tcp://127.0.0.1:{self.port}"
             target = self._accept
@@ -213,7 +231,6 @@ class FakeArcos:
     # -------------------------------------------------------------- server
 
     def _accept(self) -> None:
-        self._server.settimeout(0.05)
         while not self._halt.is_set():
             try:
                 sock, _ = self._server.accept()
@@ -233,14 +250,26 @@ class FakeArcos:
         last_rx = time.monotonic()
         sent = 0
         stage = 3 if opened else 0
+        next_read = time.monotonic()
+        self._stop_due = None
         while not self._halt.is_set():
-            data = link.recv(0.005)
+            if time.monotonic() >= next_read:
+                data = link.recv(0.005)
+                next_read = time.monotonic() + self.read_every
+            else:
+                time.sleep(0.005)
+                data = b""
             if data is None:
-                # the client went away: like the simulators, end the session and stop
+                # the client went away: like the simulators, end the session, stop, hang up
+                self.client_gone = True
                 self.v_mm = self.w_deg = 0.0
                 self.motors = False
+                link.close()
                 return
             now = time.monotonic()
+            if self._stop_due is not None and now >= self._stop_due:
+                self._stop_due = None
+                self.v_mm = self.w_deg = 0.0
             if data and self.baud is not None and link.baud() != self.baud:
                 data = b""  # garbled at the wrong rate: nothing decodes
             if data:
@@ -284,12 +313,21 @@ class FakeArcos:
                 next_sip += self.sip_period
                 self._integrate(self.sip_period)
                 sent = self._send_cycle(link, sent)
+                if self.write_failed:
+                    return
 
     def _command(self, cmd: int, arg: object, opened: bool, sent: int) -> tuple[bool, int]:
         if cmd == Cmd.CLOSE:
             return False, sent
         if cmd == Cmd.ENABLE:
             self.motors = arg == 1
+        elif cmd == Cmd.STOP and self.vanish_on_stop:
+            self.drop()
+        elif self.ignore_stop and (cmd == Cmd.STOP or arg == 0):
+            pass
+        elif self.stop_lag and (cmd == Cmd.STOP or (cmd in (Cmd.VEL, Cmd.RVEL) and arg == 0)):
+            if self._stop_due is None:
+                self._stop_due = time.monotonic() + self.stop_lag
         elif cmd == Cmd.VEL and isinstance(arg, int):
             self.v_mm = float(arg)
         elif cmd == Cmd.RVEL and isinstance(arg, int):
@@ -336,15 +374,16 @@ class FakeArcos:
                 bad[len(bad) // 2] ^= 0xFF
                 p = b"\x00\xfa" + bytes(bad)
             if not link.send(p):
+                self.write_failed = not link.closed
                 break
         return sent
 
 
 def _default_scan(i: int) -> np.ndarray:
-    """A wall 2 m ahead-ish with no return on the far left and right beams."""
+    """A wall 2 m ahead-ish with no return (AMRISim's 32767) on the far left and right."""
     scan = np.full(181, 2000 + (i % 5), dtype=int)
-    scan[:5] = 32000
-    scan[-5:] = 32000
+    scan[:5] = NO_RETURN_MM
+    scan[-5:] = NO_RETURN_MM
     return scan
 
 

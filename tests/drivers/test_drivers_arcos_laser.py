@@ -113,3 +113,15 @@ def test_garbage_packet_contents_never_raise_out_of_the_assembler() -> None:
     assert scan is not None and scan.ranges.shape == (2,)
     with pytest.raises(ValueError):
         arcos_laser.decode_laser_packet(b"\x60\x01")
+
+
+def test_no_return_is_the_simulators_32767_and_is_invalid() -> None:
+    # AMRISim sends 32767 mm for a beam without a return: no reading, not a 32 m hit
+    ranges = np.full(181, 1500)
+    ranges[[0, 1, 180]] = arcos_laser.NO_RETURN_MM
+    ranges[2] = 32000  # a real (if far) hit below the no-return code
+    (scan,) = _feed(ScanAssembler(), arcos_laser.encode_laser_packets(ranges))
+    assert scan.max_range == pytest.approx(32.767)
+    assert not scan.valid[[0, 1, 180]].any() and scan.valid[2:180].all()
+    assert np.all(scan.ranges[[0, 1, 180]] == pytest.approx(32.767))
+    assert scan.ranges[2] == pytest.approx(32.0)

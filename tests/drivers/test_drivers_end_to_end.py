@@ -120,7 +120,7 @@ def test_mdle_run_cli_reports_a_lost_robot(fake_robot: FakeRobot, tmp_path: Path
     code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url, "--quiet"])
     assert code == 1 and time.monotonic() - t0 < 3.0
     err = capsys.readouterr().err
-    assert "lost the robot" in err and fake.url in err
+    assert "lost the robot" in err and err.count(fake.url) == 1  # named once
     assert "Traceback" not in err
 
 
@@ -184,3 +184,28 @@ def test_killed_process_leaves_the_robot_to_stop_itself(fake_robot: FakeRobot, t
     assert fake.wait_for(lambda: fake.v_mm == 0, timeout=2.0)
     assert not fake.commands(Cmd.CLOSE)
     assert (fake.watchdog_trips >= 1) if serial else (fake.watchdog_trips == 0)
+
+
+@pytest.mark.parametrize("waiting_for", ["scan", "sip"])
+def test_sigterm_while_connecting_still_stops_and_closes(fake_robot: FakeRobot,
+                                                         tmp_path: Path,
+                                                         waiting_for: str) -> None:
+    # After ENABLE the backend waits for the first SIP (2 s) and scan (3 s); a SIGTERM
+    # then used to kill the process outright: exit -15, no STOP, no CLOSE.
+    import signal
+
+    fake = fake_robot(send_laser=waiting_for != "scan", send_sips=waiting_for != "sip")
+    proc = _spawn_run(fake, tmp_path)
+    try:
+        assert fake.wait_for(lambda: fake.commands(Cmd.ENABLE) != [], timeout=15.0)
+        time.sleep(0.1)  # well inside the wait for the first data
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=10.0)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, err
+    assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [], timeout=2.0)
+    stop = fake.commands(Cmd.STOP)
+    assert stop and stop[-1].t > fake.commands(Cmd.ENABLE)[0].t
+    assert stop[-1].t < fake.commands(Cmd.CLOSE)[-1].t
+    assert "Traceback" not in err

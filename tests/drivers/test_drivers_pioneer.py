@@ -251,9 +251,13 @@ def test_close_stops_and_ends_the_session(fake_robot: FakeRobot, fast: PioneerOp
     assert fake.wait_for(lambda: fake.v_mm == 300)
     backend.close()
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
-    tail = [(r.cmd, r.arg) for r in fake.received][-5:]
-    assert tail == [(Cmd.STOP, None), (Cmd.VEL, 0), (Cmd.RVEL, 0),
-                    (Cmd.SIM_LRF_ENABLE, 0), (Cmd.CLOSE, None)]
+    # STOP and zero speeds, keep-alives while a SIP confirms the stop, laser off, CLOSE
+    sent = [(r.cmd, r.arg) for r in fake.received]
+    stop = max(i for i, c in enumerate(sent) if c == (Cmd.STOP, None))
+    assert sent[stop:stop + 3] == [(Cmd.STOP, None), (Cmd.VEL, 0), (Cmd.RVEL, 0)]
+    assert sent[-2:] == [(Cmd.SIM_LRF_ENABLE, 0), (Cmd.CLOSE, None)]
+    assert set(sent[stop + 3:-2]) <= {(Cmd.PULSE, None)}
+    assert backend.goodbye == "stopped"
     assert fake.v_mm == 0 and fake.w_deg == 0
     backend.close()
     assert len(fake.commands(Cmd.CLOSE)) == 1
@@ -437,5 +441,5 @@ def test_simulator_laser_options(fake_robot: FakeRobot, fast: PioneerOptions) ->
         backend.close()
     with pytest.raises(BackendError, match="unknown option\\(s\\) fov; known: max_range"):
         open_backend("pioneer", fake.url, "sim?fov=90", options=fast)
-    with pytest.raises(BackendError, match="max_range must be metres"):
+    with pytest.raises(BackendError, match=r"`max_range` must be a number of m in \[0.1, "):
         open_backend("pioneer", fake.url, "sim?max_range=far", options=fast)
