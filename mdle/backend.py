@@ -148,6 +148,10 @@ class Backend(Protocol):
     in ``advance``; a hardware backend waits there until the tick's wall-clock deadline
     (never longer) and returns the lateness. :meth:`stop` and :meth:`close` must be safe
     to call at any time, more than once, and from a ``finally`` block.
+
+    A backend may also have a ``laser_mount`` attribute: the ladar's pose in the robot
+    frame (x, y, theta: m, m, rad); recorders use it for the ``base_link -> laser``
+    transform and read (0, 0, 0) when it is absent.
     """
 
     clock: ClockMode

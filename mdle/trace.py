@@ -13,6 +13,7 @@ written as ``null`` so the file is strict JSON. The schema is documented in ``do
 
 from __future__ import annotations
 
+import base64
 import json
 import math
 import os
@@ -23,6 +24,7 @@ from dataclasses import dataclass, field
 from math import isfinite
 from typing import IO, TYPE_CHECKING, Any
 
+from mdle.backend import Scan
 from mdle.errors import Diagnostic, MdleError, Span
 from mdle.runtime.events import Event, RunResult, Sample
 
@@ -32,7 +34,9 @@ if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
 
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
-           "read_trace", "versions"]
+           "SampleFormat", "LaserRecords", "read_trace", "versions", "decode_ranges",
+           "dumps", "start_record", "event_record", "end_record", "scan_ranges",
+           "encode_ranges", "laser_mount"]
 
 TRACE_FORMAT = "mdle-trace"
 TRACE_VERSION = 1
@@ -74,8 +78,40 @@ def _clean(value: Any) -> Any:
     return value
 
 
+def dumps(record: Mapping[str, Any]) -> str:
+    """Return a record as one line of strict JSON (non-finite numbers as null)."""
+    return _dumps(record)
+
+
 def _dumps(record: Mapping[str, Any]) -> str:
     return json.dumps(_clean(record), allow_nan=False, separators=(",", ":"))
+
+
+def start_record(scheduler: "Scheduler") -> dict[str, Any]:
+    """Return the ``start`` record of a run."""
+    return {"type": "start", "element": scheduler.element.label, "rate": scheduler.rate,
+            "until": scheduler.until}
+
+
+def event_record(event: Event) -> dict[str, Any]:
+    """Return the ``event`` record of an element's start or end."""
+    p = event.pose
+    return {"type": "event", "t": event.time, "kind": event.kind.value, "path": event.path,
+            "level": event.level, "element": event.element,
+            "cause": event.cause.value if event.cause is not None else None,
+            "x": p.x, "y": p.y, "theta": p.theta}
+
+
+def end_record(result: RunResult) -> dict[str, Any]:
+    """Return the ``end`` record of a run."""
+    t = result.termination
+    return {
+        "type": "end", "path": t.path, "cause": t.cause.value, "t": t.time,
+        "ticks": result.ticks, "duration": result.duration, "distance": result.distance,
+        "min_clearance": result.min_clearance, "collided": result.collided,
+        "fault": result.fault, "max_lateness": result.max_lateness,
+        "terminations": [{"path": x.path, "level": x.level, "cause": x.cause.value,
+                          "t": x.time} for x in result.terminations]}
 
 
 class TraceWriter:
@@ -114,7 +150,8 @@ class TraceWriter:
         self._period = float(flush_period)
         self._clock = clock
         self._flush_at = 0.0  # clock() by which queued samples are written
-        self._paths: dict[str, str] = {}
+        self._format = SampleFormat()
+        self._laser = LaserRecords()
         head: dict[str, Any] = {"type": "header", "format": TRACE_FORMAT,
                                 "version": TRACE_VERSION, "versions": versions()}
         head.update(header or {})
@@ -144,84 +181,30 @@ class TraceWriter:
                 pending.clear()
         self._flush_at = self._clock() + self._period
 
-    def _quoted(self, path: str) -> str:
-        q = self._paths.get(path)
-        if q is None:
-            q = self._paths[path] = json.dumps(path)
-        return q
-
     # ------------------------------------------------------------------ observer hooks
 
     def on_start(self, scheduler: "Scheduler") -> None:
         """Record the element and rate the run uses."""
-        self._write(_dumps({"type": "start", "element": scheduler.element.label,
-                            "rate": scheduler.rate, "until": scheduler.until}))
+        self._laser.mount = laser_mount(scheduler.backend)
+        self._write(_dumps(start_record(scheduler)))
 
     def on_event(self, event: Event) -> None:
         """Write an ``event`` record."""
-        p = event.pose
-        self._write(_dumps({
-            "type": "event", "t": event.time, "kind": event.kind.value, "path": event.path,
-            "level": event.level, "element": event.element,
-            "cause": event.cause.value if event.cause is not None else None,
-            "x": p.x, "y": p.y, "theta": p.theta}))
+        self._write(_dumps(event_record(event)))
 
     def on_tick(self, sample: Sample) -> None:
         """Queue a ``sample`` record; write the queue once it is ``flush_period`` old."""
-        try:
-            line = self._sample_line(sample)
-        except (TypeError, ValueError):  # a diagnostic that is not a number
-            line = _dumps(_sample_dict(sample))
-        self._pending.append(line)
+        scan = sample.scan
+        if scan is not None and scan is not self._laser.last:
+            for record in self._laser.records(sample.time, scan):
+                self._pending.append(_dumps(record))
+        self._pending.append(self._format(sample))
         if self._clock() >= self._flush_at:
             self.flush()
 
-    def _sample_line(self, s: Sample) -> str:
-        """Format the sample as one JSON line (floats formatted directly, fast).
-
-        Raises TypeError or ValueError for a value that is not a number (the caller then
-        falls back to :func:`json.dumps`).
-        """
-        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
-         diag, clearance, collided, true_x, true_y, true_theta) = s
-        # one test for the fields every sample has: a sum of finite numbers is finite
-        # (short of overflow, which the slow path then handles too)
-        if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
-            return _dumps(_sample_dict(s))
-        quoted = self._paths.get(path)
-        if quoted is None:
-            quoted = self._quoted(path)
-        # time keeps every digit (hardware clocks may be large); the rest 9 significant
-        line = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,'
-                '"omega":%.9g,"cmd_v":%.9g,"cmd_omega":%.9g,"path":%s,"lateness":%.9g,'
-                '"stalled":%s'
-                % (float(t), x, y, theta, v, omega, cmd_v, cmd_omega, quoted, lateness,
-                   "true" if stalled else "false"))
-        if scan_age is not None:
-            line += ',"scan_age":' + _number(scan_age)
-        if clearance is not None:
-            line += ',"clearance":' + _number(clearance)
-        if collided is not None:
-            line += ',"collided":true' if collided else ',"collided":false'
-        if true_x is not None and true_y is not None and true_theta is not None:
-            line += (',"true_x":' + _number(true_x) + ',"true_y":' + _number(true_y)
-                     + ',"true_theta":' + _number(true_theta))
-        if diag:
-            q = self._quoted
-            line += ',"diag":{%s}' % ",".join([q(k) + ":" + _number(d)
-                                               for k, d in diag.items()])
-        return line + "}"
-
     def on_end(self, result: RunResult) -> None:
         """Write the ``end`` record and close the file."""
-        t = result.termination
-        self._write(_dumps({
-            "type": "end", "path": t.path, "cause": t.cause.value, "t": t.time,
-            "ticks": result.ticks, "duration": result.duration, "distance": result.distance,
-            "min_clearance": result.min_clearance, "collided": result.collided,
-            "fault": result.fault, "max_lateness": result.max_lateness,
-            "terminations": [{"path": x.path, "level": x.level, "cause": x.cause.value,
-                              "t": x.time} for x in result.terminations]}))
+        self._write(_dumps(end_record(result)))
         self.close()
 
     def close(self) -> None:
@@ -246,6 +229,150 @@ class TraceWriter:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+class SampleFormat:
+    """Format samples as the trace's ``sample`` records, one JSON line each (fast).
+
+    Floats are formatted directly (9 significant digits, time in full); path strings and
+    diagnostic names are quoted once and cached. The trace writer and the MCAP recorder
+    share it, so ``/mdle/state`` carries exactly the trace's line.
+    """
+
+    def __init__(self) -> None:
+        self._paths: dict[str, str] = {}
+
+    def quoted(self, path: str) -> str:
+        """Return ``path`` as a JSON string (cached)."""
+        q = self._paths.get(path)
+        if q is None:
+            q = self._paths[path] = json.dumps(path)
+        return q
+
+    def __call__(self, sample: Sample) -> str:
+        """Return the ``sample`` record of one tick, without a line end."""
+        try:
+            return self._line(sample)
+        except (TypeError, ValueError):  # a diagnostic that is not a number
+            return _dumps(_sample_dict(sample))
+
+    def _line(self, s: Sample) -> str:
+        """Format the sample with % formatting.
+
+        Raises TypeError or ValueError for a value that is not a number (the caller then
+        falls back to :func:`json.dumps`).
+        """
+        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
+         diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
+        # one test for the fields every sample has: a sum of finite numbers is finite
+        # (short of overflow, which the slow path then handles too)
+        if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
+            return _dumps(_sample_dict(s))
+        quoted = self._paths.get(path)
+        if quoted is None:
+            quoted = self.quoted(path)
+        # time keeps every digit (hardware clocks may be large); the rest 9 significant
+        line = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,'
+                '"omega":%.9g,"cmd_v":%.9g,"cmd_omega":%.9g,"path":%s,"lateness":%.9g,'
+                '"stalled":%s'
+                % (float(t), x, y, theta, v, omega, cmd_v, cmd_omega, quoted, lateness,
+                   "true" if stalled else "false"))
+        if scan_age is not None:
+            line += ',"scan_age":' + _number(scan_age)
+        if clearance is not None:
+            line += ',"clearance":' + _number(clearance)
+        if collided is not None:
+            line += ',"collided":true' if collided else ',"collided":false'
+        if true_x is not None and true_y is not None and true_theta is not None:
+            line += (',"true_x":' + _number(true_x) + ',"true_y":' + _number(true_y)
+                     + ',"true_theta":' + _number(true_theta))
+        if diag:
+            q = self.quoted
+            line += ',"diag":{%s}' % ",".join([q(k) + ":" + _number(d)
+                                               for k, d in diag.items()])
+        return line + "}"
+
+
+def laser_mount(backend: object) -> tuple[float, float, float]:
+    """Return a backend's ladar pose in the robot frame (x, y, theta), (0, 0, 0) if unknown."""
+    mount = getattr(backend, "laser_mount", None)
+    try:
+        x, y, th = (float(m) for m in mount)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        return (0.0, 0.0, 0.0)
+    return (x, y, th)
+
+
+def scan_ranges(scan: "Scan") -> "np.ndarray":
+    """Return a scan's ranges as little-endian float32, +inf on invalid beams (REP-117)."""
+    import numpy as np
+
+    return np.where(scan.valid, scan.ranges, np.inf).astype("<f4")
+
+
+def encode_ranges(scan: "Scan") -> str:
+    """Return a scan's ranges as base64 little-endian float32, +inf on invalid beams."""
+    return base64.b64encode(scan_ranges(scan).tobytes()).decode("ascii")
+
+
+def decode_ranges(text: str) -> "np.ndarray":
+    """Decode a ``scan`` record's ``ranges`` (base64 float32) to a float32 array.
+
+    Raises ValueError when the text is not base64 of whole float32 values.
+    """
+    import numpy as np
+
+    if not isinstance(text, str):
+        raise ValueError("`ranges` must be a base64 string")
+    raw = base64.b64decode(text.encode("ascii"), validate=True)
+    if len(raw) % 4:
+        raise ValueError(f"`ranges` holds {len(raw)} bytes, not whole float32 values")
+    return np.frombuffer(raw, dtype="<f4")
+
+
+class LaserRecords:
+    """Make the trace's ``laser`` and ``scan`` records from the scans a run sees.
+
+    A ``laser`` record (the beam geometry in the ``laser`` frame, REP-103) comes before
+    the first scan and again whenever the geometry changes; a ``scan`` record for every
+    new scan. ``mount`` is the ladar's pose in the robot frame.
+    """
+
+    def __init__(self, mount: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
+        self.mount = mount
+        self.last: Scan | None = None
+        self._geometry: tuple[Any, ...] | None = None
+
+    def laser(self, scan: "Scan") -> dict[str, Any]:
+        """Return the ``laser`` record for ``scan``'s beams."""
+        b = scan.bearings
+        n = len(b)
+        a0 = float(b[0]) - self.mount[2] if n else 0.0
+        a1 = float(b[-1]) - self.mount[2] if n else 0.0
+        return {"type": "laser", "frame": "laser", "mount": list(self.mount),
+                "angle_min": a0, "angle_max": a1,
+                "angle_increment": (a1 - a0) / (n - 1) if n > 1 else 0.0, "count": n,
+                "range_min": 0.0, "range_max": float(scan.max_range)}
+
+    def changed(self, scan: "Scan") -> dict[str, Any] | None:
+        """Return the ``laser`` record when ``scan``'s geometry is new, else None.
+
+        Also remembers ``scan`` as the last one seen.
+        """
+        self.last = scan
+        b = scan.bearings
+        geometry = (len(b), float(b[0]) if len(b) else 0.0, float(b[-1]) if len(b) else 0.0,
+                    float(scan.max_range), self.mount)
+        if geometry == self._geometry:
+            return None
+        self._geometry = geometry
+        return self.laser(scan)
+
+    def records(self, t: float, scan: "Scan") -> list[dict[str, Any]]:
+        """Return the records for a scan first seen at tick time ``t``."""
+        laser = self.changed(scan)
+        scan_rec = {"type": "scan", "t": t, "stamp": scan.stamp, "ranges": encode_ranges(scan)}
+        return [laser, scan_rec] if laser is not None else [scan_rec]
 
 
 def _number(value: Any) -> str:
@@ -276,7 +403,9 @@ class Trace:
     """A trace read back: the header, the event and sample records, and the end record.
 
     ``end`` is None when the run was cut off before it could be written (a crash);
-    ``truncated`` is True when the last line was incomplete.
+    ``truncated`` is True when the last line was incomplete. ``lasers`` and ``scans`` hold
+    the ``laser`` and ``scan`` records (:func:`decode_ranges` decodes a scan's ranges);
+    ``extra`` any other record (``start``...).
     """
 
     path: str
@@ -286,6 +415,8 @@ class Trace:
     end: Mapping[str, Any] | None = None
     truncated: bool = False
     extra: tuple[Mapping[str, Any], ...] = field(default=())
+    lasers: tuple[Mapping[str, Any], ...] = field(default=())
+    scans: tuple[Mapping[str, Any], ...] = field(default=())
 
     def column(self, name: str) -> "np.ndarray":
         """Return a sample field as a float array, shape (len(samples),); missing/null is NaN.
@@ -320,7 +451,10 @@ def _records(path: str) -> Iterator[tuple[int, str]]:
 
 
 def read_trace(path: str | os.PathLike[str]) -> Trace:
-    """Read a trace written by :class:`TraceWriter`.
+    """Read a trace written by :class:`TraceWriter`, or an MCAP recording of a run.
+
+    An MCAP file (``mdle run --record``) or a rosbag2 folder holding one (``--rosbag``)
+    is read back through the mcap library (:func:`mdle.ros.read_recording`).
 
     Raises
     ------
@@ -329,10 +463,16 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
         other than a cut-off last line (the message names the file and line).
     """
     path = os.fspath(path)
+    if _is_recording(path):
+        from mdle.ros.read import read_recording
+
+        return read_recording(path)
     header: dict[str, Any] | None = None
     events: list[Mapping[str, Any]] = []
     samples: list[Mapping[str, Any]] = []
     extra: list[Mapping[str, Any]] = []
+    scans: list[Mapping[str, Any]] = []
+    lasers: list[Mapping[str, Any]] = []
     end: Mapping[str, Any] | None = None
     truncated = False
     bad: tuple[int, str] | None = None
@@ -366,6 +506,10 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
                 events.append(rec)
             elif kind == "end":
                 end = rec
+            elif kind == "scan":
+                scans.append(rec)
+            elif kind == "laser":
+                lasers.append(rec)
             else:
                 extra.append(rec)
     except OSError as exc:
@@ -375,7 +519,21 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
         truncated = True
     if header is None:
         raise _error(path, 1, "empty file: not an mdle trace")
-    return Trace(path, header, tuple(events), tuple(samples), end, truncated, tuple(extra))
+    return Trace(path, header, tuple(events), tuple(samples), end, truncated, tuple(extra),
+                 tuple(lasers), tuple(scans))
+
+
+def _is_recording(path: str) -> bool:
+    """Return True for an MCAP file (by its magic) or a rosbag2 folder."""
+    if os.path.isdir(path):
+        return os.path.isfile(os.path.join(path, "metadata.yaml"))
+    if not os.path.isfile(path):  # a FIFO or device: never open it here
+        return False
+    try:
+        with open(path, "rb") as f:
+            return f.read(8) == b"\x89MCAP0\r\n"
+    except OSError:
+        return False
 
 
 def _error(path: str, line: int, message: str) -> TraceError:

@@ -144,6 +144,12 @@ class SimBackend:
         """Command zero velocity (the robot decelerates at its limits)."""
         self._cmd = STOP
 
+    @property
+    def laser_mount(self) -> tuple[float, float, float]:
+        """Ladar pose in the robot frame (x, y, theta: m, m, rad), for recorders' frames."""
+        x, y, th = self.profile.ladar_mount
+        return float(x), float(y), float(th)
+
     # ------------------------------------------------------------------ protocol
     def observe(self) -> Observation:
         """Report odometry pose, measured velocities, newest scan, flags and ground truth."""

@@ -19,8 +19,8 @@ from mdle.cli import output
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Subcommand modules under ``mdle.cli``, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "worlds", "repl",
-                             "experiment")
+COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "worlds",
+                             "repl", "experiment")
 
 
 def build_parser() -> argparse.ArgumentParser:

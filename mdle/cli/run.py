@@ -44,6 +44,11 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--rate", type=_hertz, default=10.0, metavar="HZ",
                    help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle)")
     p.add_argument("--trace", metavar="FILE.jsonl", help="write the run's trace (JSON lines)")
+    p.add_argument("--record", metavar="FILE.mcap",
+                   help="record the run as ROS 2 messages in an MCAP file (Foxglove, "
+                        "PlotJuggler, ros2 bag); needs pip install 'mdle[mcap]'")
+    p.add_argument("--rosbag", metavar="DIR",
+                   help="record the run as a rosbag2 folder (DIR_0.mcap and metadata.yaml)")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
     p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
@@ -116,6 +121,10 @@ def run(args: argparse.Namespace) -> int:
     if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg", ".pdf"):
         raise MdleError(Diagnostic(None, f"--plot `{args.plot}`: the file name must end in "
                                          ".png, .svg or .pdf"))
+    if args.record or args.rosbag:
+        from mdle.ros import require
+
+        require("--record" if args.record else "--rosbag")
     program = load_program(args.plan)
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
@@ -143,6 +152,8 @@ def run(args: argparse.Namespace) -> int:
             except OSError as exc:
                 raise MdleError(Diagnostic(None, f"cannot write the trace `{trace_path}`: "
                                                  f"{exc.strerror}")) from None
+        recorders = _recorders(args, header, world)
+        observers += recorders
         if not args.quiet:
             from mdle.live import LiveView
 
@@ -161,6 +172,12 @@ def run(args: argparse.Namespace) -> int:
                 scheduler.stop()
         result = scheduler.result
         assert result is not None
+        failed = False
+        for r in recorders:
+            r.close()
+            if r.error is not None:
+                print(f"mdle run: {r.error}", file=sys.stderr)
+                failed = True
         if args.plot:
             from mdle.plot import plot_trace
 
@@ -169,8 +186,12 @@ def run(args: argparse.Namespace) -> int:
                 print(f"plot written to {args.plot}")
         if signals.received is not None:
             print("interrupted: robot stopped" + (f", trace in {args.trace}" if args.trace
-                                                  else ""), file=sys.stderr)
+                                                  else "")
+                  + "".join(f", recording in {r.target}" for r in recorders
+                            if r.error is None), file=sys.stderr)
             return signals.exit_code
+        if failed:
+            return output.EXIT_INPUT
         if result.collided or result.fault:
             why = [w for w in ("the robot collided" if result.collided else None,
                                result.fault) if w]
@@ -185,6 +206,20 @@ def run(args: argparse.Namespace) -> int:
         backend.close()
         if tmpdir is not None:
             tmpdir.cleanup()
+
+
+def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> list[Any]:
+    """Return the MCAP recorders ``--record`` and ``--rosbag`` ask for."""
+    if not (args.record or args.rosbag):
+        return []
+    from mdle.ros.recorder import McapRecorder
+
+    out = []
+    if args.record:
+        out.append(McapRecorder(args.record, header, world))
+    if args.rosbag:
+        out.append(McapRecorder(args.rosbag, header, world, rosbag=True))
+    return out
 
 
 def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any, Any]:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import NamedTuple
 
-from mdle.backend import Pose
+from mdle.backend import Pose, Scan
 
 __all__ = ["Cause", "EventKind", "Event", "Termination", "Sample", "RunResult"]
 
@@ -92,7 +92,9 @@ class Sample(NamedTuple):
     without a scan), ``stalled`` the robot's flag. ``diag`` holds the control law's
     diagnostics (front and side range, tangent, curvature: whatever it put in
     ``ctx.cache["trace"]``). ``clearance``, ``collided`` and the true pose
-    ``true_x, true_y, true_theta`` are simulator truth, None when unknown.
+    ``true_x, true_y, true_theta`` are simulator truth, None when unknown. ``scan`` is
+    the newest scan the tick saw (the same object from tick to tick until a new one
+    arrives; None without a ladar), for recorders.
 
     A named tuple rather than a frozen dataclass: one is made every tick, and a frozen
     dataclass's ``__init__`` costs five times as much.
@@ -116,6 +118,7 @@ class Sample(NamedTuple):
     true_x: float | None = None
     true_y: float | None = None
     true_theta: float | None = None
+    scan: Scan | None = None
 
 
 @dataclass(frozen=True)

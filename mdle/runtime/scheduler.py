@@ -388,7 +388,7 @@ class Scheduler:
                 stack[-1].slot.path if stack else "", lateness,
                 None if scan is None else now - scan.stamp, obs.stalled,
                 MappingProxyType(dict(trace)) if trace else _EMPTY,
-                *(_truth_fields(truth) if truth else _NO_TRUTH),
+                *(_truth_fields(truth) if truth else _NO_TRUTH), scan,
             ))
             for o in self.observers:
                 o.on_tick(sample)

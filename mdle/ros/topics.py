@@ -1,0 +1,282 @@
+"""Trace records to ROS 2 messages: the topics, frames and timestamps of a recording.
+
+:class:`RosRecording` takes the trace's records one by one (the live recorder hands
+them over as the run makes them, the exporter as it reads a trace) and writes the ROS
+messages they become into an MCAP file (:class:`~mdle.ros.mcap_file.McapFile`), or a
+rosbag2 folder (the MCAP file and ``metadata.yaml``). Frames follow REP-105: ``map``
+(the simulated world), ``odom`` (where odometry counts from), ``base_link`` (the
+robot: x forward, y left, REP-103) and ``laser`` (the ladar, at the profile's mount).
+
+Timestamps are the run's clock in nanoseconds (simulated time from 0, or the robot's
+clock): a message's log time is the tick at which the run saw it, a scan's header
+stamp the instant it was taken. ``docs/trace.md`` lists the topics.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from mdle.ros import cdr
+from mdle.ros.mcap_file import McapFile
+from mdle.ros.msgdefs import schema_text
+
+if TYPE_CHECKING:
+    import numpy as np
+
+__all__ = ["FRAMES", "TOPICS", "Topic", "RosRecording", "library_name", "to_ns"]
+
+#: Frame names (REP-105).
+FRAMES = {"map": "map", "odom": "odom", "base": "base_link", "laser": "laser"}
+
+_VOLATILE, _LATCHED = 2, 1  # QoS durability: VOLATILE, TRANSIENT_LOCAL
+
+
+@dataclass(frozen=True)
+class Topic:
+    """A topic mdle writes: name, message type, QoS durability, and whether sim-only."""
+
+    name: str
+    type: str
+    latched: bool = False
+    simulation: bool = False
+    what: str = ""
+
+
+#: Every topic, in the order they are registered.
+TOPICS: tuple[Topic, ...] = (
+    Topic("/scan", "sensor_msgs/msg/LaserScan", what="each new ladar scan, frame laser"),
+    Topic("/odom", "nav_msgs/msg/Odometry", what="odometry each tick, odom -> base_link"),
+    Topic("/tf", "tf2_msgs/msg/TFMessage",
+          what="odom -> base_link each tick; map -> odom in simulation"),
+    Topic("/tf_static", "tf2_msgs/msg/TFMessage", latched=True,
+          what="base_link -> laser (the ladar mount)"),
+    Topic("/cmd_vel", "geometry_msgs/msg/Twist", what="the command sent each tick"),
+    Topic("/ground_truth", "geometry_msgs/msg/PoseStamped", simulation=True,
+          what="true pose each tick, frame map"),
+    Topic("/map", "visualization_msgs/msg/MarkerArray", latched=True, simulation=True,
+          what="the obstacles, frame map (once)"),
+    Topic("/mdle/events", "std_msgs/msg/String",
+          what="start, event and end trace records as JSON"),
+    Topic("/mdle/state", "std_msgs/msg/String", what="the trace's sample record each tick"),
+)
+
+
+def qos_yaml(latched: bool) -> str:
+    """Return ``offered_qos_profiles`` as ``ros2 bag record`` (Humble) writes it."""
+    never = "    sec: 9223372036\n    nsec: 854775807\n"
+    return ("- history: 3\n  depth: 0\n  reliability: 1\n"
+            f"  durability: {_LATCHED if latched else _VOLATILE}\n"
+            f"  deadline:\n{never}  lifespan:\n{never}  liveliness: 1\n"
+            f"  liveliness_lease_duration:\n{never}"
+            "  avoid_ros_namespace_conventions: false")
+
+
+def to_ns(t: float) -> int:
+    """Return seconds as integer nanoseconds (never below 0: MCAP times are unsigned)."""
+    ns = round(t * 1e9)
+    return ns if ns > 0 else 0
+
+
+def library_name() -> str:
+    """Return the writer's name for the MCAP header (mdle and mcap versions)."""
+    from importlib import metadata
+
+    parts = []
+    for dist in ("mdle", "mcap"):
+        try:
+            parts.append(f"{dist}/{metadata.version(dist)}")
+        except metadata.PackageNotFoundError:
+            parts.append(dist)
+    return " ".join(parts)
+
+
+def _r9(value: float) -> float:
+    """Round as the trace writes numbers (9 significant digits; non-finite: NaN)."""
+    return float("%.9g" % value) if math.isfinite(value) else math.nan
+
+
+class RosRecording:
+    """Turn trace records into ROS 2 messages in an MCAP file (or a rosbag2 folder).
+
+    Parameters
+    ----------
+    target : str or path-like
+        The ``.mcap`` file; with ``rosbag``, the folder to create (it must not exist or
+        be empty), which gets ``NAME_0.mcap`` and ``metadata.yaml``.
+    header : mapping
+        The trace header (stored in the file as the Metadata record ``mdle``, with key
+        ``header``); a header with a ``world`` marks a simulated run (``/ground_truth``,
+        ``/map``, ``map -> odom``).
+    world : sim.World or None
+        The simulated world, for ``/map``.
+    rosbag : bool
+        Write a rosbag2 folder.
+    chunk_size, max_age : see :class:`~mdle.ros.mcap_file.McapFile`.
+
+    Feed it :meth:`start`, :meth:`event`, :meth:`laser`, :meth:`scan`, :meth:`sample` and
+    :meth:`end` in the trace's order; :meth:`finish` ends the file.
+    """
+
+    def __init__(self, target: str | os.PathLike[str], header: Mapping[str, Any],
+                 world: Any = None, *, rosbag: bool = False, **file_options: Any) -> None:
+        from mdle.trace import dumps
+
+        self.target = os.fspath(target)
+        self.rosbag = rosbag
+        if rosbag:
+            from mdle.ros.rosbag import prepare_folder
+
+            self.path = prepare_folder(self.target)
+        else:
+            self.path = self.target
+        self.simulation = header.get("world") is not None or header.get("backend") == "sim"
+        self.out = McapFile(self.path, library=library_name(), **file_options)
+        schemas: dict[str, int] = {}
+        self.channels: dict[str, int] = {}
+        self.topics = [t for t in TOPICS if self.simulation or not t.simulation]
+        for topic in self.topics:
+            if topic.type not in schemas:
+                schemas[topic.type] = self.out.schema(topic.type, "ros2msg",
+                                                      schema_text(topic.type).encode())
+            self.channels[topic.name] = self.out.channel(
+                topic.name, schemas[topic.type],
+                metadata={"offered_qos_profiles": qos_yaml(topic.latched)})
+        self.out.metadata("mdle", {"header": dumps(header)})
+        ch = self.channels
+        self._scan_ch, self._odom_ch, self._tf_ch = ch["/scan"], ch["/odom"], ch["/tf"]
+        self._static_ch, self._cmd_ch = ch["/tf_static"], ch["/cmd_vel"]
+        self._events_ch, self._state_ch = ch["/mdle/events"], ch["/mdle/state"]
+        self._truth_ch = ch.get("/ground_truth", 0)
+        self._odom = cdr.OdometryEncoder(FRAMES["odom"], FRAMES["base"])
+        self._tf_odom = cdr.TransformsEncoder([(FRAMES["odom"], FRAMES["base"])])
+        self._tf_both = cdr.TransformsEncoder([(FRAMES["odom"], FRAMES["base"]),
+                                               (FRAMES["map"], FRAMES["odom"])])
+        self._truth = cdr.PoseStampedEncoder(FRAMES["map"])
+        self._scan: cdr.ScanEncoder | None = None
+        self._mount: tuple[float, float, float] | None = None
+        self._world = world
+        self._pending: list[str] = []  # start records waiting for a time
+        self._started = False
+        self.finished = False
+
+    # ------------------------------------------------------------------ records
+
+    def _timed(self, ns: int) -> None:
+        """Publish what waits for the first time stamp: ``/map``, pending starts."""
+        if not self._started:
+            self._started = True
+            if self._world is not None and "/map" in self.channels:
+                from mdle.ros.markers import obstacle_markers
+
+                self.out.add(self.channels["/map"], ns, obstacle_markers(self._world, ns))
+        if self._pending:
+            for line in self._pending:
+                self.out.add(self._events_ch, ns, cdr.encode_string(line))
+            self._pending.clear()
+
+    def start(self, line: str) -> None:
+        """Take a ``start`` record (JSON text); published at the next record's time."""
+        self._pending.append(line)
+
+    def event(self, t: float, line: str) -> None:
+        """Publish an ``event`` (or ``end``, or other timed) record on ``/mdle/events``."""
+        ns = to_ns(t)
+        self._timed(ns)
+        self.out.add(self._events_ch, ns, cdr.encode_string(line))
+
+    def laser(self, t: float, record: Mapping[str, Any]) -> None:
+        """Take a ``laser`` record: the scan geometry and, if new, ``base_link -> laser``."""
+        values = [float(m) for m in record.get("mount") or (0.0, 0.0, 0.0)]
+        if len(values) != 3 or not all(math.isfinite(m) for m in values):
+            raise ValueError("`mount` must be three finite numbers")
+        mount = (values[0], values[1], values[2])
+        count = int(record["count"])
+        self._scan = cdr.ScanEncoder(
+            str(record.get("frame") or FRAMES["laser"]), float(record["angle_min"]),
+            float(record["angle_max"]), float(record["angle_increment"]),
+            float(record.get("range_min", 0.0)), float(record["range_max"]), count)
+        if mount != self._mount:
+            self._mount = mount
+            ns = to_ns(t)
+            self._timed(ns)
+            msg = cdr.CdrWriter().count(1).header(ns, FRAMES["base"]).string(
+                FRAMES["laser"]).pose(mount[0], mount[1], mount[2]).bytes()
+            self.out.add(self._static_ch, ns, msg)
+
+    def scan(self, t: float, stamp: float, ranges: np.ndarray) -> None:
+        """Publish a scan seen at tick ``t``, taken at ``stamp``.
+
+        ``ranges`` are float32, +inf where a beam had no return.
+        """
+        if self._scan is None:
+            raise ValueError("a scan before any `laser` record (the beam geometry)")
+        ns = to_ns(t)
+        self._timed(ns)
+        self.out.add(self._scan_ch, ns, self._scan(to_ns(stamp), ranges))
+
+    def sample(self, line: str, t: float, x: float, y: float, theta: float, v: float,
+               omega: float, cmd_v: float, cmd_omega: float,
+               truth: tuple[float, float, float] | None) -> None:
+        """Publish one tick: odometry, transforms, command, true pose and the state line.
+
+        Numbers as the trace holds them (the live recorder rounds them the same way).
+        """
+        ns = to_ns(t)
+        if not self._started or self._pending:
+            self._timed(ns)
+        add = self.out.add
+        add(self._odom_ch, ns, self._odom(ns, x, y, theta, v, omega))
+        if truth is not None and self._truth_ch:
+            tx, ty, tth = truth
+            # map -> odom: the true pose composed with the inverse of the odometry pose
+            phi = tth - theta
+            c, s = math.cos(phi), math.sin(phi)
+            add(self._tf_ch, ns, self._tf_both(ns, (x, y, theta),
+                                               (tx - c * x + s * y, ty - s * x - c * y, phi)))
+            add(self._truth_ch, ns, self._truth(ns, tx, ty, tth))
+        else:
+            add(self._tf_ch, ns, self._tf_odom(ns, (x, y, theta)))
+        add(self._cmd_ch, ns, cdr.encode_twist(cmd_v, cmd_omega))
+        add(self._state_ch, ns, cdr.encode_string(line))
+        self.out.tick()
+
+    def live_sample(self, line: str, s: Any) -> None:
+        """Publish a :class:`~mdle.runtime.events.Sample` with its trace line ``line``."""
+        truth = None
+        if s.true_x is not None and s.true_y is not None and s.true_theta is not None:
+            truth = (_r9(s.true_x), _r9(s.true_y), _r9(s.true_theta))
+        self.sample(line, float(s.time), _r9(s.x), _r9(s.y), _r9(s.theta), _r9(s.v),
+                    _r9(s.omega), _r9(s.cmd_v), _r9(s.cmd_omega), truth)
+
+    def end(self, t: float, line: str) -> None:
+        """Publish the ``end`` record."""
+        self.event(t, line)
+
+    # ------------------------------------------------------------------ the end
+
+    def counts(self) -> dict[str, int]:
+        """Messages written per topic so far."""
+        by_id = self.out.channel_counts()
+        return {name: by_id.get(ch, 0) for name, ch in self.channels.items()}
+
+    def finish(self) -> None:
+        """End the file (summary, index, footer); a rosbag2 folder gets ``metadata.yaml``."""
+        if self.finished:
+            return
+        self.finished = True
+        self.out.finish()
+        if self.rosbag:
+            from mdle.ros.rosbag import write_metadata
+
+            span = self.out.time_range or (0, 0)
+            write_metadata(self.target, os.path.basename(self.path), self.topics,
+                           self.counts(), span, qos_yaml)
+
+    def abandon(self) -> None:
+        """Close the file as it stands (after a failure: nothing more can be written)."""
+        self.finished = True
+        self.out.close()
