@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from atoms.registry import Registry
@@ -20,7 +20,7 @@ from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Seve
 from mdle.parser import parse_module
 from mdle.program import Program
 
-__all__ = ["load_program", "load_text", "load_modules", "read_source", "Loaded"]
+__all__ = ["load_program", "load_text", "load_modules", "read_source", "plan_bundle", "Loaded"]
 
 
 def read_source(path: str | os.PathLike[str], shown: str | None = None,
@@ -81,8 +81,13 @@ def _imports(module: st.Module) -> Iterator[st.Import]:
     return (s for s in module.statements if isinstance(s, st.Import))
 
 
-def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
+def load_modules(text: str, file: str, base_dir: str | None = None,
+                 files: Mapping[str, str] | None = None) -> Loaded:
     """Parse a text and every file it imports, transitively.
+
+    ``files`` gives the imported files' texts by path relative to ``base_dir`` (the
+    main file's folder), instead of reading them from disk: a plan that travels to
+    another machine with its imports (see :func:`plan_bundle`).
 
     Raises
     ------
@@ -138,7 +143,8 @@ def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
         if state.get(key) == 2:
             continue
         try:
-            src = read_source(target, shown, imp.span)
+            src = (read_source(target, shown, imp.span) if files is None
+                   else _from_bundle(files, os.path.relpath(target, root_dir), shown, imp.span))
         except MdleError as err:
             diags = err.diagnostics
             if diags and diags[0].span is imp.span:
@@ -163,6 +169,33 @@ def load_modules(text: str, file: str, base_dir: str | None = None) -> Loaded:
     return Loaded(tuple(order), sources, main)
 
 
+def _from_bundle(files: Mapping[str, str], rel: str, shown: str, span: Span) -> str:
+    try:
+        return files[os.path.normpath(rel)]
+    except KeyError:
+        raise CheckError(Diagnostic(span, f"cannot read `{shown}`: no such file")) from None
+
+
+def plan_bundle(path: str | os.PathLike[str]) -> tuple[str, dict[str, str]]:
+    """Return a plan file's text and its imports' texts by path relative to its folder.
+
+    What :func:`load_text` needs (with ``files=``) to load the program on a machine
+    that has none of the files.
+
+    Raises
+    ------
+    MdleError
+        The file or an import cannot be read, or does not parse.
+    """
+    name = os.fspath(path)
+    text = read_source(name)
+    loaded = load_modules(text, name)
+    folder = os.path.dirname(name)
+    files = {os.path.normpath(os.path.relpath(shown, folder or ".")): src
+             for shown, src in loaded.sources.items() if shown != name}
+    return text, files
+
+
 def _error(diags: list[Diagnostic], sources: dict[str, str], syntax: bool) -> MdleError:
     cls = MdleSyntaxError if syntax else CheckError
     files = {name: i for i, name in enumerate(sources)}
@@ -171,7 +204,10 @@ def _error(diags: list[Diagnostic], sources: dict[str, str], syntax: bool) -> Md
     return cls(ordered, sources)
 
 
-def load_text(text: str, file: str = "<string>", registry: Registry | None = None) -> Program:
+def load_text(text: str, file: str = "<string>", registry: Registry | None = None, *,
+              settings: Mapping[str, str] | None = None,
+              files: Mapping[str, str] | None = None, base_dir: str | None = None
+              ) -> Program:
     """Parse and check a program given as text.
 
     Parameters
@@ -183,6 +219,12 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         directory for names such as ``<string>``).
     registry : Registry, optional
         Control laws and sensor functions; ``atoms.default_registry()`` when None.
+    settings : mapping, optional
+        Parameter defaults to override, ``NAME -> value text`` (``mdle run --set``); see
+        :func:`mdle.overrides.override_defaults`.
+    files : mapping, optional
+        Imported files' texts by relative path, instead of the disk (see
+        :func:`load_modules`); ``base_dir`` is the folder they are relative to.
 
     Raises
     ------
@@ -193,11 +235,16 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         from atoms import default_registry
 
         registry = default_registry()
-    loaded = load_modules(text, file)
+    loaded = load_modules(text, file, base_dir, files)
+    if settings:
+        from mdle.overrides import override_defaults
+
+        loaded = override_defaults(loaded, settings)
     return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main)
 
 
-def load_program(path: str | os.PathLike[str], registry: Registry | None = None) -> Program:
+def load_program(path: str | os.PathLike[str], registry: Registry | None = None, *,
+                 settings: Mapping[str, str] | None = None) -> Program:
     """Read, parse, resolve imports and check a plan file.
 
     ``registry=None`` means ``atoms.default_registry()``.
@@ -210,7 +257,7 @@ def load_program(path: str | os.PathLike[str], registry: Registry | None = None)
     name = os.fspath(path)
     text = read_source(name)
     try:
-        return load_text(text, name, registry)
+        return load_text(text, name, registry, settings=settings)
     except RecursionError:  # a last guard; the nesting limits should make it unreachable
         raise CheckError(Diagnostic(Span(name, 1, 1, 1, 2), "the program nests too deeply",
                                     Severity.ERROR), {name: text}) from None

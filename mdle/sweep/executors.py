@@ -1,0 +1,233 @@
+"""Where runs execute: local worker processes, or a Dask distributed cluster.
+
+Both executors take an iterable of :class:`~mdle.sweep.tasks.RunTask` and yield an
+:class:`~mdle.sweep.worker.Outcome` per task as runs finish (any order). A task whose
+worker is lost (the process died, the Dask worker vanished) is retried once, then
+reported as a ``lost`` row. Closing the iterator early (Ctrl-C) cancels what has not
+started and stops the workers.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import replace
+from typing import Any, Protocol
+
+from mdle.sweep.tasks import RunTask
+from mdle.sweep.worker import Outcome, base_row, execute
+
+__all__ = ["Executor", "LocalExecutor", "DaskExecutor", "lost_outcome", "default_jobs"]
+
+
+class Executor(Protocol):
+    """Runs tasks and yields their outcomes as they finish."""
+
+    name: str
+
+    def run(self, tasks: Iterable[RunTask]) -> Iterator[Outcome]:
+        """Yield one outcome per task, as runs finish."""
+        ...
+
+
+def default_jobs() -> int:
+    """Return the number of cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return os.cpu_count() or 1
+
+
+def lost_outcome(task: RunTask, why: str) -> Outcome:
+    """Return the row of a run whose worker was lost on both attempts."""
+    row = base_row(task)
+    row.update(status="lost", cause=f"worker lost twice: {why}", attempts=task.attempt + 1)
+    return Outcome(row)
+
+
+def _quiet_worker() -> None:
+    """Leave Ctrl-C to the parent: it cancels the sweep and stops the workers."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class LocalExecutor:
+    """Run tasks in ``jobs`` worker processes on this machine.
+
+    Workers start from a fork server that has already imported mdle, so a worker costs
+    no import time and never inherits the parent's threads (the progress bar's).
+    """
+
+    name = "local"
+
+    def __init__(self, jobs: int | None = None,
+                 function: Callable[[RunTask], Outcome] = execute) -> None:
+        self.jobs = max(1, jobs or default_jobs())
+        self.function = function
+        self._workers: dict[int, Any] = {}
+
+    def worker_pids(self) -> list[int]:
+        """Return the process ids of the live workers (for monitoring)."""
+        return [pid for pid, p in dict(self._workers).items() if p.is_alive()]
+
+    def _pool(self) -> Any:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(["mdle.sweep.worker", "mdle.runtime", "sim", "atoms"])
+        return ProcessPoolExecutor(self.jobs, mp_context=ctx, initializer=_quiet_worker)
+
+    def run(self, tasks: Iterable[RunTask]) -> Iterator[Outcome]:
+        """Yield outcomes as runs finish; retry a run once when its worker dies."""
+        from concurrent.futures import FIRST_COMPLETED, Future, wait
+        from concurrent.futures.process import BrokenProcessPool
+
+        todo: Iterator[RunTask] = iter(tasks)
+        retry: deque[RunTask] = deque()
+        window = 2 * self.jobs          # few queued runs: Ctrl-C has little to cancel
+        pool = self._pool()
+        running: dict[Future[Outcome], RunTask] = {}
+        try:
+            while True:
+                while len(running) < window:
+                    task = retry.popleft() if retry else next(todo, None)
+                    if task is None:
+                        break
+                    running[pool.submit(self.function, task)] = task
+                    self._workers = getattr(pool, "_processes", None) or {}
+                if not running:
+                    return
+                done, _ = wait(running, return_when=FIRST_COMPLETED)
+                broken = False
+                for fut in done:
+                    task = running.pop(fut)
+                    try:
+                        yield fut.result()
+                    except BrokenProcessPool:
+                        broken = True
+                        lost = self._again(task, retry, "the worker process died")
+                        if lost is not None:
+                            yield lost
+                    except Exception as exc:  # the task could not be sent or returned
+                        yield _failed(task, exc)
+                if broken:
+                    # Every run still on the broken pool is lost with it: retry them all.
+                    for task in running.values():
+                        lost = self._again(task, retry, "the worker process died")
+                        if lost is not None:
+                            yield lost
+                    running.clear()
+                    _stop(pool)
+                    pool = self._pool()
+        finally:
+            _stop(pool)
+
+    @staticmethod
+    def _again(task: RunTask, retry: deque[RunTask], why: str) -> Outcome | None:
+        if task.attempt == 0:
+            retry.append(replace(task, attempt=1))
+            return None
+        return lost_outcome(task, why)
+
+
+def _failed(task: RunTask, exc: BaseException) -> Outcome:
+    row = base_row(task)
+    row.update(status="error", cause=f"internal error: {type(exc).__name__}: {exc}",
+               attempts=task.attempt + 1)
+    return Outcome(row)
+
+
+def _stop(pool: Any) -> None:
+    """Cancel what has not started and end the worker processes now."""
+    workers = dict(getattr(pool, "_processes", None) or {})   # no public handle on them
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in workers.values():
+        if proc.is_alive():
+            proc.terminate()
+    for proc in workers.values():
+        proc.join(timeout=5)
+
+
+class DaskExecutor:
+    """Run tasks on a Dask distributed cluster (``pip install 'mdle[dask]'``).
+
+    Parameters
+    ----------
+    cluster : str or distributed.Client or cluster object
+        A scheduler address (``tcp://host:8786``), a client, or a cluster
+        (``LocalCluster``). Workers need only mdle installed: tasks carry their texts.
+    function : callable
+        What runs a task (default :func:`mdle.sweep.worker.execute`).
+    """
+
+    name = "dask"
+
+    def __init__(self, cluster: Any, function: Callable[[RunTask], Outcome] = execute) -> None:
+        self.function = function
+        try:
+            import distributed
+        except ImportError:
+            from mdle.errors import MdleError
+
+            raise MdleError("--dask needs dask.distributed: pip install 'mdle[dask]'") from None
+        self._own = not isinstance(cluster, distributed.Client)
+        if self._own:
+            try:
+                self.client = distributed.Client(cluster, timeout="20s")
+            except (OSError, TimeoutError) as err:
+                from mdle.errors import MdleError
+
+                raise MdleError(f"--dask {cluster}: cannot reach the scheduler ({err})"
+                                ) from None
+        else:
+            self.client = cluster
+
+    def threads(self) -> int:
+        """Return the cluster's total worker threads (at least 1)."""
+        info = self.client.scheduler_info()
+        return max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()))
+
+    def run(self, tasks: Iterable[RunTask]) -> Iterator[Outcome]:
+        """Yield outcomes as runs finish; retry a run once when its worker is lost."""
+        from distributed import KilledWorker, as_completed
+        from distributed.comm.core import CommClosedError
+
+        todo: Iterator[RunTask] = iter(tasks)
+        window = 2 * self.threads() + 2
+        running: dict[Any, RunTask] = {}
+        done_stream = as_completed()
+
+        def submit(task: RunTask) -> None:
+            fut = self.client.submit(self.function, task, pure=False,
+                                     key=f"mdle-run-{task.key}-{task.attempt}-{task.index}")
+            running[fut] = task
+            done_stream.add(fut)
+
+        try:
+            for task in todo:
+                submit(task)
+                if len(running) >= window:
+                    break
+            for fut in done_stream:
+                task = running.pop(fut)
+                if fut.status == "finished":
+                    yield fut.result()
+                elif not isinstance(exc := fut.exception(), (KilledWorker, CommClosedError)):
+                    yield _failed(task, exc)     # the function raised: not a lost worker
+                else:
+                    why = f"{type(exc).__name__}: {exc}"
+                    if task.attempt == 0:
+                        submit(replace(task, attempt=1))
+                    else:
+                        yield lost_outcome(task, why)
+                fut.release()
+                nxt = next(todo, None)
+                if nxt is not None:
+                    submit(nxt)
+        finally:
+            if running:
+                self.client.cancel(list(running))
+            if self._own:
+                self.client.close()

@@ -1,0 +1,53 @@
+"""Parameter overrides (``--set NAME=VALUE``): new defaults in the main file's definitions."""
+
+from __future__ import annotations
+
+import pytest
+
+from mdle.errors import CheckError
+from mdle.loader import load_text
+from mdle.overrides import parse_setting
+
+PLAN = """\
+atom follow(rc = 1 m, side = right, kf = 0.5) = (follow_boundary(side = side, rc = rc, kf = kf), never, 5 s)
+plan main = ((follow), stalled, inf)
+"""
+
+
+def test_a_bare_number_takes_the_defaults_unit() -> None:
+    p = load_text(PLAN, settings={"rc": "80", "kf": "2"})
+    assert p.elements["follow"].args["rc"] == 80.0
+    p = load_text(PLAN, settings={"rc": "80 cm"})
+    assert p.elements["follow"].args["rc"] == pytest.approx(0.8)
+
+
+def test_symbols_and_the_elements_that_use_the_definition_follow() -> None:
+    p = load_text(PLAN, settings={"side": "left"})
+    main = p.elements["main"]
+    assert main.elements[0].args["side"] == "left"  # type: ignore[union-attr]
+
+
+def test_an_unknown_name_lists_the_parameters() -> None:
+    with pytest.raises(CheckError) as err:
+        load_text(PLAN, settings={"rcc": "1"})
+    d = err.value.diagnostics[0]
+    assert "no definition" in d.message and "`rcc`" in d.message
+    assert d.hint is not None and "`rc`" in d.hint
+
+
+def test_a_value_of_the_wrong_dimension_is_a_check_error() -> None:
+    with pytest.raises(CheckError) as err:
+        load_text(PLAN, settings={"rc": "2 s"})
+    assert "rc" in str(err.value)
+
+
+def test_a_value_that_does_not_parse_names_the_setting() -> None:
+    with pytest.raises(CheckError, match="--set rc=1 m m"):
+        load_text(PLAN, settings={"rc": "1 m m"})
+
+
+def test_parse_setting() -> None:
+    assert parse_setting("rc=0.8 m") == ("rc", "0.8 m")
+    for bad in ("rc", "=1", "rc="):
+        with pytest.raises(ValueError):
+            parse_setting(bad)
