@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import replace
@@ -47,9 +48,45 @@ def lost_outcome(task: RunTask, why: str) -> Outcome:
     return Outcome(row)
 
 
-def _quiet_worker() -> None:
-    """Leave Ctrl-C to the parent: it cancels the sweep and stops the workers."""
+def _process_state(pid: int) -> tuple[str, str] | None:
+    """Return a process's state letter and start time from /proc, None when it is gone."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rpartition(")")[2].split()
+    except OSError:
+        return None
+    return fields[0], fields[19]
+
+
+def _worker_setup(sweep_pid: int) -> None:
+    """Leave Ctrl-C to the sweep, and end this worker when the sweep process is gone.
+
+    Ctrl-C reaches every process of the terminal's group: the sweep cancels and stops
+    its workers itself. A sweep killed outright (SIGKILL) cannot: a watchdog thread ends
+    the orphaned worker within half a second (a dead sweep may linger as a zombie, or its
+    pid be reused: /proc tells both apart; elsewhere a signal 0 probe has to do).
+    """
+    import threading
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    first = _process_state(sweep_pid)
+
+    def alive() -> bool:
+        if first is None:
+            try:
+                os.kill(sweep_pid, 0)
+            except OSError:
+                return False
+            return True
+        now = _process_state(sweep_pid)
+        return now is not None and now[0] not in ("Z", "X") and now[1] == first[1]
+
+    def watch() -> None:
+        while alive():
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="mdle-sweep-watchdog", daemon=True).start()
 
 
 class LocalExecutor:
@@ -77,7 +114,8 @@ class LocalExecutor:
 
         ctx = multiprocessing.get_context("forkserver")
         ctx.set_forkserver_preload(["mdle.sweep.worker", "mdle.runtime", "sim", "atoms"])
-        return ProcessPoolExecutor(self.jobs, mp_context=ctx, initializer=_quiet_worker)
+        return ProcessPoolExecutor(self.jobs, mp_context=ctx, initializer=_worker_setup,
+                                   initargs=(os.getpid(),))
 
     def run(self, tasks: Iterable[RunTask]) -> Iterator[Outcome]:
         """Yield outcomes as runs finish; retry a run once when its worker dies."""
@@ -160,11 +198,14 @@ class DaskExecutor:
         (``LocalCluster``). Workers need only mdle installed: tasks carry their texts.
     function : callable
         What runs a task (default :func:`mdle.sweep.worker.execute`).
+    timeout : float
+        How long to try to reach the scheduler, s.
     """
 
     name = "dask"
 
-    def __init__(self, cluster: Any, function: Callable[[RunTask], Outcome] = execute) -> None:
+    def __init__(self, cluster: Any, function: Callable[[RunTask], Outcome] = execute,
+                 timeout: float = 20.0) -> None:
         self.function = function
         try:
             import distributed
@@ -175,7 +216,7 @@ class DaskExecutor:
         self._own = not isinstance(cluster, distributed.Client)
         if self._own:
             try:
-                self.client = distributed.Client(cluster, timeout="20s")
+                self.client = distributed.Client(cluster, timeout=f"{timeout}s")
             except (OSError, TimeoutError) as err:
                 from mdle.errors import MdleError
 

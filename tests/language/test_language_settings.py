@@ -7,18 +7,26 @@ import pytest
 from mdle.errors import CheckError
 from mdle.loader import load_text
 from mdle.overrides import parse_setting
+from mdle.program import AtomNode, Program
+
+
+def atom(p: Program, name: str) -> AtomNode:
+    node = p.elements[name]
+    assert isinstance(node, AtomNode)
+    return node
 
 PLAN = """\
-atom follow(rc = 1 m, side = right, kf = 0.5) = (follow_boundary(side = side, rc = rc, kf = kf), never, 5 s)
+atom follow(rc = 1 m, side = right, kf = 0.5) =
+    (follow_boundary(side = side, rc = rc, kf = kf), never, 5 s)
 plan main = ((follow), stalled, inf)
 """
 
 
 def test_a_bare_number_takes_the_defaults_unit() -> None:
     p = load_text(PLAN, settings={"rc": "80", "kf": "2"})
-    assert p.elements["follow"].args["rc"] == 80.0
+    assert atom(p, "follow").args["rc"] == 80.0
     p = load_text(PLAN, settings={"rc": "80 cm"})
-    assert p.elements["follow"].args["rc"] == pytest.approx(0.8)
+    assert atom(p, "follow").args["rc"] == pytest.approx(0.8)
 
 
 def test_symbols_and_the_elements_that_use_the_definition_follow() -> None:

@@ -8,7 +8,7 @@ import pytest
 
 #: A plan with settable parameters: follow the boundary for a few seconds.
 FOLLOW_PLAN = """\
-atom follow(rc = 1 m, kf = 0.5) = (follow_boundary(side = right, rc = rc, v = 1 m/s, kf = kf), never, 4 s)
+atom follow(rc = 1 m, kf = 0.5) = (follow_boundary(rc = rc, v = 1 m/s, kf = kf), never, 4 s)
 plan main = ((follow), stalled, inf)
 """
 
