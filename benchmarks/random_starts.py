@@ -15,8 +15,10 @@ import time
 from pathlib import Path
 
 # A script's folder comes first on sys.path: keep benchmarks/*.py (benchmarks/sim.py, say)
-# from shadowing the packages of the same name.
-sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
+# from shadowing the packages of the same name, and put the checkout's root there instead,
+# so `python benchmarks/random_starts.py` works from a checkout where mdle is not installed.
+_HERE = Path(__file__).resolve().parent
+sys.path[:] = [str(_HERE.parent)] + [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 
 # After the sys.path fix: a run imports ``sim``, which benchmarks/sim.py would shadow.
 from mdle.experiments.following import SHAPES, random_starts, table  # noqa: E402 (see above)
