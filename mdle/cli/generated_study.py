@@ -13,10 +13,12 @@ import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from mdle.cli import output
-from mdle.experiments.generated import Row, StudyConfig
+
+if TYPE_CHECKING:  # numpy and the simulator load only when a study runs (mdle check stays light)
+    from mdle.experiments.generated import Row, StudyConfig
 
 __all__ = ["add_arguments", "config_from", "run", "write_csv"]
 
@@ -49,9 +51,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(default 0.08 m at >= 50 Hz, else 0.10 m)")
 
 
-def config_from(args: argparse.Namespace) -> StudyConfig | str:
+def config_from(args: argparse.Namespace) -> "StudyConfig | str":
     """Build the study's configuration from the options, or return what is wrong with them."""
     from mdle.errors import WorldError
+    from mdle.experiments.generated import StudyConfig
     from sim.robot import robot_profile
 
     c = StudyConfig()
