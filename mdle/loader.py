@@ -19,6 +19,7 @@ from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
 from mdle.parser import parse_module
 from mdle.program import Program
+from mdle.userfile import UserFileError, read_user_file
 
 __all__ = ["load_program", "load_text", "load_modules", "read_source", "plan_bundle", "Loaded"]
 
@@ -27,6 +28,8 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
                 span: Span | None = None) -> str:
     """Return the text of a plan file (UTF-8, an optional BOM dropped).
 
+    Only a regular file of at most :data:`mdle.userfile.MAX_FILE_BYTES` is read.
+
     Raises
     ------
     MdleError
@@ -34,16 +37,9 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
     """
     name = shown if shown is not None else os.fspath(path)
     try:
-        with open(path, "rb") as f:
-            data = f.read()
-    except FileNotFoundError:
-        raise CheckError(Diagnostic(span, f"cannot read `{name}`: no such file")) from None
-    except IsADirectoryError:
-        raise CheckError(Diagnostic(span, f"cannot read `{name}`: it is a directory")) from None
-    except OSError as err:
-        raise CheckError(Diagnostic(span, f"cannot read `{name}`: {err.strerror or err}")) from None
-    except ValueError:  # a NUL character in the path
-        raise CheckError(Diagnostic(span, f"cannot read `{name!r}`: not a file name")) from None
+        data = read_user_file(path)
+    except UserFileError as err:
+        raise CheckError(Diagnostic(span, f"cannot read `{name}`: {err.reason}")) from None
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as err:

@@ -14,6 +14,7 @@ written as ``null`` so the file is strict JSON. The schema is documented in ``do
 from __future__ import annotations
 
 import base64
+import io
 import json
 import math
 import os
@@ -27,6 +28,7 @@ from typing import IO, TYPE_CHECKING, Any
 from mdle.backend import Scan
 from mdle.errors import Diagnostic, MdleError, Span
 from mdle.runtime.events import Event, RunResult, Sample
+from mdle.userfile import UserFileError, open_user_file
 
 if TYPE_CHECKING:
     import numpy as np
@@ -445,7 +447,12 @@ class Trace:
 
 
 def _records(path: str) -> Iterator[tuple[int, str]]:
-    with open(path, encoding="utf-8") as f:
+    try:
+        raw = open_user_file(path)
+    except UserFileError as err:
+        raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: {err.reason}")) \
+            from None
+    with io.TextIOWrapper(raw, encoding="utf-8") as f:
         for n, line in enumerate(f, 1):
             yield n, line
 

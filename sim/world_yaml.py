@@ -472,12 +472,22 @@ def _describe(shape: Any, index: int) -> str:
 
 
 def read_world(path: str | os.PathLike[str]) -> Any:
-    """Read and validate a world file (WorldError if unreadable or invalid)."""
+    """Read and validate a world file (WorldError if unreadable or invalid).
+
+    Only a regular file of at most :data:`mdle.userfile.MAX_FILE_BYTES` is read.
+    """
+    from mdle.userfile import UserFileError, read_user_file
+
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise WorldError(f"world file not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise WorldError(f"cannot read world file {p}: {err}") from None
+        data = read_user_file(p)
+    except UserFileError as err:
+        if err.reason == "no such file":
+            raise WorldError(f"world file not found: {p}") from None
+        raise WorldError(f"cannot read world file {p}: {err.reason}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise WorldError(f"cannot read world file {p}: not UTF-8 text (byte "
+                         f"0x{data[err.start]:02x} at offset {err.start})") from None
     return parse_world(text, file=str(path), default_name=p.stem)
