@@ -344,6 +344,8 @@ class LaserRecords:
         self.mount = mount
         self.last: Scan | None = None
         self._geometry: tuple[Any, ...] | None = None
+        self._bearings: Any = None
+        self._max_range = math.nan
 
     def laser(self, scan: "Scan") -> dict[str, Any]:
         """Return the ``laser`` record for ``scan``'s beams."""
@@ -363,6 +365,9 @@ class LaserRecords:
         """
         self.last = scan
         b = scan.bearings
+        if b is self._bearings and scan.max_range == self._max_range:
+            return None  # the same beams as the last scan (the usual case: shared arrays)
+        self._bearings, self._max_range = b, scan.max_range
         geometry = (len(b), float(b[0]) if len(b) else 0.0, float(b[-1]) if len(b) else 0.0,
                     float(scan.max_range), self.mount)
         if geometry == self._geometry:

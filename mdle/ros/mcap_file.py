@@ -24,7 +24,7 @@ import os
 import struct
 import time
 import zlib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import IO
 
 __all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile"]
@@ -180,6 +180,34 @@ class McapFile:
             self._chunk_end = ns
         self._messages += 1
         if len(buf) >= self._chunk_size:
+            self.close_chunk()
+
+    def add_group(self, ns: int, items: Sequence[tuple[int, bytes]]) -> None:
+        """Add several messages logged at the same time ``ns``: (channel, data) each.
+
+        The same as :meth:`add` for each, in one call (a tick's messages).
+        """
+        buf = self._buf
+        counts = self._counts
+        entries = self._entries
+        pack = _MESSAGE.pack
+        offset = len(buf)
+        parts = []
+        for channel, data in items:
+            seq = counts[channel]
+            counts[channel] = seq + 1
+            entries[channel].append((ns, offset))
+            n = len(data)
+            parts.append(pack(_MESSAGE_OP, 22 + n, channel, seq, ns, ns))
+            parts.append(data)
+            offset += 31 + n
+        buf += b"".join(parts)
+        if ns < self._chunk_start:
+            self._chunk_start = ns
+        if ns > self._chunk_end:
+            self._chunk_end = ns
+        self._messages += len(items)
+        if offset >= self._chunk_size:
             self.close_chunk()
 
     def tick(self) -> None:

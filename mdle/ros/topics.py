@@ -228,20 +228,22 @@ class RosRecording:
         ns = to_ns(t)
         if not self._started or self._pending:
             self._timed(ns)
-        add = self.out.add
-        add(self._odom_ch, ns, self._odom(ns, x, y, theta, v, omega))
+        odom = self._odom(ns, x, y, theta, v, omega)
         if truth is not None and self._truth_ch:
             tx, ty, tth = truth
             # map -> odom: the true pose composed with the inverse of the odometry pose
             phi = tth - theta
             c, s = math.cos(phi), math.sin(phi)
-            add(self._tf_ch, ns, self._tf_both(ns, (x, y, theta),
-                                               (tx - c * x + s * y, ty - s * x - c * y, phi)))
-            add(self._truth_ch, ns, self._truth(ns, tx, ty, tth))
+            tf = self._tf_both(ns, (x, y, theta), (tx - c * x + s * y, ty - s * x - c * y, phi))
+            self.out.add_group(ns, ((self._odom_ch, odom), (self._tf_ch, tf),
+                                    (self._cmd_ch, cdr.encode_twist(cmd_v, cmd_omega)),
+                                    (self._truth_ch, self._truth(ns, tx, ty, tth)),
+                                    (self._state_ch, cdr.encode_string(line))))
         else:
-            add(self._tf_ch, ns, self._tf_odom(ns, (x, y, theta)))
-        add(self._cmd_ch, ns, cdr.encode_twist(cmd_v, cmd_omega))
-        add(self._state_ch, ns, cdr.encode_string(line))
+            self.out.add_group(ns, ((self._odom_ch, odom),
+                                    (self._tf_ch, self._tf_odom(ns, (x, y, theta))),
+                                    (self._cmd_ch, cdr.encode_twist(cmd_v, cmd_omega)),
+                                    (self._state_ch, cdr.encode_string(line))))
         self.out.tick()
 
     def live_sample(self, line: str, s: Any) -> None:
