@@ -19,6 +19,7 @@ False
 from __future__ import annotations
 
 import math
+import os
 import re
 import shlex
 import sys
@@ -345,6 +346,20 @@ class Repl:
 
     def _load(self, args: list[str]) -> bool:
         path = _one(":load", args, "FILE")
+        if _is_recording(path):
+            run = self.session.load_run(path)
+            r = run.result
+            pose = self.session.backend.true_pose
+            self.say(f"loaded {path}: a run of `{run.label}` in world `{run.world}`, "
+                     f"{run.ticks} ticks, {r.duration:.1f} s, "
+                     + ("cut short (no end record)" if run.cut
+                        else f"ended by {r.cause.value}")
+                     + (", COLLIDED" if r.collided else ""),
+                     f"robot at {views.format_pose(pose)}; :where and :plot show the run's "
+                     "path, :trace writes it")
+            if run.note:
+                self.say(f"note: {run.note}")
+            return True
         names, warnings = self.session.load(path)
         if warnings:
             print_diagnostics(warnings, self.session.sources, self.err)
@@ -398,6 +413,13 @@ class Repl:
         return True
 
 
+def _is_recording(path: str) -> bool:
+    """Return True for a run's trace (.jsonl), an MCAP recording or a rosbag2 folder."""
+    if path.endswith((".jsonl", ".mcap")):
+        return True
+    return os.path.isdir(path) and os.path.isfile(os.path.join(path, "metadata.yaml"))
+
+
 def _no_args(cmd: str, args: list[str]) -> None:
     if args:
         raise ReplError(f"{cmd} takes no arguments")
@@ -446,7 +468,9 @@ COMMANDS: dict[str, Command] = {c.name: c for c in (
     Command("defs", "", "the definitions so far, as `mdle fmt` prints them", Repl._defs),
     Command("save", "FILE", "write the definitions so far to FILE (formatted)", Repl._save,
             "file"),
-    Command("load", "FILE", "add the definitions of an .mdle file", Repl._load, "file"),
+    Command("load", "FILE", "add the definitions of an .mdle file; or bring in a recorded "
+            "run (.jsonl trace, .mcap recording): its world, path and final pose",
+            Repl._load, "file"),
     Command("step", "[N]", "advance the last element N ticks (default 1), showing each "
             "tick's control and sensor values", Repl._step),
     Command("set", "seed N | until SECONDS | realtime on|off", "reseed the simulation; "

@@ -43,8 +43,8 @@ if TYPE_CHECKING:
     from sim import SimBackend, World
     from sim.backend import SimEvent
 
-__all__ = ["DEFAULT_UNTIL", "SETTLED_WINDOW", "ReplError", "RunReport", "Session", "SideStats",
-           "StepOutcome", "StepRow"]
+__all__ = ["DEFAULT_UNTIL", "SETTLED_WINDOW", "LoadedRun", "ReplError", "RunReport", "Session",
+           "SideStats", "StepOutcome", "StepRow"]
 
 #: Longest a single run may go on, in simulated seconds, before the REPL stops it: an
 #: element with ``never`` and ``inf`` would otherwise never give the prompt back when no
@@ -173,6 +173,37 @@ class _Run(Recorder):
         if self.samples:
             return self.samples[0].time
         return self.events[0].time if self.events else 0.0
+
+
+@dataclass(frozen=True)
+class LoadedRun:
+    """What ``:load`` of a recording brought in: the element, result, ticks, world, notes.
+
+    ``cut`` is True when the recording was cut short (no ``end`` record); ``note`` says
+    what could not be restored (the world, the robot's place), None when everything was.
+    """
+
+    label: str
+    result: RunResult
+    ticks: int
+    world: str
+    cut: bool
+    note: str | None
+
+
+class _Element:
+    def __init__(self, label: str) -> None:
+        self.label = label
+
+
+class _Recorded:
+    """What a trace writer reads of a scheduler, for a run loaded from a recording."""
+
+    def __init__(self, label: str, rate: float, backend: Any) -> None:
+        self.element = _Element(label)
+        self.rate = rate
+        self.until = None
+        self.backend = backend
 
 
 class Session:
@@ -333,6 +364,67 @@ class Session:
         warnings = self.workspace.load(path)
         after = self._forms()
         return tuple(n for n in after if before.get(n) != after[n]), warnings
+
+    def load_run(self, path: str | os.PathLike[str]) -> LoadedRun:
+        """Bring a recorded run (a trace or an MCAP recording) into the session.
+
+        The session switches to the run's world (with its seed, robot and sensing) when it
+        was simulated and that world loads, and puts the robot where the run ended; the
+        run becomes the path since the last reset (``:where``, ``:plot``, ``:trace``).
+
+        Raises
+        ------
+        TraceError
+            The file cannot be read.
+        ReplError
+            The recording has no ticks.
+        """
+        from mdle.repl.recorded import recorded_run
+        from mdle.trace import read_trace
+
+        trace = read_trace(path)
+        run = recorded_run(trace)
+        if not run.samples:
+            raise ReplError(f"`{os.fspath(path)}` holds no recorded ticks")
+        header = trace.header
+        note = None
+        world = header.get("world") if isinstance(header.get("world"), dict) else None
+        last = run.samples[-1]
+        if world and world.get("spec"):
+            pose = (Pose(last.true_x, last.true_y, last.true_theta)
+                    if last.true_x is not None and last.true_y is not None
+                    and last.true_theta is not None else None)
+            old = (self._seed, self._robot, self._sensing)
+            seed = header.get("seed")
+            self._seed = seed if isinstance(seed, int) and not isinstance(seed, bool) else None
+            self._robot = header.get("robot") if isinstance(header.get("robot"), str) else None
+            sensing = header.get("sensing")
+            self._sensing = sensing if sensing in ("scan", "exact") else "scan"
+            try:
+                try:
+                    self._open_world(str(world["spec"]), pose)
+                except MdleError:
+                    if pose is None:
+                        raise
+                    self._open_world(str(world["spec"]))
+                    note = ("the robot cannot stand where the run ended (it touches an "
+                            "obstacle): it is at the world's start")
+            except MdleError as exc:
+                self._seed, self._robot, self._sensing = old
+                note = f"the run's world does not load ({exc}); the session keeps its own"
+        else:
+            note = "recorded on a robot: the path is in odometry; the simulated robot stays"
+        self._stop_stepping()
+        record = _Run(run.label, f"<{os.path.basename(os.fspath(path))}>")
+        record.samples = list(run.samples)
+        record.events = list(run.events)
+        record.result = run.result
+        rate = header.get("rate")
+        record.started = _Recorded(run.label, float(rate) if isinstance(rate, (int, float))
+                                   and rate > 0 else self.rate, self.backend)
+        self._runs = [record]
+        return LoadedRun(run.label, run.result, len(run.samples),
+                         self.world.name, trace.truncated or trace.end is None, note)
 
     def save(self, path: str | os.PathLike[str]) -> str:
         """Write every definition, formatted as ``mdle fmt`` does; returns the text.

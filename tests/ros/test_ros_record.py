@@ -280,3 +280,28 @@ def test_plot_and_trace_reader_take_the_recording(run: dict[str, Any]) -> None:
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert (d / "p.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_repl_load_takes_the_recording(run: dict[str, Any]) -> None:
+    d = run["dir"]
+    tr: Trace = run["trace"]
+    script = (f":load {d / 'r.mcap'}\n:pose\n:where 60\n:trace {d / 'back.jsonl'}\n"
+              f":plot {d / 'back.png'}\n:load {d / 'bag'}\n:load {d / 'nothing.mcap'}\n")
+    repl = [run["cmd"][0], "repl", "--echo"]
+    proc = subprocess.run(repl, input=script, capture_output=True, text=True, timeout=120,
+                          cwd=d)
+    assert proc.returncode == 1, proc.stderr  # the last :load fails
+    out = proc.stdout
+    last = tr.samples[-1]
+    assert (f"loaded {d / 'r.mcap'}: a run of `main` in world `ellipse-pioneer`, "
+            f"{len(tr.samples)} ticks") in out
+    assert f"x {last['true_x']:.2f} m  y {last['true_y']:.2f} m" in out
+    assert f"trace written to {d / 'back.jsonl'} ({len(tr.samples)} samples)" in out
+    assert (d / "back.png").read_bytes()[:4] == b"\x89PNG"
+    assert out.count("loaded ") == 2
+    assert "cannot read" in proc.stderr and "Traceback" not in proc.stderr
+    back = read_trace(d / "back.jsonl")
+    assert back.samples == tr.samples and back.events == tr.events
+    assert len(back.scans) == len(tr.scans)
+    for a, b in zip(back.scans, tr.scans, strict=True):
+        np.testing.assert_array_equal(decode_ranges(a["ranges"]), decode_ranges(b["ranges"]))

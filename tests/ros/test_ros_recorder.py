@@ -1,0 +1,122 @@
+"""The recorder as an observer: a robot with no ground truth, and a recording that fails."""
+
+from __future__ import annotations
+
+import errno
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from mdle.backend import Observation
+from mdle.loader import load_text
+from mdle.ros.recorder import McapRecorder
+from mdle.runtime import Scheduler
+from mdle.trace import TraceWriter, read_trace
+
+PLAN = "atom hug = (follow_boundary(side = right, rc = 1 m, v = 1 m/s), never, 8 s)\n"
+
+
+class _Robot:
+    """The simulator seen as a robot: no ground truth, no mount attribute."""
+
+    def __init__(self) -> None:
+        import sim
+
+        self._sim = sim.SimBackend(sim.load_world("ellipse"))
+        self.clock = self._sim.clock
+        self.limits = self._sim.limits
+
+    def observe(self) -> Observation:
+        return replace(self._sim.observe(), truth={})
+
+    def command(self, cmd: Any) -> None:
+        self._sim.command(cmd)
+
+    def advance(self, dt: float) -> float:
+        return self._sim.advance(dt)
+
+    def stop(self) -> None:
+        self._sim.stop()
+
+    def close(self) -> None:
+        self._sim.close()
+
+
+def test_a_robot_run_has_no_simulation_topics(tmp_path: Path, doctor: Any,
+                                              rosbags_read: Any) -> None:
+    element = load_text(PLAN, "<test>").elements["hug"]
+    header = {"program": {"element": "hug"}, "backend": "pioneer", "rate": 10.0}
+    rec = McapRecorder(tmp_path / "r.mcap", header)
+    trace = TraceWriter(tmp_path / "t.jsonl", header)
+    sch = Scheduler(element, _Robot(), 10.0, [trace, rec])
+    while sch.tick():
+        pass
+    counts = doctor(tmp_path / "r.mcap")
+    n = len(read_trace(tmp_path / "t.jsonl").samples)
+    assert counts == {"/tf_static": 1, "/scan": n, "/odom": n, "/tf": n, "/cmd_vel": n,
+                      "/mdle/state": n, "/mdle/events": 4}
+    msgs = rosbags_read(tmp_path / "r.mcap")
+    tfs = [m.msg for m in msgs if m.topic == "/tf"]
+    assert all(len(t.transforms) == 1 and t.transforms[0].child_frame_id == "base_link"
+               for t in tfs)
+    (static,) = [m.msg.transforms[0] for m in msgs if m.topic == "/tf_static"]
+    assert static.transform.translation.x == 0.0  # no mount known: at the robot's origin
+    # the exported trace gives the same messages
+    from mdle.ros.export import export_trace
+
+    export_trace(tmp_path / "t.jsonl", tmp_path / "e.mcap")
+    assert doctor(tmp_path / "e.mcap") == counts
+
+
+@pytest.mark.parametrize("when", ["mid-run", "at the end"])
+def test_a_disk_that_fills_up_ends_the_run_cleanly(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str], when: str) -> None:
+    from mdle.cli import main
+    from mdle.ros import mcap_file
+
+    real = mcap_file.McapFile.close_chunk
+    finishing: list[bool] = []
+
+    def close_chunk(self: mcap_file.McapFile) -> None:
+        # mid-run: the first chunk; at the end: the last one, when the file is finished
+        if self._buf and (when == "mid-run" or finishing):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(self)
+
+    monkeypatch.setattr(mcap_file.McapFile, "close_chunk", close_chunk)
+    real_finish = mcap_file.McapFile.finish
+
+    def finish(self: mcap_file.McapFile) -> None:
+        finishing.append(True)
+        real_finish(self)
+
+    monkeypatch.setattr(mcap_file.McapFile, "finish", finish)
+    (tmp_path / "p.mdle").write_text(PLAN + "run hug\n")
+    code = main(["run", str(tmp_path / "p.mdle"), "--world", "ellipse", "--trace",
+                 str(tmp_path / "t.jsonl"), "--record", str(tmp_path / "r.mcap"), "-q"])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert f"cannot write the recording `{tmp_path / 'r.mcap'}`: No space left on device" in err
+    assert "Traceback" not in err
+    trace = read_trace(tmp_path / "t.jsonl")  # the trace is whole and says how it ended
+    assert trace.end is not None
+    if when == "mid-run":  # the run was aborted, the robot stopped
+        assert trace.end["cause"] == "error" and "No space left" in trace.end["fault"]
+        assert trace.end["t"] < 7.0
+    else:
+        assert trace.end["cause"] == "timer"
+
+
+def test_a_recording_that_cannot_be_created(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    from mdle.cli import main
+
+    (tmp_path / "p.mdle").write_text(PLAN + "run hug\n")
+    code = main(["run", str(tmp_path / "p.mdle"), "--world", "ellipse", "--record",
+                 str(tmp_path / "no" / "such" / "r.mcap"), "-q"])
+    err = capsys.readouterr().err
+    assert code == 1 and "cannot write the recording" in err
+    assert "No such file or directory" in err
