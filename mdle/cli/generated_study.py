@@ -46,6 +46,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="processes (default: every core); results do not depend on it")
     g.add_argument("--csv", type=Path, default=None, metavar="FILE",
                    help="write one row per run to FILE")
+    g.add_argument("--save-failures", type=Path, default=None, metavar="DIR",
+                   help="write each failing run's plan and world to DIR, ready for mdle run")
     g.add_argument("--tolerance", type=float, default=None, metavar="M",
                    help="largest second-half mean |d-rc| of an accurate run "
                         "(default 0.08 m at >= 50 Hz, else 0.10 m)")
@@ -113,7 +115,38 @@ def run(args: argparse.Namespace) -> int:
     _print_tables(cfg, rows, sys.stdout)
     if args.csv is not None:
         print(f"wrote {args.csv} ({len(rows)} runs)")
+    if args.save_failures is not None:
+        try:
+            saved = save_failures(rows, args.save_failures)
+        except OSError as e:
+            print(f"mdle experiment random-starts: cannot write to {args.save_failures}: "
+                  f"{e.strerror}", file=sys.stderr)
+            return output.EXIT_INPUT
+        print(f"wrote {saved} failing runs to {args.save_failures} (replay: mdle run "
+              f"{args.save_failures}/NAME.mdle --rate {cfg.rate:g} --sensing {cfg.sensing})")
+    if any(r["error"] for r in rows):
+        return output.EXIT_INPUT
     return output.EXIT_COLLISION if any(r["collided"] for r in rows) else output.EXIT_OK
+
+
+def failure_name(r: Row) -> str:
+    """Name a run's replay files: ``SHAPE-start-K`` (``-blind`` for a blind-side start)."""
+    return f"{r['shape']}-start-{r['start']}{'-blind' if r['blind'] else ''}"
+
+
+def save_failures(rows: Sequence[Row], folder: Path) -> int:
+    """Write NAME.mdle and NAME.world.yaml for every failing run into ``folder``; count them."""
+    from mdle.experiments.generated import RunSpec, replay_files, spec_fields
+
+    folder.mkdir(parents=True, exist_ok=True)
+    bad = [r for r in rows if r["outcome"] != "ok"]
+    for r in bad:
+        spec = RunSpec(**{k: r[k] for k in spec_fields()})
+        plan, world = replay_files(spec)
+        name = failure_name(r)
+        (folder / f"{name}.mdle").write_text(plan, encoding="utf-8")
+        (folder / f"{name}.world.yaml").write_text(world, encoding="utf-8")
+    return len(bad)
 
 
 def _run_with_progress(cfg: StudyConfig, jobs: int | None, total: int) -> list[Row]:
@@ -175,7 +208,8 @@ def _print_tables(cfg: StudyConfig, rows: Sequence[Row], stream: IO[str]) -> Non
             t.add_row(s["family"], str(s["runs"]), str(s["collisions"]),
                       f"{s['engaged']} ({pct:.1f} %)", _fmt(s["worst_clearance"]),
                       _fmt(s["median_err"]), _fmt(s["max_err"]),
-                      _fmt(s["median_t_engage"], 1), str(s["failures"]),
+                      _fmt(s["median_t_engage"], 1),
+                      f"{s['failures']}" + (f" ({s['errors']} errors)" if s["errors"] else ""),
                       end_section=s["family"] == "all")
         console.print(t)
     console.print("engaged: |d - rc| <= 0.2 m with the obstacle on the followed side for 4 m "
@@ -194,7 +228,9 @@ def describe_failure(r: Row) -> str:
     """Say in one line which run failed and how (shape, seed, start, what it did)."""
     kind = "blind-side" if r["blind"] else f"incidence {math.degrees(r['incidence']):+.0f} deg"
     what = r["outcome"]
-    if what == "collided":
+    if what == "error":
+        detail = r["error"]
+    elif what == "collided":
         detail = f"min clearance {r['min_clearance']:.3f} m"
     elif what == "never engaged":
         detail = (f"ended {r['final_d']:.2f} m from the boundary, closest {r['min_d']:.2f} m, "
@@ -223,10 +259,10 @@ def write_csv(rows: Sequence[Row], path: Path) -> None:
 
 
 def _cell(key: str, value: Any) -> Any:
-    if key in _DEGREES and isinstance(value, float):
-        return "" if math.isnan(value) else f"{math.degrees(value):.3f}"
-    if isinstance(value, float):
-        return "" if math.isnan(value) else f"{value:.6g}"
+    if isinstance(value, float):  # full precision: the CSV is data, not a table
+        if math.isnan(value):
+            return ""
+        return repr(math.degrees(value)) if key in _DEGREES else repr(value)
     if value is None:
         return ""
     return value

@@ -34,15 +34,17 @@ __all__ = [
     "StudyConfig",
     "outcome",
     "plan_text",
+    "replay_files",
     "run_spec",
+    "run_spec_safely",
     "run_study",
     "study_specs",
 ]
 
 Row = dict[str, Any]
 
-#: Outcomes of a run, worst first.
-OUTCOMES = ("collided", "never engaged", "inaccurate", "ok")
+#: Outcomes of a run, worst first (``error``: the run raised; its text is in ``error``).
+OUTCOMES = ("error", "collided", "never engaged", "inaccurate", "ok")
 
 
 @dataclass(frozen=True)
@@ -180,11 +182,59 @@ def run_spec(spec: RunSpec) -> Row:
                        np.asarray(near.point), clearance,
                        collided=bool(result.collided) or any(bool(s.collided) for s in samples),
                        side=spec.side, rc=spec.rc)
-    return {**asdict(spec), **m.as_dict()}
+    end = pose[-1]
+    return {**asdict(spec), **m.as_dict(), "x_end": float(end[0]), "y_end": float(end[1]),
+            "theta_end": float(end[2]), "error": ""}
+
+
+def _error_row(spec: RunSpec, error: BaseException) -> Row:
+    """Return the row of a run that raised: NaN metrics and the error's text."""
+    from mdle.experiments.engagement import FollowMetrics
+
+    nan_metrics = {f.name: math.nan for f in fields(FollowMetrics)}
+    nan_metrics.update(collided=False, engaged=False)
+    message = " ".join(str(error).split()) or type(error).__name__
+    return {**asdict(spec), **nan_metrics, "x_end": math.nan, "y_end": math.nan,
+            "theta_end": math.nan, "error": f"{type(error).__name__}: {message}"}
+
+
+def run_spec_safely(spec: RunSpec) -> Row:
+    """Run one spec; a run that raises gives an error row instead of ending the study."""
+    try:
+        return run_spec(spec)
+    except Exception as e:  # noqa: BLE001 (any failure of one run is that run's result)
+        return _error_row(spec, e)
+
+
+def replay_files(spec: RunSpec) -> tuple[str, str]:
+    """Return (plan text, world YAML) that replay one run with ``mdle run``.
+
+    The world carries the start pose, the robot and the simulator seed; the plan says the
+    rate and sensing to pass: ``mdle run NAME.mdle --rate R --sensing S`` with the world
+    saved beside it as ``NAME.world.yaml``.
+    """
+    from dataclasses import replace
+
+    from mdle.backend import Pose
+    from sim.generated import generate_shape
+    from sim.robot import robot_profile
+    from sim.world_dump import world_to_yaml
+
+    shape = generate_shape(spec.shape_seed, spec.shape_index)
+    world = replace(shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot)),
+                    seed=spec.sim_seed)
+    kind = "blind-side start" if spec.blind else "collision-course start"
+    plan = (f"# {spec.shape} (seed {spec.shape_seed}, index {spec.shape_index}), {kind} "
+            f"{spec.start}.\n# Replay: mdle run THIS.mdle --rate {spec.rate:g} "
+            f"--sensing {spec.sensing}\n"
+            + plan_text(spec.side, spec.rc, spec.v, spec.kf, spec.duration) + "run f\n")
+    return plan, world_to_yaml(world)
 
 
 def outcome(row: Row, tolerance: float) -> str:
     """Classify a row: collided, never engaged, inaccurate (mean error above tolerance) or ok."""
+    if row.get("error"):
+        return "error"
     if row["collided"]:
         return "collided"
     if not row["engaged"]:
@@ -217,7 +267,7 @@ def run_specs(specs: Sequence[RunSpec], jobs: int | None = None,
     if jobs == 1 or len(specs) <= 1:
         rows = []
         for spec in specs:
-            rows.append(run_spec(spec))
+            rows.append(run_spec_safely(spec))
             if on_row is not None:
                 on_row(rows[-1])
         return rows
@@ -225,7 +275,7 @@ def run_specs(specs: Sequence[RunSpec], jobs: int | None = None,
 
     out: list[Row | None] = [None] * len(specs)
     with ProcessPoolExecutor(max_workers=min(jobs, len(specs))) as pool:
-        futures = {pool.submit(run_spec, spec): i for i, spec in enumerate(specs)}
+        futures = {pool.submit(run_spec_safely, spec): i for i, spec in enumerate(specs)}
         for fut in as_completed(futures):
             row = fut.result()
             out[futures[fut]] = row
@@ -261,13 +311,19 @@ def summarise(rows: Sequence[Row], tolerance: float) -> list[dict[str, Any]]:
                 "blind": blind, "family": family, "runs": len(rs),
                 "collisions": sum(bool(r["collided"]) for r in rs),
                 "engaged": len(engaged),
-                "worst_clearance": min(float(r["min_clearance"]) for r in rs),
+                "worst_clearance": _nanmin([float(r["min_clearance"]) for r in rs]),
                 "median_err": float(np.median(errs)) if len(errs) else math.nan,
                 "max_err": float(np.max(errs)) if len(errs) else math.nan,
                 "median_t_engage": float(np.median(te)) if len(te) else math.nan,
                 "failures": sum(outcome(r, tolerance) != "ok" for r in rs),
+                "errors": sum(bool(r.get("error")) for r in rs),
             })
     return out
+
+
+def _nanmin(values: list[float]) -> float:
+    finite = [v for v in values if not math.isnan(v)]
+    return min(finite) if finite else math.nan
 
 
 def _family_order(family: str) -> int:

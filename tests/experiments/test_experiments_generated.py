@@ -146,3 +146,40 @@ def test_paper_random_starts_benchmark_runs_from_the_repo_root(repo: Path) -> No
                        timeout=120)
     assert r.returncode == 0, r.stderr
     assert "ellipse" in r.stdout
+
+
+def test_a_run_that_raises_is_an_error_row_not_the_end_of_the_study() -> None:
+    from mdle.experiments.generated import run_specs
+
+    good = study_specs(replace(SMALL, shapes=1, blind=False, duration=1.0))[0]
+    bad = replace(good, robot="no-such-robot")
+    rows = run_specs([bad, good], jobs=2)
+    assert "no-such-robot" in rows[0]["error"] and rows[1]["error"] == ""
+    assert outcome(rows[0], 0.1) == "error" and outcome(rows[1], 0.1) != "error"
+    assert math.isnan(rows[0]["min_clearance"]) and set(rows[0]) == set(rows[1])
+
+
+def test_failing_runs_are_saved_ready_for_mdle_run_and_replay_exactly(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    folder = tmp_path / "failures"
+    code = main(["experiment", "random-starts", "--generated", "--shapes", "1", "--starts", "2",
+                 "--duration", "3", "--jobs", "1", "--save-failures", str(folder),
+                 "--csv", str(tmp_path / "runs.csv")])
+    assert code in (0, 3)
+    out = capsys.readouterr().out
+    with (tmp_path / "runs.csv").open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    failing = [r for r in rows if r["outcome"] != "ok"]  # 3 s is too short to engage
+    assert len(failing) == 2 and f"wrote 2 failing runs to {folder}" in out
+    r = failing[0]
+    plan = folder / f"{r['shape']}-start-{r['start']}.mdle"
+    assert plan.exists() and plan.with_suffix(".world.yaml").exists()
+    trace = tmp_path / "t.jsonl"
+    assert main(["run", str(plan), "--rate", "10", "--sensing", "scan", "--quiet",
+                 "--trace", str(trace)]) in (0, 3)
+    last = [json.loads(line) for line in trace.read_text().splitlines()
+            if '"sample"' in line][-1]
+    assert last["true_x"] == pytest.approx(float(r["x_end"]), abs=1e-6)
+    assert last["true_y"] == pytest.approx(float(r["y_end"]), abs=1e-6)

@@ -8,7 +8,8 @@ import importlib
 import pytest
 
 MODULES = ["sim", "sim.shapes", "sim.raycast", "sim.distance", "sim.world", "sim.world_yaml",
-           "sim.catalog", "sim.robot", "sim.ladar", "sim.collision", "sim.backend"]
+           "sim.catalog", "sim.robot", "sim.ladar", "sim.collision", "sim.backend",
+           "sim.generated", "sim.starts", "sim.world_dump"]
 
 
 @pytest.mark.parametrize("name", MODULES)
