@@ -51,15 +51,24 @@ def load_world(spec: str | os.PathLike[str]) -> World:
     if text in list_worlds():
         return _reference(text)
     looks_like_path = text.endswith((".yaml", ".yml")) or os.sep in text or "/" in text
-    if looks_like_path or Path(text).exists():
+    if looks_like_path or _exists(text):
         return read_world(text)
     import difflib
 
     names = list_worlds()
-    close = difflib.get_close_matches(text, names, n=1)
+    close = difflib.get_close_matches(text, names, n=1) if len(text) < 100 else []
     hint = f" (did you mean `{close[0]}`?)" if close else ""
-    raise WorldError(f"unknown world `{text}`{hint}; reference worlds: {', '.join(names)}; "
+    shown = text if len(text) <= 80 else text[:60] + f"... ({len(text)} characters)"
+    raise WorldError(f"unknown world `{shown}`{hint}; reference worlds: {', '.join(names)}; "
                      "or give the path of a .yaml world file")
+
+
+def _exists(path: str) -> bool:
+    """Whether a file of that name exists (a name too long for the system does not)."""
+    try:
+        return Path(path).exists()
+    except (OSError, ValueError):
+        return False
 
 
 def world_descriptions() -> list[tuple[str, str]]:

@@ -33,7 +33,8 @@ from typing import Any
 from mdle.backend import Pose
 from mdle.errors import Diagnostic, Span, WorldError
 
-__all__ = ["OBSTACLE_TYPES", "parse_world", "read_world"]
+__all__ = ["OBSTACLE_TYPES", "MAX_COORDINATE", "MAX_LADAR_RATE", "MAX_SEED", "MAX_YAML_DEPTH",
+           "parse_world", "read_world"]
 
 #: Keys each obstacle type requires and allows (besides ``type`` and ``name``).
 OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -55,6 +56,14 @@ _FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 _MAX_CURVE_SAMPLES = 100_000
 _MIN_SIZE, _MAX_SIZE = 1e-4, 1e5   # metres: sizes outside this are typos, not worlds
 _MAX_BEAMS = 100_000
+#: Coordinates (m) farther than this from the origin are typos, not worlds.
+MAX_COORDINATE = 1e6
+#: Fastest ladar scan rate accepted, Hz (the LMS-200 scans at up to 75 Hz).
+MAX_LADAR_RATE = 1000.0
+#: Deepest nesting of lists and mappings in a world file (a world needs about 5).
+MAX_YAML_DEPTH = 64
+#: Largest seed (the simulator's generator takes 64-bit seeds).
+MAX_SEED = 2 ** 64 - 1
 
 
 @dataclass
@@ -82,46 +91,198 @@ class _Doc:
         return WorldError(Diagnostic(span, msg), sources={self.file: self.text})
 
 
-def _to_python(node: Any, path: str, doc: _Doc, loader: Any) -> Any:
-    """Convert a composed YAML node to Python values, recording each path's position."""
+_YAML_INT = re.compile(r"[-+]?(?:0|[1-9][0-9]*)")
+_YAML_FLOAT = re.compile(r"[-+]?(?:[0-9]+\.[0-9]*|\.[0-9]+)(?:[eE][-+][0-9]+)?")
+
+
+def _events(text: str, fast: bool = True) -> Any:
+    """Return the YAML event stream (libyaml's C parser when installed and ``fast``)."""
     import yaml
 
-    m = node.start_mark
-    width = (node.end_mark.index - m.index) if node.end_mark.line == m.line else 1
-    doc.marks[path] = (m.line + 1, m.column + 1, width)
-    if isinstance(node, yaml.MappingNode):
-        out: dict[str, Any] = {}
-        for knode, vnode in node.value:
-            key = loader.construct_object(knode, deep=True)
-            if not isinstance(key, str):
-                km = knode.start_mark
-                doc.marks["<key>"] = (km.line + 1, km.column + 1, 1)
-                where = f"in `{path}`: " if path else ""
-                raise doc.fail("<key>", f"{where}keys must be names, got {key!r}")
-            sub = f"{path}.{key}" if path else key
-            if key in out:
-                km = knode.start_mark
-                doc.marks[sub] = (km.line + 1, km.column + 1, len(key))
-                raise doc.fail(sub, "key given twice")
-            out[key] = _to_python(vnode, sub, doc, loader)
-            km = knode.start_mark
-            doc.marks.setdefault(sub + "#key", (km.line + 1, km.column + 1, len(key)))
-        return out
-    if isinstance(node, yaml.SequenceNode):
-        return [_to_python(v, f"{path}[{i}]", doc, loader) for i, v in enumerate(node.value)]
-    return loader.construct_object(node, deep=True)
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader) if fast else yaml.SafeLoader
+    return yaml.parse(text, Loader=loader)
+
+
+class _Builder:
+    """YAML events to Python values, with each key path's position recorded.
+
+    Built from the event stream with an explicit stack (no recursion), so nesting is
+    refused at the first level past :data:`MAX_YAML_DEPTH` instead of exhausting a
+    stack. An alias is the very object its anchor made, never a copy, so aliases of
+    aliases ("billion laughs") cost nothing; an alias of an anchor still open (a value
+    containing itself) is refused. Plain numbers take a fast path; every other scalar is
+    resolved and constructed by PyYAML's safe loader, as ``yaml.safe_load`` would.
+    """
+
+    def __init__(self, doc: _Doc) -> None:
+        import yaml
+
+        self.doc = doc
+        self.resolver = yaml.SafeLoader("")
+        self.anchors: dict[str, Any] = {}
+        self.open: set[str] = set()
+
+    def fail_at(self, mark: Any, problem: str) -> WorldError:
+        self.doc.marks["<yaml>"] = (mark.line + 1, mark.column + 1, 1)
+        return self.doc.fail("<yaml>", problem)
+
+    def scalar(self, ev: Any, path: str) -> Any:
+        import yaml
+
+        value = ev.value
+        if ev.implicit[0] and ev.tag is None:
+            if _YAML_INT.fullmatch(value):
+                try:
+                    return int(value)
+                except ValueError as err:  # more digits than Python converts
+                    raise self.doc.fail(path, f"cannot read the value: {err}") from None
+            if _YAML_FLOAT.fullmatch(value):
+                return float(value)
+        tag = ev.tag
+        if tag is None or tag == "!":
+            tag = self.resolver.resolve(yaml.ScalarNode, value, ev.implicit)
+        node = yaml.ScalarNode(tag, value, ev.start_mark, ev.end_mark, ev.style)
+        try:
+            return self.resolver.construct_object(node, deep=True)
+        except (ValueError, OverflowError) as err:  # e.g. an integer of 5,000 digits
+            raise self.doc.fail(path, f"cannot read the value: {err}") from None
+
+    def build(self, events: Any) -> Any:
+        """Return the document's value (None for an empty document)."""
+        import yaml
+
+        doc = self.doc
+        marks = doc.marks
+        # each open container: [value, path, start mark, anchor, pending key, key mark]
+        stack: list[list[Any]] = []
+        result: Any = None
+        done = False
+        scalar_event = yaml.ScalarEvent
+        for ev in events:
+            # the common case first: a number in a list (the points of a polygon)
+            if type(ev) is scalar_event and stack and ev.anchor is None \
+                    and type(stack[-1][0]) is list:
+                seq, where = stack[-1][0], stack[-1][1]
+                path = f"{where}[{len(seq)}]"
+                m, e = ev.start_mark, ev.end_mark
+                marks[path] = (m.line + 1, m.column + 1,
+                               max(1, e.index - m.index) if e.line == m.line else 1)
+                seq.append(self.scalar(ev, path))
+                continue
+            if isinstance(ev, (yaml.StreamStartEvent, yaml.StreamEndEvent,
+                               yaml.DocumentEndEvent)):
+                continue
+            if isinstance(ev, yaml.DocumentStartEvent):
+                if done:
+                    raise self.fail_at(ev.start_mark, "a world file holds one YAML document, "
+                                                      "found a second")
+                continue
+            if isinstance(ev, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                value, path, start, anchor, _, _ = stack.pop()
+                end = ev.end_mark
+                width = end.index - start.index if end.line == start.line else 1
+                marks[path] = (start.line + 1, start.column + 1, max(1, width))
+                if anchor is not None:
+                    self.open.discard(anchor)
+                    self.anchors[anchor] = value
+                self._place(stack, value, path)
+                if not stack:
+                    result, done = value, True
+                continue
+            # a node: where does it go?
+            top = stack[-1] if stack else None
+            if top is None:
+                path = ""
+            elif isinstance(top[0], list):
+                path = f"{top[1]}[{len(top[0])}]" if top[1] else f"[{len(top[0])}]"
+            elif top[4] is _NO_KEY:
+                path = "<key>"
+            else:
+                path = f"{top[1]}.{top[4]}" if top[1] else str(top[4])
+            if isinstance(ev, yaml.AliasEvent):
+                if ev.anchor in self.open:
+                    marks.setdefault(path, (ev.start_mark.line + 1, ev.start_mark.column + 1,
+                                            1))
+                    raise doc.fail(path, f"the alias `*{ev.anchor}` refers to itself (it "
+                                         "stands inside its own anchor)")
+                if ev.anchor not in self.anchors:
+                    raise self.fail_at(ev.start_mark, f"not valid YAML: unknown alias "
+                                                      f"`*{ev.anchor}`")
+                value = self.anchors[ev.anchor]
+            elif isinstance(ev, yaml.ScalarEvent):
+                m, e = ev.start_mark, ev.end_mark
+                marks[path] = (m.line + 1, m.column + 1,
+                               max(1, e.index - m.index) if e.line == m.line else 1)
+                value = self.scalar(ev, path)
+                if ev.anchor is not None:
+                    self.anchors[ev.anchor] = value
+            else:  # a mapping or sequence starts
+                if len(stack) >= MAX_YAML_DEPTH:
+                    raise self.fail_at(ev.start_mark, f"the YAML nests more than "
+                                                      f"{MAX_YAML_DEPTH} levels deep here; a "
+                                                      "world needs a handful")
+                marks[path] = (ev.start_mark.line + 1, ev.start_mark.column + 1, 1)
+                if ev.anchor is not None:
+                    self.open.add(ev.anchor)
+                container: Any = [] if isinstance(ev, yaml.SequenceStartEvent) else {}
+                stack.append([container, path, ev.start_mark, ev.anchor, _NO_KEY, None])
+                continue
+            if path == "<key>":
+                assert top is not None
+                self._key(top, value, (ev.start_mark.line + 1, ev.start_mark.column + 1))
+                continue
+            self._place(stack, value, path)
+            if not stack:
+                result, done = value, True
+        return result
+
+    def _key(self, top: list[Any], key: Any, km: tuple[int, int]) -> None:
+        import reprlib
+
+        doc = self.doc
+        if not isinstance(key, str):
+            doc.marks["<key>"] = (*km, 1)
+            where = f"in `{top[1]}`: " if top[1] else ""
+            short = reprlib.Repr()
+            short.maxlevel, short.maxlist, short.maxdict, short.maxstring = 2, 4, 4, 40
+            raise doc.fail("<key>", f"{where}keys must be names, got {short.repr(key)}")
+        sub = f"{top[1]}.{key}" if top[1] else key
+        if key in top[0]:
+            doc.marks[sub] = (*km, len(key))
+            raise doc.fail(sub, "key given twice")
+        doc.marks.setdefault(sub + "#key", (*km, len(key)))
+        top[4], top[5] = key, km
+
+    def _place(self, stack: list[list[Any]], value: Any, path: str) -> None:
+        if not stack:
+            return
+        top = stack[-1]
+        if isinstance(top[0], list):
+            top[0].append(value)
+        elif top[4] is _NO_KEY:  # a mapping or sequence where a key belongs
+            line, column, _ = self.doc.marks.get(path, (1, 1, 1))
+            self._key(top, value, (line, column))
+        else:
+            top[0][top[4]] = value
+            top[4] = _NO_KEY
+
+
+_NO_KEY = object()
 
 
 # ---------------------------------------------------------------- value checkers
 def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False,
-            size: bool = False, shown: str | None = None) -> float:
+            size: bool = False, coordinate: bool = False, shown: str | None = None) -> float:
     if isinstance(v, str) and _FLOAT.fullmatch(v.strip()):
         # YAML 1.1 reads 1e-3 (no dot) as text; take it as the number meant.
         return _number(doc, path, float(v), positive=positive, nonneg=nonneg, size=size,
-                       shown=v.strip())
+                       coordinate=coordinate, shown=v.strip())
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise doc.fail(path, f"expected a number, got {_show(v)}")
-    x = float(v)
+    try:
+        x = float(v)
+    except OverflowError:  # an integer of hundreds of digits
+        x, shown = (math.inf if v > 0 else -math.inf), _short_int(v)
     if not math.isfinite(x):
         raise doc.fail(path, f"expected a finite number, got {shown or v}")
     if (positive or size) and x <= 0:
@@ -131,15 +292,26 @@ def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: boo
                              f"{shown or v}")
     if nonneg and x < 0:
         raise doc.fail(path, f"must not be negative, got {shown or v}")
+    if coordinate and abs(x) > MAX_COORDINATE:
+        raise doc.fail(path, f"must be within \u00b1{MAX_COORDINATE:g} m of the origin, got "
+                             f"{shown or v}")
     return x
 
 
-def _integer(doc: _Doc, path: str, v: Any, *, minimum: int = 0) -> int:
+def _integer(doc: _Doc, path: str, v: Any, *, minimum: int = 0,
+             maximum: int | None = None) -> int:
     if isinstance(v, bool) or not isinstance(v, int):
         raise doc.fail(path, f"expected a whole number, got {_show(v)}")
     if v < minimum:
-        raise doc.fail(path, f"must be at least {minimum}, got {v}")
+        raise doc.fail(path, f"must be at least {minimum}, got {_short_int(v)}")
+    if maximum is not None and v > maximum:
+        raise doc.fail(path, f"must be at most {maximum}, got {_short_int(v)}")
     return int(v)
+
+
+def _short_int(v: int) -> str:
+    digits = len(str(abs(v))) if abs(v) < 10 ** 4000 else 4000
+    return str(v) if digits <= 30 else f"a number of {digits} digits"
 
 
 def _boolean(doc: _Doc, path: str, v: Any) -> bool:
@@ -157,7 +329,8 @@ def _string(doc: _Doc, path: str, v: Any) -> str:
 def _point(doc: _Doc, path: str, v: Any) -> tuple[float, float]:
     if not isinstance(v, list) or len(v) != 2:
         raise doc.fail(path, f"expected a point [x, y] in metres, got {_show(v)}")
-    return (_number(doc, f"{path}[0]", v[0]), _number(doc, f"{path}[1]", v[1]))
+    return (_number(doc, f"{path}[0]", v[0], coordinate=True),
+            _number(doc, f"{path}[1]", v[1], coordinate=True))
 
 
 def _points(doc: _Doc, path: str, v: Any, minimum: int, what: str
@@ -373,6 +546,8 @@ def _ladar(doc: _Doc, path: str, v: Any) -> Any:
     for key in ("sigma", "resolution", "rate"):
         if key in m:
             ch[key] = _number(doc, f"{path}.{key}", m[key], nonneg=True)
+    if ch.get("rate", 0.0) > MAX_LADAR_RATE:
+        raise doc.fail(f"{path}.rate", f"must be at most {MAX_LADAR_RATE:g} Hz, got {m['rate']}")
     return base.with_overrides(**ch)
 
 
@@ -388,14 +563,14 @@ def _start(doc: _Doc, path: str, v: Any) -> Pose:
     if isinstance(v, list):
         if len(v) != 3:
             raise doc.fail(path, f"expected [x, y, theta] (m, m, deg), got {_show(v)}")
-        x, y, th = (_number(doc, f"{path}[{i}]", v[i]) for i in range(3))
+        x, y, th = (_number(doc, f"{path}[{i}]", v[i], coordinate=i < 2) for i in range(3))
     else:
         m = _mapping(doc, path, v, ("x", "y", "theta"), "x, y in metres, theta in degrees")
         for key in ("x", "y"):
             if key not in m:
                 raise doc.fail(path, f"missing key `{key}`")
-        x = _number(doc, f"{path}.x", m["x"])
-        y = _number(doc, f"{path}.y", m["y"])
+        x = _number(doc, f"{path}.x", m["x"], coordinate=True)
+        y = _number(doc, f"{path}.y", m["y"], coordinate=True)
         th = _number(doc, f"{path}.theta", m.get("theta", 0.0))
     return Pose(x, y, math.radians(th))
 
@@ -410,19 +585,24 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     """
     import yaml
 
+    from sim.collision import CONTACT
     from sim.ladar import LMS200
     from sim.robot import PIONEER2DX
     from sim.world import World
 
     doc = _Doc(file, text)
     try:
-        loader = yaml.SafeLoader(text)
+        data = _Builder(doc).build(_events(text))
+    except yaml.MarkedYAMLError:
+        # libyaml words some errors differently: the pure-Python parser's words are the
+        # documented ones (the parse is redone only on this error path)
         try:
-            node = loader.get_single_node()
-            data = {} if node is None else _to_python(node, "", doc, loader)
-        finally:
-            loader.dispose()
-    except yaml.MarkedYAMLError as err:
+            for _ in _events(text, fast=False):
+                pass
+        except yaml.MarkedYAMLError as slow:
+            err = slow
+        except yaml.YAMLError:
+            pass
         mark = err.problem_mark or err.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
         doc.marks["<yaml>"] = (line, col, 1)
@@ -435,7 +615,7 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     top = _mapping(doc, "", data, _TOP_KEYS, "a world")
     name = _string(doc, "name", top["name"]) if "name" in top else default_name
     description = _string(doc, "description", top.get("description", ""))
-    seed = _integer(doc, "seed", top["seed"]) if "seed" in top else 0
+    seed = _integer(doc, "seed", top["seed"], maximum=MAX_SEED) if "seed" in top else 0
     start = _start(doc, "start", top["start"]) if "start" in top else Pose()
     robot = _robot(doc, "robot", top["robot"]) if "robot" in top else PIONEER2DX
     ladar = _ladar(doc, "ladar", top["ladar"]) if "ladar" in top else LMS200
@@ -444,7 +624,7 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
         e = top["extent"]
         if not isinstance(e, list) or len(e) != 4:
             raise doc.fail("extent", f"expected [xmin, ymin, xmax, ymax] in metres, got {_show(e)}")
-        ex = tuple(_number(doc, f"extent[{i}]", e[i]) for i in range(4))
+        ex = tuple(_number(doc, f"extent[{i}]", e[i], coordinate=True) for i in range(4))
         if ex[2] <= ex[0] or ex[3] <= ex[1]:
             raise doc.fail("extent", "xmax and ymax must exceed xmin and ymin")
         extent = (ex[0], ex[1], ex[2], ex[3])
@@ -458,11 +638,12 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
                   ladar=ladar, description=description,
                   source=None if file.startswith("<") else file, extent=extent)
     clearance = world.clearance((start.x, start.y), robot.radius) if obstacles else math.inf
-    if clearance < 0:
+    if clearance <= CONTACT:  # touching counts: the simulator would stall it at t = 0
         near = int(world.nearest_boundary((start.x, start.y)).obstacle)
         what = _describe(obstacles[near], near)
+        how = "overlaps" if clearance < 0 else "touches"
         raise doc.fail("start", f"the robot ({robot.name}, radius {robot.radius} m) at "
-                       f"({start.x:g}, {start.y:g}) overlaps {what}")
+                       f"({start.x:g}, {start.y:g}) {how} {what}")
     return world
 
 
