@@ -282,7 +282,7 @@ def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: boo
     try:
         x = float(v)
     except OverflowError:  # an integer of hundreds of digits
-        x, shown = (math.inf if v > 0 else -math.inf), _short_int(v)
+        x, shown = (math.inf if v > 0 else -math.inf), _short_int(int(v))
     if not math.isfinite(x):
         raise doc.fail(path, f"expected a finite number, got {shown or v}")
     if (positive or size) and x <= 0:
@@ -575,29 +575,21 @@ def _start(doc: _Doc, path: str, v: Any) -> Pose:
     return Pose(x, y, math.radians(th))
 
 
-def parse_world(text: str, file: str = "<string>", default_name: str = "world") -> Any:
-    """Parse and validate world YAML text into a :class:`sim.world.World`.
+def _yaml_value(doc: _Doc) -> Any:
+    """Return the value of a YAML document (None if empty); WorldError on bad YAML.
 
-    Raises
-    ------
-    WorldError
-        With the file, line, column, key path and problem of the first error found.
+    Also used by other YAML inputs (study specs), so they get the same limits.
     """
     import yaml
 
-    from sim.collision import CONTACT
-    from sim.ladar import LMS200
-    from sim.robot import PIONEER2DX
-    from sim.world import World
-
-    doc = _Doc(file, text)
     try:
-        data = _Builder(doc).build(_events(text))
-    except yaml.MarkedYAMLError:
+        data = _Builder(doc).build(_events(doc.text))
+    except yaml.MarkedYAMLError as fast:
         # libyaml words some errors differently: the pure-Python parser's words are the
         # documented ones (the parse is redone only on this error path)
+        err = fast
         try:
-            for _ in _events(text, fast=False):
+            for _ in _events(doc.text, fast=False):
                 pass
         except yaml.MarkedYAMLError as slow:
             err = slow
@@ -610,6 +602,24 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
         raise doc.fail("<yaml>", f"not valid YAML: {problem}") from None
     except yaml.YAMLError as err:
         raise doc.fail("", f"not valid YAML: {err}") from None
+    return data
+
+
+def parse_world(text: str, file: str = "<string>", default_name: str = "world") -> Any:
+    """Parse and validate world YAML text into a :class:`sim.world.World`.
+
+    Raises
+    ------
+    WorldError
+        With the file, line, column, key path and problem of the first error found.
+    """
+    from sim.collision import CONTACT
+    from sim.ladar import LMS200
+    from sim.robot import PIONEER2DX
+    from sim.world import World
+
+    doc = _Doc(file, text)
+    data = _yaml_value(doc)
     if data is None:
         data = {}
     top = _mapping(doc, "", data, _TOP_KEYS, "a world")

@@ -35,7 +35,16 @@ from pathlib import Path
 from typing import Any
 
 from mdle.errors import MdleError, WorldError
-from sim.world_yaml import _closest, _Doc, _integer, _mapping, _number, _show, _string, _to_python
+from sim.world_yaml import (
+    _closest,
+    _Doc,
+    _integer,
+    _mapping,
+    _number,
+    _show,
+    _string,
+    _yaml_value,
+)
 
 __all__ = ["SpecError", "Study", "WorldChoice", "RobotChoice", "StartRule", "parse_study",
            "read_study", "SENSING"]
@@ -174,22 +183,8 @@ def _fail(doc: _Doc, path: str, problem: str) -> SpecError:
 
 
 def _yaml(doc: _Doc) -> Any:
-    import yaml
-
-    try:
-        loader = yaml.SafeLoader(doc.text)
-        try:
-            node = loader.get_single_node()
-            return {} if node is None else _to_python(node, "", doc, loader)
-        finally:
-            loader.dispose()
-    except yaml.MarkedYAMLError as err:
-        mark = err.problem_mark or err.context_mark
-        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
-        doc.marks["<yaml>"] = (line, col, 1)
-        raise doc.fail("<yaml>", f"not valid YAML: {err.problem or err.context}") from None
-    except yaml.YAMLError as err:
-        raise doc.fail("", f"not valid YAML: {err}") from None
+    value = _yaml_value(doc)
+    return {} if value is None else value
 
 
 def _list(doc: _Doc, path: str, v: Any, what: str) -> list[Any]:
