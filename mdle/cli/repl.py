@@ -1,16 +1,21 @@
-"""``mdle repl``: compose atoms and try them on a simulated robot, interactively.
+"""``mdle repl``: compose atoms and try them on a simulated robot (or a real one), interactively.
 
 On a terminal: a prompt with history, completion and highlighting. With input piped in:
-plain lines, no control codes, exit 0 or 1 if any input failed.
+plain lines, no control codes, exit 0 or 1 if any input failed. With ``--backend pioneer``
+the same session drives a robot: it asks before the first motion (``--yes`` skips the
+question), and every way out stops the robot and closes the connection.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mdle.cli.options import add_simulation_options, positive_seconds
+
+if TYPE_CHECKING:
+    from mdle.repl.robot import RobotSession
 
 __all__ = ["add_parser", "run"]
 
@@ -30,9 +35,18 @@ def add_parser(subparsers: Any) -> None:
                    help="simulated world: a reference world name or a YAML file "
                         "(default: the default world)")
     add_simulation_options(p)
+    p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
+                   help="what the session drives: the simulator (default) or a Pioneer")
+    p.add_argument("--connect", metavar="URL",
+                   help="robot connection for --backend pioneer (tcp://host:port, "
+                        "serial:///dev/ttyS0?baud=9600)")
+    p.add_argument("--laser", metavar="URL",
+                   help="laser for --backend pioneer: sim or lms200:///dev/DEVICE?baud=38400")
+    p.add_argument("--yes", "-y", action="store_true",
+                   help="on a robot, do not ask before the first motion (scripted sessions)")
     p.add_argument("--until", type=positive_seconds, metavar="SECONDS",
-                   help="stop any run after this many simulated seconds (default 600; "
-                        "`inf`: no limit)")
+                   help="stop any run after this many seconds (simulated, or wall-clock on "
+                        "a robot; default 600; `inf`: no limit)")
     p.add_argument("--realtime", action="store_true",
                    help="pace runs to the wall clock (default: as fast as the simulator goes)")
     p.add_argument("--plain", action="store_true",
@@ -52,25 +66,79 @@ def run(args: argparse.Namespace) -> int:
 
     until = DEFAULT_UNTIL if args.until is None else (None if math.isinf(args.until)
                                                       else args.until)
-    session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
-                      sensing=args.sensing, realtime=args.realtime)
-    repl = Repl(session, debug=getattr(args, "debug", False))
     interactive = sys.stdin.isatty() and sys.stdout.isatty() and not args.plain
-    if args.file:
-        repl.handle(f":load {_quote(args.file)}")
-        if repl.failures and not interactive:
-            return output.EXIT_INPUT
-    if interactive:
-        from mdle.repl.prompt import run_prompt
-
-        return run_prompt(repl)
-    from mdle.repl.plain import run_plain
-
+    session: Session
+    if args.backend == "pioneer":
+        session = _robot_session(args, until)
+    else:
+        session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
+                          sensing=args.sensing, realtime=args.realtime)
+    repl = Repl(session, debug=getattr(args, "debug", False))
     try:
-        return run_plain(repl, sys.stdin, echo=args.echo)
-    except KeyboardInterrupt:  # Ctrl-C while waiting for input (a run catches its own)
-        print("interrupted", file=sys.stderr)
-        return output.EXIT_INTERRUPTED
+        if args.file:
+            repl.handle(f":load {_quote(args.file)}")
+            if repl.failures and not interactive:
+                return output.EXIT_INPUT
+        if interactive:
+            from mdle.repl.prompt import run_prompt
+
+            return run_prompt(repl)
+        from mdle.repl.plain import run_plain
+
+        try:
+            return run_plain(repl, sys.stdin, echo=args.echo)
+        except KeyboardInterrupt:  # Ctrl-C while waiting for input (a run catches its own)
+            print("interrupted", file=sys.stderr)
+            return output.EXIT_INTERRUPTED
+    finally:
+        _close(session, repl)
+
+
+def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSession:
+    """Connect to the robot the options name and wrap it in a REPL session."""
+    from mdle.drivers import open_backend
+    from mdle.drivers.pioneer import PioneerBackend
+    from mdle.errors import Diagnostic, MdleError
+    from mdle.repl.robot import RobotSession
+
+    if not args.connect:
+        raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
+                                   hint="e.g. --connect tcp://localhost:8101 or "
+                                        "--connect serial:///dev/ttyS0"))
+    backend = open_backend("pioneer", args.connect, args.laser)
+    assert isinstance(backend, PioneerBackend), "open_backend('pioneer') makes a Pioneer"
+    info = backend.info
+    name = f"`{info.name or 'Pioneer'}` ({info.subtype or 'unknown model'})"
+    try:
+        session = RobotSession(backend, connect=args.connect, laser=args.laser,
+                               until=until, armed=args.yes, name=name)
+    except BaseException:
+        backend.close()
+        raise
+    if sys.stdin.isatty():  # plain input on a terminal: ask there (the prompt asks itself)
+        session.confirm = _ask_on_stdin
+    return session
+
+
+def _ask_on_stdin(question: str) -> bool:
+    """Ask a yes/no question on the terminal; only `y` or `yes` is a yes."""
+    try:
+        answer = input(f"{question} [y/N] ")
+    except EOFError:
+        return False
+    return answer.strip().lower() in ("y", "yes")
+
+
+def _close(session: Any, repl: Any) -> None:
+    """Release the session's robot and say so (nothing to say in simulation)."""
+    if session.simulated:
+        return
+    session.close()
+    how = getattr(session.hardware, "goodbye", None)
+    what = {"stopped": "robot stopped", "link lost": "the link was already lost",
+            "not confirmed": "stop sent, but the robot did not report its wheels stopped",
+            }.get(how or "", "robot stopped")
+    print(f"{what}; connection to {session.hardware.description} closed", file=sys.stderr)
 
 
 def _quote(path: str) -> str:

@@ -342,6 +342,17 @@ class PioneerBackend:
     # ------------------------------------------------------------------ introspection
 
     @property
+    def failure(self) -> str | None:
+        """Why the link to the robot was lost (None while it is up)."""
+        with self._lock:
+            return self._shared.failure
+
+    @property
+    def description(self) -> str:
+        """Where the robot is: its connection (``tcp://host:port``, a serial device)."""
+        return self._transport.description
+
+    @property
     def stats(self) -> dict[str, int]:
         """Counters: SIPs and scans received, packets rejected, dead-man stops."""
         with self._lock:

@@ -167,6 +167,8 @@ class Repl:
         Never raises for the user's mistakes (KeyboardInterrupt outside a run is reported as
         an interruption).
         """
+        for notice in self.session.notices():
+            self.complain(notice)
         try:
             ok = self._dispatch(text)
         except MdleError as exc:
@@ -260,8 +262,18 @@ class Repl:
         _no_args(":pose", args)
         obs = self.session.observe()
         s = self.session
+        truth = s.true_pose
+        if truth is None:  # a real robot: odometry and what the robot reports
+            flags = "".join(w for w, on in (("; STALLED", obs.stalled),
+                                            ("; MOTORS OFF", not obs.motors_enabled)) if on)
+            battery = f"; battery {obs.battery:.1f} V" if obs.battery is not None else ""
+            self.say(f"odometry {views.format_pose(obs.pose)}",
+                     f"v {obs.v:.2f} m/s  omega {math.degrees(obs.omega):.1f} deg/s; "
+                     f"t = {obs.time:.2f} s since connecting{battery}{flags}",
+                     s.describe())
+            return True
         self.say(f"odometry {views.format_pose(obs.pose)}",
-                 f"true     {views.format_pose(s.backend.true_pose)}",
+                 f"true     {views.format_pose(truth)}",
                  f"t = {obs.time:.2f} s since the last reset"
                  + (f"; clearance {obs.truth['clearance']:.2f} m" if obs.truth else "")
                  + ("; STALLED" if obs.stalled else ""),
@@ -271,7 +283,7 @@ class Repl:
     def _scan(self, args: list[str]) -> bool:
         _no_args(":scan", args)
         s = self.session
-        self.say(*views.format_scan(s.observe(), s.workspace.registry, s.backend.limits,
+        self.say(*views.format_scan(s.observe(), s.workspace.registry, s.limits,
                                     s.rate))
         return True
 
@@ -282,6 +294,8 @@ class Repl:
             if not 20 <= width <= 400:
                 raise ReplError(f":where takes a width of 20 to 400 columns, got {width}")
         s = self.session
+        _simulated(s, ":where", "there is no map of a real robot's surroundings; `:pose` "
+                   "shows the odometry and `:plot FILE` draws the path")
         lines = views.render_map(s.world, s.path_xy(), s.backend.true_pose, width)
         grid, legend = lines[:-1], lines[-1]
         robot = {a: "bold yellow" for a in "<>^v"}
@@ -312,10 +326,16 @@ class Repl:
             th = math.radians(_number(args[2], "theta")) if len(args) == 3 else 0.0
             pose = Pose(x, y, th)
         here = self.session.reset(pose)
+        if not self.session.simulated:
+            self.say(f"path and trace cleared; the robot stays at {views.format_pose(here)} "
+                     f"(odometry)")
+            return True
         self.say(f"robot at {views.format_pose(here)}, t = 0; path cleared")
         return True
 
     def _world(self, args: list[str]) -> bool:
+        _simulated(self.session, ":world", "the session drives a real robot; a simulated "
+                   "world needs another session (`mdle repl --world NAME`)")
         if not args:
             import sim
 
@@ -347,6 +367,9 @@ class Repl:
     def _load(self, args: list[str]) -> bool:
         path = _one(":load", args, "FILE")
         if _is_recording(path):
+            _simulated(self.session, ":load of a recorded run",
+                       "a recorded run is replayed into a simulated world; `:load FILE.mdle` "
+                       "adds definitions on a robot too")
             run = self.session.load_run(path)
             r = run.result
             pose = self.session.backend.true_pose
@@ -385,6 +408,10 @@ class Repl:
                             "`:set until SECONDS` (`inf` for no limit) or "
                             "`:set realtime on|off`")
         what, value = args
+        if what in ("seed", "realtime"):
+            _simulated(self.session, f":set {what}",
+                       "a real robot has no random seed and always runs at the pace of the "
+                       "wall clock")
         if what == "seed":
             self.session.set_seed(_int(value, "the seed"))
             self.say(f"seed {self.session.seed}; robot where it was, t = 0, path cleared")
@@ -418,6 +445,12 @@ def _is_recording(path: str) -> bool:
     if path.endswith((".jsonl", ".mcap")):
         return True
     return os.path.isdir(path) and os.path.isfile(os.path.join(path, "metadata.yaml"))
+
+
+def _simulated(session: Session, cmd: str, why: str) -> None:
+    """Refuse a simulator-only command in a session on a real robot."""
+    if not session.simulated:
+        raise ReplError(Diagnostic(None, f"{cmd} works in simulation only", hint=why))
 
 
 def _no_args(cmd: str, args: list[str]) -> None:

@@ -389,6 +389,27 @@ def make_prompt_session(repl: Repl, *, input: Input | None = None,
         input=input, output=output)
 
 
+def _ask_before_moving(repl: Repl, input: Input | None, output: Output | None) -> None:
+    """On a robot, let the session ask at the prompt before the first motion."""
+    from mdle.repl.robot import RobotSession
+
+    session = repl.session
+    if not isinstance(session, RobotSession) or session.confirm is not None:
+        return
+
+    def ask(question: str) -> bool:
+        from prompt_toolkit import PromptSession
+
+        try:
+            answer = PromptSession[str](input=input, output=output).prompt(
+                f"{question} [y/N] ")
+        except (EOFError, KeyboardInterrupt):
+            return False
+        return answer.strip().lower() in ("y", "yes")
+
+    session.confirm = ask
+
+
 class ProgressLine(BaseObserver):
     """While a run goes on, one status line on the terminal.
 
@@ -441,10 +462,11 @@ def run_prompt(repl: Repl, *, input: Input | None = None, output: Output | None 
     On the real terminal (``output`` None) a :class:`ProgressLine` shows long runs.
     """
     session = make_prompt_session(repl, input=input, output=output, history=history)
+    _ask_before_moving(repl, input, output)
     if output is None:
         repl.run_observers.append(ProgressLine(repl.out))
         repl.color = repl.out.isatty()
-    repl.say(f"mdle repl: world `{repl.session.world.name}`, seed {repl.session.seed}. "
+    repl.say(f"mdle repl: {repl.session.describe()}. "
              "`:help` lists the commands; Ctrl-D leaves.")
     while not repl.quit_requested:
         try:

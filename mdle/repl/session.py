@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from atoms.registry import Registry
-from mdle.backend import Observation, Pose
+from mdle.backend import Backend, Observation, Pose, RobotLimits
 from mdle.errors import Diagnostic, MdleError
 from mdle.program import Element
 from mdle.runtime import (
@@ -82,7 +82,8 @@ class RunReport:
     """How one run (or a stepped run, once it ended) went.
 
     ``label`` is the element's label, ``t0`` the backend time of its first tick (s),
-    ``pose`` the odometry pose at the end, ``true_pose`` the simulator's pose,
+    ``pose`` the odometry pose at the end, ``true_pose`` the simulator's pose (None on a
+    robot),
     ``interrupted`` True after Ctrl-C, ``limit`` the run limit when it stopped the run
     (s, else None), ``collision`` the simulator's record of the first contact during the
     run, ``error`` the error that aborted it (a failing law or interrupt), ``closest``
@@ -96,7 +97,7 @@ class RunReport:
     result: RunResult
     t0: float
     pose: Pose
-    true_pose: Pose
+    true_pose: Pose | None
     interrupted: bool = False
     limit: float | None = None
     collision: SimEvent | None = None
@@ -230,7 +231,16 @@ class Session:
     ------
     WorldError
         The world cannot be loaded.
+
+    Notes
+    -----
+    :class:`mdle.repl.robot.RobotSession` is the same session on a real robot; the
+    methods that only make sense in simulation (worlds, seeds, putting the robot
+    somewhere) refuse there with a message, and :attr:`simulated` tells them apart.
     """
+
+    #: True for the simulator; a session on a real robot says False.
+    simulated: bool = True
 
     def __init__(self, world: str | os.PathLike[str] | None = None, *, seed: int | None = None,
                  registry: Registry | None = None, rate: float = 10.0,
@@ -253,6 +263,34 @@ class Session:
         self.world_spec: str
         self.backend: SimBackend
         self._open_world(world)
+
+    # ------------------------------------------------------------------ the robot
+
+    @property
+    def target(self) -> Backend:
+        """The backend runs drive (the simulator here, the robot in a RobotSession)."""
+        return self.backend
+
+    @property
+    def limits(self) -> RobotLimits:
+        """The robot's speed and turn limits."""
+        return self.target.limits
+
+    @property
+    def true_pose(self) -> Pose | None:
+        """The simulator's ground-truth pose (None where there is no ground truth)."""
+        return self.backend.true_pose
+
+    def describe(self) -> str:
+        """Say in one line what the session drives: world and seed."""
+        return f"world `{self.world.name}`, seed {self.seed}"
+
+    def notices(self) -> list[str]:
+        """Return news to tell the user before the next input (none in simulation)."""
+        return []
+
+    def close(self) -> None:
+        """Release the robot (nothing to do for the simulator)."""
 
     # ------------------------------------------------------------------ the world
 
@@ -536,7 +574,7 @@ class Session:
         error: MdleError | None = None
         try:
             for _ in range(n):
-                scan = self.backend.observe().scan  # what this tick will see
+                scan = self.observe().scan  # what this tick will see
                 running = scheduler.tick()
                 rows.append(_row(scheduler.ticks, record.samples[-1], scan))
                 if not running:
@@ -555,7 +593,7 @@ class Session:
     def _start(self, element: Element, text: str, observers: Sequence[Observer] = ()
                ) -> tuple[_Run, Scheduler]:
         record = _Run(element.label, text)
-        scheduler = Scheduler(element, self.backend, self.rate, (record, *observers),
+        scheduler = Scheduler(element, self.target, self.rate, (record, *observers),
                               until=self.until, realtime=self.realtime)
         scheduler.start()
         self._runs.append(record)
@@ -584,7 +622,7 @@ class Session:
 
     def observe(self) -> Observation:
         """Return what the robot senses now (pose, velocities, newest scan, truth)."""
-        return self.backend.observe()
+        return self.target.observe()
 
     @property
     def samples(self) -> list[Sample]:
