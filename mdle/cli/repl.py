@@ -23,11 +23,13 @@ __all__ = ["add_parser", "run"]
 def add_parser(subparsers: Any) -> None:
     """Register ``mdle repl``."""
     p = subparsers.add_parser(
-        "repl", help="compose and try atoms interactively on a simulated robot",
-        description="An interactive session with a simulated robot: type MDLe definitions "
-                    "to add them and elements to run them from where the robot is; `:help` "
-                    "lists the commands. With input piped in, reads it line by line and "
-                    "exits with 0, or 1 if any input failed.",
+        "repl", help="compose and try atoms interactively on a simulated robot (or a real one)",
+        description="An interactive session with a simulated robot, or with a Pioneer "
+                    "(--backend pioneer): type MDLe definitions to add them and elements to "
+                    "run them from where the robot is; `:help` lists the commands. With "
+                    "input piped in, reads it line by line and exits with 0, or 1 if any "
+                    "input failed. On a robot the first motion is confirmed (--yes skips "
+                    "it) and every way out stops the robot.",
         epilog="History is kept in $XDG_DATA_HOME/mdle/repl_history "
                "(~/.local/share/mdle/repl_history).")
     p.add_argument("file", nargs="?", metavar="FILE.mdle", help="definitions to load first")
@@ -67,6 +69,14 @@ def run(args: argparse.Namespace) -> int:
     until = DEFAULT_UNTIL if args.until is None else (None if math.isinf(args.until)
                                                       else args.until)
     interactive = sys.stdin.isatty() and sys.stdout.isatty() and not args.plain
+    if args.backend != "pioneer" and (args.connect or args.laser or args.yes):
+        from mdle.errors import Diagnostic, MdleError
+
+        given = next(f for f, v in (("--connect", args.connect), ("--laser", args.laser),
+                                    ("--yes", args.yes)) if v)
+        raise MdleError(Diagnostic(None, f"{given} drives a robot: it needs --backend pioneer",
+                                   hint="e.g. mdle repl --backend pioneer --connect "
+                                        "tcp://localhost:8101 --laser sim"))
     session: Session
     if args.backend == "pioneer":
         session = _robot_session(args, until)

@@ -215,3 +215,11 @@ def test_sigterm_during_a_run_stops_and_closes(fake_robot: FakeRobot,
     assert repl.wait() == 143
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [], timeout=2.0)
     assert fake.v_mm == 0 and fake.commands(Cmd.STOP)
+
+
+def test_robot_flags_without_the_backend_are_refused(mdle_command: list[str],
+                                                     tmp_path: Path) -> None:
+    proc = subprocess.run([*mdle_command, "repl", "--connect", "tcp://127.0.0.1:9"],
+                          input="", capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert proc.returncode == 1
+    assert "--connect drives a robot: it needs --backend pioneer" in proc.stderr
