@@ -10,6 +10,11 @@
 * ``mdle experiment random-starts --generated [--shapes N] [--starts N] [--blind-side] ...``:
   seeded starts on a collision course with generated obstacles, run on every core; engagement
   and accuracy per shape family (:mod:`mdle.cli.generated_study`).
+
+``following`` and ``random-starts`` run on the sweep engine (:mod:`mdle.sweep`): every core
+(``--jobs N``), a progress bar on standard error, and with ``--resume`` a results table in
+``OUT/NAME/results.csv`` (``OUT/random-starts-generated`` for ``--generated``) that an
+interrupted experiment picks up again.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from mdle.cli import generated_study, output
 
@@ -49,14 +55,19 @@ def add_parser(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]"
                         "--generated: 10 Hz)")
     p.add_argument("--v", type=float, default=None, metavar="M/S",
                    help="random-starts: speed (default 1 m/s)")
+    p.add_argument("--resume", action="store_true",
+                   help="following/random-starts: keep each run's row in OUT/NAME/results.csv "
+                        "and skip the runs already there")
     generated_study.add_arguments(p)
     p.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the chosen experiment and print its table."""
-    if args.draws < 1 or (args.runs is not None and args.runs < 1):
-        print("mdle experiment: --draws and --runs must be at least 1", file=sys.stderr)
+    if (args.draws < 1 or (args.runs is not None and args.runs < 1)
+            or (args.jobs is not None and args.jobs < 1)):
+        print("mdle experiment: --draws, --runs and --jobs must be at least 1",
+              file=sys.stderr)
         return output.EXIT_USAGE
     misplaced = _misplaced(args)
     if misplaced:
@@ -71,29 +82,49 @@ def run(args: argparse.Namespace) -> int:
         for path in plot_figures(args.out, seed=args.seed):
             print(f"wrote {path}")
         return output.EXIT_OK
-    from mdle.experiments.following import SHAPES, random_starts, run_follow, table
+    from mdle.experiments.following import SHAPES, follow_task, random_start_tasks, table
 
+    out = args.out / args.name if args.resume else None
     if args.name == "following":
+        tasks = [follow_task(world, side=args.side, sensing=args.sensing, seed=args.seed,
+                             duration=args.duration or 60.0, index=i)
+                 for i, world in enumerate(SHAPES)]
+        runs = _run(tasks, args, out)
         print(f"{'world':9} {'rc':>4} {'collided':>8} {'min clearance':>13} "
               f"{'mean |d-rc|':>11} {'max |d-rc|':>10}  (second half of the run)")
-        for world, rc in SHAPES.items():
-            r = run_follow(world, side=args.side, sensing=args.sensing, seed=args.seed,
-                           duration=args.duration or 60.0)
-            print(f"{world:9} {rc:4.1f} {str(r.collided):>8} {r.min_clearance:13.3f} "
+        for r in runs:
+            print(f"{r.world:9} {r.rc:4.1f} {str(r.collided):>8} {r.min_clearance:13.3f} "
                   f"{r.mean_err:11.3f} {r.max_err:10.3f}")
         return output.EXIT_OK
-    runs = []
+    tasks = []
     for world in SHAPES:
-        runs += random_starts(world, 50 if args.runs is None else args.runs, seed=args.seed,
-                              side=args.side, sensing=args.sensing,
-                              duration=args.duration or 40.0, rate=args.rate,
-                              v=1.0 if args.v is None else args.v)
+        tasks += random_start_tasks(world, 50 if args.runs is None else args.runs,
+                                    seed=args.seed, side=args.side, sensing=args.sensing,
+                                    duration=args.duration or 40.0, rate=args.rate,
+                                    v=1.0 if args.v is None else args.v)
+    runs = _run(tasks, args, out)
     print(table(runs))
     return output.EXIT_COLLISION if any(r.collided for r in runs) else output.EXIT_OK
 
 
+def _run(tasks: list[Any], args: argparse.Namespace, out: Path | None) -> list[Any]:
+    """Run the experiment's tasks on the sweep engine, with a progress display on stderr."""
+    from mdle.cli.sweep import progress_bar
+    from mdle.experiments.following import run_many
+    from mdle.sweep.executors import default_jobs
+
+    jobs = args.jobs or default_jobs()
+    try:
+        return run_many(tasks, jobs=jobs, out=out, progress=progress_bar(f"{jobs} processes"))
+    except KeyboardInterrupt:
+        if out is not None:
+            print(f"interrupted: finished runs are in {out}/results.csv; run the same command "
+                  "again to resume", file=sys.stderr)
+        raise
+
+
 #: Options that only the generated study reads.
-_GENERATED_ONLY = ("shapes", "starts", "robot", "rc", "kf", "jobs", "csv", "tolerance")
+_GENERATED_ONLY = ("shapes", "starts", "robot", "rc", "kf", "csv", "tolerance")
 
 
 def _misplaced(args: argparse.Namespace) -> str:

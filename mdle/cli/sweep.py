@@ -20,7 +20,7 @@ from typing import Any
 
 from mdle.cli import output
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "progress_bar"]
 
 
 def add_parser(subparsers: Any) -> None:
@@ -50,6 +50,8 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--metric", default=None, metavar="NAME",
                    help="report: the column to plot (default follow_mean_err when runs "
                         "follow a boundary, else min_clearance)")
+    p.add_argument("--group", metavar="AXIS",
+                   help="report: draw one median line per value of this column")
     p.add_argument("--plots", type=Path, metavar="DIR",
                    help="report: folder for the plots (default RESULTS/plots)")
     p.add_argument("--no-plots", action="store_true", help="report: tables only")
@@ -134,16 +136,23 @@ def _as_interrupt(signum: int, frame: Any) -> None:
 
 
 class _RichProgress:
-    """A rich progress bar on standard error: runs done, failures, ETA."""
+    """Progress on standard error: a rich bar on a terminal, else a line every 10 s."""
 
     def __init__(self, where: str) -> None:
         self.where = where
         self.failed = 0
+        self.done = 0
+        self.total = 0
         self._bar: Any = None
         self._task: Any = None
+        self._console: Any = None
+        self._t0 = self._last = 0.0
+        self._skipped = 0
 
     def start(self, total: int, skipped: int) -> None:
         """Show the bar (the skipped runs count as done)."""
+        import time
+
         from rich.console import Console
         from rich.progress import (
             BarColumn,
@@ -154,9 +163,13 @@ class _RichProgress:
             TimeRemainingColumn,
         )
 
-        console = Console(stderr=True)
+        self.total, self.done, self._skipped = total, skipped, skipped
+        self._t0 = self._last = time.monotonic()
+        console = self._console = Console(stderr=True)
         console.print(f"{total} runs, {skipped} already in the table; running on "
                       f"{self.where}", highlight=False)
+        if not console.is_terminal:
+            return
         self._bar = Progress(TextColumn("sweep"), BarColumn(), MofNCompleteColumn(),
                              TextColumn("[red]{task.fields[failed]} failed"),
                              TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
@@ -166,15 +179,32 @@ class _RichProgress:
 
     def advance(self, row: dict[str, Any]) -> None:
         """Count a finished run."""
+        import time
+
         from mdle.sweep.engine import FAILED
 
         self.failed += row.get("status") in FAILED
-        self._bar.update(self._task, advance=1, failed=self.failed)
+        self.done += 1
+        if self._bar is not None:
+            self._bar.update(self._task, advance=1, failed=self.failed)
+            return
+        now = time.monotonic()
+        if now - self._last >= 10.0 or self.done == self.total:
+            self._last = now
+            rate = (self.done - self._skipped) / max(now - self._t0, 1e-9)
+            eta = (self.total - self.done) / rate if rate > 0 else float("inf")
+            print(f"sweep: {self.done}/{self.total} runs, {self.failed} failed, "
+                  f"{now - self._t0:.0f} s, ETA {eta:.0f} s", file=sys.stderr, flush=True)
 
     def stop(self) -> None:
         """Leave the final bar on screen."""
         if self._bar is not None:
             self._bar.stop()
+
+
+def progress_bar(where: str) -> _RichProgress:
+    """Return the sweep's progress display (stderr) for runs on ``where``."""
+    return _RichProgress(where)
 
 
 def _report(args: argparse.Namespace) -> int:
@@ -206,6 +236,11 @@ def _report(args: argparse.Namespace) -> int:
                                     if isinstance(v, (int, float)) and not isinstance(v, bool)))
     base = Path(args.results)
     folder = args.plots or ((base if base.is_dir() else base.parent) / "plots")
-    for path in plot_axes(rows, folder, metric, names):
+    group = None
+    if args.group:
+        group = args.group if args.group in rows[0] else f"param_{args.group}"
+        if group not in rows[0]:
+            raise MdleError(f"--group {args.group}: no such column")
+    for path in plot_axes(rows, folder, metric, names, group):
         print(f"wrote {path}")
     return output.EXIT_OK

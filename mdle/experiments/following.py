@@ -4,19 +4,25 @@ Used by the end-to-end tests (tests/atoms), ``benchmarks/random_starts.py`` and 
 A run loads a real MDLe plan (``follow_boundary`` inside an atom with a timer), runs it with
 :func:`mdle.runtime.run` on a :class:`sim.SimBackend`, and measures the true distance from the
 robot's centre to the boundary ``d`` (the sample's clearance plus the body radius).
+:func:`run_follow` runs one in this process; :func:`run_many` (and :func:`random_starts`) run
+many as sweep tasks (:mod:`mdle.sweep`) on every core, optionally resumable.
 """
 
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the runtime is imported inside run_follow, when a run needs it
     from mdle.runtime.observer import Recorder
+    from mdle.sweep.tasks import RunTask
 
-__all__ = ["FollowRun", "follow_plan", "run_follow", "random_starts", "SHAPES"]
+__all__ = ["FollowRun", "follow_plan", "follow_task", "run_follow", "run_many", "random_starts",
+           "random_start_tasks", "SHAPES"]
 
 #: The paper's shapes with their following distance (reference world name -> rc, m).
 SHAPES: dict[str, float] = {"ellipse": 1.0, "hexagon": 0.5, "u-shape": 0.5, "square": 0.5,
@@ -126,15 +132,98 @@ def _start_poses(world: str, n: int, seed: int, distance: float = 8.0
                     strict=True))
 
 
+#: Trace fields the sweep summarises for a FollowRun: the corner mode and the safety layer.
+_FIELDS = ("mode", "safety")
+
+
+def follow_task(world: str, *, side: str = "right", rc: float | None = None, v: float = 1.0,
+                sensing: str = "scan", robot: str | None = "ideal", seed: int = 0,
+                duration: float = 60.0, rate: float | None = None,
+                pose: tuple[float, float, float] | None = None, index: int = 0) -> RunTask:
+    """Return the sweep task of one following run (what :func:`run_follow` runs in-process).
+
+    ``world`` is a reference world name; the task carries its text, so it runs anywhere.
+    """
+    from importlib import resources
+
+    from mdle.sweep.tasks import RunTask
+
+    rc = SHAPES.get(world, 0.5) if rc is None else rc
+    rate = (100.0 if sensing == "exact" else 50.0) if rate is None else rate
+    text = resources.files("sim").joinpath("worlds", f"{world}.yaml").read_text("utf-8")
+    return RunTask(follow_plan(side, rc, v, duration), (), "main", (), text, robot, sensing,
+                   rate, seed, pose, None, _FIELDS, False, index,
+                   {"plan": f"follow-{side}", "world": world, "robot": robot or "world",
+                    "rc": repr(float(rc)), "side": side})
+
+
+def _as_run(task: RunTask, row: dict[str, Any], rc: float, side: str) -> FollowRun:
+    """Turn a sweep row back into the FollowRun the tables print (NaN where it failed)."""
+    nan = math.nan
+
+    def num(name: str) -> float:
+        v = row.get(name)
+        return nan if v is None else float(v)
+
+    return FollowRun(task.labels["world"], side, task.sensing, task.seed, rc,
+                     bool(row.get("collided")), num("min_clearance"), num("follow_mean_err"),
+                     num("follow_max_err"), num("duration"), num("mode_mean"),
+                     num("safety_mean"))
+
+
+def run_many(tasks: Sequence[RunTask], *, jobs: int | None = None,
+             out: str | os.PathLike[str] | None = None, progress: Any = None
+             ) -> list[FollowRun]:
+    """Run following tasks on all cores (the sweep engine); FollowRuns in task order.
+
+    With ``out`` the rows go to ``out/results.csv`` and a rerun skips finished runs.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Ctrl-C: the finished rows are in the table (rerun to resume).
+    MdleError
+        A run failed (its cause), or ``out`` holds another experiment's table.
+    """
+    from mdle.errors import MdleError
+    from mdle.sweep.engine import run_tasks
+    from mdle.sweep.table import columns_for
+
+    rows: dict[str, dict[str, Any]] = {}
+    summary = run_tasks(tasks, columns_for((), _FIELDS), out, jobs=jobs, progress=progress,
+                        on_row=lambda r: rows.__setitem__(r["key"], r))
+    if summary.interrupted:
+        raise KeyboardInterrupt
+    if out is not None and summary.skipped:
+        from mdle.sweep.table import read_rows
+
+        for r in read_rows(Path(out) / "results.csv"):
+            rows.setdefault(r["key"], r)
+    runs = []
+    for task in tasks:
+        row = rows[task.key]
+        if row.get("status") in ("error", "lost"):
+            raise MdleError(f"run {task.labels['world']} seed {task.seed}: {row.get('cause')}")
+        runs.append(_as_run(task, row, float(task.labels["rc"]), task.labels["side"]))
+    return runs
+
+
+def random_start_tasks(world: str, n: int = 50, *, seed: int = 0, side: str = "right",
+                       sensing: str = "scan", duration: float = 40.0,
+                       rate: float | None = None, v: float = 1.0) -> list[RunTask]:
+    """Return the tasks of ``n`` seeded random starts headed roughly at the obstacle."""
+    return [follow_task(world, side=side, sensing=sensing, seed=seed * 1000 + i,
+                        duration=duration, rate=rate, pose=pose, v=v, index=i)
+            for i, pose in enumerate(_start_poses(world, n, seed))]
+
+
 def random_starts(world: str, n: int = 50, *, seed: int = 0, side: str = "right",
                   sensing: str = "scan", duration: float = 40.0, rate: float | None = None,
-                  v: float = 1.0) -> list[FollowRun]:
+                  v: float = 1.0, jobs: int | None = None,
+                  out: str | os.PathLike[str] | None = None) -> list[FollowRun]:
     """Run ``n`` seeded random starts headed roughly at the obstacle; one FollowRun each."""
-    runs = []
-    for i, pose in enumerate(_start_poses(world, n, seed)):
-        runs.append(run_follow(world, side=side, sensing=sensing, seed=seed * 1000 + i,
-                               duration=duration, rate=rate, pose=pose, v=v))
-    return runs
+    return run_many(random_start_tasks(world, n, seed=seed, side=side, sensing=sensing,
+                                       duration=duration, rate=rate, v=v), jobs=jobs, out=out)
 
 
 def table(runs: Sequence[FollowRun]) -> str:

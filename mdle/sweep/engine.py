@@ -12,17 +12,17 @@ The results folder holds ``results.csv`` (the journal, one row per finished run)
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
-from mdle.sweep.executors import Executor, LocalExecutor
+from mdle.sweep.executors import Executor, LocalExecutor, Task
 from mdle.sweep.spec import Study
 from mdle.sweep.table import ResultsTable, columns_for, write_parquet
 from mdle.sweep.tasks import expand
 
-__all__ = ["run_sweep", "SweepSummary", "Progress", "FAILED"]
+__all__ = ["run_sweep", "run_tasks", "SweepSummary", "Progress", "FAILED"]
 
 #: Statuses counted as failures in progress and summaries.
 FAILED = ("collision", "error", "lost")
@@ -83,29 +83,51 @@ def run_sweep(study: Study, out: str | os.PathLike[str], *, executor: Executor |
     MdleError
         The folder holds a table of another study, or random starts cannot be placed.
     """
-    folder = Path(out)
-    folder.mkdir(parents=True, exist_ok=True)
-    if spec_text is not None:
-        (folder / "spec.yaml").write_text(spec_text, encoding="utf-8")
     columns = columns_for(study.parameter_names, study.trace_fields)
-    table = ResultsTable(folder / "results.csv", columns)
     tasks = list(expand(study))
-    todo = [t for t in tasks if t.key not in table.done]
-    summary = SweepSummary(len(tasks), len(tasks) - len(todo), table=table.path)
+    if spec_text is not None:
+        Path(out).mkdir(parents=True, exist_ok=True)
+        (Path(out) / "spec.yaml").write_text(spec_text, encoding="utf-8")
+    return run_tasks(tasks, columns, out, executor=executor, jobs=jobs, progress=progress,
+                     on_row=on_row)
+
+
+def run_tasks(tasks: Sequence[Task], columns: Sequence[str],
+              out: str | os.PathLike[str] | None, *, executor: Executor | None = None,
+              jobs: int | None = None, progress: Progress | None = None,
+              on_row: Callable[[dict[str, Any]], None] | None = None) -> SweepSummary:
+    """Run the tasks not yet in ``out/results.csv`` and append their rows.
+
+    The engine under :func:`run_sweep` and the experiments: any picklable tasks with a
+    ``key``, an ``attempt`` and a ``row()`` of descriptive columns, run by the
+    executor's function. ``out=None`` keeps no table (nothing to resume): rows go to
+    ``on_row`` only.
+    """
+    folder = Path(out) if out is not None else None
+    table: ResultsTable | None = None
+    done: set[str] = set()
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
+        table = ResultsTable(folder / "results.csv", columns)
+        done = table.done
+    todo = [t for t in tasks if t.key not in done]
+    summary = SweepSummary(len(tasks), len(tasks) - len(todo),
+                           table=table.path if table is not None else None)
     runner = executor if executor is not None else LocalExecutor(jobs)
-    traces = folder / "traces"
     if progress is not None:
         progress.start(summary.total, summary.skipped)
     stream = runner.run(todo)
     try:
         for outcome in stream:
             row = outcome.row
-            if outcome.trace is not None:
+            if outcome.trace is not None and folder is not None:
+                traces = folder / "traces"
                 traces.mkdir(exist_ok=True)
                 tmp = traces / f".{row['key']}.tmp"
                 tmp.write_bytes(outcome.trace)
                 os.replace(tmp, traces / f"{row['key']}.jsonl.gz")
-            table.append(row)
+            if table is not None:
+                table.append(row)
             summary.done += 1
             summary.failed += row.get("status") in FAILED
             if progress is not None:
@@ -118,9 +140,11 @@ def run_sweep(study: Study, out: str | os.PathLike[str], *, executor: Executor |
         close = getattr(stream, "close", None)
         if close is not None:
             close()
-        table.close()
+        if table is not None:
+            table.close()
         if progress is not None:
             progress.stop()
-    if write_parquet(table.path, folder / "results.parquet"):
+    if folder is not None and table is not None and write_parquet(
+            table.path, folder / "results.parquet"):
         summary.parquet = folder / "results.parquet"
     return summary

@@ -1,6 +1,7 @@
 """Where runs execute: local worker processes, or a Dask distributed cluster.
 
-Both executors take an iterable of :class:`~mdle.sweep.tasks.RunTask` and yield an
+Both executors take an iterable of tasks (:class:`~mdle.sweep.tasks.RunTask`, or any
+:class:`Task` with the function that runs it) and yield an
 :class:`~mdle.sweep.worker.Outcome` per task as runs finish (any order). A task whose
 worker is lost (the process died, the Dask worker vanished) is retried once, then
 reported as a ``lost`` row. Closing the iterator early (Ctrl-C) cancels what has not
@@ -17,10 +18,27 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import replace
 from typing import Any, Protocol
 
-from mdle.sweep.tasks import RunTask
-from mdle.sweep.worker import Outcome, base_row, execute
+from mdle.sweep.worker import Outcome, execute
 
-__all__ = ["Executor", "LocalExecutor", "DaskExecutor", "lost_outcome", "default_jobs"]
+__all__ = ["Executor", "LocalExecutor", "DaskExecutor", "Task", "lost_outcome", "default_jobs"]
+
+
+class Task(Protocol):
+    """What an executor runs: picklable, keyed by content, with its descriptive columns."""
+
+    @property
+    def key(self) -> str:
+        """Return the hash of what decides the run's outcome."""
+        ...
+
+    @property
+    def attempt(self) -> int:
+        """Return 0 on the first try, 1 on the retry after a lost worker."""
+        ...
+
+    def row(self) -> dict[str, Any]:
+        """Return the columns that describe the run (known before it runs)."""
+        ...
 
 
 class Executor(Protocol):
@@ -28,7 +46,7 @@ class Executor(Protocol):
 
     name: str
 
-    def run(self, tasks: Iterable[RunTask]) -> Iterator[Outcome]:
+    def run(self, tasks: Iterable[Any]) -> Iterator[Outcome]:
         """Yield one outcome per task, as runs finish."""
         ...
 
@@ -41,9 +59,9 @@ def default_jobs() -> int:
         return os.cpu_count() or 1
 
 
-def lost_outcome(task: RunTask, why: str) -> Outcome:
+def lost_outcome(task: Task, why: str) -> Outcome:
     """Return the row of a run whose worker was lost on both attempts."""
-    row = base_row(task)
+    row = task.row()
     row.update(status="lost", cause=f"worker lost twice: {why}", attempts=task.attempt + 1)
     return Outcome(row)
 
@@ -99,7 +117,7 @@ class LocalExecutor:
     name = "local"
 
     def __init__(self, jobs: int | None = None,
-                 function: Callable[[RunTask], Outcome] = execute) -> None:
+                 function: Callable[[Any], Outcome] = execute) -> None:
         self.jobs = max(1, jobs or default_jobs())
         self.function = function
         self._workers: dict[int, Any] = {}
@@ -117,16 +135,16 @@ class LocalExecutor:
         return ProcessPoolExecutor(self.jobs, mp_context=ctx, initializer=_worker_setup,
                                    initargs=(os.getpid(),))
 
-    def run(self, tasks: Iterable[RunTask]) -> Iterator[Outcome]:
+    def run(self, tasks: Iterable[Any]) -> Iterator[Outcome]:
         """Yield outcomes as runs finish; retry a run once when its worker dies."""
         from concurrent.futures import FIRST_COMPLETED, Future, wait
         from concurrent.futures.process import BrokenProcessPool
 
-        todo: Iterator[RunTask] = iter(tasks)
-        retry: deque[RunTask] = deque()
+        todo: Iterator[Any] = iter(tasks)
+        retry: deque[Any] = deque()
         window = 2 * self.jobs          # few queued runs: Ctrl-C has little to cancel
         pool = self._pool()
-        running: dict[Future[Outcome], RunTask] = {}
+        running: dict[Future[Outcome], Any] = {}
         try:
             while True:
                 while len(running) < window:
@@ -163,15 +181,15 @@ class LocalExecutor:
             _stop(pool)
 
     @staticmethod
-    def _again(task: RunTask, retry: deque[RunTask], why: str) -> Outcome | None:
+    def _again(task: Any, retry: deque[Any], why: str) -> Outcome | None:
         if task.attempt == 0:
             retry.append(replace(task, attempt=1))
             return None
         return lost_outcome(task, why)
 
 
-def _failed(task: RunTask, exc: BaseException) -> Outcome:
-    row = base_row(task)
+def _failed(task: Task, exc: BaseException) -> Outcome:
+    row = task.row()
     row.update(status="error", cause=f"internal error: {type(exc).__name__}: {exc}",
                attempts=task.attempt + 1)
     return Outcome(row)
@@ -204,7 +222,7 @@ class DaskExecutor:
 
     name = "dask"
 
-    def __init__(self, cluster: Any, function: Callable[[RunTask], Outcome] = execute,
+    def __init__(self, cluster: Any, function: Callable[[Any], Outcome] = execute,
                  timeout: float = 20.0) -> None:
         self.function = function
         try:
@@ -230,17 +248,17 @@ class DaskExecutor:
         info = self.client.scheduler_info()
         return max(1, sum(w.get("nthreads", 1) for w in info.get("workers", {}).values()))
 
-    def run(self, tasks: Iterable[RunTask]) -> Iterator[Outcome]:
+    def run(self, tasks: Iterable[Any]) -> Iterator[Outcome]:
         """Yield outcomes as runs finish; retry a run once when its worker is lost."""
         from distributed import KilledWorker, as_completed
         from distributed.comm.core import CommClosedError
 
-        todo: Iterator[RunTask] = iter(tasks)
+        todo: Iterator[Any] = iter(tasks)
         window = 2 * self.threads() + 2
-        running: dict[Any, RunTask] = {}
+        running: dict[Any, Any] = {}
         done_stream = as_completed()
 
-        def submit(task: RunTask) -> None:
+        def submit(task: Any) -> None:
             fut = self.client.submit(self.function, task, pure=False,
                                      key=f"mdle-run-{task.key}-{task.attempt}-{task.index}")
             running[fut] = task

@@ -21,6 +21,12 @@ __all__ = ["axes", "summarise", "format_summary", "plot_axes", "numeric"]
 
 _AXIS_ORDER = ("rate", "sensing", "robot", "world", "entry", "plan")
 _FAILED = ("collision", "error", "lost")
+#: Axis labels with units for the metrics a run records.
+_LABELS = {"follow_mean_err": "mean |d - rc|, second half (m)",
+           "follow_max_err": "max |d - rc|, second half (m)",
+           "min_clearance": "closest approach (m)", "distance": "distance travelled (m)",
+           "duration": "duration (s)", "wall_time": "wall time (s)",
+           "engage_distance": "path before engaging (m)", "rate": "control rate (Hz)"}
 
 
 def numeric(value: Any) -> float | None:
@@ -117,8 +123,13 @@ def format_summary(rows: Sequence[dict[str, Any]], axis_names: Sequence[str] | N
 
 
 def plot_axes(rows: Sequence[dict[str, Any]], folder: str | Path, metric: str,
-              axis_names: Sequence[str] | None = None) -> list[Path]:
-    """Draw ``metric`` against each axis (dots and median; box plots); return the files."""
+              axis_names: Sequence[str] | None = None, group: str | None = None
+              ) -> list[Path]:
+    """Draw ``metric`` against each axis (dots and median; box plots); return the files.
+
+    With ``group`` (another column) the left panel draws one median line per value of
+    that column instead of a single one.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -142,24 +153,38 @@ def plot_axes(rows: Sequence[dict[str, Any]], folder: str | Path, metric: str,
               for i, n in enumerate(nums)]
         for x, d in zip(xs, data, strict=True):
             left.plot(np.full(len(d), x), d, "o", color="tab:blue", alpha=0.35, ms=4)
-        med = [(x, float(np.median(d))) for x, d in zip(xs, data, strict=True) if len(d)]
-        left.plot([m[0] for m in med], [m[1] for m in med], "-", color="tab:red",
-                  label="median")
+        if group is None or group == axis:
+            med = [(x, float(np.median(d))) for x, d in zip(xs, data, strict=True) if len(d)]
+            left.plot([m[0] for m in med], [m[1] for m in med], "-", color="tab:red",
+                      label="median")
+        else:
+            for gv in _sorted_values(rows, group):
+                sub = [r for r in rows if _key(r.get(group)) == gv]
+                pts = []
+                for x, v in zip(xs, values, strict=True):
+                    vals = [r[metric] for r in sub if _key(r.get(axis)) == v
+                            and isinstance(r.get(metric), (int, float))
+                            and math.isfinite(r[metric])]
+                    if vals:
+                        pts.append((x, float(np.median(vals))))
+                left.plot([p[0] for p in pts], [p[1] for p in pts], "o-",
+                          label=f"median, {group.removeprefix('param_')} = {gv}")
         if not numeric_axis:
             left.set_xticks(xs, [str(v) for v in values], rotation=30, ha="right")
-        left.set_xlabel(label)
-        left.set_ylabel(metric)
+        left.set_xlabel(_LABELS.get(axis, label))
+        left.set_ylabel(_LABELS.get(metric, metric))
         left.set_title(f"{metric} vs {label} (each dot a run)")
         left.legend(loc="best")
         left.grid(alpha=0.3)
         right.boxplot([d if len(d) else np.array([np.nan]) for d in data])
         right.set_xticks(range(1, len(values) + 1), [str(v) for v in values], rotation=30,
                          ha="right")
-        right.set_xlabel(label)
-        right.set_ylabel(metric)
+        right.set_xlabel(_LABELS.get(axis, label))
+        right.set_ylabel(_LABELS.get(metric, metric))
         right.set_title(f"{metric} per {label}")
         right.grid(alpha=0.3)
-        path = out_dir / f"{metric}-vs-{label}.png"
+        suffix = f"-by-{group.removeprefix('param_')}" if group and group != axis else ""
+        path = out_dir / f"{metric}-vs-{label}{suffix}.png"
         fig.savefig(path, dpi=110)
         plt.close(fig)
         written.append(path)

@@ -62,6 +62,12 @@ class RunTask:
                    self.until, list(self.trace_fields)]
         return hashlib.sha256(canonical(content).encode()).hexdigest()[:20]
 
+    def row(self) -> dict[str, Any]:
+        """Return the columns that describe the run (known before it runs)."""
+        from mdle.sweep.worker import base_row
+
+        return base_row(self)
+
 
 def expand(study: Study) -> Iterator[RunTask]:
     """Yield the study's runs in a fixed order (worlds outermost, seeds innermost).

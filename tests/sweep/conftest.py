@@ -32,3 +32,9 @@ def tiny_spec(tmp_path: Path) -> Path:
     spec = tmp_path / "tiny.yaml"
     spec.write_text(TINY_SPEC)
     return spec
+
+
+@pytest.fixture
+def follow_plan() -> str:
+    """The text of the settable following plan."""
+    return FOLLOW_PLAN

@@ -11,8 +11,6 @@ from pathlib import Path
 
 import pytest
 
-from tests.sweep.conftest import FOLLOW_PLAN
-
 SPEC = """\
 plan: follow.mdle
 worlds: [ellipse, hexagon]
@@ -32,8 +30,8 @@ def _lines(path: Path) -> list[str]:
     return text[: text.rfind("\n") + 1].splitlines()
 
 
-def _study(tmp_path: Path) -> Path:
-    (tmp_path / "follow.mdle").write_text(FOLLOW_PLAN)
+def _study(tmp_path: Path, plan: str) -> Path:
+    (tmp_path / "follow.mdle").write_text(plan)
     spec = tmp_path / "study.yaml"
     spec.write_text(SPEC)
     return spec
@@ -41,8 +39,8 @@ def _study(tmp_path: Path) -> Path:
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGKILL])
 def test_a_killed_sweep_resumes_without_losing_or_repeating_rows(
-        tmp_path: Path, mdle_command: list[str], sig: signal.Signals) -> None:
-    spec = _study(tmp_path)
+        tmp_path: Path, mdle_command: list[str], sig: signal.Signals, follow_plan: str) -> None:
+    spec = _study(tmp_path, follow_plan)
     out = tmp_path / "out"
     table = out / "results.csv"
     cmd = [*mdle_command, "sweep", str(spec), "--out", str(out), "--jobs", "2"]
@@ -76,9 +74,9 @@ def test_a_killed_sweep_resumes_without_losing_or_repeating_rows(
     assert all(r["status"] == "ok" for r in rows)
 
 
-def test_report_prints_a_summary_and_draws_plots(tmp_path: Path,
-                                                 mdle_command: list[str]) -> None:
-    spec = _study(tmp_path)
+def test_report_prints_a_summary_and_draws_plots(tmp_path: Path, mdle_command: list[str],
+                                                 follow_plan: str) -> None:
+    spec = _study(tmp_path, follow_plan)
     spec.write_text(SPEC.replace("seeds: {count: 6}", "seeds: [0]").replace(
         "worlds: [ellipse, hexagon]", "worlds: [ellipse]"))
     out = tmp_path / "out"
@@ -97,15 +95,17 @@ def test_report_prints_a_summary_and_draws_plots(tmp_path: Path,
     assert bad.returncode == 1 and "--by zeta: no such column (swept: kf)" in bad.stderr
 
 
-def test_spec_errors_are_located_and_exit_1(tmp_path: Path, mdle_command: list[str]) -> None:
-    spec = _study(tmp_path)
-    spec.write_text(SPEC + "parameters2: {}\n")
-    r = subprocess.run([*mdle_command, "sweep", str(spec)], capture_output=True, text=True,
+def test_spec_errors_are_located_and_exit_1(tmp_path: Path, mdle_command: list[str],
+                                            follow_plan: str) -> None:
+    spec = _study(tmp_path, follow_plan)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(SPEC + "parameters2: {}\n")
+    r = subprocess.run([*mdle_command, "sweep", str(bad)], capture_output=True, text=True,
                        timeout=60, cwd=tmp_path)
     assert r.returncode == 1
-    assert f"{spec}:8:1: error: parameters2: unknown key `parameters2`" in r.stderr
+    assert f"{bad}:8:1: error: parameters2: unknown key `parameters2`" in r.stderr
     assert "Traceback" not in r.stderr
-    dry = subprocess.run([*mdle_command, "sweep", str(_study(tmp_path)), "--dry-run"],
+    dry = subprocess.run([*mdle_command, "sweep", str(spec), "--dry-run"],
                          capture_output=True, text=True, timeout=60, cwd=tmp_path)
     assert dry.returncode == 0 and f"{TOTAL} runs" in dry.stdout
     for argv, message in ((["report"], "give the results folder"),
