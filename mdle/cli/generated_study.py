@@ -103,7 +103,14 @@ def run(args: argparse.Namespace) -> int:
     from mdle.experiments.generated import study_specs
 
     total = len(study_specs(cfg))
-    rows = _run_with_progress(cfg, args.jobs, total)
+    out = args.out / "random-starts-generated" if getattr(args, "resume", False) else None
+    try:
+        rows = _run_with_progress(cfg, args.jobs, total, out)
+    except KeyboardInterrupt:
+        if out is not None:
+            print(f"interrupted: finished runs are in {out}/results.csv; run the same command "
+                  "again to resume", file=sys.stderr)
+        raise
     if args.csv is not None:
         try:
             write_csv(rows, args.csv)
@@ -149,11 +156,12 @@ def save_failures(rows: Sequence[Row], folder: Path) -> int:
     return len(bad)
 
 
-def _run_with_progress(cfg: StudyConfig, jobs: int | None, total: int) -> list[Row]:
+def _run_with_progress(cfg: StudyConfig, jobs: int | None, total: int,
+                       out: Path | None = None) -> list[Row]:
     from mdle.experiments.generated import run_study
 
     if not sys.stderr.isatty():
-        return run_study(cfg, jobs=jobs)
+        return run_study(cfg, jobs=jobs, out=out)
     from rich.console import Console
     from rich.progress import (
         BarColumn,
@@ -168,7 +176,7 @@ def _run_with_progress(cfg: StudyConfig, jobs: int | None, total: int) -> list[R
                   TimeElapsedColumn(), TimeRemainingColumn(),
                   console=Console(file=sys.stderr)) as bar:
         task = bar.add_task("runs", total=total)
-        return run_study(cfg, jobs=jobs, on_row=lambda _row: bar.advance(task))
+        return run_study(cfg, jobs=jobs, on_row=lambda _row: bar.advance(task), out=out)
 
 
 def _fmt(x: float, digits: int = 3) -> str:

@@ -37,7 +37,10 @@ __all__ = [
     "replay_files",
     "run_spec",
     "run_spec_safely",
+    "run_specs",
     "run_study",
+    "run_task",
+    "SpecTask",
     "study_specs",
 ]
 
@@ -245,43 +248,132 @@ def outcome(row: Row, tolerance: float) -> str:
 
 
 def run_study(config: StudyConfig, jobs: int | None = None,
-              on_row: Callable[[Row], None] | None = None) -> list[Row]:
+              on_row: Callable[[Row], None] | None = None,
+              out: str | os.PathLike[str] | None = None, progress: Any = None) -> list[Row]:
     """Run a whole study and return its rows, in spec order, each with its ``outcome``.
 
-    ``jobs`` processes (None: every core; 1: in this process). ``on_row`` is called as each
-    run finishes (for a progress bar), in completion order.
+    ``jobs`` processes (None: every core; 1 without ``out``: in this process). ``on_row`` is
+    called as each run finishes (for a progress bar), in completion order. With ``out`` the
+    rows are kept in ``out/results.csv`` and a rerun skips the runs already there.
     """
     specs = study_specs(config)
-    rows = run_specs(specs, jobs, on_row)
+    rows = run_specs(specs, jobs, on_row, out=out, progress=progress)
     for r in rows:
         r["outcome"] = outcome(r, config.accuracy)
     return rows
 
 
+#: Bumped when a spec's runs would give other rows (old results tables then rerun).
+TASK_VERSION = 1
+_BOOKKEEPING = ("key", "status", "cause", "attempts", "worker", "wall_time")
+
+
+@dataclass(frozen=True)
+class SpecTask:
+    """A :class:`RunSpec` as a sweep task (:mod:`mdle.sweep`): keyed by its content."""
+
+    spec: RunSpec
+    attempt: int = 0
+
+    @property
+    def key(self) -> str:
+        """Return the hash of the spec (what decides the run)."""
+        import hashlib
+
+        from mdle.sweep.spec import canonical
+
+        text = canonical([TASK_VERSION, asdict(self.spec)])
+        return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+    def row(self) -> dict[str, Any]:
+        """Return the spec's columns and the key."""
+        return {"key": self.key, **asdict(self.spec)}
+
+
+def run_task(task: SpecTask) -> Any:
+    """Run one task in a sweep worker; a run that raises becomes a row with its cause."""
+    import socket
+    import time
+
+    from mdle.sweep.worker import Outcome
+
+    t0 = time.perf_counter()
+    row: dict[str, Any] = run_spec_safely(task.spec)   # a run that raises: an error row
+    row.update(status="error" if row["error"] else "ok", cause=row["error"])
+    row.update(key=task.key, attempts=task.attempt + 1,
+               worker=f"{socket.gethostname()}:{os.getpid()}",
+               wall_time=time.perf_counter() - t0)
+    return Outcome(row)
+
+
+def _columns() -> list[str]:
+    from mdle.experiments.engagement import FollowMetrics
+
+    return ["key", *spec_fields(), *(f.name for f in fields(FollowMetrics)), "x_end", "y_end",
+            "theta_end", "error", *_BOOKKEEPING[1:]]
+
+
 def run_specs(specs: Sequence[RunSpec], jobs: int | None = None,
-              on_row: Callable[[Row], None] | None = None) -> list[Row]:
-    """Run specs on ``jobs`` processes; return their rows in spec order."""
+              on_row: Callable[[Row], None] | None = None,
+              out: str | os.PathLike[str] | None = None, progress: Any = None) -> list[Row]:
+    """Run specs on ``jobs`` processes (the sweep engine); return their rows in spec order.
+
+    A run that raises, or whose worker was lost twice, is an error row (``error`` says why).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Ctrl-C; with ``out`` the finished rows are kept for a rerun.
+    """
     jobs = (os.cpu_count() or 1) if jobs is None else jobs
     if jobs < 1:
         raise ValueError(f"jobs must be at least 1, got {jobs}")
-    if jobs == 1 or len(specs) <= 1:
+    if out is None and (jobs == 1 or len(specs) <= 1):
         rows = []
         for spec in specs:
             rows.append(run_spec_safely(spec))
             if on_row is not None:
                 on_row(rows[-1])
         return rows
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+    from pathlib import Path
 
-    out: list[Row | None] = [None] * len(specs)
-    with ProcessPoolExecutor(max_workers=min(jobs, len(specs))) as pool:
-        futures = {pool.submit(run_spec_safely, spec): i for i, spec in enumerate(specs)}
-        for fut in as_completed(futures):
-            row = fut.result()
-            out[futures[fut]] = row
-            if on_row is not None:
-                on_row(row)
-    return [r for r in out if r is not None]
+    from mdle.sweep.engine import run_tasks
+    from mdle.sweep.executors import LocalExecutor
+    from mdle.sweep.table import read_rows
+
+    tasks = [SpecTask(s) for s in specs]
+    by_key: dict[str, Row] = {}
+    table = Path(out) / "results.csv" if out is not None else None
+    if table is not None and table.is_file():   # runs of an earlier, interrupted study
+        wanted = {t.key for t in tasks}
+        for r in read_rows(table):
+            if r["key"] in wanted and r["key"] not in by_key:
+                by_key[r["key"]] = r
+                if on_row is not None:
+                    on_row(_plain(r))
+
+    def got(row: Row) -> None:
+        by_key[row["key"]] = row
+        if on_row is not None:
+            on_row(_plain(row))
+
+    summary = run_tasks(tasks, _columns(), out,
+                        executor=LocalExecutor(min(jobs, len(specs)), function=run_task),
+                        progress=progress, on_row=got)
+    if summary.interrupted:
+        raise KeyboardInterrupt
+    rows = []
+    for task in tasks:
+        row = by_key[task.key]
+        if row.get("status") == "lost":   # its worker died twice: an error row of the study's
+            row = _error_row(task.spec, RuntimeError(str(row.get("cause"))))
+        rows.append(_plain(row))
+    return rows
+
+
+def _plain(row: Row) -> Row:
+    """Return a row without the sweep's bookkeeping columns."""
+    return {k: v for k, v in row.items() if k not in _BOOKKEEPING}
 
 
 def spec_fields() -> list[str]:

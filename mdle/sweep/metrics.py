@@ -7,9 +7,11 @@ simulator), vectorised. Boundary following is measured on the ticks a
 * ``follow_mean_err`` / ``follow_max_err``: mean and max of ``|d - rc|`` over the second
   half (in time) of those ticks, ``d`` the true distance from the robot's centre to the
   nearest boundary;
-* ``engaged``: the robot held ``|d - rc| <= 0.2 m`` with the nearest boundary on the
-  followed side for 4 m of path without a break; ``engage_distance`` the path length
-  travelled before that stretch began (m).
+* ``engaged`` (the engagement measure of :mod:`mdle.experiments.engagement`): the robot
+  held ``|d - rc| <= 0.2 m`` with the nearest boundary on the followed side for 4 m of path
+  without a break; ``engage_time``/``engage_distance`` when that stretch began (s, m of
+  path from the run's start); ``engaged_mean_err``/``engaged_max_err`` over the second half
+  of the time after it.
 """
 
 from __future__ import annotations
@@ -22,11 +24,11 @@ from typing import Any
 import numpy as np
 
 __all__ = ["FollowSpec", "follow_atoms", "follow_metrics", "field_summary", "path_length",
-           "ENGAGE_TOLERANCE", "ENGAGE_PATH"]
+           "FOLLOW_COLUMNS"]
 
-#: Largest |d - rc| (m) that counts as following, and the path (m) it must last.
-ENGAGE_TOLERANCE = 0.2
-ENGAGE_PATH = 4.0
+#: The columns :func:`follow_metrics` fills.
+FOLLOW_COLUMNS = ("follow_rc", "follow_mean_err", "follow_max_err", "engaged", "engage_time",
+                  "engage_distance", "engaged_mean_err", "engaged_max_err")
 
 
 @dataclass(frozen=True)
@@ -69,8 +71,8 @@ def path_length(x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def follow_metrics(t: np.ndarray, x: np.ndarray, y: np.ndarray, theta: np.ndarray,
-                   d: np.ndarray, near: np.ndarray, rc: np.ndarray, right: np.ndarray,
-                   following: np.ndarray) -> dict[str, float | bool | None]:
+                   d: np.ndarray, near: np.ndarray, clearance: np.ndarray, rc: np.ndarray,
+                   right: np.ndarray, following: np.ndarray) -> dict[str, float | bool | None]:
     """Measure boundary following from per-tick truth.
 
     Parameters
@@ -81,6 +83,8 @@ def follow_metrics(t: np.ndarray, x: np.ndarray, y: np.ndarray, theta: np.ndarra
         True distance from the robot's centre to the nearest boundary, m.
     near : (N, 2) array
         That nearest boundary point.
+    clearance : (N,) array
+        True body clearance, m.
     rc : (N,) array
         The following distance of the atom running at each tick (NaN when none).
     right : (N,) bool array
@@ -91,43 +95,41 @@ def follow_metrics(t: np.ndarray, x: np.ndarray, y: np.ndarray, theta: np.ndarra
     Returns
     -------
     dict
-        ``follow_rc`` (the first rc), ``follow_mean_err``, ``follow_max_err``,
-        ``engaged``, ``engage_distance``; None where no tick was following.
+        ``follow_rc`` (the first atom's rc), ``follow_mean_err`` and ``follow_max_err``
+        (second half of the following time, engaged or not), and the engagement measures
+        of :func:`mdle.experiments.engagement.follow_metrics` on the following ticks:
+        ``engaged``, ``engage_time``, ``engage_distance`` (from the start of the run),
+        ``engaged_mean_err``, ``engaged_max_err`` (second half of the time after
+        engagement); None where no tick was following.
     """
-    none: dict[str, float | bool | None] = {"follow_rc": None, "follow_mean_err": None,
-                                            "follow_max_err": None, "engaged": None,
-                                            "engage_distance": None}
+    from mdle.experiments.engagement import follow_metrics as engagement
+
+    none: dict[str, float | bool | None] = dict.fromkeys(FOLLOW_COLUMNS)
     if not following.any():
         return none
     idx = np.flatnonzero(following)
-    tf = t[idx]
-    second = idx[tf >= tf[0] + (tf[-1] - tf[0]) / 2.0]
-    err = np.abs(d[second] - rc[second])
-    # Which side the nearest boundary point lies on: the cross product of heading and
-    # the vector to it is negative when it is to the right.
-    cross = np.cos(theta) * (near[:, 1] - y) - np.sin(theta) * (near[:, 0] - x)
-    on_side = np.where(right, cross < 0.0, cross > 0.0)
-    ok = following & on_side & (np.abs(d - rc) <= ENGAGE_TOLERANCE)
+    # The following time runs from its first tick to the tick its atom ended (that tick's
+    # sample, the state the atom ended in, counts too).
+    span = np.append(idx, idx[-1] + 1) if idx[-1] + 1 < len(t) else idx
+    second = span[t[span] >= t[span[0]] + (t[span[-1]] - t[span[0]]) / 2.0]
+    err = np.abs(d[second] - rc[idx[0]])
+    rc0, right0 = float(rc[idx[0]]), bool(right[idx[0]])
+    # One rc and side for the engagement measure: those of the first following atom.
+    same = idx[(rc[idx] == rc0) & (right[idx] == right0)]
+    m = engagement(t[same], x[same], y[same], theta[same], d[same], near[same],
+                   clearance[same], collided=False, side="right" if right0 else "left",
+                   rc=rc0)
     s = path_length(x, y)
-    engaged, engage_at = _first_stretch(ok, s, ENGAGE_PATH)
-    return {"follow_rc": float(rc[idx[0]]), "follow_mean_err": float(err.mean()),
-            "follow_max_err": float(err.max()), "engaged": engaged,
-            "engage_distance": engage_at}
 
+    def opt(v: float) -> float | None:
+        return None if math.isnan(v) else float(v)
 
-def _first_stretch(ok: np.ndarray, s: np.ndarray, length: float) -> tuple[bool, float | None]:
-    """Find the first unbroken run of ``ok`` ticks covering ``length`` of path."""
-    if not ok.any():
-        return False, None
-    padded = np.concatenate(([False], ok, [False])).astype(np.int8)
-    edges = np.diff(padded)
-    starts = np.flatnonzero(edges == 1)
-    ends = np.flatnonzero(edges == -1) - 1
-    covered = s[ends] - s[starts]
-    good = np.flatnonzero(covered >= length)
-    if len(good) == 0:
-        return False, None
-    return True, float(s[starts[good[0]]])
+    return {"follow_rc": rc0, "follow_mean_err": float(err.mean()),
+            "follow_max_err": float(err.max()), "engaged": bool(m.engaged),
+            "engage_time": opt(m.t_engage),
+            "engage_distance": None if not m.engaged else float(
+                s[same][0] + m.s_engage),
+            "engaged_mean_err": opt(m.mean_err), "engaged_max_err": opt(m.max_err)}
 
 
 def field_summary(samples: Sequence[Any], names: Iterable[str],

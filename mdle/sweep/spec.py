@@ -149,14 +149,25 @@ def read_study(path: str | os.PathLike[str]) -> Study:
     SpecError
         The file cannot be read, or what :func:`parse_study` reports.
     """
+    from mdle.userfile import UserFileError
+
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise SpecError(f"study spec not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise SpecError(f"cannot read study spec {p}: {err}") from None
+        text = _read_text(p)
+    except UserFileError as err:
+        if err.reason == "no such file":
+            raise SpecError(f"study spec not found: {p}") from None
+        raise SpecError(f"cannot read study spec {p}: {err.reason}") from None
+    except UnicodeDecodeError as err:
+        raise SpecError(f"cannot read study spec {p}: not UTF-8 text ({err})") from None
     return parse_study(text, file=str(p), base=p.parent, default_name=p.stem)
+
+
+def _read_text(path: Path) -> str:
+    """Read a file the spec names (regular files of bounded size only), as UTF-8."""
+    from mdle.userfile import read_user_file
+
+    return read_user_file(path).decode("utf-8-sig")
 
 
 def parse_study(text: str, file: str = "<spec>", base: str | os.PathLike[str] = ".",
@@ -206,8 +217,9 @@ def _parse(doc: _Doc, base: Path, default_name: str) -> Study:
     description = _string(doc, "description", top.get("description", ""))
     plan_label, plan_text, plan_files = _plan(doc, base, top["plan"])
     entry = _string(doc, "entry", top["entry"]) if "entry" in top else None
-    worlds = tuple(_world(doc, f"worlds[{i}]", base, w) for i, w in
-                   enumerate(_list(doc, "worlds", top.get("worlds", ["default"]), "world")))
+    worlds = tuple(c for i, w in
+                   enumerate(_list(doc, "worlds", top.get("worlds", ["default"]), "world"))
+                   for c in _worlds(doc, f"worlds[{i}]", base, w))
     robots = (tuple(_robot(doc, f"robots[{i}]", base, r) for i, r in
                     enumerate(_list(doc, "robots", top["robots"], "robot")))
               if "robots" in top else (RobotChoice("world", None),))
@@ -296,6 +308,39 @@ def _check_plan(doc: _Doc, study: Study) -> None:
             load(where, {name: value})
 
 
+_GENERATED = ("seed", "count", "first", "index", "family")
+
+
+def _worlds(doc: _Doc, path: str, base: Path, v: Any) -> list[WorldChoice]:
+    """Return the worlds one ``worlds`` entry names: a name, a file, or generated shapes."""
+    if not isinstance(v, dict):
+        return [_world(doc, path, base, v)]
+    _mapping(doc, path, v, ("generated",), "a world name, a file, or {generated: ..}")
+    from mdle.sweep.worlds import generated_text
+    from sim.generated import FAMILIES
+
+    gpath = f"{path}.generated"
+    g = _mapping(doc, gpath, v["generated"], _GENERATED,
+                 "seed and count (and first), or seed and index; family")
+    seed = _integer(doc, f"{gpath}.seed", g.get("seed", 0))
+    family = None
+    if "family" in g:
+        family = _choice(doc, f"{gpath}.family", g["family"], FAMILIES)
+    if "index" in g:
+        if "count" in g or "first" in g:
+            raise _fail(doc, gpath, "give `index` (one shape) or `count` (and `first`)")
+        indices = [_integer(doc, f"{gpath}.index", g["index"])]
+    else:
+        count = _integer(doc, f"{gpath}.count", g.get("count", 1), minimum=1)
+        first = _integer(doc, f"{gpath}.first", g.get("first", 0))
+        indices = list(range(first, first + count))
+    out = []
+    for i in indices:
+        fam = family if family is not None else FAMILIES[i % len(FAMILIES)]
+        out.append(WorldChoice(f"{fam}-{seed}-{i}", generated_text(seed, i, family)))
+    return out
+
+
 def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
     from sim.catalog import list_worlds
     from sim.world_yaml import parse_world
@@ -312,10 +357,14 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
         raise _fail(doc, path, f"no reference world or world file `{name}`"
                     + (f" (did you mean `{hint}`?)" if hint else
                        f"; reference worlds: {', '.join(list_worlds())}"))
+    from mdle.userfile import UserFileError
+
     try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise _fail(doc, path, f"cannot read world file {p}: {err}") from None
+        text = _read_text(p)
+    except UserFileError as err:
+        raise _fail(doc, path, f"cannot read world file {p}: {err.reason}") from None
+    except UnicodeDecodeError as err:
+        raise _fail(doc, path, f"cannot read world file {p}: not UTF-8 text ({err})") from None
     parse_world(text, file=str(p), default_name=p.stem)   # located errors of the file itself
     return WorldChoice(Path(name).stem.removesuffix(".world"), text)
 
@@ -326,17 +375,22 @@ def _robot(doc: _Doc, path: str, base: Path, v: Any) -> RobotChoice:
     from sim.world_yaml import _robot as robot_section
 
     if isinstance(v, str) and (v.endswith((".yaml", ".yml")) or "/" in v):
+        from mdle.userfile import UserFileError
+
         p = base / v
         try:
-            data = yaml.safe_load(p.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise _fail(doc, path, f"robot profile file not found: {v} (looked for {p})"
-                        ) from None
-        except (OSError, UnicodeDecodeError, yaml.YAMLError) as err:
+            text = _read_text(p)
+            data = yaml.safe_load(text)
+        except UserFileError as err:
+            if err.reason == "no such file":
+                raise _fail(doc, path, f"robot profile file not found: {v} (looked for {p})"
+                            ) from None
+            raise _fail(doc, path, f"cannot read robot profile {p}: {err.reason}") from None
+        except (UnicodeDecodeError, yaml.YAMLError) as err:
             raise _fail(doc, path, f"cannot read robot profile {p}: {err}") from None
         if isinstance(data, dict) and "robot" in data and len(data) == 1:
             data = data["robot"]
-        sub = _Doc(str(p), p.read_text(encoding="utf-8"))
+        sub = _Doc(str(p), text)
         robot_section(sub, "", data)
         return RobotChoice(Path(v).stem, data)
     if v == "world":

@@ -27,7 +27,8 @@ _DESCRIBE = ("key", "index", "plan", "entry", "world", "robot", "sensing", "rate
              "x0", "y0", "theta0")
 RESULT_COLUMNS = ("status", "ended", "cause", "duration", "collided", "collisions",
                   "min_clearance", "distance", "ticks", "follow_rc", "follow_mean_err",
-                  "follow_max_err", "engaged", "engage_distance")
+                  "follow_max_err", "engaged", "engage_time", "engage_distance",
+                  "engaged_mean_err", "engaged_max_err")
 _TAIL = ("attempts", "worker", "wall_time")
 _INT = {"index", "seed", "collisions", "ticks", "attempts"}
 _BOOL = {"collided", "engaged"}
@@ -41,11 +42,24 @@ def columns_for(parameters: Sequence[str], fields: Sequence[str]) -> list[str]:
              *(f"{f}_{s}" for f in fields for s in ("mean", "max")), *_TAIL])
 
 
+_FLOAT = {*RESULT_COLUMNS, "rate", "x0", "y0", "theta0", "wall_time"} - _INT - _BOOL - _TEXT
+
+
 def column_type(name: str) -> str:
-    """Return the type of a column: ``text``, ``int``, ``bool`` or ``float``."""
+    """Return the type of a column: ``text``, ``int``, ``bool``, ``float`` or ``any``.
+
+    ``any`` (a column of another table, an experiment's) is read as the value looks:
+    a whole number, a number, true/false, else text.
+    """
     if name in _TEXT or name.startswith("param_"):
         return "text"
-    return "int" if name in _INT else "bool" if name in _BOOL else "float"
+    if name in _INT:
+        return "int"
+    if name in _BOOL:
+        return "bool"
+    if name in _FLOAT or name.endswith(("_mean", "_max")):
+        return "float"
+    return "any"
 
 
 def _cell(value: Any) -> str:
@@ -69,7 +83,14 @@ def _typed(name: str, text: str) -> Any:
         return text == "true"
     if kind == "int":
         return int(text)
-    return float(text)
+    if kind == "float":
+        return float(text)
+    for convert in (int, float):
+        try:
+            return convert(text)
+        except ValueError:
+            pass
+    return {"true": True, "false": False}.get(text, text)
 
 
 class ResultsTable:
@@ -184,6 +205,18 @@ def read_rows(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
             for row in reader if len(row) == len(header)]
 
 
+def _arrow_type(pa: Any, values: list[Any]) -> Any:
+    """Pick an Arrow type for a column read as the values looked."""
+    seen = {type(v) for v in values if v is not None}
+    if seen <= {bool} and seen:
+        return pa.bool_()
+    if seen <= {int} and seen:
+        return pa.int64()
+    if seen <= {int, float} and seen:
+        return pa.float64()
+    return pa.string()
+
+
 def write_parquet(csv_path: str | os.PathLike[str], out: str | os.PathLike[str]) -> bool:
     """Write a typed Parquet copy of a results CSV; False when pyarrow is not installed."""
     try:
@@ -194,7 +227,13 @@ def write_parquet(csv_path: str | os.PathLike[str], out: str | os.PathLike[str])
     rows = read_rows(csv_path)
     header = next(csv.reader(io.StringIO(Path(csv_path).read_text(encoding="utf-8"))))
     kinds = {"text": pa.string(), "int": pa.int64(), "bool": pa.bool_(), "float": pa.float64()}
-    schema = pa.schema([(c, kinds[column_type(c)]) for c in header])
+    schema = pa.schema([(c, kinds[column_type(c)] if column_type(c) in kinds
+                         else _arrow_type(pa, [r.get(c) for r in rows])) for c in header])
+    for field in schema:
+        if field.type == pa.string():   # a mixed column: keep its values as text
+            for r in rows:
+                if r.get(field.name) is not None and not isinstance(r[field.name], str):
+                    r[field.name] = _cell(r[field.name])
     table = pa.Table.from_pylist(rows, schema=schema)
     tmp = Path(str(out) + ".tmp")
     pq.write_table(table, tmp)

@@ -22,7 +22,7 @@ from mdle.sweep.spec import StartRule, Study, WorldChoice, canonical
 __all__ = ["RunTask", "expand", "start_poses"]
 
 #: Bumped when the metrics a run computes change meaning (old tables then rerun).
-METRICS_VERSION = 1
+METRICS_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -113,9 +113,9 @@ def _random_poses(rule: StartRule, choice: WorldChoice) -> list[tuple[float, flo
     import numpy as np
 
     from mdle.sweep.spec import SpecError
-    from sim.world_yaml import parse_world
+    from mdle.sweep.worlds import build_world
 
-    world = parse_world(choice.text, file=choice.label, default_name=choice.label)
+    world = build_world(choice.text, choice.label)
     if not world.obstacles:
         raise SpecError(f"starts.random: world `{choice.label}` has no obstacle to start "
                         "near or head for")

@@ -76,17 +76,9 @@ def execute(task: RunTask) -> Outcome:
 
 
 def _world(task: RunTask) -> Any:
-    import yaml
+    from mdle.sweep.worlds import build_world
 
-    from sim.world_yaml import parse_world
-
-    name = task.labels.get("world", "world")
-    text = task.world_text
-    if task.robot is not None:
-        data = yaml.safe_load(text) or {}
-        data["robot"] = task.robot
-        text = yaml.safe_dump(data, sort_keys=False)
-    return parse_world(text, file=f"<world {name}>", default_name=name)
+    return build_world(task.world_text, task.labels.get("world", "world"), task.robot)
 
 
 def _run(task: RunTask) -> tuple[dict[str, Any], bytes | None]:
@@ -157,8 +149,10 @@ def _run(task: RunTask) -> tuple[dict[str, Any], bytes | None]:
                               for s in samples])
             following = np.isfinite(rc)
             near = world.nearest_boundary(np.column_stack((tx, ty)))
+            clear = np.array([math.nan if s.clearance is None else s.clearance
+                              for s in samples], dtype=float)
             out.update(follow_metrics(t, tx, ty, th, np.asarray(near.distance, dtype=float),
-                                      np.asarray(near.point, dtype=float).reshape(-1, 2), rc,
-                                      right, following))
+                                      np.asarray(near.point, dtype=float).reshape(-1, 2),
+                                      clear, rc, right, following))
     out.update(field_summary(samples, task.trace_fields, SAMPLE_FIELDS))
     return out, trace

@@ -166,3 +166,17 @@ def test_traces_are_kept_on_request(tiny_spec: Path, tmp_path: Path) -> None:
     plain.write_bytes(gzip.decompress(traces[0].read_bytes()))
     trace = read_trace(plain)
     assert len(trace.column("time")) >= 40
+
+
+def test_a_sweep_over_generated_shapes(tmp_path: Path) -> None:
+    plan = ("atom follow(rc = 0.5 m) = (follow_boundary(rc = rc, v = 1 m/s), never, 6 s)"
+            "\\n")
+    study = parse_study(f'plan: {{text: "{plan}"}}\nentry: follow\n'
+                        "worlds: [{generated: {seed: 0, count: 2}}]\nrates: [20]\n"
+                        "starts: {random: {count: 1, distance: [1, 2], seed: 2}}\n")
+    summary = run_sweep(study, tmp_path / "o", jobs=2)
+    rows = read_rows(tmp_path / "o")
+    assert summary.done == 2 and {r["world"] for r in rows} == {"star-0-0", "nonconvex-0-1"}
+    for r in rows:
+        assert r["status"] in ("ok", "collision") and r["follow_rc"] == 0.5
+        assert r["engaged"] in (True, False) and r["distance"] > 1.0

@@ -132,3 +132,20 @@ def test_random_starts_that_cannot_be_placed_say_so(tmp_path: Path) -> None:
                     base=tmp_path)
     with pytest.raises(SpecError, match="no obstacle"):
         list(expand(s))
+
+
+def test_generated_worlds_expand_and_travel_as_parameters() -> None:
+    s = parse_study(HEAD + "worlds: [ellipse, {generated: {seed: 3, count: 3, first: 2}}, "
+                    "{generated: {seed: 1, index: 0, family: plate}}]\n")
+    assert [w.label for w in s.worlds] == ["ellipse", "rounded-rect-3-2",
+                                           "rounded-rect-facets-3-3", "superellipse-3-4",
+                                           "plate-1-0"]
+    from mdle.sweep.worlds import build_world
+    from sim.generated import generate_shape
+
+    w = build_world(s.worlds[1].text, s.worlds[1].label)
+    assert w.obstacles == generate_shape(3, 2).obstacles
+    assert "family: unknown value" in error(
+        HEAD + "worlds: [{generated: {seed: 1, family: blob}}]\n")
+    assert "worlds[0].generated: give `index`" in error(
+        HEAD + "worlds: [{generated: {index: 1, count: 2}}]\n")
