@@ -265,7 +265,7 @@ def run_study(config: StudyConfig, jobs: int | None = None,
 
 #: Bumped when a spec's runs would give other rows (old results tables then rerun).
 TASK_VERSION = 1
-_BOOKKEEPING = ("key", "status", "cause", "attempts", "worker", "wall_time")
+_BOOKKEEPING = ("key", "status", "cause", "attempts", "worker", "wall_time", "cpu_time")
 
 
 @dataclass(frozen=True)
@@ -297,12 +297,12 @@ def run_task(task: SpecTask) -> Any:
 
     from mdle.sweep.worker import Outcome
 
-    t0 = time.perf_counter()
+    t0, cpu = time.perf_counter(), time.process_time()
     row: dict[str, Any] = run_spec_safely(task.spec)   # a run that raises: an error row
     row.update(status="error" if row["error"] else "ok", cause=row["error"])
     row.update(key=task.key, attempts=task.attempt + 1,
                worker=f"{socket.gethostname()}:{os.getpid()}",
-               wall_time=time.perf_counter() - t0)
+               wall_time=time.perf_counter() - t0, cpu_time=time.process_time() - cpu)
     return Outcome(row)
 
 

@@ -289,7 +289,9 @@ def _check_plan(doc: _Doc, study: Study) -> None:
                                 files=files, base_dir="/")
             element_of(program, study.entry)
         except MdleError as err:
-            msg = "; ".join(d.message for d in err.diagnostics[:3])
+            msg = "; ".join(d.message.removeprefix(f"--set {n}: ") + (f" ({d.hint})" if d.hint
+                                                                       else "")
+                            for d in err.diagnostics[:3] for n in [*settings, ""][:1])
             if err.diagnostics and err.diagnostics[0].span is not None and not settings:
                 raise SpecError(err.diagnostics, err.sources) from None
             raise _fail(doc, path, msg) from None

@@ -29,7 +29,7 @@ RESULT_COLUMNS = ("status", "ended", "cause", "duration", "collided", "collision
                   "min_clearance", "distance", "ticks", "follow_rc", "follow_mean_err",
                   "follow_max_err", "engaged", "engage_time", "engage_distance",
                   "engaged_mean_err", "engaged_max_err")
-_TAIL = ("attempts", "worker", "wall_time")
+_TAIL = ("attempts", "worker", "wall_time", "cpu_time")
 _INT = {"index", "seed", "collisions", "ticks", "attempts"}
 _BOOL = {"collided", "engaged"}
 _TEXT = {"key", "plan", "entry", "world", "robot", "sensing", "status", "ended", "cause",
@@ -42,7 +42,8 @@ def columns_for(parameters: Sequence[str], fields: Sequence[str]) -> list[str]:
              *(f"{f}_{s}" for f in fields for s in ("mean", "max")), *_TAIL])
 
 
-_FLOAT = {*RESULT_COLUMNS, "rate", "x0", "y0", "theta0", "wall_time"} - _INT - _BOOL - _TEXT
+_FLOAT = ({*RESULT_COLUMNS, "rate", "x0", "y0", "theta0", "wall_time", "cpu_time"}
+          - _INT - _BOOL - _TEXT)
 
 
 def column_type(name: str) -> str:

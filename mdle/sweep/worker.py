@@ -53,7 +53,7 @@ def base_row(task: RunTask) -> dict[str, Any]:
 
 def execute(task: RunTask) -> Outcome:
     """Run ``task`` and measure it; every failure is reported in the row, not raised."""
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     row = base_row(task)
     trace: bytes | None = None
     try:
@@ -72,6 +72,7 @@ def execute(task: RunTask) -> Outcome:
     row["attempts"] = task.attempt + 1
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     row["wall_time"] = time.perf_counter() - start
+    row["cpu_time"] = time.process_time() - cpu
     return Outcome(row, trace)
 
 

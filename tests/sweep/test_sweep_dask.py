@@ -15,7 +15,7 @@ from mdle.sweep.table import read_rows
 
 distributed = pytest.importorskip("distributed")
 
-TIMING = ("wall_time", "worker")
+TIMING = ("wall_time", "cpu_time", "worker")
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from mdle.sweep import LocalExecutor, expand, parse_study, read_study, run_sweep
 from mdle.sweep.table import read_rows
 from mdle.sweep.worker import execute
 
-TIMING = ("wall_time", "worker")
+TIMING = ("wall_time", "cpu_time", "worker")
 
 
 def test_a_small_sweep_writes_one_row_per_run(tiny_spec: Path, tmp_path: Path) -> None:

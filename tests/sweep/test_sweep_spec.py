@@ -30,7 +30,7 @@ def error(text: str, base: Path | None = None) -> str:
     ("sensing: [sonar]\n", "sensing[0]: unknown value 'sonar'; one of: scan, exact"),
     ("parameters: {grid: {kf: []}}\n", "parameters.grid.kf: is empty"),
     ("parameters: {grid: {kf: [1, 1]}}\n", "parameters.grid.kf[1]: repeats an earlier value"),
-    ("parameters: {grid: {kff: [1]}}\n", "parameters.grid.kff[0]: --set kff: no definition"),
+    ("parameters: {grid: {kff: [1]}}\n", "parameters.grid.kff[0]: no definition"),
     ("parameters: {grid: {rc: [1 s]}}\n", "parameters.grid.rc[0]:"),
     ("parameters: {random: {count: 3, ranges: {kf: [2, 1]}}}\n",
      "parameters.random.ranges.kf: the range [2, 1] is empty"),
