@@ -70,3 +70,20 @@ def test_an_unreachable_scheduler_is_a_clear_error() -> None:
 
     with pytest.raises(MdleError, match="cannot reach the scheduler"):
         DaskExecutor("tcp://127.0.0.1:9", timeout=1.0)
+
+
+def test_mdle_sweep_dask_address_from_the_command_line(
+        tiny_spec: Path, tmp_path: Path, client: Any, mdle_command: list[str]) -> None:
+    import subprocess
+
+    address = client.scheduler.address
+    out = tmp_path / "cli"
+    r = subprocess.run([*mdle_command, "sweep", str(tiny_spec), "--out", str(out), "--dask",
+                        address], capture_output=True, text=True, timeout=180)
+    assert r.returncode == 0, r.stderr
+    assert f"Dask cluster {address}" in r.stderr and "8 runs done (0 failed)" in r.stderr
+    local = run_sweep(read_study(tiny_spec), tmp_path / "local", jobs=2)
+    assert local.done == 8 and _rows(out) == _rows(tmp_path / "local")
+    both = subprocess.run([*mdle_command, "sweep", str(tiny_spec), "--dask", address,
+                           "--jobs", "2"], capture_output=True, text=True, timeout=60)
+    assert both.returncode == 2 and "--jobs is for local processes" in both.stderr
