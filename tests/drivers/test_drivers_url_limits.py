@@ -149,3 +149,43 @@ def test_mdle_run_reports_bad_urls_with_exit_1(fake_robot: FakeRobot, tmp_path: 
     assert code == 1, err
     assert needle in err and "Traceback" not in err and "internal error" not in err
     assert fake.received == []
+
+
+def test_random_urls_give_messages_never_crashes() -> None:
+    # whatever is typed after --connect or --laser: a BackendError with a message, or (for
+    # a well-formed URL) a refused connection to a closed local port; never anything else
+    import socket
+
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from mdle.drivers.transport import parse_url
+
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    closed = f"tcp://127.0.0.1:{s.getsockname()[1]}"
+    s.close()
+    keys = st.sampled_from(["model", "baud", "max_range", *ROBOT_PARAM_RANGES, "x", ""])
+    values = st.one_of(st.text(max_size=12), st.floats().map(repr),
+                       st.integers(-10**30, 10**30).map(str))
+    queries = st.lists(st.tuples(keys, values), max_size=3).map(
+        lambda kv: "&".join(f"{k}={v}" for k, v in kv))
+    texts = st.one_of(st.text(max_size=40),
+                      st.builds(lambda scheme, rest: f"{scheme}://{rest}",
+                                st.sampled_from(["tcp", "serial", "lms200", "sim", "http"]),
+                                st.text(max_size=30)))
+
+    @settings(max_examples=150, deadline=None, database=None)
+    @given(text=texts, query=queries, laser=st.booleans())
+    def check(text: str, query: str, laser: bool) -> None:
+        try:
+            parse_url(text)
+        except BackendError as exc:
+            assert str(exc)
+        connect, laser_url = (closed, f"sim?{query}") if laser else (f"{closed}?{query}", None)
+        with pytest.raises(BackendError) as info:
+            open_backend("pioneer", connect, laser_url, options=PioneerOptions(
+                sync_timeout=0.05, sync_retries=1))
+        assert str(info.value)
+
+    check()
