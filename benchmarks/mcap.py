@@ -14,12 +14,16 @@
 Timings are noisy on a shared machine: each figure is the median (and minimum) of
 ``--repeat`` runs, the variants interleaved, with the load average printed.
 
-Run: ``python benchmarks/mcap.py [--ticks N] [--repeat R]``.
+Run: ``python benchmarks/mcap.py [--ticks N] [--repeat R]``. Wall and CPU time depend on
+the machine's load; instruction counts do not: ``--part NAME`` runs one part once (for
+``valgrind --tool=callgrind``; run it with two ``--ticks`` or ``--seconds`` values and
+take the difference per tick).
 """
 
 from __future__ import annotations
 
 import argparse
+import gc
 import math
 import os
 import statistics
@@ -95,7 +99,13 @@ def prepared_ticks(n: int) -> list[Sample]:
 
 
 def per_tick(ticks: list[Sample], make: Any) -> tuple[float, float]:
-    """Microseconds per tick of an observer's on_tick: (wall, CPU); setup excluded."""
+    """Microseconds per tick of an observer's on_tick: (wall, CPU); setup excluded.
+
+    The prepared ticks are moved out of the garbage collector's sight first: a real run
+    does not keep its samples, so collections would not walk them.
+    """
+    gc.collect()
+    gc.freeze()
     with tempfile.TemporaryDirectory() as tmp:
         obs = make(tmp)
         obs.on_start(_Sched())
@@ -106,6 +116,7 @@ def per_tick(ticks: list[Sample], make: Any) -> tuple[float, float]:
             on_tick(s)
         elapsed, cpu = time.perf_counter() - t0, time.process_time() - c0
         obs.close()
+    gc.unfreeze()
     return elapsed / len(ticks) * 1e6, cpu / len(ticks) * 1e6
 
 
@@ -135,7 +146,22 @@ def main() -> None:
     ap.add_argument("--ticks", type=int, default=3000)
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--part", choices=("tick-none", "tick-record", "tick-trace", "run-plain",
+                                       "run-record"),
+                    help="run only this part, once (for an instruction counter)")
     args = ap.parse_args()
+    if args.part:
+        if args.part.startswith("tick"):
+            ticks = prepared_ticks(args.ticks)
+            if args.part == "tick-none":  # preparing the ticks alone, to subtract
+                per_tick(ticks[:1], lambda d: TraceWriter(os.path.join(d, "t.jsonl"), HEADER))
+            elif args.part == "tick-record":
+                per_tick(ticks, lambda d: McapRecorder(os.path.join(d, "r.mcap"), HEADER))
+            else:
+                per_tick(ticks, lambda d: TraceWriter(os.path.join(d, "t.jsonl"), HEADER))
+        else:
+            whole_run(args.part == "run-record", args.seconds)
+        return
     print(f"load average {os.getloadavg()[0]:.2f}; {BEAMS} beams, {args.ticks} ticks, "
           f"{args.repeat} repeats")
     ticks = prepared_ticks(args.ticks)

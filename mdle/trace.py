@@ -198,8 +198,7 @@ class TraceWriter:
         """Queue a ``sample`` record; write the queue once it is ``flush_period`` old."""
         scan = sample.scan
         if scan is not None and scan is not self._laser.last:
-            for record in self._laser.records(sample.time, scan):
-                self._pending.append(_dumps(record))
+            self._pending.extend(self._laser.lines(sample.time, scan))
         self._pending.append(self._format(sample))
         if self._clock() >= self._flush_at:
             self.flush()
@@ -233,6 +232,12 @@ class TraceWriter:
         self.close()
 
 
+_HEAD = ('{"type":"sample","t":%r,"x":%s,"y":%s,"theta":%s,"v":%s,"omega":%s,"cmd_v":%s,'
+         '"cmd_omega":%s,"path":%s,"lateness":%.9g,"stalled":%s')
+_SEVEN = ",".join(["%.9g"] * 7)
+_TEN = ",".join(["%.9g"] * 10)
+
+
 class SampleFormat:
     """Format samples as the trace's ``sample`` records, one JSON line each (fast).
 
@@ -243,6 +248,7 @@ class SampleFormat:
 
     def __init__(self) -> None:
         self._paths: dict[str, str] = {}
+        self._diag: dict[tuple[str, ...], str] = {}
 
     def quoted(self, path: str) -> str:
         """Return ``path`` as a JSON string (cached)."""
@@ -279,16 +285,66 @@ class SampleFormat:
                 '"stalled":%s'
                 % (float(t), x, y, theta, v, omega, cmd_v, cmd_omega, quoted, lateness,
                    "true" if stalled else "false"))
+        truth = None
+        if true_x is not None and true_y is not None and true_theta is not None:
+            truth = (_number(true_x), _number(true_y), _number(true_theta))
+        return self._tail(line, scan_age, clearance, collided, truth, diag)
+
+    def line_and_values(self, s: Sample) -> tuple[str, tuple[float, ...] | None]:
+        """Return the sample line and the numbers in it, parsed back from their digits.
+
+        The numbers are (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
+        true_theta) exactly as a reader of the line gets them (the true pose left out
+        when the sample has none), or None when a number is not finite (then the caller
+        rounds for itself). Formatting each number once serves the line and its reader.
+        """
+        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
+         diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
+        try:
+            if true_x is not None and true_y is not None and true_theta is not None:
+                if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
+                                + true_x + true_y + true_theta):
+                    return self(s), None
+                digits = (_TEN % (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
+                                  true_theta)).split(",")
+                truth: tuple[str, str, str] | None = (digits[7], digits[8], digits[9])
+            else:
+                if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
+                    return self(s), None
+                digits = (_SEVEN % (x, y, theta, v, omega, cmd_v, cmd_omega)).split(",")
+                truth = None
+            quoted = self._paths.get(path)
+            if quoted is None:
+                quoted = self.quoted(path)
+            line = _HEAD % (float(t), digits[0], digits[1], digits[2], digits[3], digits[4],
+                            digits[5], digits[6], quoted, lateness,
+                            "true" if stalled else "false")
+            line = self._tail(line, scan_age, clearance, collided, truth, diag)
+        except (TypeError, ValueError):  # a diagnostic that is not a number
+            return self(s), None
+        return line, tuple(map(float, digits))
+
+    def _tail(self, line: str, scan_age: Any, clearance: Any, collided: Any,
+              truth: tuple[str, str, str] | None, diag: Mapping[str, Any]) -> str:
+        """Append the optional fields to a sample line and close it."""
         if scan_age is not None:
             line += ',"scan_age":' + _number(scan_age)
         if clearance is not None:
             line += ',"clearance":' + _number(clearance)
         if collided is not None:
             line += ',"collided":true' if collided else ',"collided":false'
-        if true_x is not None and true_y is not None and true_theta is not None:
-            line += (',"true_x":' + _number(true_x) + ',"true_y":' + _number(true_y)
-                     + ',"true_theta":' + _number(true_theta))
+        if truth is not None:
+            line += ',"true_x":' + truth[0] + ',"true_y":' + truth[1] + ',"true_theta":' + truth[2]
         if diag:
+            # one format for all values, the keys' template made once per set of names
+            keys = tuple(diag)
+            template = self._diag.get(keys)
+            if template is None:
+                template = self._diag[keys] = ',"diag":{%s}}' % ",".join(
+                    [self.quoted(k).replace("%", "%%") + ":%.9g" for k in keys])
+            values = tuple(diag.values())
+            if isfinite(sum(values)):
+                return line + template % values
             q = self.quoted
             line += ',"diag":{%s}' % ",".join([q(k) + ":" + _number(d)
                                                for k, d in diag.items()])
@@ -375,11 +431,27 @@ class LaserRecords:
         self._geometry = geometry
         return self.laser(scan)
 
-    def records(self, t: float, scan: "Scan") -> list[dict[str, Any]]:
-        """Return the records for a scan first seen at tick time ``t``."""
+    def lines(self, t: float, scan: "Scan") -> list[str]:
+        """Return the records for a scan first seen at ``t`` as JSON lines (fast)."""
         laser = self.changed(scan)
+        stamp = float(scan.stamp)
+        if not (isfinite(t) and isfinite(stamp)):
+            recs = self.records_after(laser, t, scan)
+            return [_dumps(r) for r in recs]
+        # base64 needs no escaping: the record is formatted directly
+        line = '{"type":"scan","t":%r,"stamp":%r,"ranges":"%s"}' % (
+            float(t), stamp, encode_ranges(scan))
+        return [_dumps(laser), line] if laser is not None else [line]
+
+    def records_after(self, laser: dict[str, Any] | None, t: float, scan: "Scan"
+                      ) -> list[dict[str, Any]]:
+        """Return the ``laser`` record (if any) and the ``scan`` record as dicts."""
         scan_rec = {"type": "scan", "t": t, "stamp": scan.stamp, "ranges": encode_ranges(scan)}
         return [laser, scan_rec] if laser is not None else [scan_rec]
+
+    def records(self, t: float, scan: "Scan") -> list[dict[str, Any]]:
+        """Return the records for a scan first seen at tick time ``t``."""
+        return self.records_after(self.changed(scan), t, scan)
 
 
 def _number(value: Any) -> str:

@@ -6,10 +6,11 @@ Metadata, then Chunks of Message records, each followed by its MessageIndex reco
 at :meth:`McapFile.finish` a DataEnd, the summary (schemas, channels, statistics, chunk
 and metadata indexes, summary offsets), the Footer and the closing magic.
 
-The mcap library's record classes write every record but the messages: its per-message
-path (a dataclass and seven stream writes each, about 6 us) is too slow for a 30 us tick
-budget, so message records and message indexes are packed here with :mod:`struct` and
-numpy.
+The mcap library's record classes write the header, schemas, channels, metadata and the
+summary; its per-message path (a dataclass and seven stream writes each, about 6 us) is
+too slow for a 30 us tick budget, so the records written as a run goes (messages,
+chunks, message indexes) are packed here with :mod:`struct` and numpy, and checked
+against the library's reader in the tests.
 
 Durability: a chunk is closed once it holds ``chunk_size`` bytes or has been open for
 ``max_age`` seconds of wall time, and goes to the operating system at once (with its
@@ -27,6 +28,8 @@ import zlib
 from collections.abc import Callable, Mapping, Sequence
 from typing import IO
 
+import numpy as np
+
 __all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile"]
 
 MAGIC = b"\x89MCAP0\r\n"
@@ -43,6 +46,8 @@ _MESSAGE = struct.Struct("<BQHIQQ")   # opcode, length, channel, sequence, log, 
 _MESSAGE_OP = 0x05
 _INDEX_OP = 0x07
 _INDEX_HEAD = struct.Struct("<BQHI")  # opcode, length, channel, entries' byte length
+_CHUNK_OP = 0x06
+_CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc, name length
 
 
 class McapFile:
@@ -217,7 +222,7 @@ class McapFile:
 
     def close_chunk(self) -> None:
         """Write the open chunk and its message indexes to the file (if it has messages)."""
-        from mcap.records import Chunk, ChunkIndex
+        from mcap.records import ChunkIndex
 
         self._close_at = self._clock() + self._max_age
         if not self._buf:
@@ -225,19 +230,20 @@ class McapFile:
         raw = bytes(self._buf)
         data = self._compress(raw) if self._compress is not None else raw
         start, end = self._chunk_start, self._chunk_end
-        chunk = Chunk(compression=self._compression, data=data, message_start_time=start,
-                      message_end_time=end, uncompressed_crc=zlib.crc32(raw),
-                      uncompressed_size=len(raw))
         chunk_offset = self._pos
-        chunk.write(self._builder)
-        chunk_length = self._builder.count
-        pieces = [self._builder.end()]
+        # the Chunk record packed directly (the library's writer copies it through a
+        # seekable buffer twice): start, end, uncompressed size and CRC, compression, data
+        comp = self._compression.encode()
+        head = _CHUNK_HEAD.pack(_CHUNK_OP, 8 + 8 + 8 + 4 + 4 + len(comp) + 8 + len(data),
+                                start, end, len(raw), zlib.crc32(raw), len(comp))
+        pieces = [head, comp, struct.pack("<Q", len(data)), data]
+        chunk_length = len(head) + len(comp) + 8 + len(data)
         index_offsets: dict[int, int] = {}
         at = chunk_offset + chunk_length
         for ch, entries in enumerate(self._entries):
             if not entries:
                 continue
-            body = struct.pack(f"<{2 * len(entries)}Q", *[v for e in entries for v in e])
+            body = np.asarray(entries, dtype="<u8").tobytes()
             piece = _INDEX_HEAD.pack(_INDEX_OP, 6 + len(body), ch, len(body)) + body
             index_offsets[ch] = at
             at += len(piece)

@@ -105,7 +105,8 @@ class McapRecorder:
                 if laser is not None:
                     self.recording.laser(sample.time, laser)
                 self.recording.scan(sample.time, scan.stamp, scan_ranges(scan))
-            self.recording.live_sample(self._format(sample), sample)
+            line, values = self._format.line_and_values(sample)
+            self.recording.live_sample(line, sample, values)
         except OSError as exc:
             raise self._fail(exc) from None
 

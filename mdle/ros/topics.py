@@ -246,13 +246,22 @@ class RosRecording:
                                     (self._state_ch, cdr.encode_string(line))))
         self.out.tick()
 
-    def live_sample(self, line: str, s: Any) -> None:
-        """Publish a :class:`~mdle.runtime.events.Sample` with its trace line ``line``."""
-        truth = None
-        if s.true_x is not None and s.true_y is not None and s.true_theta is not None:
-            truth = (_r9(s.true_x), _r9(s.true_y), _r9(s.true_theta))
-        self.sample(line, float(s.time), _r9(s.x), _r9(s.y), _r9(s.theta), _r9(s.v),
-                    _r9(s.omega), _r9(s.cmd_v), _r9(s.cmd_omega), truth)
+    def live_sample(self, line: str, s: Any, values: tuple[float, ...] | None = None) -> None:
+        """Publish a :class:`~mdle.runtime.events.Sample` with its trace line ``line``.
+
+        ``values`` are the line's numbers as :meth:`mdle.trace.SampleFormat.line_and_values`
+        gives them; without them the sample's numbers are rounded here the same way.
+        """
+        if values is None:
+            truth = None
+            if s.true_x is not None and s.true_y is not None and s.true_theta is not None:
+                truth = (_r9(s.true_x), _r9(s.true_y), _r9(s.true_theta))
+            self.sample(line, float(s.time), _r9(s.x), _r9(s.y), _r9(s.theta), _r9(s.v),
+                        _r9(s.omega), _r9(s.cmd_v), _r9(s.cmd_omega), truth)
+            return
+        x, y, theta, v, omega, cmd_v, cmd_omega = values[:7]
+        self.sample(line, float(s.time), x, y, theta, v, omega, cmd_v, cmd_omega,
+                    (values[7], values[8], values[9]) if len(values) == 10 else None)
 
     def end(self, t: float, line: str) -> None:
         """Publish the ``end`` record."""
