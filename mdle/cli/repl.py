@@ -115,7 +115,11 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
         raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
                                    hint="e.g. --connect tcp://localhost:8101 or "
                                         "--connect serial:///dev/ttyS0"))
-    backend = open_backend("pioneer", args.connect, args.laser)
+    try:
+        backend = open_backend("pioneer", args.connect, args.laser)
+    except SystemExit:  # SIGTERM while connecting: the backend stopped and closed it
+        print("interrupted while connecting: robot stopped, session closed", file=sys.stderr)
+        raise
     assert isinstance(backend, PioneerBackend), "open_backend('pioneer') makes a Pioneer"
     info = backend.info
     name = f"`{info.name or 'Pioneer'}` ({info.subtype or 'unknown model'})"

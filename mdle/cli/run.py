@@ -237,7 +237,12 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         from mdle.drivers import open_backend
 
         header.update(connect=args.connect, laser=args.laser)
-        return open_backend("pioneer", args.connect, args.laser, rate=args.rate), None
+        try:
+            return open_backend("pioneer", args.connect, args.laser, rate=args.rate), None
+        except SystemExit:  # SIGTERM while connecting: the backend stopped and closed it
+            print("interrupted while connecting: robot stopped, session closed",
+                  file=sys.stderr)
+            raise
     import sim
 
     spec: str | os.PathLike[str] | None = args.world

@@ -208,4 +208,5 @@ def test_sigterm_while_connecting_still_stops_and_closes(fake_robot: FakeRobot,
     stop = fake.commands(Cmd.STOP)
     assert stop and stop[-1].t > fake.commands(Cmd.ENABLE)[0].t
     assert stop[-1].t < fake.commands(Cmd.CLOSE)[-1].t
+    assert "interrupted while connecting: robot stopped" in err
     assert "Traceback" not in err
