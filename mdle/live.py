@@ -4,7 +4,11 @@ On a terminal, a rich live panel: the running path (plan > behavior > atom) with
 level's elapsed time and remaining timer, the pose, speed and turn rate, and the last
 events; then a summary table. Off a terminal (a pipe, a log file, CI), plain lines with
 no control codes: one per event, then the summary. The view is an observer of the
-scheduler and only reads what the scheduler hands it.
+scheduler and only reads what the scheduler hands it, except in one case: when its
+stream can no longer be written (``mdle run ... | head`` closed the pipe), it stops
+printing and asks the scheduler to stop the run (robot stopped, the trace's end record
+gives the reason), as a program in a pipeline ends when its reader goes away;
+:attr:`LiveView.output_lost` then holds the error.
 """
 
 from __future__ import annotations
@@ -103,6 +107,17 @@ class LiveView(BaseObserver):
         self._wall0 = 0.0
         self._next_refresh = 0.0
         self.wall_seconds: float | None = None
+        #: The error that made the stream unusable (EPIPE...), None while it works.
+        self.output_lost: OSError | None = None
+
+    def _lost(self, exc: OSError) -> None:
+        """Stop printing for good, and stop the run: no one sees it any more."""
+        self.output_lost = exc
+        self._live = None
+        if self._scheduler is not None:
+            what = "closed" if isinstance(exc, BrokenPipeError) else \
+                f"unwritable ({exc.strerror or exc})"
+            self._scheduler.request_stop(f"standard output {what}")
 
     # ------------------------------------------------------------------ observer hooks
 
@@ -110,22 +125,31 @@ class LiveView(BaseObserver):
         """Open the live panel (terminal only)."""
         self._scheduler = scheduler
         self._wall0 = time.monotonic()
-        if not self.plain:
+        if not self.plain and self.output_lost is None:
             from rich.console import Console
             from rich.live import Live
 
             console = Console(file=self.stream)
             self._live = Live(self._panel(), console=console, auto_refresh=False,
                               transient=True)
-            self._live.start()
+            try:
+                self._live.start()
+            except OSError as exc:
+                self._lost(exc)
 
     def on_event(self, event: Event) -> None:
         """Print (plain) or remember (panel) the event."""
         if self._t0 is None:
             self._t0 = event.time
         line = format_event(event, self._t0)
+        if self.output_lost is not None:
+            return
         if self.plain:
-            print(line, file=self.stream)
+            try:
+                print(line, file=self.stream)
+                self.stream.flush()  # a reader down a pipe sees each event as it happens
+            except OSError as exc:
+                self._lost(exc)
         else:
             self._events.append(line)
 
@@ -137,15 +161,23 @@ class LiveView(BaseObserver):
         now = time.monotonic()
         if now >= self._next_refresh:
             self._next_refresh = now + 1.0 / REFRESH_HZ
-            self._live.update(self._panel(), refresh=True)
+            try:
+                self._live.update(self._panel(), refresh=True)
+            except OSError as exc:
+                self._lost(exc)
 
     def on_end(self, result: RunResult) -> None:
         """Close the panel and print the summary."""
         self.wall_seconds = time.monotonic() - self._wall0
-        if self._live is not None:
-            self._live.stop()
-            self._live = None
-        self.print_summary(result)
+        if self.output_lost is not None:
+            return
+        try:
+            if self._live is not None:
+                live, self._live = self._live, None
+                live.stop()
+            self.print_summary(result)
+        except OSError as exc:
+            self.output_lost = exc
 
     # ------------------------------------------------------------------ rendering
 

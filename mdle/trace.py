@@ -6,8 +6,11 @@ versions), an ``event`` for every element start and end, a ``sample`` per tick, 
 (the operating system) at once, samples in batches within :data:`FLUSH_PERIOD` of wall
 time; the writer flushes whenever the run ends, whatever the cause (error, Ctrl-C,
 SIGTERM), so only a process killed outright (SIGKILL, a crash of the interpreter
-itself) can lose samples, at most the last ``flush_period`` seconds of them. The reader
-accepts a trace whose last line was cut short. Non-finite numbers (NaN, inf) are
+itself) can lose samples, at most the last ``flush_period`` seconds of them. The file
+only ever holds whole records: a write that fails (disk full, file size limit) or is cut
+by a signal is taken back to the end of the last whole record, the writer reports a
+:class:`TraceWriteError` (which ends the run), and it still tries to write the end
+record. The reader accepts a trace whose last line was cut short. Non-finite numbers (NaN, inf) are
 written as ``null`` so the file is strict JSON. The schema is documented in ``docs/trace.md``.
 """
 
@@ -36,7 +39,7 @@ if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
 
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
-           "SampleFormat", "LaserRecords", "read_trace", "versions", "decode_ranges",
+           "TraceWriteError", "SampleFormat", "LaserRecords", "read_trace", "versions", "decode_ranges",
            "dumps", "start_record", "event_record", "end_record", "scan_ranges",
            "encode_ranges", "laser_mount"]
 
@@ -52,6 +55,19 @@ FLUSH_PERIOD = 0.02
 
 class TraceError(MdleError):
     """A trace file cannot be read: not JSON lines, not an mdle trace, or a newer version."""
+
+
+class TraceWriteError(MdleError):
+    """A trace file cannot be written any more (disk full, I/O error, file size limit).
+
+    ``path`` is the file, ``records`` how many whole records were written before.
+    """
+
+    def __init__(self, path: str, reason: str, records: int) -> None:
+        super().__init__(Diagnostic(None, f"cannot write the trace `{path}`: {reason} "
+                                          f"({records} whole records written before)"))
+        self.path = path
+        self.records = records
 
 
 def versions() -> dict[str, str]:
@@ -111,7 +127,7 @@ def end_record(result: RunResult) -> dict[str, Any]:
         "type": "end", "path": t.path, "cause": t.cause.value, "t": t.time,
         "ticks": result.ticks, "duration": result.duration, "distance": result.distance,
         "min_clearance": result.min_clearance, "collided": result.collided,
-        "fault": result.fault, "max_lateness": result.max_lateness,
+        "fault": result.fault, "reason": result.reason, "max_lateness": result.max_lateness,
         "terminations": [{"path": x.path, "level": x.level, "cause": x.cause.value,
                           "t": x.time} for x in result.terminations]}
 
@@ -137,6 +153,19 @@ class TraceWriter:
     The writer is an observer: pass it to :func:`mdle.runtime.run` or a
     :class:`~mdle.runtime.Scheduler`. :meth:`close` is called by ``on_end``; call it
     yourself if the run never started.
+
+    Writing is all or nothing per batch of whole records: when a write fails the file is
+    cut back to its last whole record, :attr:`error` keeps the :class:`TraceWriteError`,
+    which the hook that met it raises (ending the run); later records are dropped, except
+    that ``on_end`` tries once more to write the end record. ``on_end`` and
+    :meth:`close` never raise; read :attr:`error` after the run.
+
+    Raises
+    ------
+    OSError
+        The file cannot be created.
+    TraceWriteError
+        The header cannot be written (the file is left empty).
     """
 
     def __init__(self, path: str | os.PathLike[str], header: Mapping[str, Any] | None = None,
@@ -154,10 +183,20 @@ class TraceWriter:
         self._flush_at = 0.0  # clock() by which queued samples are written
         self._format = SampleFormat()
         self._laser = LaserRecords()
+        self._size = 0  # bytes of whole records in the file
+        self._records = 0  # whole records in the file
+        #: The write failure that stopped this writer (None while all is well).
+        self.error: TraceWriteError | None = None
+        #: True once the end record is in the file.
+        self.ended = False
         head: dict[str, Any] = {"type": "header", "format": TRACE_FORMAT,
                                 "version": TRACE_VERSION, "versions": versions()}
         head.update(header or {})
-        self._write(_dumps(head))
+        try:
+            self._write(_dumps(head))
+        except BaseException:
+            self.close()
+            raise
 
     def _write(self, line: str) -> None:
         """Queue ``line`` and write everything queued now."""
@@ -165,23 +204,57 @@ class TraceWriter:
         self.flush()
 
     def flush(self) -> None:
-        """Write every queued record to the file now (the run's end does it too)."""
+        """Write every queued record to the file now (the run's end does it too).
+
+        Raises
+        ------
+        TraceWriteError
+            The write failed (the file was cut back to its last whole record).
+        """
         pending = self._pending
         if pending:
-            data = ("\n".join(pending) + "\n").encode()
             try:
-                if self._file is not None:
-                    view = memoryview(data)
-                    while view:  # a regular file takes it all at once; be safe anyway
-                        n = self._file.write(view)
-                        if not n:
-                            raise OSError(f"cannot write the trace `{self.path}`")
-                        view = view[n:]
+                if self._file is not None and self.error is None:
+                    self._write_whole(("\n".join(pending) + "\n").encode(), len(pending))
             finally:
                 # A Ctrl-C is raised at the earliest after write() returns: clearing in
                 # `finally` writes no record twice, and drops none that was not written.
                 pending.clear()
         self._flush_at = self._clock() + self._period
+
+    def _write_whole(self, data: bytes, records: int) -> None:
+        """Write ``data`` (whole records) entirely, or leave the file as it was."""
+        assert self._file is not None
+        view = memoryview(data)
+        done = False
+        try:
+            while view:  # a regular file takes it all at once, short of a full disk
+                n = self._file.write(view)
+                if not n:
+                    raise OSError(0, "the file takes no more data")
+                view = view[n:]
+            done = True
+        except OSError as exc:
+            self._cut_back()
+            reason = exc.strerror or str(exc)
+            self.error = TraceWriteError(self.path, reason, self._records)
+            raise self.error from None
+        finally:
+            if done:
+                self._size += len(data)
+                self._records += records
+            elif self.error is None:  # cut by a signal between two partial writes
+                self._cut_back()
+
+    def _cut_back(self) -> None:
+        """Truncate the file to its last whole record (best effort)."""
+        if self._file is None:
+            return
+        try:
+            os.ftruncate(self._file.fileno(), self._size)
+            self._file.seek(self._size)
+        except OSError:
+            pass
 
     # ------------------------------------------------------------------ observer hooks
 
@@ -196,6 +269,8 @@ class TraceWriter:
 
     def on_tick(self, sample: Sample) -> None:
         """Queue a ``sample`` record; write the queue once it is ``flush_period`` old."""
+        if self.error is not None:
+            return
         scan = sample.scan
         if scan is not None and scan is not self._laser.last:
             self._pending.extend(self._laser.lines(sample.time, scan))
@@ -204,17 +279,43 @@ class TraceWriter:
             self.flush()
 
     def on_end(self, result: RunResult) -> None:
-        """Write the ``end`` record and close the file."""
-        self._write(_dumps(end_record(result)))
-        self.close()
+        """Write the ``end`` record and close the file (never raises: see :attr:`error`).
+
+        After a write failure the records still queued are dropped and the end record
+        alone is tried once more (the failed batch was cut off, which may have made room).
+        """
+        record = end_record(result)
+        if self.error is not None and not record["fault"]:
+            record["fault"] = str(self.error)
+        line = _dumps(record)
+        try:
+            if self.error is None:
+                self._write(line)
+                self.ended = self._file is not None
+            elif self._file is not None:
+                self._pending.clear()
+                self._write_whole((line + "\n").encode(), 1)
+                self.ended = True
+        except TraceWriteError:
+            pass
+        finally:
+            self.close()
 
     def close(self) -> None:
-        """Flush and close the file (safe to call more than once)."""
+        """Flush and close the file (safe to call more than once; never raises).
+
+        A failure to write what was queued is kept in :attr:`error`.
+        """
         if self._file is not None:
             try:
                 self.flush()
+            except TraceWriteError:
+                pass
             finally:
-                self._file.close()
+                try:
+                    self._file.close()
+                except OSError:
+                    pass
                 self._file = None
         self._pending.clear()
 

@@ -3,18 +3,21 @@
 Each module in :data:`COMMANDS` defines ``add_parser(subparsers)`` (registering its
 subcommand with ``set_defaults(handler=run)``) and ``run(args) -> int``. Those modules
 import their heavy dependencies inside ``run``, so ``mdle --help`` and ``mdle check``
-start fast.
+start fast. :func:`main` installs the signal handlers (:mod:`mdle.cli.signals`) before
+anything else, so a signal at any moment ends mdle with 128 + its number and a message.
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib
+# Only what the signal handlers need is imported before they are installed.
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-from mdle import __version__
-from mdle.cli import output
+from mdle.cli.signals import SignalGuard
+
+if TYPE_CHECKING:
+    import argparse
 
 __all__ = ["main", "build_parser", "COMMANDS"]
 
@@ -25,6 +28,11 @@ COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "w
 
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser with every subcommand."""
+    import argparse
+    import importlib
+
+    from mdle import __version__
+
     parser = argparse.ArgumentParser(
         prog="mdle",
         description="Write, check, simulate and run MDLe motion plans for mobile robots.",
@@ -42,17 +50,48 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mdle`` console script; returns the exit code.
 
-    Exit codes: 0 success, 1 errors in the input (plan, world), 2 usage errors,
-    3 the robot collided or stalled fatally, 130 interrupted (Ctrl-C), 70 an internal
-    error (a bug in mdle: reported in one line, traceback with ``--debug``).
+    Exit codes (docs/runtime.md has the table): 0 success, 1 errors in the input (plan,
+    world, trace) or a robot fault, 2 usage errors, 3 the robot collided or stalled
+    fatally, 70 an internal error (a bug in mdle: one line, the traceback with
+    ``--debug``), 74 an output file could not be written (disk full), 129/130/143
+    ended by SIGHUP/SIGINT (Ctrl-C)/SIGTERM, 141 standard output was closed (``| head``).
+
+    ``argv`` None (the console script) reads ``sys.argv`` and leaves the handlers in
+    place, recording only, until the interpreter exits; with ``argv`` given (a caller in
+    Python) the previous handlers are restored on return.
     """
+    guard = SignalGuard().install(deferred=True)
+    try:
+        return _main(argv, guard)
+    except KeyboardInterrupt as exc:  # a signal while the command line was read
+        from mdle.cli import output
+
+        return output.interrupted(exc, guard)
+    finally:
+        if argv is not None:
+            guard.restore()
+
+
+def _main(argv: Sequence[str] | None, guard: SignalGuard) -> int:
+    from mdle.cli import output
+
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # --help, --version, usage errors
+        if guard.received is not None:
+            return guard.exit_code
+        code = exit_.code
+        return code if isinstance(code, int) else (0 if code is None else output.EXIT_USAGE)
     handler = getattr(args, "handler", None)
     if handler is None:
         parser.print_help(sys.stderr)
         return output.EXIT_USAGE
-    return output.guarded(handler, args)
+    args.signals = guard
+    code = output.guarded(handler, args)
+    if guard.received is not None and code in (output.EXIT_OK, output.EXIT_INTERRUPTED):
+        return guard.exit_code
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

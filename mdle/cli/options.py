@@ -7,14 +7,16 @@ durations the same way (a number of seconds; ``inf`` for no limit).
 from __future__ import annotations
 
 import argparse
+import os
 from typing import Any
 
-__all__ = ["add_simulation_options", "positive_seconds", "seconds"]
+__all__ = ["add_simulation_options", "positive_seconds", "seconds", "seed", "writable_output"]
 
 
 def add_simulation_options(p: Any) -> None:
     """Add ``--seed``, ``--robot`` and ``--sensing`` (the simulated robot) to a parser."""
-    p.add_argument("--seed", type=int, help="random seed of the simulation (default: the world's)")
+    p.add_argument("--seed", type=seed, help="random seed of the simulation, 0 to 2**32 - 1 "
+                                             "(default: the world's)")
     p.add_argument("--robot", metavar="PROFILE",
                    help="robot profile in simulation (pioneer2dx, ideal; default: the world's)")
     p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
@@ -54,3 +56,61 @@ def positive_seconds(text: str) -> float:
     if not value > 0:
         raise argparse.ArgumentTypeError(f"must be more than zero seconds, got {text!r}")
     return value
+
+
+#: Largest simulation seed (numpy's legacy seeding takes 32 bits).
+MAX_SEED = 2**32 - 1
+
+
+def seed(text: str) -> int:
+    """Read a simulation seed: a whole number from 0 to :data:`MAX_SEED` (argparse ``type``).
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        ``text`` is not a whole number, or is out of range.
+    """
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if not 0 <= value <= MAX_SEED:
+        raise argparse.ArgumentTypeError(f"a seed is a whole number from 0 to {MAX_SEED}, "
+                                         f"got {text!r}")
+    return value
+
+
+def writable_output(path: str, option: str, suffixes: tuple[str, ...] = ()) -> None:
+    """Check, before any work, that ``path`` can be written (created or replaced).
+
+    ``option`` names the place in the message (``--plot``, ``-o``); ``suffixes`` are the
+    file name endings accepted (any when empty).
+
+    Raises
+    ------
+    MdleError
+        The suffix is not accepted, the folder does not exist or cannot be written, or
+        the path is a folder or a file that cannot be written.
+    """
+    from mdle.errors import Diagnostic, MdleError
+
+    def refuse(why: str) -> MdleError:
+        return MdleError(Diagnostic(None, f"{option} `{path}`: {why}"))
+
+    if suffixes and os.path.splitext(path)[1].lower() not in suffixes:
+        raise refuse("the file name must end in " + _either(suffixes))
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise refuse(f"there is no folder `{folder}`")
+    if os.path.isdir(path):
+        raise refuse("that is a folder, not a file")
+    if os.path.exists(path):
+        if not os.access(path, os.W_OK):
+            raise refuse("the file cannot be written (permission denied or read-only)")
+    elif not os.access(folder, os.W_OK | os.X_OK):
+        raise refuse(f"files cannot be created in `{folder}` (permission denied or "
+                     "read-only)")
+
+
+def _either(items: tuple[str, ...]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " or " + items[-1]

@@ -7,11 +7,15 @@ otherwise, so logs and pipes carry no control codes.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable, Iterable, Mapping
-from typing import IO
+from typing import IO, TYPE_CHECKING
 
 from mdle.errors import Diagnostic, MdleError, Severity, render_diagnostic
+
+if TYPE_CHECKING:
+    from mdle.cli.signals import SignalGuard
 
 __all__ = [
     "EXIT_OK",
@@ -20,8 +24,12 @@ __all__ = [
     "EXIT_COLLISION",
     "EXIT_INTERNAL",
     "EXIT_INTERRUPTED",
+    "EXIT_IO",
+    "EXIT_PIPE",
     "print_diagnostics",
     "guarded",
+    "interrupted",
+    "output_closed",
 ]
 
 EXIT_OK = 0
@@ -29,7 +37,14 @@ EXIT_INPUT = 1
 EXIT_USAGE = 2
 EXIT_COLLISION = 3
 EXIT_INTERNAL = 70
+#: An output file (the trace, a plot) could not be written: disk full, I/O error
+#: (sysexits' EX_IOERR).
+EXIT_IO = 74
+#: Ctrl-C (SIGINT); SIGTERM gives 143 and SIGHUP 129: 128 + the signal's number.
 EXIT_INTERRUPTED = 130
+#: Standard output was closed (``mdle run ... | head``): 128 + SIGPIPE, what a shell
+#: reports for a program a closed pipe ends.
+EXIT_PIPE = 141
 
 _STYLE = {Severity.ERROR: "bold red", Severity.WARNING: "bold yellow", Severity.NOTE: "cyan"}
 
@@ -64,20 +79,61 @@ def print_diagnostics(diagnostics: Iterable[Diagnostic], sources: Mapping[str, s
 
 
 def guarded(handler: Callable[[argparse.Namespace], int], args: argparse.Namespace) -> int:
-    """Run a subcommand; turn MdleErrors into diagnostics and anything else into one line."""
+    """Run a subcommand; turn MdleErrors into diagnostics and anything else into one line.
+
+    A signal guard in ``args.signals`` is armed first (a signal that came while the
+    command line was read ends the command here), unless the handler manages the guard
+    itself (``args.own_signals``).
+    """
+    guard: SignalGuard | None = getattr(args, "signals", None)
     try:
+        if guard is not None and not getattr(args, "own_signals", False):
+            guard.arm()
         return handler(args)
     except MdleError as err:
         print_diagnostics(err.diagnostics, getattr(err, "sources", None))
         return EXIT_INPUT
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:
+        return interrupted(exc, guard)
     except BrokenPipeError:
-        return EXIT_OK
+        output_closed()
+        return EXIT_PIPE
     except Exception as exc:  # an mdle bug: never a raw traceback unless asked
         if getattr(args, "debug", False):
             raise
         print(f"mdle: internal error: {type(exc).__name__}: {exc} (run with --debug for the "
               "traceback)", file=sys.stderr)
         return EXIT_INTERNAL
+
+
+def interrupted(exc: BaseException, guard: SignalGuard | None) -> int:
+    """Say that a signal ended the command; return 128 + its number."""
+    from mdle.cli.signals import signal_name
+
+    signum = getattr(exc, "signum", None)
+    if signum is None and guard is not None:
+        signum = guard.received
+    code = 128 + signum if signum is not None else EXIT_INTERRUPTED
+    try:
+        print(f"mdle: interrupted by {signal_name(code - 128)}", file=sys.stderr)
+    except OSError:  # no one to tell
+        pass
+    return code
+
+
+def output_closed() -> None:
+    """Point standard output at /dev/null after EPIPE, so nothing more fails on it.
+
+    Whatever is still printed (and the flush at exit) then goes nowhere instead of raising
+    again, as ``head``-friendly programs behave.
+    """
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # no real file descriptor behind stdout
+        pass
+    try:
+        sys.stdout.flush()  # what was left in the buffer goes nowhere now
+    except (OSError, ValueError):
+        pass

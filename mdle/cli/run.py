@@ -2,22 +2,31 @@
 
 Exit codes: 0 the program ran to its end (or to ``--until``), 1 plan or world errors
 (shown as ``mdle check`` shows them) and robot or connection faults, 3 the robot
-collided or stalled fatally, 130 Ctrl-C (143 SIGTERM): the robot is stopped and the
-trace flushed in every case.
+collided or stalled fatally, 74 the trace or a recording could not be written (disk
+full: the run is ended), 130 Ctrl-C (143 SIGTERM, 129 SIGHUP), 141 standard output closed (``| head``:
+the run is ended). The robot is stopped, and a requested trace ends with its end record
+and the stop command, in every case; a signal that comes before the run could start
+still leaves a trace (header and end record) saying so.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
-import signal
 import sys
 import tempfile
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
-from mdle.cli.options import add_simulation_options, seconds
+from mdle.cli.options import add_simulation_options, seconds, writable_output
+from mdle.cli.signals import SignalGuard, signal_name
+
+if TYPE_CHECKING:
+    from mdle.live import LiveView
+    from mdle.runtime import RunResult, Scheduler
+    from mdle.trace import TraceWriter
 
 __all__ = ["add_parser", "run", "world_beside"]
 
@@ -30,7 +39,8 @@ def add_parser(subparsers: Any) -> None:
                     "Pioneer with --backend pioneer. Shows a live view on a terminal; writes "
                     "a JSON lines trace and a plot on request.",
         epilog="Exit codes: 0 done, 1 errors in the plan or world (or a robot fault), "
-               "3 collided or stalled, 130 interrupted.")
+               "3 collided or stalled, 74 the trace could not be written (disk full), "
+               "130 Ctrl-C, 143 SIGTERM, 141 standard output closed.")
     p.add_argument("plan", metavar="PLAN.mdle", help="the plan file")
     p.add_argument("--world", metavar="NAME|FILE",
                    help="simulated world: a reference world name or a YAML file (default: "
@@ -58,7 +68,7 @@ def add_parser(subparsers: Any) -> None:
                         "serial:///dev/ttyS0)")
     p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
     add_simulation_options(p)
-    p.set_defaults(handler=run)
+    p.set_defaults(handler=run, own_signals=True)
 
 
 def _hertz(text: str) -> float:
@@ -80,47 +90,73 @@ def world_beside(plan: str | os.PathLike[str]) -> Path | None:
     return None
 
 
-class _Signals:
-    """SIGINT/SIGTERM ask the scheduler to stop at the next tick; a second one forces it."""
+@dataclass
+class _Parts:
+    """What a run has opened so far, for a clean end from wherever it was interrupted."""
 
-    def __init__(self) -> None:
-        self.received: int | None = None
-        self._old: dict[int, Any] = {}
-        self.scheduler: Any = None
+    header: dict[str, Any]
+    backend: Any = None
+    world: Any = None
+    trace_path: str | None = None
+    writer: TraceWriter | None = None
+    live: LiveView | None = None
+    scheduler: Scheduler | None = None
+    tmpdir: Any = None
+    observers: list[Any] = field(default_factory=list)
+    recorders: list[Any] = field(default_factory=list)
 
-    def __enter__(self) -> "_Signals":
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            try:
-                self._old[sig] = signal.signal(sig, self._handle)
-            except ValueError:  # not the main thread: leave the defaults
-                pass
-        return self
-
-    def _handle(self, signum: int, frame: Any) -> None:
-        if self.received is not None or self.scheduler is None:
-            self.received = signum
-            raise KeyboardInterrupt  # second signal: stop now (the scheduler stops the robot)
-        self.received = signum
-        self.scheduler.request_stop()
-
-    def __exit__(self, *exc: object) -> None:
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
-
-    @property
-    def exit_code(self) -> int:
-        return 128 + (self.received or signal.SIGINT)
+    def close(self) -> None:
+        """Close the observers, the backend (the robot) and the temporary folder."""
+        for o in self.observers:
+            close = getattr(o, "close", None)
+            if close is not None:
+                close()
+        if self.backend is not None:
+            self.backend.close()
+        if self.tmpdir is not None:
+            self.tmpdir.cleanup()
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the plan; returns the exit code."""
-    from mdle.errors import Diagnostic, MdleError
+    """Run the plan; returns the exit code.
+
+    The signal guard (``args.signals``, installed by :func:`mdle.cli.main`) is armed
+    while the plan and world load, deferred while the trace and scheduler are made and
+    while everything closes, and stops the scheduler while it ticks.
+    """
+    from mdle.ros.recorder import RecordingError  # imports none of the mcap extra
+    from mdle.trace import TraceWriteError
+
+    guard: SignalGuard = getattr(args, "signals", None) or SignalGuard()
+    parts = _Parts(_header(args))
+    try:
+        guard.arm()
+        return _run(args, guard, parts)
+    except KeyboardInterrupt as exc:
+        with guard.deferring():
+            stopped = _end_interrupted(args, parts, exc)
+        signum = guard.received if guard.received is not None else getattr(exc, "signum", 2)
+        where = f", trace in {args.trace}" if args.trace and _trace_ended(parts) else ""
+        _say(f"mdle run: interrupted by {signal_name(signum)}"
+             + (f": robot stopped{where}" if stopped else f" before the run started{where}"))
+        return 128 + signum
+    except (TraceWriteError, RecordingError) as err:
+        with guard.deferring():
+            output.print_diagnostics(err.diagnostics)
+        return output.EXIT_IO
+    finally:
+        with guard.deferring():
+            parts.close()
+
+
+def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     from mdle.loader import load_program
     from mdle.runtime import Scheduler, element_of
 
-    if args.plot and os.path.splitext(args.plot)[1].lower() not in (".png", ".svg", ".pdf"):
-        raise MdleError(Diagnostic(None, f"--plot `{args.plot}`: the file name must end in "
-                                         ".png, .svg or .pdf"))
+    if args.plot:
+        writable_output(args.plot, "--plot", (".png", ".svg", ".pdf"))
+    if args.trace:
+        writable_output(args.trace, "--trace")
     if args.record or args.rosbag:
         from mdle.ros import require
 
@@ -129,83 +165,145 @@ def run(args: argparse.Namespace) -> int:
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
     element = element_of(program, args.element)
+    parts.header["program"].update(element=element.label, entry=program.entry)
+    parts.backend, parts.world = _open_backend(args, parts.header)
 
-    header: dict[str, Any] = {
-        "program": {"file": os.path.abspath(args.plan), "element": element.label,
-                    "entry": program.entry},
-        "rate": args.rate, "until": args.until, "backend": args.backend,
-        "argv": sys.argv[1:],
-    }
-    backend, world = _open_backend(args, header)
-    observers: list[Any] = []
-    trace_path = args.trace
-    tmpdir = None
-    try:
-        if args.plot and not trace_path:
-            tmpdir = tempfile.TemporaryDirectory(prefix="mdle-")
-            trace_path = os.path.join(tmpdir.name, "run.jsonl")
-        if trace_path:
-            from mdle.trace import TraceWriter
-
-            try:
-                observers.append(TraceWriter(trace_path, header))
-            except OSError as exc:
-                raise MdleError(Diagnostic(None, f"cannot write the trace `{trace_path}`: "
-                                                 f"{exc.strerror}")) from None
-        recorders = _recorders(args, header, world)
-        observers += recorders
+    with guard.deferring():  # the trace is made whole, header first, or not at all
+        parts.trace_path = args.trace
+        if args.plot and not args.trace:
+            parts.tmpdir = tempfile.TemporaryDirectory(prefix="mdle-")
+            parts.trace_path = os.path.join(parts.tmpdir.name, "run.jsonl")
+        if parts.trace_path:
+            parts.writer = _open_trace(parts.trace_path, parts.header)
+            parts.observers.append(parts.writer)
+        parts.recorders = _recorders(args, parts.header, parts.world)
+        parts.observers += parts.recorders
         if not args.quiet:
             from mdle.live import LiveView
 
-            observers.append(LiveView())
-        scheduler = Scheduler(element, backend, args.rate, observers, until=args.until,
-                              realtime=args.realtime)
-        with _Signals() as signals:
-            signals.scheduler = scheduler
-            try:
-                scheduler.start()
-                while scheduler.tick():
-                    pass
-            except KeyboardInterrupt:
-                # A second Ctrl-C: inside a tick the scheduler has already ended the run;
-                # between two ticks it has not, so end it here (stop() does nothing twice).
-                scheduler.stop()
-        result = scheduler.result
-        assert result is not None
-        failed = False
-        for r in recorders:
-            r.close()
-            if r.error is not None:
-                print(f"mdle run: {r.error}", file=sys.stderr)
-                failed = True
-        if args.plot:
-            from mdle.plot import plot_trace
+            parts.live = LiveView()
+            parts.observers.append(parts.live)
+        scheduler = parts.scheduler = Scheduler(element, parts.backend, args.rate,
+                                                parts.observers, until=args.until,
+                                                realtime=args.realtime)
+    with guard.stopping(scheduler):  # a signal that came meanwhile stops it at once
+        scheduler.start()
+        while scheduler.tick():
+            pass
+    result = scheduler.result
+    assert result is not None
+    writer = parts.writer
+    if writer is not None and writer.error is not None:
+        raise writer.error
+    failed = False
+    for r in parts.recorders:
+        r.close()
+        if r.error is not None:
+            _say(f"mdle run: {r.error}")
+            failed = True
+    lost = parts.live.output_lost if parts.live is not None else None
+    if args.plot:
+        from mdle.plot import plot_trace
 
-            plot_trace(trace_path, args.plot, world=world)
-            if not args.quiet:
-                print(f"plot written to {args.plot}")
-        if signals.received is not None:
-            print("interrupted: robot stopped" + (f", trace in {args.trace}" if args.trace
-                                                  else "")
-                  + "".join(f", recording in {r.target}" for r in recorders
-                            if r.error is None), file=sys.stderr)
-            return signals.exit_code
-        if failed:
-            return output.EXIT_INPUT
-        if result.collided or result.fault:
-            why = [w for w in ("the robot collided" if result.collided else None,
-                               result.fault) if w]
-            print(f"mdle run: {'; '.join(why)}", file=sys.stderr)
-            return output.EXIT_COLLISION
-        return output.EXIT_OK
-    finally:
-        for o in observers:
-            close = getattr(o, "close", None)
-            if close is not None:
-                close()
-        backend.close()
-        if tmpdir is not None:
-            tmpdir.cleanup()
+        assert parts.trace_path is not None
+        plot_trace(parts.trace_path, args.plot, world=parts.world)
+        if not args.quiet and lost is None:
+            _print(f"plot written to {args.plot}")
+    if guard.received is not None:
+        _say(f"mdle run: interrupted by {signal_name(guard.received)}: robot stopped"
+             + (f", trace in {args.trace}" if args.trace else "")
+             + "".join(f", recording in {r.target}" for r in parts.recorders
+                       if r.error is None))
+        return guard.exit_code
+    if lost is not None:
+        output.output_closed()
+        _say(f"mdle run: {result.reason or 'standard output lost'}: run stopped, robot "
+             "stopped" + (f", trace in {args.trace}" if args.trace else ""))
+        return output.EXIT_PIPE if isinstance(lost, BrokenPipeError) else output.EXIT_IO
+    if failed:
+        return output.EXIT_IO
+    if result.collided or result.fault:
+        why = [w for w in ("the robot collided" if result.collided else None,
+                           result.fault) if w]
+        _say(f"mdle run: {'; '.join(why)}")
+        return output.EXIT_COLLISION
+    return output.EXIT_OK
+
+
+def _header(args: argparse.Namespace) -> dict[str, Any]:
+    """Return the trace header's fields known before anything is loaded."""
+    return {"program": {"file": os.path.abspath(args.plan), "element": args.element,
+                        "entry": None},
+            "rate": args.rate, "until": args.until, "backend": args.backend,
+            "argv": sys.argv[1:]}
+
+
+def _open_trace(path: str, header: dict[str, Any]) -> TraceWriter:
+    from mdle.errors import Diagnostic, MdleError
+    from mdle.trace import TraceWriter
+
+    try:
+        return TraceWriter(path, header)
+    except OSError as exc:
+        raise MdleError(Diagnostic(None, f"cannot write the trace `{path}`: "
+                                         f"{exc.strerror}")) from None
+
+
+def _end_interrupted(args: argparse.Namespace, parts: _Parts, exc: BaseException) -> bool:
+    """End what the interruption left open; True when the run had begun (robot stopped).
+
+    A scheduler that has not ended is stopped (the robot too, and the trace ends with the
+    stop); a trace asked for before the run could begin gets its header and an end
+    record that says so.
+    """
+    reason = getattr(exc, "reason", None) or "KeyboardInterrupt"
+    scheduler = parts.scheduler
+    if scheduler is not None:
+        if scheduler.result is None:
+            scheduler.request_stop(reason)
+            scheduler.stop()
+        return True
+    if parts.backend is not None:
+        parts.backend.stop()
+    writer = parts.writer
+    if writer is None and args.trace:
+        try:
+            writer = _open_trace(args.trace, parts.header)
+        except Exception:  # noqa: BLE001 - nothing more to save; the signal is reported
+            return parts.backend is not None
+        parts.observers.append(writer)
+    if writer is not None and not writer.ended:
+        writer.on_end(_not_started(parts.header, f"{reason} before the run started"))
+    return parts.backend is not None
+
+
+def _not_started(header: dict[str, Any], reason: str) -> RunResult:
+    """Return the result of a run that never began: stopped at t = 0, no tick."""
+    from mdle.runtime import Cause, RunResult, Termination
+
+    label = str(header["program"].get("element") or "")
+    return RunResult(Termination(label, 0, Cause.STOPPED, 0.0), (), (), 0, 0.0, 0.0,
+                     reason=reason)
+
+
+def _trace_ended(parts: _Parts) -> bool:
+    return any(getattr(o, "ended", False) for o in parts.observers)
+
+
+def _say(text: str) -> None:
+    """Print on standard error (nothing if that is gone too)."""
+    try:
+        print(text, file=sys.stderr)
+    except OSError:
+        pass
+
+
+def _print(text: str) -> None:
+    """Print on standard output; a closed one is left alone."""
+    try:
+        print(text)
+    except BrokenPipeError:
+        output.output_closed()
 
 
 def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> list[Any]:

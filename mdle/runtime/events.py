@@ -131,7 +131,8 @@ class RunResult:
     ``min_clearance`` the smallest true clearance seen (m, None without ground truth),
     ``collided`` whether the simulator reported a collision, ``fault`` the message of the
     error or fault that aborted the run (None otherwise), ``max_lateness`` the worst tick
-    lateness (s).
+    lateness (s), ``reason`` why a run that was stopped from outside (cause ``stopped``)
+    was stopped: the signal (``SIGTERM``), ``standard output closed``, the time limit.
     """
 
     termination: Termination
@@ -144,6 +145,7 @@ class RunResult:
     collided: bool = False
     fault: str | None = None
     max_lateness: float = 0.0
+    reason: str | None = None
 
     @property
     def cause(self) -> Cause:

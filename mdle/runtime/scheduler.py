@@ -199,6 +199,8 @@ class Scheduler:
         self._ticks = 0
         self._started = False
         self._stop_requested = False
+        self._stop_reason: str | None = None
+        self._ending = False
         self._t0: float | None = None
         self._obs: Observation | None = None
         self._pose: Pose = Pose()
@@ -240,6 +242,8 @@ class Scheduler:
             if self.result is None:
                 cause = Cause.STOPPED if isinstance(exc, KeyboardInterrupt) else Cause.ERROR
                 fault = None if cause is Cause.STOPPED else _describe(exc)
+                if cause is Cause.STOPPED and self._stop_reason is None:
+                    self._stop_reason = getattr(exc, "reason", None) or "KeyboardInterrupt"
                 try:
                     self._finish(cause, fault)
                 except Exception:  # keep the original error; the stop failure is logged
@@ -255,9 +259,21 @@ class Scheduler:
         assert self.result is not None
         return self.result
 
-    def request_stop(self) -> None:
-        """Ask the run to stop at the next tick (safe from a signal handler)."""
+    def request_stop(self, reason: str | None = None) -> None:
+        """Ask the run to stop at the next tick (safe from a signal handler).
+
+        That tick observes, ends every active element with cause ``stopped`` and sends
+        the stop command, which its sample records. ``reason`` (a signal's name, "standard
+        output closed") goes to :attr:`RunResult.reason`; the first one given is kept.
+        """
+        if self._stop_reason is None:
+            self._stop_reason = reason or "stop requested"
         self._stop_requested = True
+
+    @property
+    def ending(self) -> bool:
+        """True once the run has begun to end (and after it ended)."""
+        return self._ending or self.result is not None
 
     # ------------------------------------------------------------------ introspection API
 
@@ -314,34 +330,25 @@ class Scheduler:
     # ------------------------------------------------------------------ the tick
 
     def _tick(self) -> bool:
-        if self._stop_requested:
-            self._finish(Cause.STOPPED, None)
-            return False
         obs = self.backend.observe()
         now = obs.time
-        prev = self._obs
-        self._obs = obs
+        self._absorb(obs)
         pose = obs.pose
-        if prev is not None:
-            self._distance += math.hypot(pose.x - self._pose.x, pose.y - self._pose.y)
-        self._pose = pose
         truth = obs.truth
-        if truth:
-            clearance = truth.get("clearance")
-            if clearance is not None and (self._min_clearance is None
-                                          or clearance < self._min_clearance):
-                self._min_clearance = float(clearance)
-            if truth.get("collided"):
-                self._collided = True
 
         tick = self._ticks
         self._ticks = tick + 1
         ctx = Context(obs, 0.0, self.dt, self.backend.limits, {})
         if self._t0 is None:
             self._t0 = now
-            self._descend(self._root, now, ctx)
+            if not self._stop_requested:  # asked to stop before it began: never start
+                self._descend(self._root, now, ctx)
         fault = None
-        if self.until is not None and now - self._t0 >= self.until - TIME_EPS:
+        if self._stop_requested:
+            self._end_from(0, Cause.STOPPED, now, all_levels=True)
+        elif self.until is not None and now - self._t0 >= self.until - TIME_EPS:
+            if self._stop_reason is None:
+                self._stop_reason = f"the time limit (until = {self.until:g} s)"
             self._end_from(0, Cause.STOPPED, now, all_levels=True)
         elif self.stall_timeout is not None and (obs.stalled or not obs.motors_enabled
                                                  or self._stall_since is not None):
@@ -395,6 +402,23 @@ class Scheduler:
         if not running:
             self._finish(None, fault)
         return running
+
+    def _absorb(self, obs: Observation) -> None:
+        """Make ``obs`` the latest observation: pose, distance, clearance, collision."""
+        prev = self._obs
+        self._obs = obs
+        pose = obs.pose
+        if prev is not None:
+            self._distance += math.hypot(pose.x - self._pose.x, pose.y - self._pose.y)
+        self._pose = pose
+        truth = obs.truth
+        if truth:
+            clearance = truth.get("clearance")
+            if clearance is not None and (self._min_clearance is None
+                                          or clearance < self._min_clearance):
+                self._min_clearance = float(clearance)
+            if truth.get("collided"):
+                self._collided = True
 
     def _settle(self, ctx: Context, now: float, tick: int) -> None:
         """Test the active elements outermost first until none fires (rules 3-6)."""
@@ -539,8 +563,16 @@ class Scheduler:
     def _finish(self, cause: Cause | None, fault: str | None) -> None:
         """End every active element with ``cause``, stop the robot, build the result.
 
-        ``cause`` None means the program ended by itself (the stack is already empty).
+        ``cause`` None means the program ended by itself, or at a tick that already sent
+        the stop command (the stack is empty). Otherwise (an abort between or inside
+        ticks) the robot is observed once more where it is stopped, the elements end at
+        that time, and after the stop command a last sample records it (``cmd_v`` and
+        ``cmd_omega`` zero), so a trace always ends with the command actually sent.
         """
+        self._ending = True
+        stopped: Observation | None = None
+        if cause is not None:
+            stopped = self._last_look()
         now = self._obs.time if self._obs is not None else 0.0
         stack = self._stack
         try:
@@ -559,6 +591,11 @@ class Scheduler:
             self._checks = None
             try:
                 self.backend.stop()
+                self._last_cmd = STOP
+                if stopped is not None and self.observers:
+                    sample = _stop_sample(stopped)
+                    for o in self.observers:
+                        o.on_tick(sample)
             finally:
                 root = next((t for t in reversed(self._terminations) if t.level == 0),
                             Termination(self._root.path, 0, cause or Cause.STOPPED, now))
@@ -573,9 +610,32 @@ class Scheduler:
                     collided=self._collided,
                     fault=fault,
                     max_lateness=self._max_lateness,
+                    reason=self._stop_reason if root.cause is Cause.STOPPED else None,
                 )
                 for o in self.observers:
                     o.on_end(self.result)
+
+    def _last_look(self) -> Observation | None:
+        """Observe the robot as the run is aborted; the latest observation if that fails.
+
+        None before the first tick when the backend cannot be observed either.
+        """
+        try:
+            obs = self.backend.observe()
+        except (Exception, KeyboardInterrupt):  # a lost robot, a second Ctrl-C: end anyway
+            return self._obs
+        self._absorb(obs)
+        return obs
+
+
+def _stop_sample(obs: Observation) -> Sample:
+    """Return the sample of the stop command sent at ``obs`` (no element running)."""
+    truth = obs.truth
+    scan = obs.scan
+    return Sample(obs.time, obs.pose.x, obs.pose.y, obs.pose.theta, obs.v, obs.omega,
+                  STOP.v, STOP.omega, "", 0.0,
+                  None if scan is None else obs.time - scan.stamp, obs.stalled, _EMPTY,
+                  *(_truth_fields(truth) if truth else _NO_TRUTH))
 
 
 _NO_TRUTH = (None, None, None, None, None)

@@ -128,8 +128,17 @@ def test_bad_plot_or_trace_file_is_refused_before_running(
     assert res.returncode == 1 and ".png, .svg or .pdf" in res.stderr
     assert res.stdout == ""  # nothing ran
     res = run_mdle("run", str(plan(FOLLOW)), "--trace", str(tmp_path / "no" / "t.jsonl"))
-    assert res.returncode == 1 and "cannot write the trace" in res.stderr
+    assert res.returncode == 1 and "--trace" in res.stderr and "no folder" in res.stderr
     assert res.stdout == ""
+    # a plot that could not be written at the end of the run is refused before it
+    res = run_mdle("run", str(plan(FOLLOW)), "--plot", str(tmp_path / "none" / "p.png"))
+    assert res.returncode == 1 and "--plot" in res.stderr and "no folder" in res.stderr
+    assert res.stdout == ""
+    res = run_mdle("run", str(plan(FOLLOW)), "--plot", str(tmp_path))
+    assert res.returncode == 1 and "must end in" in res.stderr
+    (tmp_path / "d.png").mkdir()
+    res = run_mdle("run", str(plan(FOLLOW)), "--plot", str(tmp_path / "d.png"))
+    assert res.returncode == 1 and "is a folder" in res.stderr and res.stdout == ""
 
 
 def test_pioneer_backend_needs_a_connection(plan: WritePlan, run_mdle: RunMdle) -> None:
@@ -173,7 +182,11 @@ def test_signal_stops_the_robot_and_leaves_a_valid_trace(
     lines = trace.read_text().splitlines()
     records = [json.loads(line) for line in lines]  # complete, strict JSON lines
     assert records[-1]["type"] == "end" and records[-1]["cause"] == "stopped"
-    assert records[-2]["type"] == "event" and records[-2]["cause"] == "stopped"
+    assert records[-1]["reason"] == ("SIGINT (Ctrl-C)" if sig == signal.SIGINT else "SIGTERM")
+    # the stop command that was sent is the last sample, after the elements ended
+    assert records[-2]["type"] == "sample" and records[-2]["cmd_omega"] == 0.0
+    assert records[-2]["cmd_v"] == 0.0 and records[-2]["path"] == ""
+    assert records[-3]["type"] == "event" and records[-3]["cause"] == "stopped"
     assert "elements run:" in out
 
 
@@ -295,4 +308,5 @@ def test_second_ctrl_c_between_ticks_still_ends_the_run(
     assert code == 130
     t = read_trace(trace)
     assert t.end is not None and t.end["cause"] == "stopped"
-    assert len(t.samples) == 2
+    # two ticks, then the stop command sent when the run was ended between ticks
+    assert len(t.samples) == 3 and t.samples[-1]["cmd_v"] == 0.0

@@ -158,15 +158,49 @@ def test_keyboard_interrupt_inside_a_tick_stops_robot(ir: SimpleNamespace) -> No
 
 
 def test_request_stop_ends_the_run_at_the_next_tick(ir: SimpleNamespace) -> None:
+    # the next tick observes, ends every element and sends the stop command, which its
+    # sample records; the reason reaches the result
     backend = ScriptedBackend()
-    sch = Scheduler(ir.string("main", ir.atom("a", 1.0)), backend)
+    rec = Recorder()
+    sch = Scheduler(ir.string("main", ir.atom("a", 1.0, law=ir.const_law("a", 0.5))),
+                    backend, observers=[rec])
     sch.tick()
     sch.tick()
-    sch.request_stop()
+    sch.request_stop("SIGTERM")
     assert not sch.tick()
     assert sch.result is not None
-    assert sch.result.cause is Cause.STOPPED and sch.result.ticks == 2
+    assert sch.result.cause is Cause.STOPPED and sch.result.ticks == 3
+    assert sch.result.reason == "SIGTERM"
+    assert [s.cmd_v for s in rec.samples] == [0.5, 0.5, 0.0]
+    assert rec.samples[-1].path == "" and backend.commands[-1][1] == Command(0.0, 0.0)
     assert len(backend.stops) == 1
+
+
+def test_an_abort_between_ticks_records_the_stop_command(ir: SimpleNamespace) -> None:
+    backend = ScriptedBackend()
+    rec = Recorder()
+    sch = Scheduler(ir.atom("a", 1.0, law=ir.const_law("a", 0.5)), backend,
+                    observers=[rec])
+    sch.tick()
+    sch.tick()
+    assert rec.samples[-1].cmd_v == 0.5
+    sch.stop()
+    assert sch.ending and sch.result is not None
+    last = rec.samples[-1]
+    assert (last.cmd_v, last.cmd_omega, last.path) == (0.0, 0.0, "")
+    # observed where the robot was stopped: after the last tick's advance
+    assert last.time > rec.samples[-2].time
+    assert rec.events[-1].time == last.time and len(backend.stops) == 1
+
+
+def test_a_stop_requested_before_the_first_tick_starts_nothing(ir: SimpleNamespace) -> None:
+    rec = Recorder()
+    sch = Scheduler(ir.atom("a", 1.0, law=ir.const_law("a", 0.5)), ScriptedBackend(),
+                    observers=[rec])
+    sch.request_stop("SIGINT (Ctrl-C)")
+    assert not sch.tick()
+    assert rec.events == [] and [s.cmd_v for s in rec.samples] == [0.0]
+    assert rec.result is not None and rec.result.cause is Cause.STOPPED
 
 
 def test_stop_is_idempotent_and_works_before_any_tick(ir: SimpleNamespace) -> None:

@@ -133,7 +133,10 @@ def test_a_run_ended_by_ctrl_c_or_a_crash_leaves_every_sample_on_disk(
         run(ir.atom("a", law=ir.const_law("a", step=step)), ScriptedBackend(),
             observers=[writer])
     trace = read_trace(path)
-    assert len(trace.samples) == 4 and not trace.truncated
+    # the four ticks, then the stop command sent as the run was aborted
+    assert len(trace.samples) == 5 and not trace.truncated
+    assert [s["cmd_v"] for s in trace.samples] == [0.1] * 4 + [0.0]
+    assert trace.samples[-1]["path"] == ""
     assert trace.end is not None
     assert trace.end["cause"] == ("stopped" if error is KeyboardInterrupt else "error")
 
