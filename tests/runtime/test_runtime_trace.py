@@ -16,7 +16,7 @@ from mdle.backend import Command
 from mdle.errors import MdleRuntimeError
 from mdle.runtime import Cause, Scheduler, run
 from mdle.runtime.scripted import ScriptedBackend
-from mdle.trace import TraceError, TraceWriter, read_trace
+from mdle.trace import TraceError, TraceWriteError, TraceWriter, read_trace
 
 
 def test_trace_has_header_events_samples_and_end(ir: SimpleNamespace, tmp_path: Path) -> None:
@@ -196,3 +196,90 @@ def test_trace_of_an_aborted_run_ends_with_the_abort(ir: SimpleNamespace, tmp_pa
     assert trace.end is not None
     assert result.cause is Cause.STOPPED and trace.end["cause"] == "stopped"
     assert trace.events[-1]["cause"] == "stopped"
+
+
+class _FillsUp:
+    """The trace's raw file on a disk with ``room`` bytes left: a write that does not fit
+    is written in part (as the kernel does), and the next one fails with ENOSPC."""
+
+    def __init__(self, raw: Any, room: int) -> None:
+        self.raw, self.room = raw, room
+
+    def write(self, data: Any) -> int:
+        import errno
+
+        if self.room <= 0:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        n = min(len(data), self.room)
+        self.room -= n
+        return int(self.raw.write(bytes(data[:n])))
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.raw, name)
+
+
+def _whole_lines(path: Path) -> list[dict[str, Any]]:
+    data = path.read_bytes()
+    assert data == b"" or data.endswith(b"\n"), "a record was cut"
+    return [json.loads(line) for line in data.splitlines()]
+
+
+@pytest.mark.parametrize("room", [700, 2000, 5000])
+def test_a_full_disk_keeps_whole_records_and_ends_the_run(
+        ir: SimpleNamespace, tmp_path: Path, room: int) -> None:
+    path = tmp_path / "t.jsonl"
+    backend = ScriptedBackend()
+    writer = TraceWriter(path, flush_period=0.0)
+    writer._file = _FillsUp(writer._file, room)  # type: ignore[assignment]
+    atom = ir.atom("a", law=ir.const_law("a", 0.5))
+    with pytest.raises(TraceWriteError, match="No space left on device"):
+        run(atom, backend, until=100.0, observers=[writer])
+    records = _whole_lines(path)  # every line whole, nothing cut
+    assert records[0]["type"] == "header"
+    assert writer.error is not None and str(path) in str(writer.error)
+    assert writer.error.records == len(records) - (1 if writer.ended else 0)
+    # the run was ended by the failure and the robot stopped
+    assert backend.stops and backend.stops[-1] >= backend.commands[-1][0]
+    if writer.ended:  # cutting the failed batch made room for the end record
+        assert records[-1]["type"] == "end" and records[-1]["cause"] == "error"
+        assert "No space left" in records[-1]["fault"]
+    assert read_trace(path).header["type"] == "header"
+
+
+def test_a_write_cut_by_a_signal_leaves_no_partial_record(tmp_path: Path) -> None:
+    path = tmp_path / "t.jsonl"
+    writer = TraceWriter(path, flush_period=3600.0)
+
+    class _CutShort:
+        """A write that stops half way, then a Ctrl-C before the rest is written."""
+
+        def __init__(self, raw: Any) -> None:
+            self.raw, self.calls = raw, 0
+
+        def write(self, data: Any) -> int:
+            self.calls += 1
+            if self.calls == 1:
+                return int(self.raw.write(bytes(data[: len(data) // 2])))
+            raise KeyboardInterrupt
+
+        def __getattr__(self, name: str) -> Any:
+            return getattr(self.raw, name)
+
+    size = path.stat().st_size
+    raw = writer._file
+    writer._file = _CutShort(raw)  # type: ignore[assignment]
+    writer._pending.append('{"type":"extra","n":1}')
+    with pytest.raises(KeyboardInterrupt):
+        writer.flush()
+    assert path.stat().st_size == size  # taken back to the header
+    writer._file = raw
+    writer._pending.append('{"type":"extra","n":2}')
+    writer.close()
+    assert [r["type"] for r in _whole_lines(path)] == ["header", "extra"]
+
+
+def test_a_header_that_cannot_be_written_is_an_error_naming_the_file(tmp_path: Path) -> None:
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full on this system")
+    with pytest.raises(TraceWriteError, match="cannot write the trace `/dev/full`"):
+        TraceWriter("/dev/full")
