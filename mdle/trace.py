@@ -39,8 +39,8 @@ if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
 
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
-           "TraceWriteError", "SampleFormat", "LaserRecords", "read_trace", "versions", "decode_ranges",
-           "dumps", "start_record", "event_record", "end_record", "scan_ranges",
+           "TraceWriteError", "SampleFormat", "LaserRecords", "read_trace", "versions",
+           "decode_ranges", "dumps", "start_record", "event_record", "end_record", "scan_ranges",
            "encode_ranges", "laser_mount"]
 
 TRACE_FORMAT = "mdle-trace"

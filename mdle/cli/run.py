@@ -3,10 +3,10 @@
 Exit codes: 0 the program ran to its end (or to ``--until``), 1 plan or world errors
 (shown as ``mdle check`` shows them) and robot or connection faults, 3 the robot
 collided or stalled fatally, 74 the trace or a recording could not be written (disk
-full: the run is ended), 130 Ctrl-C (143 SIGTERM, 129 SIGHUP), 141 standard output closed (``| head``:
-the run is ended). The robot is stopped, and a requested trace ends with its end record
-and the stop command, in every case; a signal that comes before the run could start
-still leaves a trace (header and end record) saying so.
+full: the run is ended), 130 Ctrl-C (143 SIGTERM, 129 SIGHUP), 141 standard output
+closed (``| head``: the run is ended). The robot is stopped, and a requested trace
+ends with its end record and the stop command, in every case; a signal that comes
+before the run could start still leaves a trace (header and end record) saying so.
 """
 
 from __future__ import annotations

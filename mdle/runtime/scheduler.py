@@ -630,12 +630,13 @@ class Scheduler:
 
 def _stop_sample(obs: Observation) -> Sample:
     """Return the sample of the stop command sent at ``obs`` (no element running)."""
-    truth = obs.truth
     scan = obs.scan
+    clearance, collided, true_x, true_y, true_theta = (
+        _truth_fields(obs.truth) if obs.truth else _NO_TRUTH)
     return Sample(obs.time, obs.pose.x, obs.pose.y, obs.pose.theta, obs.v, obs.omega,
                   STOP.v, STOP.omega, "", 0.0,
                   None if scan is None else obs.time - scan.stamp, obs.stalled, _EMPTY,
-                  *(_truth_fields(truth) if truth else _NO_TRUTH))
+                  clearance, collided, true_x, true_y, true_theta, scan)
 
 
 _NO_TRUTH = (None, None, None, None, None)

@@ -186,7 +186,8 @@ def test_signal_stops_the_robot_and_leaves_a_valid_trace(
     # the stop command that was sent is the last sample, after the elements ended
     assert records[-2]["type"] == "sample" and records[-2]["cmd_omega"] == 0.0
     assert records[-2]["cmd_v"] == 0.0 and records[-2]["path"] == ""
-    assert records[-3]["type"] == "event" and records[-3]["cause"] == "stopped"
+    last_event = next(r for r in reversed(records) if r["type"] == "event")
+    assert last_event["cause"] == "stopped" and last_event["t"] == records[-2]["t"]
     assert "elements run:" in out
 
 

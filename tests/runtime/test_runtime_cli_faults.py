@@ -116,10 +116,10 @@ def test_signals_at_fifty_random_moments_leave_complete_traces(
                 proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                         text=True, env=_env())
             running.append((k, sig, trace, proc, time.monotonic() + moments[k]))
-        for k, sig, trace, proc, at in sorted(running, key=lambda r: r[4]):
+        for _, sig, _, proc, at in sorted(running, key=lambda r: r[4]):
             time.sleep(max(0.0, at - time.monotonic()))
             proc.send_signal(sig)
-        for k, sig, trace, proc, at in running:
+        for k, sig, trace, proc, _ in running:
             what = f"run {k}: {signal.Signals(sig).name} at {moments[k] * 1e3:.0f} ms"
             out, err = _finish(proc)
             assert proc.returncode == 128 + sig, f"{what}: exit {proc.returncode}\n{err}"
