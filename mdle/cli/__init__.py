@@ -89,7 +89,7 @@ def _main(argv: Sequence[str] | None, guard: SignalGuard) -> int:
         return output.EXIT_USAGE
     args.signals = guard
     code = output.guarded(handler, args)
-    if guard.received is not None and code in (output.EXIT_OK, output.EXIT_INTERRUPTED):
+    if guard.pending:  # a signal the command deferred and never acted on
         return guard.exit_code
     return code
 

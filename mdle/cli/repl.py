@@ -95,11 +95,7 @@ def run(args: argparse.Namespace) -> int:
             return run_prompt(repl)
         from mdle.repl.plain import run_plain
 
-        try:
-            return run_plain(repl, sys.stdin, echo=args.echo)
-        except KeyboardInterrupt:  # Ctrl-C while waiting for input (a run catches its own)
-            print("interrupted", file=sys.stderr)
-            return output.EXIT_INTERRUPTED
+        return run_plain(repl, sys.stdin, echo=args.echo)
     finally:
         _close(session, repl)
 

@@ -27,7 +27,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any, Protocol
 
-__all__ = ["SIGNALS", "Interrupted", "SignalGuard", "Stoppable", "signal_name"]
+__all__ = ["SIGNALS", "Interrupted", "SignalGuard", "Stoppable", "ends_session", "signal_name"]
 
 #: The signals that end mdle (SIGHUP: the terminal went away).
 SIGNALS: tuple[signal.Signals, ...] = tuple(
@@ -42,6 +42,15 @@ def signal_name(signum: int) -> str:
     except ValueError:
         return f"signal {signum}"
     return "SIGINT (Ctrl-C)" if signum == signal.SIGINT else name
+
+
+def ends_session(exc: BaseException) -> bool:
+    """Return True for an interruption that must end an interactive session too.
+
+    Ctrl-C (SIGINT, or a plain ``KeyboardInterrupt``) only stops what runs; SIGTERM and
+    SIGHUP end the program.
+    """
+    return getattr(exc, "signum", signal.SIGINT) != signal.SIGINT
 
 
 class Interrupted(KeyboardInterrupt):
@@ -137,6 +146,11 @@ class SignalGuard:
             yield
         finally:
             self._mode, self._target = mode, None
+
+    @property
+    def pending(self) -> bool:
+        """True when a signal came while deferred and nothing has acted on it yet."""
+        return self._pending
 
     @property
     def exit_code(self) -> int:

@@ -30,6 +30,7 @@ from typing import IO
 
 from mdle.backend import Pose
 from mdle.cli.output import print_diagnostics
+from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
 from mdle.repl import views
 from mdle.repl.session import ReplError, RunReport, Session
@@ -174,7 +175,9 @@ class Repl:
         except MdleError as exc:
             print_diagnostics(exc.diagnostics, exc.sources, self.err)
             ok = False
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
+            if ends_session(exc):  # SIGTERM, SIGHUP: the session ends (robot stopped)
+                raise
             self.complain("interrupted")
             ok = False
         except Exception as exc:  # noqa: BLE001 (an mdle bug: report it, keep the session)

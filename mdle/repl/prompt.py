@@ -20,6 +20,7 @@ import os
 import re
 import time
 from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, ClassVar
 
@@ -38,6 +39,7 @@ from pygments.token import (
     Whitespace,
 )
 
+from mdle.cli.signals import ends_session
 from mdle.repl.commands import COMMANDS, DEFINITION_KEYWORDS, KEYWORDS, Repl
 from mdle.runtime import BaseObserver, RunResult, Sample
 
@@ -52,6 +54,7 @@ __all__ = [
     "MdleCompleter",
     "MdleLexer",
     "ProgressLine",
+    "ctrl_c_interrupts",
     "history_path",
     "make_prompt_session",
     "run_prompt",
@@ -471,9 +474,60 @@ def run_prompt(repl: Repl, *, input: Input | None = None, output: Output | None 
     while not repl.quit_requested:
         try:
             text = session.prompt(PROMPT)
-        except KeyboardInterrupt:  # Ctrl-C at the prompt: drop the line
+        except KeyboardInterrupt as exc:  # Ctrl-C at the prompt: drop the line
+            if ends_session(exc):  # SIGTERM, SIGHUP: leave
+                raise
             continue
         except EOFError:  # Ctrl-D
             break
-        repl.handle(text)
+        with ctrl_c_interrupts(repl.out if output is None else None):
+            repl.handle(text)
     return 0
+
+
+@contextmanager
+def ctrl_c_interrupts(stream: IO[str] | None) -> Iterator[None]:
+    """Make sure Ctrl-C on the terminal behind ``stream`` raises KeyboardInterrupt here.
+
+    Whatever mode the terminal was left in (a raw mode turns the key into a plain byte)
+    and whatever became of the SIGINT handler: the terminal's ISIG flag is switched on
+    (with Ctrl-C as its interrupt key) and a handler that raises is put in place for the
+    block, both restored after it. Without a terminal (``stream`` None, or not a tty)
+    only the handler is seen to.
+    """
+    import signal
+
+    handler = signal.getsignal(signal.SIGINT)
+    if not callable(handler):  # SIG_IGN / SIG_DFL: a run could not be stopped
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    saved = None
+    fd = -1
+    try:
+        import termios
+
+        if stream is not None and stream.isatty():
+            fd = stream.fileno()
+            saved = termios.tcgetattr(fd)
+            mode = list(saved)
+            cc = list(mode[6])
+            if not (mode[3] & termios.ISIG) or cc[termios.VINTR] != b"\x03":
+                mode[3] |= termios.ISIG
+                cc[termios.VINTR] = b"\x03"
+                mode[6] = cc
+                termios.tcsetattr(fd, termios.TCSANOW, mode)
+            else:
+                saved = None
+    except (ImportError, OSError, ValueError):  # no termios, or not a real terminal
+        saved = None
+    try:
+        yield
+    finally:
+        if saved is not None:
+            try:
+                import termios
+
+                termios.tcsetattr(fd, termios.TCSANOW, saved)
+            except OSError:
+                pass
+        if not callable(handler):
+            signal.signal(signal.SIGINT, handler)

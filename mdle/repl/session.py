@@ -24,6 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from atoms.registry import Registry
 from mdle.backend import Backend, Observation, Pose, RobotLimits
+from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
 from mdle.program import Element
 from mdle.runtime import (
@@ -533,8 +534,12 @@ class Session:
             scheduler.start()
             while scheduler.tick():
                 pass
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
             interrupted = True
+            if ends_session(exc):  # SIGTERM: stop the robot (below), then end the session
+                scheduler.request_stop(getattr(exc, "reason", None))
+                scheduler.stop()
+                raise
         except MdleError as exc:  # a failing law or interrupt, a backend fault
             error = exc
         finally:
@@ -579,8 +584,12 @@ class Session:
                 rows.append(_row(scheduler.ticks, record.samples[-1], scan))
                 if not running:
                     break
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
             interrupted = True
+            if ends_session(exc):
+                scheduler.stop()
+                self._stepping = None
+                raise
         except MdleError as exc:
             error = exc
         if scheduler.result is None and interrupted:
