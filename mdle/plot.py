@@ -133,6 +133,10 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
         x, y = true_x, trace.column("true_y")
     else:
         x, y = trace.column("x"), trace.column("y")
+    placed = np.flatnonzero(np.isfinite(x) & np.isfinite(y))
+    if not len(placed):
+        raise PlotError(Diagnostic(None, f"trace `{trace.path}` has no sample with a finite "
+                                         "position (x, y) to plot"))
     curv = _curvature(trace)
     pts = boundary_points(trace)
     (x0, x1), (y0, y1) = _extent(x, y, pts, world)
@@ -156,7 +160,10 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     for i, (label, seg) in enumerate(_segments_by_atom(x, y, trace.paths()).items()):
         ax.add_collection(LineCollection(list(seg), colors=colours[i % 10], lw=2.0, zorder=3,
                                          label=f"atom {label}"))
-    ax.plot([x[0]], [y[0]], marker=(3, 0, math.degrees(trace.column("theta")[0]) - 90),
+    first = int(placed[0])
+    heading = float(trace.column("theta")[first])
+    heading = heading if math.isfinite(heading) else 0.0
+    ax.plot([x[first]], [y[first]], marker=(3, 0, math.degrees(heading) - 90),
             ms=11, color="k", ls="none", zorder=5, label="start")
 
     _mark_events(ax, trace.events, world is not None and use_truth, trace)
@@ -231,7 +238,12 @@ def _mark_events(ax: "Axes", events: Sequence[Mapping[str, Any]], truth: bool,
         if e.get("kind") != "end" or cause not in _CAUSE_STYLE:
             continue
         marker, colour = _CAUSE_STYLE[cause]
-        px, py = where(e)
+        try:
+            px, py = where(e)
+        except (KeyError, TypeError):  # an event without a time or place: not drawn
+            continue
+        if not (math.isfinite(px) and math.isfinite(py)):
+            continue
         ax.plot([px], [py], marker=marker, color=colour, ms=7, mew=1.5, ls="none", zorder=4,
                 mfc="none" if marker in ("o", "s") else colour,
                 label=None if cause in shown else f"end: {cause}")
@@ -251,7 +263,7 @@ def _title(trace: Trace) -> str:
         parts.append(f"seed {h['seed']}")
     end = trace.end
     if end:
-        parts.append(f"{end.get('cause')} at {float(end.get('duration', 0.0)):.1f} s")
+        parts.append(f"{end.get('cause')} at {float(end.get('duration') or 0.0):.1f} s")
         if end.get("collided"):
             parts.append("COLLIDED")
     elif trace.truncated or end is None:
@@ -301,5 +313,32 @@ def plot_trace(trace_path: str | os.PathLike[str], out: str | os.PathLike[str],
     elif world is None:
         world = world_of(trace)
     fig = trace_figure(trace, world)
-    fig.savefig(out, dpi=130)
+    _save(fig, out, ext)
     return out
+
+
+def _save(fig: "Figure", out: str, ext: str) -> None:
+    """Write the figure to ``out`` whole or not at all (a temporary file, then a rename).
+
+    Raises
+    ------
+    PlotError
+        The file cannot be written (the message names it and says why).
+    """
+    head, name = os.path.split(os.path.abspath(out))
+    tmp: str | None = os.path.join(head, f".{name}.{os.getpid()}.part")
+    try:
+        assert tmp is not None
+        with open(tmp, "wb") as f:  # created as any new file is (the umask applies)
+            fig.savefig(f, format=ext, dpi=130)
+        os.replace(tmp, out)
+        tmp = None
+    except OSError as exc:
+        raise PlotError(Diagnostic(None, f"cannot write the plot `{out}`: "
+                                         f"{exc.strerror or exc}")) from None
+    finally:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass

@@ -17,7 +17,6 @@ written as ``null`` so the file is strict JSON. The schema is documented in ``do
 from __future__ import annotations
 
 import base64
-import io
 import json
 import math
 import os
@@ -624,15 +623,102 @@ class Trace:
         return sorted(names)
 
 
-def _records(path: str) -> Iterator[tuple[int, str]]:
+def _records(path: str) -> Iterator[tuple[int, bytes]]:
     try:
         raw = open_user_file(path)
     except UserFileError as err:
         raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: {err.reason}")) \
             from None
-    with io.TextIOWrapper(raw, encoding="utf-8") as f:
+    with raw as f:
         for n, line in enumerate(f, 1):
             yield n, line
+
+
+def _decode(line: bytes) -> tuple[str | None, str]:
+    """Return the line as text, or None and what is wrong with it."""
+    try:
+        return line.decode("utf-8"), ""
+    except UnicodeDecodeError as exc:
+        return None, (f"not UTF-8 text (byte 0x{line[exc.start]:02x} at column "
+                      f"{exc.start + 1})")
+
+
+def _parse(text: str) -> tuple[Any, str]:
+    """Return the JSON value of a line, or None and what is wrong with it."""
+    try:
+        return json.loads(text), ""
+    except json.JSONDecodeError as exc:
+        return None, f"not JSON ({exc.msg})"
+    except RecursionError:
+        return None, "not a trace record (JSON nested too deeply)"
+
+
+#: Fields mdle reads from each kind of record, by the JSON type they must have (a
+#: missing field or null is always accepted: readers treat it as unknown).
+_NUMBERS: dict[str, tuple[str, ...]] = {
+    "sample": ("t", "x", "y", "theta", "v", "omega", "cmd_v", "cmd_omega", "lateness",
+               "scan_age", "clearance", "true_x", "true_y", "true_theta"),
+    "event": ("t", "x", "y", "theta"),
+    "end": ("t", "duration", "distance", "min_clearance", "max_lateness"),
+    "scan": ("t", "stamp"),
+    "header": ("rate", "until"),
+}
+_STRINGS: dict[str, tuple[str, ...]] = {
+    "sample": ("path",), "event": ("kind", "path", "cause", "element"),
+    "end": ("path", "cause", "fault", "reason"), "scan": ("ranges",),
+}
+_INTEGERS: dict[str, tuple[str, ...]] = {"event": ("level",), "end": ("ticks",),
+                                         "header": ("seed",)}
+_BOOLEANS: dict[str, tuple[str, ...]] = {"sample": ("stalled", "collided"),
+                                         "end": ("collided",)}
+_OBJECTS: dict[str, tuple[str, ...]] = {"sample": ("diag",),
+                                        "header": ("program", "world", "versions")}
+_HEADER_STRINGS = (("program", ("file", "element", "entry")), ("world", ("name", "spec")))
+
+
+def _type_error(rec: Mapping[str, Any], kind: str) -> str | None:
+    """Return what is wrong with the types of a record's fields (None: nothing)."""
+    for key in _NUMBERS.get(kind, ()):
+        v = rec.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+            return _wrong(kind, key, "a number", v)
+    for key in _INTEGERS.get(kind, ()):
+        v = rec.get(key)
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int)):
+            return _wrong(kind, key, "a whole number", v)
+    for key in _STRINGS.get(kind, ()):
+        v = rec.get(key)
+        if v is not None and not isinstance(v, str):
+            return _wrong(kind, key, "a string", v)
+    for key in _BOOLEANS.get(kind, ()):
+        v = rec.get(key)
+        if v is not None and not isinstance(v, bool):
+            return _wrong(kind, key, "true or false", v)
+    for key in _OBJECTS.get(kind, ()):
+        v = rec.get(key)
+        if v is not None and not isinstance(v, dict):
+            return _wrong(kind, key, "an object", v)
+    if kind == "sample" and rec.get("diag"):
+        for name, v in rec["diag"].items():
+            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))):
+                return _wrong(kind, f"diag.{name}", "a number", v)
+    if kind == "end" and not isinstance(rec.get("terminations", []), list):
+        return _wrong(kind, "terminations", "a list", rec["terminations"])
+    if kind == "header":
+        for part, keys in _HEADER_STRINGS:
+            sub = rec.get(part) or {}
+            for key in keys:
+                v = sub.get(key)
+                if v is not None and not isinstance(v, str):
+                    return _wrong(kind, f"{part}.{key}", "a string", v)
+    return None
+
+
+def _wrong(kind: str, key: str, what: str, value: Any) -> str:
+    shown = json.dumps(value)
+    if len(shown) > 40:
+        shown = shown[:37] + "..."
+    return f"`{key}` of the {kind} record must be {what}, not {shown}"
 
 
 def read_trace(path: str | os.PathLike[str]) -> Trace:
@@ -662,28 +748,38 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
     truncated = False
     bad: tuple[int, str] | None = None
     try:
-        for n, line in _records(path):
+        for n, raw_line in _records(path):
             if bad is not None:  # a bad line that was not the last one
                 raise _error(path, bad[0], bad[1])
-            if not line.strip():
+            line, problem = _decode(raw_line)
+            rec = None
+            if line is not None:
+                if not line.strip():
+                    continue
+                rec, problem = _parse(line)
+            if problem:
+                if raw_line.endswith(b"\n"):
+                    raise _error(path, n, problem)
+                bad = (n, problem)  # a last line cut short: accepted, marked truncated
                 continue
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError as exc:
-                if line.endswith("\n"):
-                    raise _error(path, n, f"not JSON ({exc.msg})") from None
-                bad = (n, f"not JSON ({exc.msg})")
-                continue
-            if not isinstance(rec, dict) or "type" not in rec:
+            if not isinstance(rec, dict) or not isinstance(rec.get("type"), str):
                 raise _error(path, n, "a record must be a JSON object with a `type`")
             kind = rec["type"]
             if header is None:
                 if kind != "header" or rec.get("format") != TRACE_FORMAT:
                     raise _error(path, n, f"not an mdle trace (the first record must be a "
                                           f"`header` with format `{TRACE_FORMAT}`)")
-                if int(rec.get("version", 0)) > TRACE_VERSION:
+                version = rec.get("version", 0)
+                if isinstance(version, bool) or not isinstance(version, int):
+                    raise _error(path, n, _wrong("header", "version", "a whole number",
+                                                 version))
+                if version > TRACE_VERSION:
                     raise _error(path, n, f"trace version {rec['version']} is newer than "
                                           f"this mdle reads ({TRACE_VERSION})")
+            wrong = _type_error(rec, kind)
+            if wrong is not None:
+                raise _error(path, n, wrong)
+            if header is None:
                 header = rec
             elif kind == "sample":
                 samples.append(rec)

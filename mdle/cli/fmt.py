@@ -35,7 +35,7 @@ def run(args: argparse.Namespace) -> int:
     """Format each file; returns the exit code."""
     from mdle.cli.check import expand_paths
     from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
-    from mdle.errors import MdleError
+    from mdle.errors import Diagnostic, MdleError
     from mdle.format import format_source
     from mdle.loader import read_source
 
@@ -55,9 +55,39 @@ def run(args: argparse.Namespace) -> int:
                 status = EXIT_INPUT
         elif args.write:
             if out != text:
-                with open(path, "w", encoding="utf-8", newline="\n") as f:
-                    f.write(out)
+                problem = _rewrite(path, out)
+                if problem is not None:
+                    print_diagnostics([Diagnostic(None, f"cannot write `{path}`: {problem}")])
+                    status = EXIT_INPUT
+                    continue
                 print(f"reformatted {path}", file=sys.stderr)
         else:
             sys.stdout.write(out)
     return status if files else EXIT_INPUT
+
+
+def _rewrite(path: str, text: str) -> str | None:
+    """Replace the file's text whole (a new file renamed over it); return why not, or None.
+
+    A file that cannot be written (read-only, on a read-only disk) is left as it is; so is
+    one whose new text cannot be written in full (a full disk).
+    """
+    import os
+
+    if not os.access(path, os.W_OK):
+        return "the file is read-only (or not yours)"
+    path = os.path.realpath(path)  # through a link: the file it names is rewritten
+    head, name = os.path.split(path)
+    tmp = os.path.join(head, f".{name}.{os.getpid()}.fmt")
+    try:
+        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+        os.chmod(tmp, os.stat(path).st_mode & 0o7777)
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        return exc.strerror or str(exc)
+    return None

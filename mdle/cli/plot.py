@@ -25,8 +25,10 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Write the plot; returns the exit code."""
+    from mdle.cli.options import writable_output
     from mdle.plot import plot_trace
 
+    writable_output(args.output, "-o", (".png", ".svg", ".pdf"))
     out = plot_trace(args.trace, args.output, world=args.world)
     print(f"plot written to {out}")
     return 0

@@ -95,7 +95,10 @@ def run(args: argparse.Namespace) -> int:
             return run_prompt(repl)
         from mdle.repl.plain import run_plain
 
-        return run_plain(repl, sys.stdin, echo=args.echo)
+        stdin = sys.stdin
+        if hasattr(stdin, "reconfigure"):  # bytes that are not UTF-8 reach run_plain as such
+            stdin.reconfigure(errors="surrogateescape")
+        return run_plain(repl, stdin, echo=args.echo)
     finally:
         _close(session, repl)
 

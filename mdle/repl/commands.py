@@ -324,9 +324,9 @@ class Repl:
             if len(args) not in (2, 3):
                 raise ReplError(":reset takes no argument (the world's start) or X Y [THETA] "
                                 "(metres, metres, degrees)")
-            x = _number(args[0], "x")
-            y = _number(args[1], "y")
-            th = math.radians(_number(args[2], "theta")) if len(args) == 3 else 0.0
+            x = _finite(args[0], "x")
+            y = _finite(args[1], "y")
+            th = math.radians(_finite(args[2], "theta")) if len(args) == 3 else 0.0
             pose = Pose(x, y, th)
         here = self.session.reset(pose)
         if not self.session.simulated:
@@ -416,7 +416,12 @@ class Repl:
                        "a real robot has no random seed and always runs at the pace of the "
                        "wall clock")
         if what == "seed":
-            self.session.set_seed(_int(value, "the seed"))
+            from mdle.cli.options import MAX_SEED
+
+            seed = _int(value, "the seed")
+            if not 0 <= seed <= MAX_SEED:
+                raise ReplError(f"a seed is a whole number from 0 to {MAX_SEED}, got {value}")
+            self.session.set_seed(seed)
             self.say(f"seed {self.session.seed}; robot where it was, t = 0, path cleared")
             return True
         if what == "until":
@@ -474,6 +479,13 @@ def _number(text: str, what: str) -> float:
         raise ReplError(f"{what} must be a number, got `{text}`") from None
     if math.isnan(value):
         raise ReplError(f"{what} must be a number, got `{text}`")
+    return value
+
+
+def _finite(text: str, what: str) -> float:
+    value = _number(text, what)
+    if not math.isfinite(value):
+        raise ReplError(f"{what} must be a finite number, got `{text}`")
     return value
 
 

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -110,3 +112,55 @@ def test_show_prints_tree_and_figures() -> None:
     r = mdle("show", TOUR, "--plan", "spin")
     assert r.stdout.startswith("atom spin: turn(rate = 30 deg/s)  [never | 3 s]")
     assert mdle("show", TOUR, "--plan", "nope").returncode == 1
+
+
+@pytest.fixture
+def read_only_plan(tmp_path: Path) -> Iterator[Path]:
+    """A badly laid out plan that cannot be written: mode 0444, or (as root, who writes
+    anyway) on a tmpfs remounted read-only; skipped where neither can be made."""
+    text = "atom  a = (go(0.1 m/s),never, 1 s)\n"
+    if os.geteuid() != 0:
+        p = tmp_path / "ro.mdle"
+        p.write_text(text)
+        p.chmod(0o444)
+        yield p
+        return
+    point = tmp_path / "ro"
+    point.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(point)],
+                      capture_output=True, timeout=30).returncode != 0:
+        pytest.skip("root, and no tmpfs can be mounted here")
+    try:
+        (point / "ro.mdle").write_text(text)
+        subprocess.run(["mount", "-o", "remount,ro", str(point)], check=True,
+                       capture_output=True, timeout=30)
+        yield point / "ro.mdle"
+    finally:
+        subprocess.run(["umount", "-l", str(point)], capture_output=True, timeout=30)
+
+
+def test_fmt_write_on_a_read_only_file_is_a_message(read_only_plan: Path) -> None:
+    before = read_only_plan.read_text()
+    res = mdle("fmt", "--write", str(read_only_plan))
+    assert res.returncode == 1, res.stderr
+    assert f"cannot write `{read_only_plan}`" in res.stdout + res.stderr
+    assert "internal error" not in res.stdout + res.stderr
+    assert read_only_plan.read_text() == before
+
+
+def test_fmt_write_replaces_the_file_whole_and_keeps_its_mode(tmp_path: Path) -> None:
+    p = tmp_path / "p.mdle"
+    p.write_text("atom  a = (go(0.1 m/s),never, 1 s)\n")
+    p.chmod(0o640)
+    res = mdle("fmt", "--write", str(p))
+    assert res.returncode == 0, res.stderr
+    assert p.read_text() == "atom a = (go(0.1 m/s), never, 1 s)\n"
+    assert p.stat().st_mode & 0o777 == 0o640
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["p.mdle"]
+
+
+def test_run_with_a_negative_seed_is_a_usage_error(tmp_path: Path) -> None:
+    p = tmp_path / "p.mdle"
+    p.write_text("atom a = (go(0.1 m/s), never, 1 s)\n")
+    res = mdle("run", str(p), "--seed", "-1")
+    assert res.returncode == 2 and "a seed is a whole number from 0" in res.stderr

@@ -173,3 +173,17 @@ def test_sigint_during_a_piped_run_stops_it_and_the_session_goes_on(
     assert "turn (level 0) ended by stopped at" in out and "(Ctrl-C: robot stopped)" in out
     # turned in place, then the :pose after it ran (the first one was read above)
     assert out.count("odometry x -9.00 m  y 0.30 m") == 1
+
+
+def test_bytes_that_are_not_utf8_are_reported_and_the_session_goes_on(
+        mdle_command: list[str]) -> None:
+    # a strict decoder (as under a UTF-8 locale other than C.UTF-8) must not end the session
+    env = dict(os.environ, PYTHONIOENCODING="utf-8:strict")
+    proc = subprocess.run([*mdle_command, "repl", "--world", "empty"], capture_output=True,
+                          input=b"atom a = (go(0.1 m/s), never, 1 s)\n\xff\xfe bad\na\n",
+                          timeout=120, env=env)
+    err = proc.stderr.decode()
+    assert proc.returncode == 1, err
+    assert "input line 2 is not UTF-8 text (byte 0xff at column 1)" in err
+    assert "internal error" not in err and "Traceback" not in err
+    assert "a (level 0) ended by timer at 1.00 s" in proc.stdout.decode()

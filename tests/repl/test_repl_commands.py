@@ -353,3 +353,19 @@ def test_colour_only_when_asked(r: Run) -> None:
     assert strip == plain  # the same text, with colours
     ok, report, _ = r("(go(1 m/s), never, 1 s)")
     assert report.startswith("\x1b[1;32mgo (level 0) ended by timer")  # bold green: fine
+
+
+def test_a_negative_seed_is_a_message(r: Run) -> None:
+    ok, out, err = r(":set seed -1")
+    assert not ok and "a seed is a whole number from 0 to 4294967295" in err
+    assert "internal error" not in err
+    ok, out, err = r(":set seed 4294967296")
+    assert not ok and "internal error" not in err
+
+
+@pytest.mark.parametrize("args", ["inf 0", "0 nan", "0 0 inf", "-inf -inf"])
+def test_reset_to_a_place_that_is_not_finite_is_a_message(r: Run, args: str) -> None:
+    ok, out, err = r(f":reset {args}")
+    assert not ok and ("must be a finite number" in err or "must be a number" in err)
+    ok, out, err = r("(go(0.3 m/s), never, 1 s)")  # the robot was left where it was
+    assert ok and "internal error" not in err, err
