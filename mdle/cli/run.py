@@ -150,6 +150,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
+    from mdle.errors import MdleError
     from mdle.loader import load_program
     from mdle.runtime import Scheduler, element_of
 
@@ -176,7 +177,10 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
         if parts.trace_path:
             parts.writer = _open_trace(parts.trace_path, parts.header)
             parts.observers.append(parts.writer)
-        parts.recorders = _recorders(args, parts.header, parts.world)
+        try:
+            parts.recorders = _recorders(args, parts.header, parts.world)
+        except MdleError as err:  # cannot be created: a bad option (exit 1), not a full disk
+            raise MdleError(err.diagnostics) from None
         parts.observers += parts.recorders
         if not args.quiet:
             from mdle.live import LiveView

@@ -98,7 +98,7 @@ def test_a_disk_that_fills_up_ends_the_run_cleanly(
     code = main(["run", str(tmp_path / "p.mdle"), "--world", "ellipse", "--trace",
                  str(tmp_path / "t.jsonl"), "--record", str(tmp_path / "r.mcap"), "-q"])
     err = capsys.readouterr().err
-    assert code == 1
+    assert code == 74  # an output that could not be written (docs/runtime.md)
     assert f"cannot write the recording `{tmp_path / 'r.mcap'}`: No space left on device" in err
     assert "Traceback" not in err
     trace = read_trace(tmp_path / "t.jsonl")  # the trace is whole and says how it ended
