@@ -252,8 +252,10 @@ def _mark_events(ax: "Axes", events: Sequence[Mapping[str, Any]], truth: bool,
 
 def _title(trace: Trace) -> str:
     h = trace.header
-    prog = h.get("program") or {}
-    world = h.get("world") or {}
+    prog = h.get("program")
+    prog = prog if isinstance(prog, dict) else {}
+    world = h.get("world")
+    world = world if isinstance(world, dict) else {}
     parts = [str(prog.get("element") or "run")]
     if prog.get("file"):
         parts[0] += f" ({os.path.basename(str(prog['file']))})"
@@ -273,8 +275,9 @@ def _title(trace: Trace) -> str:
 
 def world_of(trace: Trace) -> Any:
     """Return the world named in the trace header, or None when it cannot be loaded."""
-    spec = (trace.header.get("world") or {}).get("spec")
-    if not spec:
+    header_world = trace.header.get("world")
+    spec = header_world.get("spec") if isinstance(header_world, dict) else None
+    if not spec or not isinstance(spec, str):
         return None
     try:
         import sim

@@ -672,7 +672,7 @@ _INTEGERS: dict[str, tuple[str, ...]] = {"event": ("level",), "end": ("ticks",),
 _BOOLEANS: dict[str, tuple[str, ...]] = {"sample": ("stalled", "collided"),
                                          "end": ("collided",)}
 _OBJECTS: dict[str, tuple[str, ...]] = {"sample": ("diag",),
-                                        "header": ("program", "world", "versions")}
+                                        "header": ("versions",)}
 _HEADER_STRINGS = (("program", ("file", "element", "entry")), ("world", ("name", "spec")))
 
 
@@ -706,7 +706,9 @@ def _type_error(rec: Mapping[str, Any], kind: str) -> str | None:
         return _wrong(kind, "terminations", "a list", rec["terminations"])
     if kind == "header":
         for part, keys in _HEADER_STRINGS:
-            sub = rec.get(part) or {}
+            sub = rec.get(part)
+            if not isinstance(sub, dict):  # a free-form note: readers ignore it
+                continue
             for key in keys:
                 v = sub.get(key)
                 if v is not None and not isinstance(v, str):

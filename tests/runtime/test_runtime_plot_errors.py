@@ -55,8 +55,6 @@ def test_the_real_trace_plots(tmp_path: Path, good: bytes,
     (lambda d: _edit(d, "header", version="1"), "`version` of the header record must be a "
                                                 "whole number"),
     (lambda d: _edit(d, "header", version=1.5), "whole number"),
-    (lambda d: _edit(d, "header", program="p.mdle"), "`program` of the header record must "
-                                                     "be an object"),
     (lambda d: _edit(d, "header", world={"spec": 7}), "`world.spec` of the header record"),
     (lambda d: _edit(d, "header", seed="zero"), "`seed` of the header record"),
     (lambda d: _edit(d, "sample", x="abc"), "`x` of the sample record must be a number"),
