@@ -12,17 +12,13 @@ from mdle.backend import Backend, ClockMode, Command, Pose
 from mdle.errors import BackendError, WorldError
 from sim.backend import SimBackend
 from sim.ladar import Ladar, LadarProfile
-from sim.robot import (
-    IDEAL,
-    PIONEER2DX,
-    OdometryNoise,
-    Phase,
-    RobotProfile,
-    integrate,
-    plan_phases,
-)
+from sim.profiles import robot_profile
+from sim.robot import OdometryNoise, Phase, RobotProfile, integrate, plan_phases
 from sim.shapes import Circle, Rectangle, Wall
 from sim.world import World
+
+IDEAL = robot_profile("ideal")
+PIONEER2DX = robot_profile("pioneer2dx")
 
 
 def wall_world(robot: RobotProfile = PIONEER2DX) -> World:
