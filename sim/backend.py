@@ -226,7 +226,7 @@ class SimBackend:
         return 0.0
 
     def _advance_timed(self, t1: float) -> None:
-        """Move to ``t1`` in pieces cut where a queued command takes effect or a report is due."""
+        """Move to ``t1`` in pieces cut where a report is due; queued commands switch inside."""
         pending = self._pending
         cycle = self.profile.sip_cycle
         while True:
@@ -239,13 +239,16 @@ class SimBackend:
                     self._sip_j += 1
             if t >= t1 - _EPS:
                 break
-            nxt = t1
-            if pending and pending[0][0] < nxt:
-                nxt = pending[0][0]
-            if cycle > 0 and self._sip_j * cycle < nxt:
-                nxt = self._sip_j * cycle
-            final = nxt >= t1 - _EPS
-            self._step(t1 if final else nxt, final)
+            end = t1
+            if cycle > 0 and self._sip_j * cycle < end:
+                end = self._sip_j * cycle
+            final = end >= t1 - _EPS
+            if final:
+                end = t1
+            switches = []
+            while pending and pending[0][0] < end - _EPS:
+                switches.append(pending.popleft())
+            self._step(end, final, switches)
         if self._scan_queue:
             kept = []
             for due, scan in self._scan_queue:
@@ -255,11 +258,14 @@ class SimBackend:
                     self._scan = scan
             self._scan_queue = kept
 
-    def _step(self, t1: float, final: bool) -> None:
-        """Integrate the held command from the current time to ``t1`` (collisions, scans).
+    def _step(self, t1: float, final: bool,
+              switches: list[tuple[float, Command]] | None = None) -> None:
+        """Integrate from the current time to ``t1`` (collisions, scans).
 
-        Only the ``final`` piece of a tick takes an oracle scan and leaves the exact
-        clearance; earlier pieces keep a lower bound of it (the centre moved at most its reach).
+        The held command changes at each ``(time, command)`` of ``switches`` (queued
+        commands taking effect inside the step). Only the ``final`` piece of a tick takes
+        an oracle scan and leaves the exact clearance; earlier pieces keep a lower bound of
+        it (the centre moved at most its reach).
         """
         t0 = self._t
         # The last ladar instant inside (t0, t1], if any.
@@ -273,8 +279,21 @@ class SimBackend:
                 scan_at = min(t1, max(t0, self._scan_phase + k * self._period))
                 self._scan_k = k
         x0, y0, th0 = self._x, self._y, self._th
-        phases, v_end, w_end = plan_phases(self._v, self._w, self._cmd.v, self._cmd.omega,
-                                           t1 - t0, self.profile)
+        if switches:
+            phases: list[Phase] = []
+            v, w, cmd, t = self._v, self._w, self._cmd, t0
+            for ta, nxt in switches:
+                if ta > t:
+                    more, v, w = plan_phases(v, w, cmd.v, cmd.omega, ta - t, self.profile)
+                    phases += more
+                    t = ta
+                cmd = nxt
+            more, v_end, w_end = plan_phases(v, w, cmd.v, cmd.omega, t1 - t, self.profile)
+            phases += more
+            self._cmd = cmd
+        else:
+            phases, v_end, w_end = plan_phases(self._v, self._w, self._cmd.v, self._cmd.omega,
+                                               t1 - t0, self.profile)
         x, y, th = x0, y0, th0
         clear = self._clear
         t = t0
