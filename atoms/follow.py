@@ -71,14 +71,19 @@ def scan_points_cached(ctx: Context) -> Any:
 
 @control_law(
     Param("side", default="right", choices=SIDES, doc="side the boundary is on: right or left"),
-    Param("rc", LENGTH, 0.5, doc="distance to keep from the boundary"),
-    Param("v", SPEED, 0.3, doc="constant forward speed"),
-    Param("zeta", NONE, 1.0, doc="damping ratio of the distance loop (mu = 4 zeta v sqrt(2 kf))"),
-    Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2"),
-    Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)"),
-    Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)"),
-    Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)"),
-    Param("lookahead", TIME, 0.8, doc="how far ahead the safety layer checks the arc"),
+    Param("rc", LENGTH, 0.5, doc="distance to keep from the boundary", low=0.0, low_open=True),
+    Param("v", SPEED, 0.3, doc="constant forward speed", low=0.0, low_open=True),
+    Param("zeta", NONE, 1.0, doc="damping ratio of the distance loop (mu = 4 zeta v sqrt(2 kf))",
+          low=0.0, low_open=True),
+    Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2", low=0.0,
+          low_open=True),
+    Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)", low=0.0,
+          low_open=True, finite=False),
+    Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)",
+          low=0.0),
+    Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)",
+          low=0.0),
+    Param("lookahead", TIME, 0.8, doc="how far ahead the safety layer checks the arc", low=0.0),
     start=start_follow,
 )
 def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Command:

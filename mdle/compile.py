@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from atoms.registry import BOOL, REQUIRED, LawSpec, Registry, SensorSpec
+from atoms.registry import BOOL, REQUIRED, LawSpec, Param, Registry, SensorSpec
 from mdle import conditions as cond
 from mdle import syntax as st
 from mdle.dimensions import (
@@ -38,6 +38,7 @@ from mdle.dimensions import (
     dim_example,
     dim_words,
     fits,
+    same_kind,
     show_value,
     unit_for,
 )
@@ -70,6 +71,7 @@ class _Slot:
     default: Any  # a Value, or REQUIRED
     choices: tuple[str, ...] = ()
     symbol: bool = False  # takes a symbol (a law parameter with choices, or a symbol default)
+    param: Param | None = None  # a law's or sensor function's declaration (its range)
 
 
 def _kind_name(target: object) -> str:
@@ -136,6 +138,9 @@ class Checker:
         self._too_deep = False
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
+        #: True while a definition is checked with its required parameters unknown (NaN):
+        #: a NaN is then no error (each use with arguments is checked again)
+        self._partial = False
 
     # ------------------------------------------------------------------ diagnostics
 
@@ -254,6 +259,10 @@ class Checker:
             self.error(expr.span, f"expected a timer such as `10 s` or `inf`, found "
                        f"{dim_words(q.dim)} (`{_short(expr)}`)")
             raise _Abort
+        if math.isnan(q.value) and not self._partial:
+            self.error(expr.span, f"the timer `{_short(expr)}` is not a number (NaN)",
+                       hint="`inf * 0` and `inf - inf` have no value; write `inf` or a time")
+            raise _Abort
         if q.value < 0:
             self.error(expr.span, "a timer cannot be negative")
             raise _Abort
@@ -352,6 +361,15 @@ class Checker:
             self.error(expr.span, f"`{slot.name}` of `{callee}` is {dim_example(slot.dim)}, "
                        f"found {dim_words(v.dim)} (`{_short(expr)}`)", hint=hint)
             raise _Abort
+        p = slot.param
+        if p is not None and not (self._partial and math.isnan(v.value)) \
+                and not p.accepts(v.value):
+            unit = f" ({p.dim.symbol()})" if p.dim != NONE else ""
+            self.error(expr.span, f"`{slot.name}` of `{callee}` must be {p.range_words()}{unit}, "
+                       f"found {show_value(v) if not math.isnan(v.value) else 'NaN'}"
+                       + (f" (`{_short(expr)}`)" if not isinstance(expr, st.Number) else ""),
+                       hint=p.doc or None)
+            raise _Abort
         return v
 
     def _slots_of_spec(self, spec: LawSpec | SensorSpec) -> list[_Slot]:
@@ -359,7 +377,7 @@ class Checker:
                       REQUIRED if p.default is REQUIRED else (
                           Symbol(p.default) if isinstance(p.default, str) else
                           Quantity(float(p.default), p.dim)),
-                      tuple(p.choices), bool(p.choices)) for p in spec.params]
+                      tuple(p.choices), bool(p.choices), p) for p in spec.params]
 
     def slots_of(self, d: st.Definition) -> list[_Slot]:
         """Return the parameters of a definition; a parameter's dimension is its default's."""
@@ -686,7 +704,7 @@ class Checker:
         beta = 1.0
         try:
             beta = self._factor(beta_e, env, "beta")
-            if not beta > 0:
+            if not beta > 0 and not (self._partial and math.isnan(beta)):
                 self.error(beta_e.span, "beta scales the timer and must be positive")
                 failed = True
         except _Abort:
@@ -710,6 +728,10 @@ class Checker:
         if not (q.dim is None or q.dim == NONE or q.zero):
             self.error(expr.span, f"{what} is a plain number such as `0.5`, found "
                        f"{dim_words(q.dim)}")
+            raise _Abort
+        if not math.isfinite(q.value) and not (self._partial and math.isnan(q.value)):
+            self.error(expr.span, f"{what} must be a finite number, found `{_short(expr)}`"
+                       + (" (NaN)" if math.isnan(q.value) else ""))
             raise _Abort
         return q.value
 
@@ -819,6 +841,7 @@ class Checker:
         slots = self.slots_of(d)
         runnable = all(s.default is not REQUIRED for s in slots)
         bound = {s.name: (_UNKNOWN if s.default is REQUIRED else s.default) for s in slots}
+        self._partial = not runnable
         try:
             if d.kind is st.DefKind.INTERRUPT:
                 self._interrupt_body(d, bound, None)
@@ -826,6 +849,8 @@ class Checker:
             e = self.instance(d, bound)
         except _Abort:
             return None
+        finally:
+            self._partial = False
         return e if runnable else None
 
 
@@ -835,7 +860,7 @@ def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
 
 
 def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
-    return a.dim is None or b.dim is None or a.dim == b.dim
+    return a.dim is None or b.dim is None or same_kind(a.dim, b.dim)
 
 
 def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
@@ -891,14 +916,21 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     srcs = dict(sources or {})
     checker, errors = _checker(modules, registry, replace)
     main = main if main is not None else (modules[-1] if modules else None)
-    try:
-        elements: dict[str, Element] = {}
-        for d in _dependency_order(checker.ns, checker.broken):
+    elements: dict[str, Element] = {}
+    for d in _dependency_order(checker.ns, checker.broken):
+        try:
             e = checker.check_definition(d)
-            if e is not None:
-                elements[d.name] = e
+        except RecursionError:  # a last guard: the nesting limits should prevent this
+            checker.error(d.span, f"`{d.name}` nests too deeply to check",
+                          hint="flatten it: fewer levels of elements or interrupts inside "
+                               "each other")
+            checker.broken.add(d.name)
+            continue
+        if e is not None:
+            elements[d.name] = e
+    try:
         entry = _entry(checker, main, elements)
-    except RecursionError:  # a last guard: the nesting limits should prevent this
+    except RecursionError:
         checker.error(None, "the program nests too deeply to check")
         entry = None
     errors.extend(checker.errors)

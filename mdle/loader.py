@@ -17,7 +17,7 @@ from atoms.registry import Registry
 from mdle import syntax as st
 from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
-from mdle.parser import parse_module
+from mdle.parser import normalise_newlines, parse_module
 from mdle.program import Program
 from mdle.userfile import UserFileError, read_user_file
 
@@ -41,7 +41,7 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
     except UserFileError as err:
         raise CheckError(Diagnostic(span, f"cannot read `{name}`: {err.reason}")) from None
     try:
-        return data.decode("utf-8-sig")
+        return normalise_newlines(data.decode("utf-8-sig"))
     except UnicodeDecodeError as err:
         line = data[:err.start].count(b"\n") + 1
         col = err.start - (data.rfind(b"\n", 0, err.start) + 1) + 1
@@ -90,6 +90,7 @@ def load_modules(text: str, file: str, base_dir: str | None = None,
     MdleError
         With the diagnostics of every file (syntax errors, missing files, import cycles).
     """
+    text = normalise_newlines(text)
     sources: dict[str, str] = {file: text}
     diagnostics: list[Diagnostic] = []
     syntax_failed = False
