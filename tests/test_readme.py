@@ -35,3 +35,15 @@ def test_readme_first_command_names_an_existing_plan() -> None:
     text = README.read_text(encoding="utf-8")
     plans = re.findall(r"mdle run (plans/\S+\.mdle)", text)
     assert plans and all((README.parent / p).is_file() for p in plans)
+
+
+def test_ci_runs_the_readme_fresh_machine_commands_in_order() -> None:
+    # .ci/run runs exactly what this prints, so README and CI cannot drift apart
+    out = subprocess.run([sys.executable, str(README.parent / ".ci" / "readme_commands.py"),
+                          str(README)], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    first, second = out.stdout.splitlines()
+    assert "mdle run plans/" in first and "--plot" in first
+    assert "pip install '.[test]'" in second and second.endswith("pytest -n 2")
+    ci = (README.parent / ".ci" / "run").read_text(encoding="utf-8")
+    assert "readme_commands.py" in ci and "git clone" in ci

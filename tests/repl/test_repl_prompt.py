@@ -93,15 +93,26 @@ def test_completer_offers_parameters_symbols_and_units(repl: Repl) -> None:
 
 def test_completer_offers_commands_worlds_and_files(repl: Repl, tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    # A folder cluttered as a newcomer's is after the README's first command: a plot
+    # beside the plans must not be offered as a world or a plan.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ellipse.png").write_bytes(b"")
+    (tmp_path / "ellipse-run.jsonl").write_text("")
+    (tmp_path / "plans").mkdir()
+    (tmp_path / "plans" / "tune.mdle").write_text("")
+    (tmp_path / "plans" / "tune.png").write_bytes(b"")
+    (tmp_path / "worlds").mkdir()
+    (tmp_path / "worlds" / "lab.yaml").write_text("")
+    (tmp_path / "worlds" / "lab.txt").write_text("")
     assert completions(repl, ":s") == ["scan", "save", "step", "set"]
     assert completions(repl, ":wor") == ["world"]
     assert completions(repl, ":world ell") == ["ellipse"]
+    assert completions(repl, ":world worlds/l") == ["ab.yaml"]
     assert completions(repl, ":set u") == ["until"]
     assert completions(repl, ":help qu") == ["quit"]
-    (tmp_path / "plans").mkdir()
-    (tmp_path / "plans" / "tune.mdle").write_text("")
-    monkeypatch.chdir(tmp_path)
     assert completions(repl, ":load plans/tu") == ["ne.mdle"]
+    # outputs may be any file name: `:plot` offers what is there
+    assert sorted(completions(repl, ":plot plans/tu")) == ["ne.mdle", "ne.png"]
 
 
 def test_tab_completes_at_the_prompt_and_enter_continues_unfinished_input(repl: Repl) -> None:
