@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 from atoms.registry import Registry
@@ -202,7 +202,7 @@ def _error(diags: list[Diagnostic], sources: dict[str, str], syntax: bool) -> Md
 
 
 def load_text(text: str, file: str = "<string>", registry: Registry | None = None, *,
-              settings: Mapping[str, str] | None = None,
+              settings: Mapping[str, str] | Sequence[str] | None = None,
               files: Mapping[str, str] | None = None, base_dir: str | None = None
               ) -> Program:
     """Parse and check a program given as text.
@@ -217,8 +217,8 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
     registry : Registry, optional
         Control laws and sensor functions; ``atoms.default_registry()`` when None.
     settings : mapping, optional
-        Parameter defaults to override, ``NAME -> value text`` (``mdle run --set``); see
-        :func:`mdle.overrides.override_defaults`.
+        Parameter defaults to override: ``NAME -> value text``, or ``NAME=VALUE`` texts
+        (``mdle run --set``); see :func:`mdle.overrides.override_defaults`.
     files : mapping, optional
         Imported files' texts by relative path, instead of the disk (see
         :func:`load_modules`); ``base_dir`` is the folder they are relative to.
@@ -236,12 +236,12 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
     if settings:
         from mdle.overrides import override_defaults
 
-        loaded = override_defaults(loaded, settings)
+        loaded = override_defaults(loaded, settings, registry)
     return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main)
 
 
 def load_program(path: str | os.PathLike[str], registry: Registry | None = None, *,
-                 settings: Mapping[str, str] | None = None) -> Program:
+                 settings: Mapping[str, str] | Sequence[str] | None = None) -> Program:
     """Read, parse, resolve imports and check a plan file.
 
     ``registry=None`` means ``atoms.default_registry()``.

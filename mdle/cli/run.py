@@ -9,7 +9,9 @@ trace flushed in every case.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
+import re
 import signal
 import sys
 import tempfile
@@ -37,6 +39,16 @@ def add_parser(subparsers: Any) -> None:
                         "PLAN.world.yaml or PLAN.yaml beside the plan, else the default world)")
     p.add_argument("--plan", dest="element", metavar="NAME",
                    help="element to run (default: the file's `run` target, else `main`)")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="NAME=VALUE",
+                   help="override a parameter's default, with units as in a plan: "
+                        "`--set cruise.v=0.2m/s`, `--set 'rc=1 m'` (DEFINITION.PARAMETER, or "
+                        "a parameter name: every definition's parameter of that name); "
+                        "repeatable")
+    p.add_argument("--start", type=start_pose, metavar="X,Y,THETA",
+                   help="simulator only: start the robot at X, Y (metres) heading THETA "
+                        "(degrees, counter-clockwise from the world's x axis) instead of the "
+                        "world's start; units may be written: `--start '150cm,-2m,1.57rad'`")
     p.add_argument("--until", type=seconds, metavar="SECONDS",
                    help="stop after this many seconds of (simulated) time")
     p.add_argument("--realtime", action="store_true",
@@ -69,6 +81,48 @@ def _hertz(text: str) -> float:
     if not 0 < value <= 1000:
         raise argparse.ArgumentTypeError(f"the rate must be in (0, 1000] Hz, got {text!r}")
     return value
+
+
+def start_pose(text: str) -> tuple[float, float, float]:
+    """Read ``X,Y,THETA`` (an argparse ``type``): metres, metres, degrees unless units say.
+
+    Returns (x, y, theta) in SI (m, m, rad).
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        Not three comma-separated numbers, or a unit of the wrong kind.
+    """
+    import math
+
+    from mdle.units import ANGLE, LENGTH, unit_value
+
+    parts = text.split(",")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(
+            f"expected X,Y,THETA (metres, metres, degrees), got {text!r}")
+    out: list[float] = []
+    for part, name, dim, unit in zip(parts, ("X", "Y", "THETA"), (LENGTH, LENGTH, ANGLE),
+                                     ("m", "m", "deg"), strict=True):
+        m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/ ]*?)\s*",
+                         part)
+        if m is None:
+            raise argparse.ArgumentTypeError(f"{name} of --start: expected a number, got "
+                                             f"{part.strip()!r}")
+        try:
+            factor, got = unit_value(m.group(2) or unit)
+        except KeyError:
+            raise argparse.ArgumentTypeError(
+                f"{name} of --start: unknown unit {m.group(2)!r}") from None
+        if got != dim:
+            kind = "a length (m, cm, mm)" if dim == LENGTH else "an angle (deg, rad)"
+            raise argparse.ArgumentTypeError(f"{name} of --start is {kind}, got "
+                                             f"{part.strip()!r}")
+        value = float(m.group(1)) * factor
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{name} of --start must be finite")
+        out.append(value)
+    return out[0], out[1], out[2]
 
 
 def world_beside(plan: str | os.PathLike[str]) -> Path | None:
@@ -125,7 +179,10 @@ def run(args: argparse.Namespace) -> int:
         from mdle.ros import require
 
         require("--record" if args.record else "--rosbag")
-    program = load_program(args.plan)
+    if args.start is not None and args.backend != "sim":
+        raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
+                                         "starts where it stands"))
+    program = load_program(args.plan, settings=args.overrides)
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
     element = element_of(program, args.element)
@@ -136,6 +193,8 @@ def run(args: argparse.Namespace) -> int:
         "rate": args.rate, "until": args.until, "backend": args.backend,
         "argv": sys.argv[1:],
     }
+    if args.overrides:
+        header["overrides"] = list(args.overrides)
     backend, world = _open_backend(args, header)
     observers: list[Any] = []
     trace_path = args.trace
@@ -259,4 +318,9 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     kwargs: dict[str, Any] = {"seed": args.seed, "sensing": args.sensing}
     if args.robot:
         kwargs["robot"] = args.robot
+    if args.start is not None:
+        from mdle.backend import Pose
+
+        world = dataclasses.replace(world, start_pose=Pose(*args.start))
+        header["start"] = {"x": args.start[0], "y": args.start[1], "theta": args.start[2]}
     return sim.SimBackend(world, **kwargs), world

@@ -7,6 +7,7 @@ that are written, exit codes, Ctrl-C.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -296,3 +297,34 @@ def test_second_ctrl_c_between_ticks_still_ends_the_run(
     t = read_trace(trace)
     assert t.end is not None and t.end["cause"] == "stopped"
     assert len(t.samples) == 2
+
+
+def test_set_overrides_a_parameter_and_start_places_the_robot(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
+    text = "atom cruise(v = 0.3 m/s) = (go(v), never, 2 s)\nplan main = ((cruise), never, inf)\n"
+    trace = tmp_path / "t.jsonl"
+    res = run_mdle("run", str(plan(text)), "--world", "empty", "-q", "--trace", str(trace),
+                   "--set", "cruise.v=0.5m/s", "--start", "1, -2 m, 90")
+    assert res.returncode == 0, res.stderr
+    t = read_trace(trace)
+    assert max(t.column("cmd_v")) == pytest.approx(0.5)
+    assert (t.samples[0]["true_x"], t.samples[0]["true_y"]) == (1.0, -2.0)
+    assert t.samples[0]["true_theta"] == pytest.approx(math.pi / 2)
+    assert t.header["overrides"] == ["cruise.v=0.5m/s"]
+    assert t.header["start"]["theta"] == pytest.approx(math.pi / 2)
+
+
+def test_bad_set_and_start_are_located_messages_not_tracebacks(
+        plan: WritePlan, run_mdle: RunMdle) -> None:
+    path = str(plan("atom cruise(v = 0.3 m/s) = (go(v), never, 2 s)\n"
+                    "plan main = ((cruise), never, inf)\n"))
+    res = run_mdle("run", path, "--world", "empty", "--set", "cruise.v=0.5 m")
+    assert res.returncode == 1
+    assert res.stderr.startswith("--set:1:10: error: `v` of `cruise` is a speed such as "
+                                 "`0.3 m/s`, found a length (`0.5 m`)\n    cruise.v=0.5 m\n")
+    res = run_mdle("run", path, "--world", "empty", "--start", "1,2")
+    assert res.returncode == 2 and "expected X,Y,THETA" in res.stderr
+    res = run_mdle("run", path, "--world", "empty", "--start", "1 s,2,0")
+    assert res.returncode == 2 and "X of --start is a length" in res.stderr
+    res = run_mdle("run", path, "--world", "default", "--start", "1.5,-3,0")  # in the box
+    assert res.returncode == 1 and "overlaps" in res.stderr and "Traceback" not in res.stderr
