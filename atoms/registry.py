@@ -129,18 +129,22 @@ class Context:
     evaluated (seconds since it started), ``dt`` the tick length, ``limits`` the robot's
     limits, and ``cache`` a dictionary shared by every function during this tick only,
     so that an estimate (the boundary seen in the scan, say) is computed once per tick.
-    The runtime owns the context and sets ``t`` before each evaluation.
+    The runtime owns the context and sets ``t`` before each evaluation. ``atom`` is the
+    per-atom state of the innermost running atom (what its law's ``start`` made; None when
+    none runs or it has none), so that a sensor function can report on the running law
+    (``lost``: how long ``follow_boundary`` has lost its boundary).
     """
 
-    __slots__ = ("obs", "t", "dt", "limits", "cache")
+    __slots__ = ("obs", "t", "dt", "limits", "cache", "atom")
 
     def __init__(self, obs: Observation, t: float, dt: float, limits: RobotLimits,
-                 cache: dict[Any, Any] | None = None) -> None:
+                 cache: dict[Any, Any] | None = None, atom: Any = None) -> None:
         self.obs = obs
         self.t = t
         self.dt = dt
         self.limits = limits
         self.cache: dict[Any, Any] = {} if cache is None else cache
+        self.atom = atom
 
 
 #: ``step(args, ctx, state) -> Command``: the control law, called once per tick.

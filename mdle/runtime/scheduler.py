@@ -402,6 +402,7 @@ class Scheduler:
         stack = self._stack
         level = 0
         while True:
+            ctx.atom = stack[-1].state if stack else None  # for sensors reading the law's state
             checks = self._checks
             if checks is None:
                 checks = self._checks = tuple(
