@@ -6,6 +6,11 @@ passes through an obstacle (on contact it stops and raises ``stalled``, as a Pio
 does, and records a :class:`SimEvent`), takes ladar scans at the ladar's own instants
 (``k / rate``), and updates odometry (with the profile's seeded drift, if any).
 
+Observations report odometry as a robot does (REP-105 ``odom`` frame): the pose relative
+to where the robot was at :meth:`SimBackend.reset` (the run's start), which is
+(0, 0, 0). World coordinates are ground truth: ``Observation.truth`` and
+:attr:`SimBackend.true_pose`.
+
 >>> import math
 >>> from sim.world import World
 >>> from sim.shapes import Rectangle
@@ -112,7 +117,10 @@ class SimBackend:
 
     # ------------------------------------------------------------------ lifecycle
     def reset(self, pose: Pose | None = None) -> None:
-        """Put the robot back at ``pose`` (default the world's start), time 0, fresh seed."""
+        """Put the robot at ``pose`` (default the world's start), time 0, fresh seed.
+
+        Odometry restarts there at (0, 0, 0); ``pose`` is in world coordinates.
+        """
         pose = self.world.start_pose if pose is None else pose
         clear, owner = self._collider.clearance(pose.x, pose.y)
         if clear < 0 or self.world.inside((pose.x, pose.y)):
@@ -130,7 +138,9 @@ class SimBackend:
                      else None)
         self._t = 0.0
         self._x, self._y, self._th = pose.x, pose.y, pose.theta
-        self._ox, self._oy, self._oth = pose.x, pose.y, pose.theta
+        # Odometry starts at (0, 0, 0) where the robot is now, as on a robot (REP-105 odom).
+        self._ox = self._oy = self._oth = 0.0
+        self._origin = (pose.x, pose.y, math.cos(pose.theta), math.sin(pose.theta), pose.theta)
         self._v = self._w = 0.0
         self._cmd = STOP
         self._stalled = False
@@ -389,7 +399,10 @@ class SimBackend:
     def _update_odometry(self, x0: float, y0: float, th0: float) -> None:
         noise = self.profile.odometry
         if not noise.enabled:
-            self._ox, self._oy, self._oth = self._x, self._y, self._th
+            x0s, y0s, c0, s0, th0s = self._origin
+            dx0, dy0 = self._x - x0s, self._y - y0s
+            self._ox, self._oy = c0 * dx0 + s0 * dy0, c0 * dy0 - s0 * dx0
+            self._oth = self._th - th0s
             return
         c, s = math.cos(th0), math.sin(th0)
         dx, dy = self._x - x0, self._y - y0

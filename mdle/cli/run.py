@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import re
 import signal
@@ -196,6 +197,15 @@ def run(args: argparse.Namespace) -> int:
     if args.overrides:
         header["overrides"] = list(args.overrides)
     backend, world = _open_backend(args, header)
+    from mdle.frames import FRAME_NOTE, reads_pose
+
+    if not args.quiet and reads_pose(program):
+        where = ""
+        if world is not None:
+            s = world.start_pose
+            where = (f" (here: the start pose in the world, x {s.x:g} m, y {s.y:g} m, heading "
+                     f"{math.degrees(s.theta):.4g} deg)")
+        print(f"note: {FRAME_NOTE}{where}")
     observers: list[Any] = []
     trace_path = args.trace
     tmpdir = None
