@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -148,6 +149,7 @@ class SimBackend:
         self._clear = (clear, owner)
         self._clear_bound = False
         self.events = []
+        self._reported = 0  # events already handed out in an observation's truth
         prof = self.profile
         rate = self._ladar.profile.rate
         if self._oracle:
@@ -194,6 +196,16 @@ class SimBackend:
             ox, oy, oth, v, w = self._report
         else:
             ox, oy, oth, v, w = self._ox, self._oy, self._oth, self._v, self._w
+        # a collision since the previous observation: truth["contact"] names it
+        truth: dict[str, Any] = {"x": self._x, "y": self._y, "theta": _wrap(self._th),
+                                    "clearance": self._clear[0], "collided": self._collided}
+        if len(self.events) > self._reported:
+            e = self.events[self._reported]
+            self._reported = len(self.events)
+            kind = (self.world.obstacles[e.obstacle].kind
+                    if 0 <= e.obstacle < len(self.world.obstacles) else "")
+            truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
+                                "t": e.time, "x": e.x, "y": e.y}
         return Observation(
             time=self._t,
             pose=Pose(ox, oy, _wrap(oth)),
@@ -202,8 +214,7 @@ class SimBackend:
             scan=self._scan,
             stalled=self._stalled,
             motors_enabled=True,
-            truth={"x": self._x, "y": self._y, "theta": _wrap(self._th),
-                   "clearance": self._clear[0], "collided": self._collided},
+            truth=truth,
         )
 
     def command(self, cmd: Command) -> None:

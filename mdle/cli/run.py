@@ -262,7 +262,9 @@ def run(args: argparse.Namespace) -> int:
         if failed:
             return output.EXIT_INPUT
         if result.collided or result.fault:
-            why = [w for w in ("the robot collided" if result.collided else None,
+            hit = ("the robot collided: " + result.collision.describe(_t0(result))
+                   if result.collision is not None else "the robot collided")
+            why = [w for w in (hit if result.collided else None,
                                result.fault) if w]
             print(f"mdle run: {'; '.join(why)}", file=sys.stderr)
             return output.EXIT_COLLISION
@@ -289,6 +291,11 @@ def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> 
     if args.rosbag:
         out.append(McapRecorder(args.rosbag, header, world, rosbag=True))
     return out
+
+
+def _t0(result: Any) -> float:
+    """Return the time of the run's first tick (the first event's), to report run times."""
+    return result.events[0].time if result.events else 0.0
 
 
 def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any, Any]:

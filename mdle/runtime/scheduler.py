@@ -24,7 +24,7 @@ from atoms.registry import Context
 from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose
 from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
 from mdle.program import AtomNode, Element, StringNode
-from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample, Termination
+from mdle.runtime.events import Cause, Collision, Event, EventKind, RunResult, Sample, Termination
 from mdle.runtime.observer import Observer
 from mdle.runtime.pacing import Pacer
 
@@ -205,6 +205,8 @@ class Scheduler:
         self._distance = 0.0
         self._min_clearance: float | None = None
         self._collided = False
+        self._collision: Collision | None = None  # the first contact
+        self._ran = ""  # the path that ran during the last advance
         self._max_lateness = 0.0
         self._stall_since: float | None = None
         self._last_cmd = STOP
@@ -326,6 +328,7 @@ class Scheduler:
             self._distance += math.hypot(pose.x - self._pose.x, pose.y - self._pose.y)
         self._pose = pose
         truth = obs.truth
+        contact: Collision | None = None
         if truth:
             clearance = truth.get("clearance")
             if clearance is not None and (self._min_clearance is None
@@ -333,6 +336,11 @@ class Scheduler:
                 self._min_clearance = float(clearance)
             if truth.get("collided"):
                 self._collided = True
+            reported = truth.get("contact")
+            if reported is not None:
+                contact = _collision(reported, self._ran)
+                if self._collision is None:
+                    self._collision = contact
 
         tick = self._ticks
         self._ticks = tick + 1
@@ -369,6 +377,7 @@ class Scheduler:
             cmd = STOP
         self.backend.command(cmd)
         self._last_cmd = cmd
+        self._ran = stack[-1].slot.path if stack else ""
 
         running = bool(stack)
         lateness = 0.0
@@ -388,7 +397,7 @@ class Scheduler:
                 stack[-1].slot.path if stack else "", lateness,
                 None if scan is None else now - scan.stamp, obs.stalled,
                 MappingProxyType(dict(trace)) if trace else _EMPTY,
-                *(_truth_fields(truth) if truth else _NO_TRUTH), scan,
+                *(_truth_fields(truth) if truth else _NO_TRUTH), scan, contact,
             ))
             for o in self.observers:
                 o.on_tick(sample)
@@ -572,6 +581,7 @@ class Scheduler:
                     distance=self._distance,
                     min_clearance=self._min_clearance,
                     collided=self._collided,
+                    collision=self._collision,
                     fault=fault,
                     max_lateness=self._max_lateness,
                 )
@@ -581,6 +591,13 @@ class Scheduler:
 
 _NO_TRUTH = (None, None, None, None, None)
 _new_sample = tuple.__new__
+
+
+def _collision(contact: Mapping[str, Any], path: str) -> Collision:
+    """Return the record of a contact the backend reported in its ground truth."""
+    return Collision(float(contact.get("t", 0.0)), float(contact.get("x", math.nan)),
+                     float(contact.get("y", math.nan)), str(contact.get("obstacle", "")),
+                     str(contact.get("kind", "")), int(contact.get("index", -1)), path)
 
 
 def _truth_fields(truth: Mapping[str, Any]) -> tuple[Any, ...]:

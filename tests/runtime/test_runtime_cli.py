@@ -147,6 +147,25 @@ def test_collision_exits_3(plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -
     assert end is not None and end["collided"] is True
 
 
+def test_a_collision_is_named_in_stderr_the_trace_the_summary_and_the_plot(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
+    trace, png = tmp_path / "t.jsonl", tmp_path / "p.png"
+    res = run_mdle("run", str(plan(RAM)), "--world", "default", "--trace", str(trace),
+                   "--plot", str(png))
+    assert res.returncode == 3
+    # what was hit, where and when, and in which element (the box of the default room)
+    assert res.stderr.startswith("mdle run: the robot collided: hit `box` (rectangle) at "
+                                 "x 0.75 m, y -3.00 m, t = 10.3 s, while `main/go` ran"), res.stderr
+    assert "collided: YES: hit `box` (rectangle)" in res.stdout
+    t = read_trace(trace)
+    (hit,) = t.collisions()
+    assert (hit["obstacle"], hit["kind"], hit["index"], hit["path"]) == (
+        "box", "rectangle", 1, "main/go")
+    assert hit["x"] == pytest.approx(0.75, abs=0.01) and hit["t"] == pytest.approx(10.3)
+    assert t.end is not None and t.end["collision"]["obstacle"] == "box"
+    assert png.read_bytes().startswith(b"\x89PNG")
+
+
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_signal_stops_the_robot_and_leaves_a_valid_trace(
         plan: WritePlan, tmp_path: Path, sig: signal.Signals, code: int,
