@@ -52,6 +52,8 @@ __all__ = ["Checker", "check_program", "MAX_NESTING", "never_ends"]
 
 #: Deepest nesting of elements and interrupts, counting through named definitions.
 MAX_NESTING = 120
+#: Most names one "did you mean" compares an unknown name with.
+_MAX_CANDIDATES = 200
 
 Env = Mapping[str, Value]
 _EMPTY: Env = MappingProxyType({})
@@ -138,6 +140,7 @@ class Checker:
         self._too_deep = False
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
+        self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
         #: True while a definition is checked with its required parameters unknown (NaN):
         #: a NaN is then no error (each use with arguments is checked again)
         self._partial = False
@@ -172,8 +175,38 @@ class Checker:
                        hint="flatten the plan: fewer levels of behaviors inside behaviors")
             raise _Abort
 
+    def _closest(self, name: str, pool: Sequence[str]) -> str | None:
+        """Return the name in ``pool`` closest to ``name`` (difflib, cutoff 0.6), if any.
+
+        The pool is indexed by length once per checker: a ratio of 0.6 needs lengths
+        within a factor of two, and at most :data:`_MAX_CANDIDATES` of those (sharing the
+        first letter first) are compared, so 4,000 unknown names among 4,000 definitions
+        cost a few comparisons each instead of 4,000.
+        """
+        key = (len(pool), tuple(pool[:3]), tuple(pool[-3:]))
+        index = self._pools.get(key)
+        if index is None:
+            index = {}
+            for c in dict.fromkeys(pool):
+                index.setdefault(len(c), []).append(c)
+            self._pools[key] = index
+        n = len(name)
+        near = [c for size in range(max(1, n // 2), 2 * n + 2) for c in index.get(size, ())]
+        if len(near) > _MAX_CANDIDATES:
+            near = ([c for c in near if c[:1] == name[:1]] + near)[:_MAX_CANDIDATES]
+        close = difflib.get_close_matches(name, near, n=1, cutoff=0.6)
+        return close[0] if close else None
+
+    def _names(self) -> list[str]:
+        """Every name a plan may use (the namespace's, sorted once per checker)."""
+        names = self._cache.get(("names",))
+        if names is None:
+            names = self._cache[("names",)] = self.ns.names()
+        return names
+
     def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
-        close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.6)
+        found = self._closest(name, list(pool))
+        close = [found] if found else []
         self.error(span, f"unknown {what} `{name}`",
                    hint=f"did you mean `{close[0]}`?" if close else None)
 
@@ -237,7 +270,7 @@ class Checker:
     def _number(self, expr: st.Expr, env: Env) -> Quantity:
         v = self.value(expr, env)
         if isinstance(v, Symbol):
-            pool = [*env, *self.ns.names()]
+            pool = [*env, *self._names()]
             self._unknown(v.name, expr.span, "name", pool)
             raise _Abort
         return v
@@ -345,7 +378,7 @@ class Checker:
         if isinstance(v, Symbol):
             if slot.symbol:
                 return v
-            pool = [*env, *self.ns.names()]
+            pool = [*env, *self._names()]
             self._unknown(v.name, expr.span, "name", pool)
             raise _Abort
         if slot.symbol:
@@ -601,7 +634,8 @@ class Checker:
             raise _Abort
         pool = [n for n, d in self.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
         pool += list(self.ns.registry.laws)
-        close = difflib.get_close_matches(name, pool, n=1, cutoff=0.6)
+        found = self._closest(name, pool)
+        close = [found] if found else []
         self.error(span, f"unknown name `{name}`: not a control law, atom, behavior or plan",
                    hint=f"did you mean `{close[0]}`?" if close else None)
         raise _Abort
