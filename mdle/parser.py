@@ -44,7 +44,7 @@ from mdle.syntax_errors import (
 from mdle.units import NONE, UNITS, unit_value
 
 __all__ = ["parse_module", "parse_expression", "normalise_newlines", "MAX_DEPTH", "MAX_ERRORS",
-           "lark_parser"]
+           "lark_parser", "iter_tokens", "lex_fragment"]
 
 #: Deepest nesting of parentheses and operators accepted in one expression.
 MAX_DEPTH = 100
@@ -738,3 +738,28 @@ def iter_tokens(text: str) -> Iterator[Token]:
             _STATE.reset(token)
         yield tok
 
+
+
+def lex_fragment(text: str, opened: int = 0) -> tuple[list[Token], int, bool]:
+    """Lex a piece of a longer text that starts at a line boundary.
+
+    No token spans a newline, so lexing line by line gives the tokens lexing the whole
+    text would. ``opened`` is the count of brackets still open before the piece (the
+    :data:`MAX_DEPTH` guard of :func:`iter_tokens` carries over). Returns the tokens,
+    the open count after them, and whether lexing stopped early (a bad character, or
+    more than :data:`MAX_DEPTH` brackets open), after which nothing more is lexed.
+    """
+    state = _State("<lex>", open_brackets=opened)
+    lexer = lark_parser().lex(text, dont_ignore=False)
+    out: list[Token] = []
+    while True:
+        token = _STATE.set(state)
+        try:
+            tok = next(lexer)
+        except StopIteration:
+            return out, state.open_brackets, False
+        except (UnexpectedInput, _TooDeep):
+            return out, state.open_brackets, True
+        finally:
+            _STATE.reset(token)
+        out.append(tok)
