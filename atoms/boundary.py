@@ -333,8 +333,13 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
             if not (math.isfinite(t) and math.isfinite(k)):
                 return MISS
             return Ray(True, r, math.atan2(math.sin(t), math.cos(t)), k)
-        return BoundaryView(oracle(lay.c) if lay.c_ok else MISS,
-                            oracle(0) if lay.s_ok else MISS, True, scan.max_range)
+        side_ray = oracle(0) if lay.s_ok else MISS
+        if side_ray.hit and lay.n_side > 1:
+            k = _turning_ahead(ranges, valid, tangents, curvatures, lay, left)
+            if k is not None:
+                side_ray = Ray(True, side_ray.r, side_ray.beta, side_ray.kappa + k)
+        return BoundaryView(oracle(lay.c) if lay.c_ok else MISS, side_ray, True,
+                            scan.max_range)
     r = ranges[lay.take]
     ok = np.isfinite(r)
     ok &= r > 0
@@ -361,6 +366,46 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
             ray = _front_full(ranges, bearings, valid, left, lay.c, float(r[cl]), wins)
         front = ray
     return BoundaryView(front, side_ray, False, scan.max_range)
+
+
+def _turning_ahead(ranges: "np.ndarray", valid: "np.ndarray", tangents: "np.ndarray",
+                   curvatures: "np.ndarray", lay: _Layout, left: bool) -> float | None:
+    """Return the curvature of the vertices ahead on the side ray's surface, spread (1/m).
+
+    Over the boundary the side run's beams hit (from the side ray forward, up to the
+    surface's end or ``side_span``), the exact tangent's total turning less what the exact
+    curvature accounts for (the turning at vertices: a polygon's corners, a sampled curve's
+    facet joints), divided by that length. Added to the exact curvature at the hit, it is
+    the curvature a path following at about ``rc`` meets next: a polygon's exact curvature
+    is 0 up to each vertex, so nothing anticipated the turn, and a sampled curve's facets
+    are flat however fine the sampling. With it, both read as the noisy scan's fit sees them,
+    and a smooth boundary is unchanged. None when the window has fewer than two beams on
+    the side ray's surface.
+    """
+    import numpy as np
+
+    from atoms.estimators import DEFAULT_GAP
+
+    ns = lay.n_side
+    idx = lay.take[:ns]
+    r = ranges[idx]
+    ok = valid[idx] & np.isfinite(r) & (r > 0)
+    z = np.where(ok, r, np.nan) * lay.unit[:ns]
+    step = np.abs(z[1:] - z[:-1])
+    link = step < np.maximum(lay.spacing[:ns - 1] * r[:-1], DEFAULT_GAP)
+    end = int(np.argmin(link)) if not link.all() else ns - 1  # beams 0..end on one surface
+    if end < 1:
+        return None
+    t = tangents[idx[:end + 1]]
+    if left:
+        t = np.pi - t
+    k = curvatures[idx[:end + 1]]
+    seg = step[:end]
+    # convex turning only: a concave corner ahead is the front ray's (its gate and floor)
+    turn = min(float(np.angle(np.exp(1j * np.diff(t))).sum()
+                     - (0.5 * (k[1:] + k[:-1]) * seg).sum()), 0.0)
+    length = float(seg.sum())
+    return turn / length if length > 0 and math.isfinite(turn) else None
 
 
 def _front_full(ranges: "np.ndarray", bearings: "np.ndarray", valid: "np.ndarray", left: bool,

@@ -19,14 +19,19 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from atoms.boundary import SIDES, Side, cached_view, parse_side
-from atoms.registry import Args, Context, Param, control_law
+from atoms.registry import Args, Context, Param, control_law, sensor
 from mdle.backend import Command
 from mdle.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 if TYPE_CHECKING:
+    from atoms.latency import Predictor
     from atoms.steering import Gains, Memory
 
-__all__ = ["follow_boundary", "FollowState", "start_follow", "scan_points_cached"]
+__all__ = ["follow_boundary", "lost", "FollowState", "start_follow", "scan_points_cached"]
+
+#: The trace's ``mode`` field: 0 follow, 1 corner (circling a vertex), 2 search (the boundary
+#: was lost: circling the point seen last).
+_MODE_CODES = {"follow": 0.0, "corner": 1.0, "search": 2.0}
 
 
 @dataclass
@@ -36,10 +41,16 @@ class FollowState:
     side: Side
     gains: "Gains"
     memory: "Memory"
+    t0: float = 0.0
+    """Backend time (s) at which the atom started: local time is ``obs.time - t0``."""
+    latency: float | None = None
+    """Command latency predicted over (s); None: no prediction (``latency = 0 s``)."""
+    predictor: "Predictor | None" = None
 
 
 def start_follow(args: Args, ctx: Context) -> FollowState:
     """Make the per-atom state when a ``follow_boundary`` atom starts."""
+    from atoms.latency import Predictor
     from atoms.steering import Gains, Memory
 
     umax = min(float(args["umax"]), ctx.limits.max_turn_rate)
@@ -48,7 +59,12 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
     # the approach then takes the same path length whatever v
     mu = 4.0 * float(args["zeta"]) * abs(float(args["v"])) * math.sqrt(2.0 * max(kf, 0.0))
     gains = Gains(mu=mu, kf=kf, umax=umax, tau=float(args["tau"]))
-    return FollowState(parse_side(args["side"]), gains, Memory())
+    latency = float(args["latency"])
+    if math.isinf(latency):
+        latency = ctx.limits.command_latency
+    predict = float(args["latency"]) != 0.0
+    return FollowState(parse_side(args["side"]), gains, Memory(), ctx.obs.time - ctx.t,
+                       latency if predict else None, Predictor() if predict else None)
 
 
 def scan_points_cached(ctx: Context) -> Any:
@@ -71,14 +87,22 @@ def scan_points_cached(ctx: Context) -> Any:
 
 @control_law(
     Param("side", default="right", choices=SIDES, doc="side the boundary is on: right or left"),
-    Param("rc", LENGTH, 0.5, doc="distance to keep from the boundary"),
-    Param("v", SPEED, 0.3, doc="constant forward speed"),
-    Param("zeta", NONE, 1.0, doc="damping ratio of the distance loop (mu = 4 zeta v sqrt(2 kf))"),
-    Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2"),
-    Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)"),
-    Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)"),
-    Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)"),
-    Param("lookahead", TIME, 0.8, doc="how far ahead the safety layer checks the arc"),
+    Param("rc", LENGTH, 0.5, doc="distance to keep from the boundary", low=0.0, low_open=True),
+    Param("v", SPEED, 0.3, doc="constant forward speed", low=0.0, low_open=True),
+    Param("zeta", NONE, 1.0, doc="damping ratio of the distance loop (mu = 4 zeta v sqrt(2 kf))",
+          low=0.0, low_open=True),
+    Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2", low=0.0,
+          low_open=True),
+    Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)", low=0.0,
+          low_open=True, finite=False),
+    Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)",
+          low=0.0),
+    Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)",
+          low=0.0),
+    Param("lookahead", TIME, 0.8, doc="how far ahead the safety layer checks the arc", low=0.0),
+    Param("latency", TIME, math.inf,
+          doc="command latency to predict over (default: the robot's; 0 s: no prediction, "
+              "not even of the scan's age)", low=0.0, finite=False),
     start=start_follow,
 )
 def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Command:
@@ -91,22 +115,40 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     v = float(args["v"])
     rc = float(args["rc"])
     view = cached_view(ctx, state.side)
-    pose = ctx.obs.pose
+    obs = ctx.obs
+    pose = obs.pose
     left = state.side is Side.LEFT
-    law_pose = (pose.x, -pose.y, -pose.theta) if left else (pose.x, pose.y, pose.theta)
-    u = steering.step(view.front, view.side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
+    sgn = -1.0 if left else 1.0
+    law_pose = (pose.x, sgn * pose.y, sgn * pose.theta)
+    front, side = view.front, view.side
+    moved = None
+    pred = state.predictor
+    if pred is not None and state.latency is not None:
+        # answer the boundary as it will be when this command acts, not as it was scanned
+        from atoms.latency import shift_front, shift_side
+
+        pred.record_pose(obs.time, law_pose)
+        stamp = obs.scan.stamp if obs.scan is not None else obs.time
+        moved, law_pose = pred.predict(obs.time, stamp, law_pose, obs.v, sgn * obs.omega,
+                                       state.latency, ctx.limits.max_accel,
+                                       ctx.limits.max_turn_accel)
+        front, side = shift_front(front, moved), shift_side(side, moved)
+    u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                       g.umax, filter_kappa=not view.exact)
-    if left:
-        u = -u
+    u *= sgn
     u_law, v_law = u, v
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        v, u, clearance = steering.safety_filter(scan_points_cached(ctx), v, u, g.umax,
-                                                 ctx.limits.radius, margin,
-                                                 float(args["lookahead"]))
-    sgn = -1.0 if left else 1.0
-    f, s = view.front, view.side
+        points = scan_points_cached(ctx)
+        if moved is not None and moved != (0.0, 0.0, 0.0):
+            points = _into(points, moved[0], sgn * moved[1], sgn * moved[2])
+        v, u, clearance = steering.safety_filter(points, v, u, g.umax, ctx.limits.radius,
+                                                 margin, float(args["lookahead"]),
+                                                 side=1 if left else -1)
+    if pred is not None:
+        pred.record_command(obs.time, v, sgn * u)
+    f, s = view.front, view.side  # the trace shows what was measured
     ctx.cache["trace"] = {
         "front_hit": float(f.hit),
         "front_range": f.r if f.hit else 0.0,
@@ -116,9 +158,33 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "side_range": s.r if s.hit else 0.0,
         "side_tangent": sgn * s.beta if s.hit else 0.0,
         "side_curvature": sgn * s.kappa if s.hit else 0.0,
-        "mode": 1.0 if state.memory.mode == steering.CORNER else 0.0,
+        "mode": _MODE_CODES[state.memory.mode],
+        "lost": state.memory.lost_for(ctx.t),
         "u_law": u_law,
         "safety": float(u != u_law or v != v_law),
         "predicted_clearance": clearance if math.isfinite(clearance) else -1.0,
     }
     return Command(v, u)
+
+
+def _into(points: Any, dx: float, dy: float, dth: float) -> Any:
+    """Return robot-frame points (M, 2) in the frame moved by ``(dx, dy, dth)``."""
+    import numpy as np
+
+    c, s = math.cos(dth), math.sin(dth)
+    q = points - np.array([dx, dy])
+    return q @ np.array([[c, -s], [s, c]])
+
+
+@sensor(result=TIME)
+def lost(args: Args, ctx: Context) -> float:
+    """Return how long the running ``follow_boundary`` has lost its boundary (s).
+
+    0 while one of its rays sees the boundary, before it has seen any, and when no
+    ``follow_boundary`` atom runs; otherwise the time since a ray last saw it (the atom is
+    searching meanwhile). ``(follow_boundary(...), lost > 5 s, 2 min)`` gives up a search.
+    """
+    state = ctx.atom
+    if not isinstance(state, FollowState):
+        return 0.0
+    return state.memory.lost_for(ctx.obs.time - state.t0)

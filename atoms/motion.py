@@ -23,8 +23,8 @@ def _wrap(a: float) -> float:
 
 @control_law(Param("x", LENGTH, doc="goal x in the odometry frame"),
              Param("y", LENGTH, doc="goal y in the odometry frame"),
-             Param("v", SPEED, 0.3, doc="cruising speed"),
-             Param("tol", LENGTH, 0.05, doc="stop within this distance of the goal"))
+             Param("v", SPEED, 0.3, doc="cruising speed", low=0.0, low_open=True),
+             Param("tol", LENGTH, 0.05, doc="stop within this distance of the goal", low=0.0))
 def goto(args: Args, ctx: Context, state: Any) -> Command:
     """Drive to the point (x, y): turn toward it, slow down within a metre, stop at tol.
 
@@ -46,7 +46,7 @@ def goto(args: Args, ctx: Context, state: Any) -> Command:
 
 
 @control_law(Param("theta", ANGLE, doc="heading to turn to, odometry frame"),
-             Param("rate", TURN_RATE, 1.0, doc="largest turn rate"))
+             Param("rate", TURN_RATE, 1.0, doc="largest turn rate", low=0.0, low_open=True))
 def heading(args: Args, ctx: Context, state: Any) -> Command:
     """Turn on the spot to the heading theta (proportional, 2/s, capped at rate); hold there."""
     e = _wrap(float(args["theta"]) - ctx.obs.pose.theta)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import enum
 import inspect
+import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -80,6 +81,11 @@ class Param:
     ``dim`` is the physical dimension of a numeric parameter; a parameter with
     ``choices`` takes a symbol from that closed set instead (``side = right``).
     ``default`` is in SI units (or a symbol), or :data:`REQUIRED`.
+
+    The values a numeric parameter accepts (in SI): at least ``low`` (more than ``low``
+    with ``low_open``), at most ``high``, and a finite number unless ``finite`` is False
+    (``inf`` may then stand for "no limit"); NaN never. The checker refuses anything
+    else with the argument's place, so a law never starts with a value it cannot use.
     """
 
     name: str
@@ -87,11 +93,33 @@ class Param:
     default: Value | _Required = REQUIRED
     choices: tuple[str, ...] = ()
     doc: str = ""
+    low: float | None = None
+    high: float | None = None
+    low_open: bool = False
+    finite: bool = True
 
     @property
     def is_symbol(self) -> bool:
         """True when the parameter takes a symbol such as ``right`` rather than a number."""
         return bool(self.choices)
+
+    def accepts(self, value: float) -> bool:
+        """Whether ``value`` (SI) is within the declared range."""
+        if math.isnan(value) or (self.finite and math.isinf(value)):
+            return False
+        if self.low is not None and (value < self.low or self.low_open and value == self.low):
+            return False
+        return self.high is None or value <= self.high
+
+    def range_words(self) -> str:
+        """Return the declared range in words: ``a finite number more than 0``."""
+        parts = []
+        if self.low is not None:
+            parts.append(f"{'more than' if self.low_open else 'at least'} {self.low:g}")
+        if self.high is not None:
+            parts.append(f"at most {self.high:g}")
+        what = "a finite number" if self.finite else "a number (or inf)"
+        return what + (" " + " and ".join(parts) if parts else "")
 
 
 class Context:
@@ -101,18 +129,22 @@ class Context:
     evaluated (seconds since it started), ``dt`` the tick length, ``limits`` the robot's
     limits, and ``cache`` a dictionary shared by every function during this tick only,
     so that an estimate (the boundary seen in the scan, say) is computed once per tick.
-    The runtime owns the context and sets ``t`` before each evaluation.
+    The runtime owns the context and sets ``t`` before each evaluation. ``atom`` is the
+    per-atom state of the innermost running atom (what its law's ``start`` made; None when
+    none runs or it has none), so that a sensor function can report on the running law
+    (``lost``: how long ``follow_boundary`` has lost its boundary).
     """
 
-    __slots__ = ("obs", "t", "dt", "limits", "cache")
+    __slots__ = ("obs", "t", "dt", "limits", "cache", "atom")
 
     def __init__(self, obs: Observation, t: float, dt: float, limits: RobotLimits,
-                 cache: dict[Any, Any] | None = None) -> None:
+                 cache: dict[Any, Any] | None = None, atom: Any = None) -> None:
         self.obs = obs
         self.t = t
         self.dt = dt
         self.limits = limits
         self.cache: dict[Any, Any] = {} if cache is None else cache
+        self.atom = atom
 
 
 #: ``step(args, ctx, state) -> Command``: the control law, called once per tick.

@@ -48,19 +48,19 @@ def min_range(args: Args, ctx: Context) -> float:
 
 @sensor(result=LENGTH)
 def x(args: Args, ctx: Context) -> float:
-    """Return the odometry x, metres."""
+    """Return the odometry x, metres (0 at the run's start, forward of the start pose)."""
     return ctx.obs.pose.x
 
 
 @sensor(result=LENGTH)
 def y(args: Args, ctx: Context) -> float:
-    """Return the odometry y, metres."""
+    """Return the odometry y, metres (0 at the run's start, left of the start pose)."""
     return ctx.obs.pose.y
 
 
 @sensor(result=ANGLE)
 def theta(args: Args, ctx: Context) -> float:
-    """Return the odometry heading, radians in (-pi, pi]."""
+    """Return the odometry heading, radians in (-pi, pi] (0 at the run's start)."""
     return ctx.obs.pose.theta
 
 
@@ -90,6 +90,6 @@ def stalled(args: Args, ctx: Context) -> bool:
 
 @sensor(Param("x", LENGTH), Param("y", LENGTH), result=LENGTH)
 def dist_to(args: Args, ctx: Context) -> float:
-    """Return the distance from the robot (odometry) to the point (x, y), metres."""
+    """Return the distance from the robot to the point (x, y) of the odometry frame, metres."""
     p = ctx.obs.pose
     return math.hypot(float(args["x"]) - p.x, float(args["y"]) - p.y)

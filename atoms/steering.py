@@ -17,10 +17,12 @@ The pieces:
 * :func:`follow_law`: grazing-ray rejection, the front-range gate with its linear blend, and the
   front floor (a soft emergency left turn);
 * :func:`corner_law`: circling a remembered vertex (corner mode);
-* :func:`step`: one tick with the corner-mode state machine and odometry memory;
+* :func:`step`: one tick with the mode state machine (follow, corner, search) and odometry
+  memory: a boundary seen once and lost is searched for, never abandoned;
 * :func:`safety_filter`: the full-scan safety layer (the two rays are blind to the left and
   between them): the commanded arc is checked against every scan point and, if it comes too
-  close, replaced by the admissible turn rate nearest to it.
+  close, replaced by the admissible turn rate nearest to it among those that keep the
+  obstacle on the followed side (slower, or turning on the spot, before the blind side).
 
 >>> g = Gains()
 >>> side = Ray(True, 0.5, 0.0, -1.0)            # on a circle of radius 1, rc = 0.5 away
@@ -51,10 +53,12 @@ __all__ = [
     "wrap",
     "FOLLOW",
     "CORNER",
+    "SEARCH",
 ]
 
 FOLLOW = "follow"
 CORNER = "corner"
+SEARCH = "search"
 
 
 def wrap(a: float) -> float:
@@ -123,6 +127,9 @@ class Gains:
         Low-pass time constant for estimated side curvature (0: none; exact data need none).
     kappa_reset : float, m
         The filter restarts when the side range jumps more than this.
+    search_ahead : float, rad
+        A lost boundary is searched for once the point seen last is further than this from
+        the heading (closer to the heading, driving straight on approaches it).
     """
 
     mu: float = 4.0
@@ -148,6 +155,7 @@ class Gains:
     corner_max_turn: float = 1.9 * math.pi
     tau: float = 0.2
     kappa_reset: float = 0.3
+    search_ahead: float = math.radians(75.0)
 
 
 @dataclass
@@ -161,10 +169,22 @@ class Memory:
     last_side: tuple[float, float, float, float, float] | None = None
     """(rs, world tangent angle, world x, world y, time) of the last valid side hit."""
     corner: tuple[float, float] = (0.0, 0.0)
+    """The point circled in corner and search mode (odometry frame, m)."""
     turned: float = 0.0
     kappa: float | None = None
     last_rs: float = math.nan
     time: float = 0.0
+    seen: tuple[float, float] | None = None
+    """The boundary point a valid ray saw last (odometry frame, m); None: never seen."""
+    seen_at: float = math.nan
+    """Local time (s) at which a valid ray last saw the boundary (NaN: never)."""
+
+    def lost_for(self, t: float) -> float:
+        """Return how long (s) the boundary has been lost at local time ``t``.
+
+        0 while a ray sees it, and 0 if it was never seen (nothing to search for yet).
+        """
+        return 0.0 if self.seen is None else max(t - self.seen_at, 0.0)
 
 
 def f_gain(z: float, rc: float, g: Gains) -> float:
@@ -328,32 +348,65 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
             mem.mode = CORNER
             mem.corner = (last[2], last[3])
             mem.turned = 0.0
+    if mem.mode == FOLLOW and not front.hit and not side.hit and mem.seen is not None \
+            and _abeam_or_behind(mem.seen, x, y, theta, g.search_ahead):
+        # Both rays miss after the boundary was seen (a face ended beyond corner reach, a
+        # deflection, a start that grazed the obstacle) and the point seen last is no longer
+        # ahead: circle it, with the obstacle on the followed side, until a ray finds the
+        # boundary again. (While it is ahead, driving straight on closes in on it.)
+        mem.mode = SEARCH
+        mem.corner = mem.seen
     if mem.mode == CORNER:
-        cx, cy = mem.corner
-        d = math.hypot(cx - x, cy - y)
-        e = wrap(math.atan2(cy - y, cx - x) - theta + math.pi / 2.0)
         back = side.hit and abs(side.beta) < g.corner_exit_angle \
-            and abs(side.r - d) < g.corner_exit_range * rc
-        if front.hit or mem.turned > g.corner_max_turn or back:
+            and abs(side.r - math.hypot(mem.corner[0] - x, mem.corner[1] - y)) \
+            < g.corner_exit_range * rc
+        if front.hit or back:
             mem.mode = FOLLOW
-            if not back and not front.hit:
-                mem.last_side = None  # gave up circling: do not circle the same point again
+        elif mem.turned > g.corner_max_turn:
+            mem.mode = SEARCH  # circled the vertex and never found the side: keep searching
         else:
-            u = corner_law(d, e, v, rc, g, umax)
+            u = _circle(mem, x, y, theta, v, rc, g, umax)
             mem.turned += abs(u) * dt
             return u
+    if mem.mode == SEARCH:
+        if front.hit or side.hit:
+            mem.mode = FOLLOW
+        else:
+            return _circle(mem, x, y, theta, v, rc, g, umax)
     if side.hit:
         ang = theta - math.pi / 2.0
-        mem.last_side = (side.r, theta + side.beta, x + side.r * math.cos(ang),
-                         y + side.r * math.sin(ang), t)
+        sx, sy = x + side.r * math.cos(ang), y + side.r * math.sin(ang)
+        mem.last_side = (side.r, theta + side.beta, sx, sy, t)
+        mem.seen, mem.seen_at = (sx, sy), t
+    elif front.hit:
+        mem.seen = (x + front.r * math.cos(theta), y + front.r * math.sin(theta))
+        mem.seen_at = t
     return _blend_and_floor(front, side, v, rc, g, umax)
 
 
+def _abeam_or_behind(point: tuple[float, float], x: float, y: float, theta: float,
+                     ahead: float) -> bool:
+    """Return True unless ``point`` lies within ``ahead`` (rad) of the heading."""
+    return math.cos(math.atan2(point[1] - y, point[0] - x) - theta) < math.cos(ahead)
+
+
+def _circle(mem: Memory, x: float, y: float, theta: float, v: float, rc: float, g: Gains,
+            umax: float) -> float:
+    """Return the point-circling law's turn rate around ``mem.corner`` (corner and search)."""
+    cx, cy = mem.corner
+    d = math.hypot(cx - x, cy - y)
+    e = wrap(math.atan2(cy - y, cx - x) - theta + math.pi / 2.0)
+    return corner_law(d, e, v, rc, g, umax)
+
+
 def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookahead: float,
-                   samples: int) -> "np.ndarray":
+                   samples: int) -> tuple["np.ndarray", "np.ndarray"]:
     """Compute the clearance (m, before the body radius) of arcs at ``speed`` and ``rates``.
 
     Each arc lasts ``lookahead`` seconds and is sampled at ``samples`` points after the start.
+    Returns the clearances (K,) and, for each arc, on which side of it its nearest scan point
+    lies: the sign of the cross product of the arc's heading there with the point (K,),
+    positive on the left.
     """
     import numpy as np
 
@@ -365,14 +418,20 @@ def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookah
     cs = np.where(straight, 1.0, c)[:, None]
     ax = np.where(straight[:, None], s[None, :], np.sin(th) / cs)
     ay = np.where(straight[:, None], 0.0, (1.0 - np.cos(th)) / cs)
-    dx = ax[..., None] - near[:, 0]
-    dy = ay[..., None] - near[:, 1]
-    return np.sqrt((dx * dx + dy * dy).min(axis=(1, 2)))         # (K,)
+    dx = near[:, 0] - ax[..., None]                              # (K, S, M): arc -> point
+    dy = near[:, 1] - ay[..., None]
+    d2 = (dx * dx + dy * dy).reshape(rates.size, -1)
+    nearest = d2.argmin(axis=1)
+    k = np.arange(rates.size)
+    sk = nearest // near.shape[0]
+    cross = (np.cos(th[k, sk]) * dy.reshape(rates.size, -1)[k, nearest]
+             - np.sin(th[k, sk]) * dx.reshape(rates.size, -1)[k, nearest])
+    return np.sqrt(d2[k, nearest]), cross
 
 
 def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius: float,
                   margin: float, lookahead: float, candidates: int = 25,
-                  samples: int = 8) -> tuple[float, float, float]:
+                  samples: int = 8, side: int = -1) -> tuple[float, float, float]:
     """Apply the full-scan safety layer: keep ``(v, u)`` unless its arc nears the scan.
 
     The arc the robot drives at ``(v, u)`` over ``lookahead`` seconds is sampled and its
@@ -380,10 +439,13 @@ def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius:
     admissible if that is at least ``margin``, or, when the robot is already closer than
     ``margin``, if the arc gets no closer than it is now. An admissible command stands.
     Otherwise the turn rate is replaced by the admissible one nearest to ``u`` among
-    ``candidates`` rates over +-umax, at full speed if one exists, else at half, a quarter,
-    and finally standing still (turning on the spot, which never gets closer), so the robot
-    never drives into a dead end it cannot turn out of (a constant-speed unicycle cannot
-    turn round in a wedge narrower than its turning circle).
+    ``candidates`` rates over +-umax whose nearest scan point lies on the followed ``side``
+    (-1 right, +1 left): the followed side wins, so a robot that meets a face at an awkward
+    angle is never deflected along it with the obstacle on its blind side. Such a rate is
+    sought at full speed, else at half, a quarter, and finally the robot turns on the spot
+    towards the followed side (which never gets closer and puts what is ahead on that
+    side); so it also never drives into a dead end it cannot turn out of (a
+    constant-speed unicycle cannot turn round in a wedge narrower than its turning circle).
 
     Parameters
     ----------
@@ -411,14 +473,14 @@ def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius:
         return v, u, math.inf
     now = float(np.sqrt((near * near).sum(1).min())) - radius
     need = min(margin, now - 1e-3)
-    own = float(_arc_clearance(near, v, np.array([u]), lookahead, samples)[0]) - radius
+    own = float(_arc_clearance(near, v, np.array([u]), lookahead, samples)[0][0]) - radius
     if own >= need:
         return v, u, own
     rates = np.linspace(-umax, umax, candidates)
     for factor in (1.0, 0.5, 0.25):
-        clear = _arc_clearance(near, v * factor, rates, lookahead, samples) - radius
-        ok = clear >= need
+        clear, cross = _arc_clearance(near, v * factor, rates, lookahead, samples)
+        ok = (clear - radius >= need) & (cross * side > 0)
         if ok.any():
             pick = np.flatnonzero(ok)[np.argmin(np.abs(rates[ok] - u))]
             return v * factor, float(rates[pick]), own
-    return 0.0, min(max(u, -umax), umax), own  # turn on the spot: never closer
+    return 0.0, -side * umax, own  # turn on the spot towards the followed side

@@ -44,7 +44,7 @@ from mdle.backend import Command, Pose  # noqa: E402 (after the path fix above)
 from sim.backend import SimBackend  # noqa: E402 (after the path fix above)
 from sim.catalog import load_world  # noqa: E402 (after the path fix above)
 from sim.ladar import LMS200, Ladar  # noqa: E402 (after the path fix above)
-from sim.robot import PIONEER2DX  # noqa: E402 (after the path fix above)
+from sim.profiles import robot_profile  # noqa: E402 (after the path fix above)
 from sim.shapes import Curve, Rectangle, Wall  # noqa: E402 (after the path fix above)
 from sim.world import World  # noqa: E402 (after the path fix above)
 
@@ -111,7 +111,7 @@ def time_calls(fn: Callable[[], object], calls: int, runs: int) -> Timing:
 
 def scan_cost(world: World, calls: int, runs: int) -> Timing:
     """Time one scan as :class:`sim.backend.SimBackend` takes it (ray cast, noise, rounding)."""
-    ladar = Ladar(LMS200, np.random.default_rng(0), mount=PIONEER2DX.ladar_mount)
+    ladar = Ladar(LMS200, np.random.default_rng(0), mount=robot_profile("pioneer2dx").ladar_mount)
     fan = ladar.fan(world.caster)
     headings = np.linspace(-math.pi, math.pi, 64, endpoint=False).tolist()
     k = [0]
@@ -124,9 +124,9 @@ def scan_cost(world: World, calls: int, runs: int) -> Timing:
     return time_calls(one, calls, runs)
 
 
-def tick_cost(world: World, calls: int, runs: int) -> Timing:
+def tick_cost(world: World, calls: int, runs: int, robot: str | None = None) -> Timing:
     """Time observe, command, advance(0.1 s): the robot drives ~1 m circles round its start."""
-    backend = SimBackend(world, seed=0)
+    backend = SimBackend(world, seed=0, robot=robot)
     k = [0]
 
     def tick() -> None:
@@ -168,6 +168,13 @@ def main() -> None:
     t = tick_cost(w, args.calls, args.runs)
     print(f"  {w.parts.n_segments:6d} segments: {t}; {1e5 / t.median:.0f}x real time at "
           f"10 Hz (target: <= 150 us)")
+    w = scattered_world(100)
+    untimed = tick_cost(w, args.calls, args.runs, robot="pioneer2dx")
+    timed = tick_cost(w, args.calls, args.runs, robot="pioneer-p3dx")
+    print(f"  {w.parts.n_segments:6d} segments, pioneer2dx (no timing model):   {untimed}")
+    print(f"  {w.parts.n_segments:6d} segments, pioneer-p3dx (timing model on):  {timed}")
+    print(f"  timing model cost: x{timed.median / untimed.median:.3f} (median), "
+          f"x{timed.minimum / untimed.minimum:.3f} (min) (target: <= x1.10)")
     w = scattered_world(10000)
     print(f"  {w.parts.n_segments:6d} segments: {tick_cost(w, args.calls, args.runs)}")
     w = load_world("ellipse")

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 if TYPE_CHECKING:  # numpy is only needed by those who build scans
     import numpy as np
@@ -93,7 +93,7 @@ class Observation:
     stalled: bool = False
     motors_enabled: bool = True
     battery: float | None = None
-    truth: dict[str, float | bool] = field(default_factory=dict)
+    truth: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

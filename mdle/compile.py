@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from atoms.registry import BOOL, REQUIRED, LawSpec, Registry, SensorSpec
+from atoms.registry import BOOL, REQUIRED, LawSpec, Param, Registry, SensorSpec
 from mdle import conditions as cond
 from mdle import syntax as st
 from mdle.dimensions import (
@@ -38,6 +38,7 @@ from mdle.dimensions import (
     dim_example,
     dim_words,
     fits,
+    same_kind,
     show_value,
     unit_for,
 )
@@ -51,6 +52,8 @@ __all__ = ["Checker", "check_program", "MAX_NESTING", "never_ends"]
 
 #: Deepest nesting of elements and interrupts, counting through named definitions.
 MAX_NESTING = 120
+#: Most names one "did you mean" compares an unknown name with.
+_MAX_CANDIDATES = 200
 
 Env = Mapping[str, Value]
 _EMPTY: Env = MappingProxyType({})
@@ -70,6 +73,7 @@ class _Slot:
     default: Any  # a Value, or REQUIRED
     choices: tuple[str, ...] = ()
     symbol: bool = False  # takes a symbol (a law parameter with choices, or a symbol default)
+    param: Param | None = None  # a law's or sensor function's declaration (its range)
 
 
 def _kind_name(target: object) -> str:
@@ -136,6 +140,10 @@ class Checker:
         self._too_deep = False
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
+        self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
+        #: True while a definition is checked with its required parameters unknown (NaN):
+        #: a NaN is then no error (each use with arguments is checked again)
+        self._partial = False
 
     # ------------------------------------------------------------------ diagnostics
 
@@ -167,8 +175,38 @@ class Checker:
                        hint="flatten the plan: fewer levels of behaviors inside behaviors")
             raise _Abort
 
+    def _closest(self, name: str, pool: Sequence[str]) -> str | None:
+        """Return the name in ``pool`` closest to ``name`` (difflib, cutoff 0.6), if any.
+
+        The pool is indexed by length once per checker: a ratio of 0.6 needs lengths
+        within a factor of two, and at most :data:`_MAX_CANDIDATES` of those (sharing the
+        first letter first) are compared, so 4,000 unknown names among 4,000 definitions
+        cost a few comparisons each instead of 4,000.
+        """
+        key = (len(pool), tuple(pool[:3]), tuple(pool[-3:]))
+        index = self._pools.get(key)
+        if index is None:
+            index = {}
+            for c in dict.fromkeys(pool):
+                index.setdefault(len(c), []).append(c)
+            self._pools[key] = index
+        n = len(name)
+        near = [c for size in range(max(1, n // 2), 2 * n + 2) for c in index.get(size, ())]
+        if len(near) > _MAX_CANDIDATES:
+            near = ([c for c in near if c[:1] == name[:1]] + near)[:_MAX_CANDIDATES]
+        close = difflib.get_close_matches(name, near, n=1, cutoff=0.6)
+        return close[0] if close else None
+
+    def _names(self) -> list[str]:
+        """Every name a plan may use (the namespace's, sorted once per checker)."""
+        names = self._cache.get(("names",))
+        if names is None:
+            names = self._cache[("names",)] = self.ns.names()
+        return names
+
     def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
-        close = difflib.get_close_matches(name, list(pool), n=1, cutoff=0.6)
+        found = self._closest(name, list(pool))
+        close = [found] if found else []
         self.error(span, f"unknown {what} `{name}`",
                    hint=f"did you mean `{close[0]}`?" if close else None)
 
@@ -232,7 +270,7 @@ class Checker:
     def _number(self, expr: st.Expr, env: Env) -> Quantity:
         v = self.value(expr, env)
         if isinstance(v, Symbol):
-            pool = [*env, *self.ns.names()]
+            pool = [*env, *self._names()]
             self._unknown(v.name, expr.span, "name", pool)
             raise _Abort
         return v
@@ -253,6 +291,10 @@ class Checker:
         if not (q.dim is None or q.dim == TIME or q.dim == NONE or q.zero):
             self.error(expr.span, f"expected a timer such as `10 s` or `inf`, found "
                        f"{dim_words(q.dim)} (`{_short(expr)}`)")
+            raise _Abort
+        if math.isnan(q.value) and not self._partial:
+            self.error(expr.span, f"the timer `{_short(expr)}` is not a number (NaN)",
+                       hint="`inf * 0` and `inf - inf` have no value; write `inf` or a time")
             raise _Abort
         if q.value < 0:
             self.error(expr.span, "a timer cannot be negative")
@@ -336,7 +378,7 @@ class Checker:
         if isinstance(v, Symbol):
             if slot.symbol:
                 return v
-            pool = [*env, *self.ns.names()]
+            pool = [*env, *self._names()]
             self._unknown(v.name, expr.span, "name", pool)
             raise _Abort
         if slot.symbol:
@@ -352,6 +394,15 @@ class Checker:
             self.error(expr.span, f"`{slot.name}` of `{callee}` is {dim_example(slot.dim)}, "
                        f"found {dim_words(v.dim)} (`{_short(expr)}`)", hint=hint)
             raise _Abort
+        p = slot.param
+        if p is not None and not (self._partial and math.isnan(v.value)) \
+                and not p.accepts(v.value):
+            unit = f" ({p.dim.symbol()})" if p.dim != NONE else ""
+            self.error(expr.span, f"`{slot.name}` of `{callee}` must be {p.range_words()}{unit}, "
+                       f"found {show_value(v) if not math.isnan(v.value) else 'NaN'}"
+                       + (f" (`{_short(expr)}`)" if not isinstance(expr, st.Number) else ""),
+                       hint=p.doc or None)
+            raise _Abort
         return v
 
     def _slots_of_spec(self, spec: LawSpec | SensorSpec) -> list[_Slot]:
@@ -359,7 +410,7 @@ class Checker:
                       REQUIRED if p.default is REQUIRED else (
                           Symbol(p.default) if isinstance(p.default, str) else
                           Quantity(float(p.default), p.dim)),
-                      tuple(p.choices), bool(p.choices)) for p in spec.params]
+                      tuple(p.choices), bool(p.choices), p) for p in spec.params]
 
     def slots_of(self, d: st.Definition) -> list[_Slot]:
         """Return the parameters of a definition; a parameter's dimension is its default's."""
@@ -583,7 +634,8 @@ class Checker:
             raise _Abort
         pool = [n for n, d in self.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
         pool += list(self.ns.registry.laws)
-        close = difflib.get_close_matches(name, pool, n=1, cutoff=0.6)
+        found = self._closest(name, pool)
+        close = [found] if found else []
         self.error(span, f"unknown name `{name}`: not a control law, atom, behavior or plan",
                    hint=f"did you mean `{close[0]}`?" if close else None)
         raise _Abort
@@ -686,7 +738,7 @@ class Checker:
         beta = 1.0
         try:
             beta = self._factor(beta_e, env, "beta")
-            if not beta > 0:
+            if not beta > 0 and not (self._partial and math.isnan(beta)):
                 self.error(beta_e.span, "beta scales the timer and must be positive")
                 failed = True
         except _Abort:
@@ -710,6 +762,10 @@ class Checker:
         if not (q.dim is None or q.dim == NONE or q.zero):
             self.error(expr.span, f"{what} is a plain number such as `0.5`, found "
                        f"{dim_words(q.dim)}")
+            raise _Abort
+        if not math.isfinite(q.value) and not (self._partial and math.isnan(q.value)):
+            self.error(expr.span, f"{what} must be a finite number, found `{_short(expr)}`"
+                       + (" (NaN)" if math.isnan(q.value) else ""))
             raise _Abort
         return q.value
 
@@ -819,6 +875,7 @@ class Checker:
         slots = self.slots_of(d)
         runnable = all(s.default is not REQUIRED for s in slots)
         bound = {s.name: (_UNKNOWN if s.default is REQUIRED else s.default) for s in slots}
+        self._partial = not runnable
         try:
             if d.kind is st.DefKind.INTERRUPT:
                 self._interrupt_body(d, bound, None)
@@ -826,6 +883,8 @@ class Checker:
             e = self.instance(d, bound)
         except _Abort:
             return None
+        finally:
+            self._partial = False
         return e if runnable else None
 
 
@@ -835,7 +894,7 @@ def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
 
 
 def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
-    return a.dim is None or b.dim is None or a.dim == b.dim
+    return a.dim is None or b.dim is None or same_kind(a.dim, b.dim)
 
 
 def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
@@ -891,14 +950,21 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     srcs = dict(sources or {})
     checker, errors = _checker(modules, registry, replace)
     main = main if main is not None else (modules[-1] if modules else None)
-    try:
-        elements: dict[str, Element] = {}
-        for d in _dependency_order(checker.ns, checker.broken):
+    elements: dict[str, Element] = {}
+    for d in _dependency_order(checker.ns, checker.broken):
+        try:
             e = checker.check_definition(d)
-            if e is not None:
-                elements[d.name] = e
+        except RecursionError:  # a last guard: the nesting limits should prevent this
+            checker.error(d.span, f"`{d.name}` nests too deeply to check",
+                          hint="flatten it: fewer levels of elements or interrupts inside "
+                               "each other")
+            checker.broken.add(d.name)
+            continue
+        if e is not None:
+            elements[d.name] = e
+    try:
         entry = _entry(checker, main, elements)
-    except RecursionError:  # a last guard: the nesting limits should prevent this
+    except RecursionError:
         checker.error(None, "the program nests too deeply to check")
         entry = None
     errors.extend(checker.errors)

@@ -26,6 +26,7 @@ __all__ = [
     "dim_words",
     "dim_example",
     "fits",
+    "same_kind",
     "show_value",
 ]
 
@@ -89,9 +90,24 @@ def unit_for(dim: Dim) -> str | None:
     return _UNIT_OF.get(dim)
 
 
+def same_kind(a: Dim, b: Dim) -> bool:
+    """Whether two dimensions measure the same thing.
+
+    Radians are a ratio of lengths, so a rate per metre or per second is the same quantity
+    with or without them: a curvature in rad/m compares with ``1 / 2 m``, a turn rate in
+    rad/s with ``1 / 1 s``. A bare angle stays apart from a plain number, so that
+    ``heading > 30`` still asks for a unit.
+    """
+    if a == b:
+        return True
+    if (a.length or a.time) and (b.length or b.time):
+        return (a.length, a.time) == (b.length, b.time)
+    return False
+
+
 def fits(value: Quantity, dim: Dim | None) -> bool:
     """Whether ``value`` may stand where ``dim`` is expected (unknowns and bare 0 fit)."""
-    return dim is None or value.dim is None or value.zero or value.dim == dim
+    return dim is None or value.dim is None or value.zero or same_kind(value.dim, dim)
 
 
 def show_value(value: Value) -> str:

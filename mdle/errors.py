@@ -9,6 +9,8 @@ and a caret. Each stage raises its own :class:`MdleError` subclass; the CLI show
 from __future__ import annotations
 
 import enum
+import functools
+import re
 from dataclasses import dataclass
 
 __all__ = [
@@ -22,6 +24,7 @@ __all__ = [
     "MdleRuntimeError",
     "BackendError",
     "render_diagnostic",
+    "source_line",
 ]
 
 
@@ -108,6 +111,34 @@ def _one_line(d: Diagnostic) -> str:
     return f"{where}{d.severity.value}: {d.message}"
 
 
+#: Characters shown as a space in a quoted source line: a tab, and the characters
+#: Python's ``splitlines`` (and terminals) take as line breaks, which in MDLe are not.
+_BLANKS = {ord(c): " " for c in "\t\r\v\f\x1c\x1d\x1e\x85\u2028\u2029"}
+
+
+@functools.lru_cache(maxsize=8)
+def _line_starts(text: str) -> tuple[int, ...]:
+    r"""Return the offset of each line of ``text`` (lines end at ``\n`` only, as in MDLe)."""
+    return (0, *(m.end() for m in re.finditer("\n", text)))
+
+
+def source_line(text: str, line: int) -> str | None:
+    r"""Return line ``line`` (1-based) of ``text`` without its newline; None past the end.
+
+    Lines end at ``\n`` only, as the parser counts them (a form feed or U+2028 is not a
+    line break). The line offsets of a text are computed once, so rendering thousands of
+    diagnostics of a large file stays linear.
+    """
+    starts = _line_starts(text)
+    if not 1 <= line <= len(starts):
+        return None
+    begin = starts[line - 1]
+    end = starts[line] - 1 if line < len(starts) else len(text)
+    if begin == len(text) and line > 1:
+        return None  # the empty "line" after a final newline
+    return text[begin:end]
+
+
 def render_diagnostic(d: Diagnostic, sources: dict[str, str] | None = None) -> str:
     """Render a diagnostic as plain text: header, source line, caret, hint, notes.
 
@@ -125,9 +156,9 @@ def render_diagnostic(d: Diagnostic, sources: dict[str, str] | None = None) -> s
     lines = [_one_line(d)]
     text = (sources or {}).get(d.span.file) if d.span else None
     if d.span is not None and text is not None:
-        src_lines = text.splitlines()
-        if 1 <= d.span.line <= len(src_lines):
-            raw = src_lines[d.span.line - 1].replace("\t", " ")
+        found = source_line(text, d.span.line)
+        if found is not None:
+            raw = found.translate(_BLANKS)
             col = max(1, min(d.span.column, len(raw) + 1))
             width = 1
             if d.span.end_line == d.span.line and d.span.end_column > col:

@@ -55,7 +55,9 @@ def summary_rows(result: RunResult, wall_seconds: float | None = None) -> list[t
     rows.append(("distance travelled", f"{result.distance:.2f} m"))
     if result.min_clearance is not None:
         rows.append(("minimum clearance", f"{result.min_clearance:.3f} m"))
-    rows.append(("collided", "YES" if result.collided else "no"))
+    t0 = result.events[0].time if result.events else 0.0
+    rows.append(("collided", ("YES: " + result.collision.describe(t0)) if result.collision
+                 else "YES" if result.collided else "no"))
     rows.append(("ticks", str(result.ticks)))
     if result.max_lateness > 0:
         rows.append(("worst tick lateness", f"{result.max_lateness * 1e3:.1f} ms"))
@@ -209,7 +211,7 @@ class LiveView(BaseObserver):
         facts.add_column(style="bold")
         facts.add_column()
         for label, value in rows:
-            style = "bold red" if (label == "collided" and value == "YES") or \
+            style = "bold red" if (label == "collided" and value.startswith("YES")) or \
                 label == "fault" else ""
             facts.add_row(label, value, style=style)
         console.print(facts)

@@ -10,14 +10,14 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 from atoms.registry import Registry
 from mdle import syntax as st
 from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
-from mdle.parser import parse_module
+from mdle.parser import normalise_newlines, parse_module
 from mdle.program import Program
 from mdle.userfile import UserFileError, read_user_file
 
@@ -41,7 +41,7 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
     except UserFileError as err:
         raise CheckError(Diagnostic(span, f"cannot read `{name}`: {err.reason}")) from None
     try:
-        return data.decode("utf-8-sig")
+        return normalise_newlines(data.decode("utf-8-sig"))
     except UnicodeDecodeError as err:
         line = data[:err.start].count(b"\n") + 1
         col = err.start - (data.rfind(b"\n", 0, err.start) + 1) + 1
@@ -90,6 +90,7 @@ def load_modules(text: str, file: str, base_dir: str | None = None,
     MdleError
         With the diagnostics of every file (syntax errors, missing files, import cycles).
     """
+    text = normalise_newlines(text)
     sources: dict[str, str] = {file: text}
     diagnostics: list[Diagnostic] = []
     syntax_failed = False
@@ -201,7 +202,7 @@ def _error(diags: list[Diagnostic], sources: dict[str, str], syntax: bool) -> Md
 
 
 def load_text(text: str, file: str = "<string>", registry: Registry | None = None, *,
-              settings: Mapping[str, str] | None = None,
+              settings: Mapping[str, str] | Sequence[str] | None = None,
               files: Mapping[str, str] | None = None, base_dir: str | None = None
               ) -> Program:
     """Parse and check a program given as text.
@@ -216,8 +217,8 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
     registry : Registry, optional
         Control laws and sensor functions; ``atoms.default_registry()`` when None.
     settings : mapping, optional
-        Parameter defaults to override, ``NAME -> value text`` (``mdle run --set``); see
-        :func:`mdle.overrides.override_defaults`.
+        Parameter defaults to override: ``NAME -> value text``, or ``NAME=VALUE`` texts
+        (``mdle run --set``); see :func:`mdle.overrides.override_defaults`.
     files : mapping, optional
         Imported files' texts by relative path, instead of the disk (see
         :func:`load_modules`); ``base_dir`` is the folder they are relative to.
@@ -235,12 +236,12 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
     if settings:
         from mdle.overrides import override_defaults
 
-        loaded = override_defaults(loaded, settings)
+        loaded = override_defaults(loaded, settings, registry)
     return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main)
 
 
 def load_program(path: str | os.PathLike[str], registry: Registry | None = None, *,
-                 settings: Mapping[str, str] | None = None) -> Program:
+                 settings: Mapping[str, str] | Sequence[str] | None = None) -> Program:
     """Read, parse, resolve imports and check a plan file.
 
     ``registry=None`` means ``atoms.default_registry()``.

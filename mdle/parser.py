@@ -43,7 +43,8 @@ from mdle.syntax_errors import (
 )
 from mdle.units import NONE, UNITS, unit_value
 
-__all__ = ["parse_module", "parse_expression", "MAX_DEPTH", "MAX_ERRORS", "lark_parser"]
+__all__ = ["parse_module", "parse_expression", "normalise_newlines", "MAX_DEPTH", "MAX_ERRORS",
+           "lark_parser", "iter_tokens", "lex_fragment"]
 
 #: Deepest nesting of parentheses and operators accepted in one expression.
 MAX_DEPTH = 100
@@ -379,6 +380,17 @@ def _unknown_unit(unit: str, span: Span) -> Diagnostic:
 # Public entry points
 
 
+def normalise_newlines(text: str) -> str:
+    r"""Return ``text`` with ``\r\n`` and a lone ``\r`` (old Mac files) made ``\n``.
+
+    Lines are counted at ``\n`` only, so a file with another line ending would be one
+    long line 1 in every message.
+    """
+    if "\r" not in text:
+        return text
+    return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
 def parse_module(text: str, file: str = "<string>") -> st.Module:
     """Parse a whole file of MDLe.
 
@@ -399,6 +411,7 @@ def parse_module(text: str, file: str = "<string>") -> st.Module:
     MdleSyntaxError
         Every syntax error found (up to :data:`MAX_ERRORS`), and every unknown unit.
     """
+    text = normalise_newlines(text)
     statements, comments, diagnostics = _parse_with_recovery(text, file)
     if diagnostics:
         raise MdleSyntaxError(_sorted(diagnostics), {file: text})
@@ -725,3 +738,28 @@ def iter_tokens(text: str) -> Iterator[Token]:
             _STATE.reset(token)
         yield tok
 
+
+
+def lex_fragment(text: str, opened: int = 0) -> tuple[list[Token], int, bool]:
+    """Lex a piece of a longer text that starts at a line boundary.
+
+    No token spans a newline, so lexing line by line gives the tokens lexing the whole
+    text would. ``opened`` is the count of brackets still open before the piece (the
+    :data:`MAX_DEPTH` guard of :func:`iter_tokens` carries over). Returns the tokens,
+    the open count after them, and whether lexing stopped early (a bad character, or
+    more than :data:`MAX_DEPTH` brackets open), after which nothing more is lexed.
+    """
+    state = _State("<lex>", open_brackets=opened)
+    lexer = lark_parser().lex(text, dont_ignore=False)
+    out: list[Token] = []
+    while True:
+        token = _STATE.set(state)
+        try:
+            tok = next(lexer)
+        except StopIteration:
+            return out, state.open_brackets, False
+        except (UnexpectedInput, _TooDeep):
+            return out, state.open_brackets, True
+        finally:
+            _STATE.reset(token)
+        out.append(tok)

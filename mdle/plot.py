@@ -160,16 +160,26 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     for i, (label, seg) in enumerate(_segments_by_atom(x, y, trace.paths()).items()):
         ax.add_collection(LineCollection(list(seg), colors=colours[i % 10], lw=2.0, zorder=3,
                                          label=f"atom {label}"))
-    first = int(placed[0])
-    heading = float(trace.column("theta")[first])
+    i0 = int(placed[0])
+    heading = float(trace.column("theta")[i0])
     heading = heading if math.isfinite(heading) else 0.0
-    ax.plot([x[first]], [y[first]], marker=(3, 0, math.degrees(heading) - 90),
+    ax.plot([x[i0]], [y[i0]], marker=(3, 0, math.degrees(heading) - 90),
             ms=11, color="k", ls="none", zorder=5, label="start")
 
     _mark_events(ax, trace.events, world is not None and use_truth, trace)
-    hit = np.flatnonzero(trace.column("collided") > 0.5)
-    if len(hit):
-        ax.plot([x[hit[0]]], [y[hit[0]]], marker="*", ms=16, color="tab:red", ls="none",
+    hits = trace.collisions()
+    first = np.flatnonzero(trace.column("collided") > 0.5)
+    if hits:  # at the sample of the contact's time, on whichever path is drawn
+        t = trace.column("t")
+        for n, c in enumerate(hits):
+            i = int(np.clip(np.searchsorted(t, float(c["t"]) - 1e-9), 0, len(t) - 1))
+            what = f"hit `{c.get('obstacle') or 'an obstacle'}` at {float(c['t']) - t[0]:.1f} s"
+            ax.plot([x[i]], [y[i]], marker="*", ms=16, color="tab:red", ls="none", zorder=6,
+                    label=what if n == 0 else None)
+            ax.annotate(what, (x[i], y[i]), xytext=(8, 8), textcoords="offset points",
+                        color="tab:red", fontsize="small", zorder=6)
+    elif len(first):
+        ax.plot([x[first[0]]], [y[first[0]]], marker="*", ms=16, color="tab:red", ls="none",
                 zorder=6, label="first collision")
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)

@@ -29,7 +29,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 from mdle.backend import Scan
 from mdle.errors import Diagnostic, MdleError, Span
-from mdle.runtime.events import Event, RunResult, Sample
+from mdle.runtime.events import Collision, Event, RunResult, Sample
 from mdle.userfile import UserFileError, open_user_file
 
 if TYPE_CHECKING:
@@ -119,6 +119,12 @@ def event_record(event: Event) -> dict[str, Any]:
             "x": p.x, "y": p.y, "theta": p.theta}
 
 
+def collision_record(c: Collision) -> dict[str, Any]:
+    """Return the ``collision`` record of a contact."""
+    return {"type": "collision", "t": c.time, "obstacle": c.obstacle, "kind": c.kind,
+            "index": c.index, "x": c.x, "y": c.y, "path": c.path}
+
+
 def end_record(result: RunResult) -> dict[str, Any]:
     """Return the ``end`` record of a run."""
     t = result.termination
@@ -127,6 +133,8 @@ def end_record(result: RunResult) -> dict[str, Any]:
         "ticks": result.ticks, "duration": result.duration, "distance": result.distance,
         "min_clearance": result.min_clearance, "collided": result.collided,
         "fault": result.fault, "reason": result.reason, "max_lateness": result.max_lateness,
+        "collision": None if result.collision is None else {
+            k: v for k, v in collision_record(result.collision).items() if k != "type"},
         "terminations": [{"path": x.path, "level": x.level, "cause": x.cause.value,
                           "t": x.time} for x in result.terminations]}
 
@@ -274,6 +282,8 @@ class TraceWriter:
         if scan is not None and scan is not self._laser.last:
             self._pending.extend(self._laser.lines(sample.time, scan))
         self._pending.append(self._format(sample))
+        if sample.contact is not None:  # written at once, like an event
+            self._write(_dumps(collision_record(sample.contact)))
         if self._clock() >= self._flush_at:
             self.flush()
 
@@ -614,6 +624,10 @@ class Trace:
     def paths(self) -> list[str]:
         """Return the active path of each sample."""
         return [str(s.get("path", "")) for s in self.samples]
+
+    def collisions(self) -> list[Mapping[str, Any]]:
+        """Return the ``collision`` records, in time order."""
+        return [r for r in self.extra if r.get("type") == "collision"]
 
     def diag_names(self) -> list[str]:
         """Every diagnostic name any sample carries, sorted."""

@@ -6,6 +6,11 @@ passes through an obstacle (on contact it stops and raises ``stalled``, as a Pio
 does, and records a :class:`SimEvent`), takes ladar scans at the ladar's own instants
 (``k / rate``), and updates odometry (with the profile's seeded drift, if any).
 
+Observations report odometry as a robot does (REP-105 ``odom`` frame): the pose relative
+to where the robot was at :meth:`SimBackend.reset` (the run's start), which is
+(0, 0, 0). World coordinates are ground truth: ``Observation.truth`` and
+:attr:`SimBackend.true_pose`.
+
 >>> import math
 >>> from sim.world import World
 >>> from sim.shapes import Rectangle
@@ -25,7 +30,9 @@ does, and records a :class:`SimEvent`), takes ladar scans at the ladar's own ins
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -33,13 +40,15 @@ from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimit
 from mdle.errors import BackendError, WorldError
 from sim.collision import CONTACT, Collider
 from sim.ladar import Ladar, LadarProfile, ladar_profile
-from sim.robot import Phase, RobotProfile, integrate, plan_phases, robot_profile
+from sim.profiles import robot_profile
+from sim.robot import Phase, RobotProfile, integrate, plan_phases
 from sim.world import World
 
 __all__ = ["SENSING_MODES", "SimBackend", "SimEvent"]
 
 SENSING_MODES = ("scan", "exact")
 _TAU = 2.0 * math.pi
+_EPS = 1e-9  # s: instants closer than this are the same instant
 
 
 def _wrap(a: float) -> float:
@@ -70,8 +79,9 @@ class SimBackend:
     world : World
     seed : int, optional
         Seed of every random draw (ladar noise, odometry drift); default the world's.
-    robot : str, optional
-        A robot profile name (``pioneer2dx``, ``ideal``); default the world's profile.
+    robot : str or RobotProfile, optional
+        A robot profile: a shipped name (``pioneer-p3dx``, ``pioneer2dx``, ``ideal``), a
+        profile file, or a :class:`sim.robot.RobotProfile`; default the world's.
     ladar : str, optional
         A ladar profile name (``lms200``, ``lms200-ideal``); default the world's.
     sensing : {"scan", "exact"}
@@ -88,18 +98,19 @@ class SimBackend:
 
     clock: ClockMode = ClockMode.SIMULATED
 
-    def __init__(self, world: World, *, seed: int | None = None, robot: str | None = None,
-                 ladar: str | None = None, sensing: str = "scan") -> None:
+    def __init__(self, world: World, *, seed: int | None = None,
+                 robot: str | RobotProfile | None = None, ladar: str | None = None,
+                 sensing: str = "scan") -> None:
         if sensing not in SENSING_MODES:
             raise BackendError(f"unknown sensing mode `{sensing}` (one of: "
                                f"{', '.join(SENSING_MODES)})")
         self.world = world
         self.seed = world.seed if seed is None else int(seed)
-        self.profile: RobotProfile = world.robot if robot is None else robot_profile(robot)
+        self.profile: RobotProfile = (world.robot if robot is None else robot
+                                      if isinstance(robot, RobotProfile) else robot_profile(robot))
         self.ladar_profile: LadarProfile = (world.ladar if ladar is None
                                             else ladar_profile(ladar))
         self.sensing = sensing
-        self.limits: RobotLimits = self.profile.limits
         self._collider = Collider(world.parts, self.profile.radius)
         self._oracle = sensing == "exact"
         self.events: list[SimEvent] = []
@@ -107,7 +118,10 @@ class SimBackend:
 
     # ------------------------------------------------------------------ lifecycle
     def reset(self, pose: Pose | None = None) -> None:
-        """Put the robot back at ``pose`` (default the world's start), time 0, fresh seed."""
+        """Put the robot at ``pose`` (default the world's start), time 0, fresh seed.
+
+        Odometry restarts there at (0, 0, 0); ``pose`` is in world coordinates.
+        """
         pose = self.world.start_pose if pose is None else pose
         clear, owner = self._collider.clearance(pose.x, pose.y)
         if clear < 0 or self.world.inside((pose.x, pose.y)):
@@ -115,8 +129,9 @@ class SimBackend:
                              f"radius {self.profile.radius} m) at ({pose.x:g}, {pose.y:g}) "
                              f"overlaps obstacles[{owner}]")
         ss = np.random.SeedSequence(self.seed)
-        ladar_seq, odo_seq = ss.spawn(2)
+        ladar_seq, odo_seq, timing_seq = ss.spawn(3)
         self._odo_rng = np.random.default_rng(odo_seq)
+        self._timing_rng = np.random.default_rng(timing_seq)
         self._ladar = Ladar(self.ladar_profile, np.random.default_rng(ladar_seq),
                             mount=self.profile.ladar_mount, oracle=self._oracle)
         self._fan = (self._ladar.fan(self.world.caster)
@@ -124,16 +139,40 @@ class SimBackend:
                      else None)
         self._t = 0.0
         self._x, self._y, self._th = pose.x, pose.y, pose.theta
-        self._ox, self._oy, self._oth = pose.x, pose.y, pose.theta
+        # Odometry starts at (0, 0, 0) where the robot is now, as on a robot (REP-105 odom).
+        self._ox = self._oy = self._oth = 0.0
+        self._origin = (pose.x, pose.y, math.cos(pose.theta), math.sin(pose.theta), pose.theta)
         self._v = self._w = 0.0
         self._cmd = STOP
         self._stalled = False
         self._collided = False
         self._clear = (clear, owner)
+        self._clear_bound = False
         self.events = []
+        self._reported = 0  # events already handed out in an observation's truth
+        prof = self.profile
         rate = self._ladar.profile.rate
-        self._period = 0.0 if (self._oracle or rate <= 0) else 1.0 / rate
-        self._scan_k = 0
+        if self._oracle:
+            self._period = 0.0
+        elif prof.scan_period is not None:
+            self._period = prof.scan_period
+        else:
+            self._period = 1.0 / rate if rate > 0 else 0.0
+        self.limits: RobotLimits = prof.limits_with(self._period)
+        # The timing model: commands wait `command_latency` in a queue of simulated time,
+        # pose and velocities are reported every `sip_cycle`, scans are taken at a seeded
+        # phase of their period (the ladar does not run on the controller's clock) and
+        # become readable `scan_latency` later.
+        self._timed = prof.timed
+        self._pending: deque[tuple[float, Command]] = deque()
+        self._sip_j = 1
+        self._report = (self._ox, self._oy, self._oth, 0.0, 0.0)
+        self._scan_delay = (prof.scan_latency if prof.scan_latency.enabled and not self._oracle
+                            else None)
+        self._scan_queue: list[tuple[float, Scan]] = []
+        self._scan_phase = (float(self._timing_rng.uniform(0.0, self._period))
+                            if self._timed and self._period > 0 else 0.0)
+        self._scan_k = 0 if self._scan_phase == 0.0 else -1
         self._scan: Scan = self._take_scan(self._x, self._y, self._th, 0.0)
 
     def close(self) -> None:
@@ -141,8 +180,8 @@ class SimBackend:
         self.stop()
 
     def stop(self) -> None:
-        """Command zero velocity (the robot decelerates at its limits)."""
-        self._cmd = STOP
+        """Command zero velocity (after the command latency; the robot decelerates)."""
+        self._send(STOP)
 
     @property
     def laser_mount(self) -> tuple[float, float, float]:
@@ -153,16 +192,29 @@ class SimBackend:
     # ------------------------------------------------------------------ protocol
     def observe(self) -> Observation:
         """Report odometry pose, measured velocities, newest scan, flags and ground truth."""
+        if self.profile.sip_cycle > 0:
+            ox, oy, oth, v, w = self._report
+        else:
+            ox, oy, oth, v, w = self._ox, self._oy, self._oth, self._v, self._w
+        # a collision since the previous observation: truth["contact"] names it
+        truth: dict[str, Any] = {"x": self._x, "y": self._y, "theta": _wrap(self._th),
+                                    "clearance": self._clear[0], "collided": self._collided}
+        if len(self.events) > self._reported:
+            e = self.events[self._reported]
+            self._reported = len(self.events)
+            kind = (self.world.obstacles[e.obstacle].kind
+                    if 0 <= e.obstacle < len(self.world.obstacles) else "")
+            truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
+                                "t": e.time, "x": e.x, "y": e.y}
         return Observation(
             time=self._t,
-            pose=Pose(self._ox, self._oy, _wrap(self._oth)),
-            v=self._v,
-            omega=self._w,
+            pose=Pose(ox, oy, _wrap(oth)),
+            v=v,
+            omega=w,
             scan=self._scan,
             stalled=self._stalled,
             motors_enabled=True,
-            truth={"x": self._x, "y": self._y, "theta": _wrap(self._th),
-                   "clearance": self._clear[0], "collided": self._collided},
+            truth=truth,
         )
 
     def command(self, cmd: Command) -> None:
@@ -172,7 +224,14 @@ class SimBackend:
         w = min(max(float(cmd.omega), -lim.max_turn_rate), lim.max_turn_rate)
         if not (math.isfinite(v) and math.isfinite(w)):
             raise BackendError(f"command is not finite: v={cmd.v}, omega={cmd.omega}")
-        self._cmd = Command(v, w)
+        self._send(Command(v, w))
+
+    def _send(self, cmd: Command) -> None:
+        latency = self.profile.command_latency
+        if latency > 0:
+            self._pending.append((self._t + latency, cmd))
+        else:
+            self._cmd = cmd
 
     def advance(self, dt: float) -> float:
         """Let ``dt`` seconds of simulated time pass; return 0 (never late)."""
@@ -180,30 +239,98 @@ class SimBackend:
             raise BackendError(f"advance(dt) needs a finite dt >= 0, got {dt}")
         if dt == 0.0:
             return 0.0
-        t0, t1 = self._t, self._t + dt
+        t1 = self._t + dt
+        if not self._timed:
+            self._step(t1, True)
+        else:
+            self._advance_timed(t1)
+        return 0.0
+
+    def _advance_timed(self, t1: float) -> None:
+        """Move to ``t1`` in pieces cut where a report is due; queued commands switch inside."""
+        pending = self._pending
+        cycle = self.profile.sip_cycle
+        while True:
+            t = self._t
+            while pending and pending[0][0] <= t + _EPS:
+                self._cmd = pending.popleft()[1]
+            if cycle > 0:
+                while self._sip_j * cycle <= t + _EPS:
+                    self._report = (self._ox, self._oy, self._oth, self._v, self._w)
+                    self._sip_j += 1
+            if t >= t1 - _EPS:
+                break
+            end = t1
+            if cycle > 0 and self._sip_j * cycle < end:
+                end = self._sip_j * cycle
+            final = end >= t1 - _EPS
+            if final:
+                end = t1
+            switches = []
+            while pending and pending[0][0] < end - _EPS:
+                switches.append(pending.popleft())
+            self._step(end, final, switches)
+        if self._scan_queue:
+            kept = []
+            for due, scan in self._scan_queue:
+                if due > t1 + _EPS:
+                    kept.append((due, scan))
+                elif scan.stamp >= self._scan.stamp:
+                    self._scan = scan
+            self._scan_queue = kept
+
+    def _step(self, t1: float, final: bool,
+              switches: list[tuple[float, Command]] | None = None) -> None:
+        """Integrate from the current time to ``t1`` (collisions, scans).
+
+        The held command changes at each ``(time, command)`` of ``switches`` (queued
+        commands taking effect inside the step). Only the ``final`` piece of a tick takes
+        an oracle scan and leaves the exact clearance; earlier pieces keep a lower bound of
+        it (the centre moved at most its reach).
+        """
+        t0 = self._t
         # The last ladar instant inside (t0, t1], if any.
         scan_at = math.inf          # none this step
         if self._period == 0.0:
-            scan_at = t1
+            if final:
+                scan_at = t1
         else:
-            k = math.floor(t1 / self._period + 1e-9)
+            k = math.floor((t1 - self._scan_phase) / self._period + 1e-9)
             if k > self._scan_k:
-                scan_at = min(t1, max(t0, k * self._period))
+                scan_at = min(t1, max(t0, self._scan_phase + k * self._period))
                 self._scan_k = k
         x0, y0, th0 = self._x, self._y, self._th
-        phases, v_end, w_end = plan_phases(self._v, self._w, self._cmd.v, self._cmd.omega, dt,
-                                           self.profile)
+        if switches:
+            phases: list[Phase] = []
+            v, w, cmd, t = self._v, self._w, self._cmd, t0
+            for ta, nxt in switches:
+                if ta > t:
+                    more, v, w = plan_phases(v, w, cmd.v, cmd.omega, ta - t, self.profile)
+                    phases += more
+                    t = ta
+                cmd = nxt
+            more, v_end, w_end = plan_phases(v, w, cmd.v, cmd.omega, t1 - t, self.profile)
+            phases += more
+            self._cmd = cmd
+        else:
+            phases, v_end, w_end = plan_phases(self._v, self._w, self._cmd.v, self._cmd.omega,
+                                               t1 - t0, self.profile)
         x, y, th = x0, y0, th0
         clear = self._clear
         t = t0
         contact = False
         scanned = math.isinf(scan_at)
         if not scanned and scan_at <= t0 + 1e-12:
-            self._scan, scanned = self._take_scan(x, y, th, scan_at), True
+            self._scanned(self._take_scan(x, y, th, scan_at))
+            scanned = True
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,
         # nothing can be touched this step and one distance query (at the end) suffices.
         reach = sum(ph.max_abs_v * ph.duration for ph in phases)
         safe = clear[0] - CONTACT >= reach
+        if not safe and self._clear_bound:
+            clear = self._collider.clearance(x, y)   # the sweep needs the exact clearance
+            safe = clear[0] - CONTACT >= reach
+        self._clear_bound = False
         for ph in phases:
             pieces = [ph]
             if not scanned and t < scan_at < t + ph.duration:
@@ -221,11 +348,16 @@ class SimBackend:
                         break
                 t += piece.duration
                 if not scanned and t >= scan_at - 1e-12:
-                    self._scan, scanned = self._take_scan(x, y, th, scan_at), True
+                    self._scanned(self._take_scan(x, y, th, scan_at))
+                    scanned = True
             if contact:
                 break
         if safe:
-            clear = self._collider.clearance(x, y)
+            if final:
+                clear = self._collider.clearance(x, y)
+            else:
+                clear = (clear[0] - reach, clear[1])
+                self._clear_bound = True
         if contact:
             self._v = self._w = 0.0
             if not self._stalled:
@@ -237,14 +369,13 @@ class SimBackend:
                 self.events.append(SimEvent("collision", t, x, y, obs_i, label))
             self._stalled = self._collided = True
             if not scanned:  # the robot rests at the contact point until the scan instant
-                self._scan = self._take_scan(x, y, th, scan_at)
+                self._scanned(self._take_scan(x, y, th, scan_at))
         else:
             self._v, self._w = v_end, w_end
             self._stalled = False
         self._x, self._y, self._th, self._clear = x, y, th, clear
         self._t = t1
         self._update_odometry(x0, y0, th0)
-        return 0.0
 
     # ------------------------------------------------------------------ extras
     @property
@@ -258,6 +389,14 @@ class SimBackend:
         return Pose(self._x, self._y, _wrap(self._th))
 
     # ------------------------------------------------------------------ internals
+    def _scanned(self, scan: Scan) -> None:
+        """Make a new scan readable now, or after its seeded latency."""
+        if self._scan_delay is None:
+            self._scan = scan
+        else:
+            due = scan.stamp + self._scan_delay.draw(self._timing_rng)
+            self._scan_queue.append((due, scan))
+
     def _take_scan(self, x: float, y: float, th: float, stamp: float) -> Scan:
         lad = self._ladar
         if self._fan is not None:
@@ -271,7 +410,10 @@ class SimBackend:
     def _update_odometry(self, x0: float, y0: float, th0: float) -> None:
         noise = self.profile.odometry
         if not noise.enabled:
-            self._ox, self._oy, self._oth = self._x, self._y, self._th
+            x0s, y0s, c0, s0, th0s = self._origin
+            dx0, dy0 = self._x - x0s, self._y - y0s
+            self._ox, self._oy = c0 * dx0 + s0 * dy0, c0 * dy0 - s0 * dx0
+            self._oth = self._th - th0s
             return
         c, s = math.cos(th0), math.sin(th0)
         dx, dy = self._x - x0, self._y - y0

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mdle.backend import Pose
-from sim.robot import IDEAL, RobotProfile
+from sim.robot import RobotProfile
 from sim.shapes import Arc, Circle, Curve, Polygon, Rectangle, Shape
 from sim.world import World
 
@@ -89,11 +89,16 @@ class GeneratedShape:
 
         return shapely.union_all([o.geometry() for o in self.obstacles])
 
-    def world(self, start: Pose | None = None, robot: RobotProfile = IDEAL) -> World:
+    def world(self, start: Pose | None = None, robot: RobotProfile | None = None) -> World:
         """Return a :class:`World` with these obstacles.
 
-        ``start`` defaults to a clear pose 4 m beyond the shapes' right edge, heading at them.
+        ``start`` defaults to a clear pose 4 m beyond the shapes' right edge, heading at them;
+        ``robot`` to the ideal unicycle.
         """
+        if robot is None:
+            from sim.profiles import robot_profile
+
+            robot = robot_profile("ideal")
         if start is None:
             x0, y0, x1, y1 = self.geometry().bounds
             start = Pose(x1 + 4.0, 0.5 * (y0 + y1), math.pi)

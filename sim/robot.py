@@ -22,16 +22,16 @@ from typing import Any
 import numpy as np
 
 from mdle.backend import RobotLimits
-from mdle.errors import WorldError
 
 __all__ = [
-    "ROBOT_PROFILES",
+    "Latency",
     "OdometryNoise",
     "Phase",
+    "RAMPS",
     "RobotProfile",
     "integrate",
     "plan_phases",
-    "robot_profile",
+    "ramp_rate",
 ]
 
 _GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(8), strict=True))
@@ -58,8 +58,43 @@ class OdometryNoise:
 
 
 @dataclass(frozen=True)
+class Latency:
+    """A seeded delay distribution, seconds: uniform on [low, high], or normal (mean, std).
+
+    ``kind`` is ``"uniform"`` (``a`` = low, ``b`` = high) or ``"normal"`` (``a`` = mean,
+    ``b`` = standard deviation; draws below 0 are taken as 0). All zero: no delay.
+    """
+
+    kind: str = "uniform"
+    a: float = 0.0
+    b: float = 0.0
+
+    @property
+    def mean(self) -> float:
+        """Return the mean delay (of the untruncated normal for ``normal``)."""
+        return 0.5 * (self.a + self.b) if self.kind == "uniform" else self.a
+
+    @property
+    def enabled(self) -> bool:
+        """True when the delay is not always zero."""
+        return self.a > 0 or self.b > 0
+
+    def draw(self, rng: np.random.Generator) -> float:
+        """Draw one delay (seconds, >= 0)."""
+        if self.kind == "uniform":
+            return self.a if self.b <= self.a else float(rng.uniform(self.a, self.b))
+        return max(0.0, float(rng.normal(self.a, self.b)))
+
+    def describe(self) -> str:
+        """Return the distribution in words, milliseconds."""
+        if self.kind == "uniform":
+            return f"uniform {self.a * 1e3:.0f}-{self.b * 1e3:.0f} ms"
+        return f"normal, mean {self.a * 1e3:.0f} ms, std {self.b * 1e3:.0f} ms"
+
+
+@dataclass(frozen=True)
 class RobotProfile:
-    """A robot's body, limits, ladar mount and odometry model (SI units).
+    """A robot's body, limits, timing, ladar mount and odometry model (SI units).
 
     Attributes
     ----------
@@ -69,12 +104,27 @@ class RobotProfile:
     max_speed, max_reverse_speed : float, m/s
     max_turn_rate : float, rad/s
     max_accel, max_decel : float, m/s^2 (``inf``: reaches any speed at once)
-    max_turn_accel : float, rad/s^2
+        Rates at which the firmware ramps the speed up (away from zero) and down.
+    max_turn_accel, max_turn_decel : float, rad/s^2
+        The same for the turn rate.
+    ramp : {"firmware", "stage"}
+        How speeds ramp (:func:`ramp_rate`): as a Pioneer's firmware, or as the
+        Stage-based simulators (a positive speed commanded negative changes at once).
+    command_latency : float, s
+        From a command being sent until the firmware starts ramping towards it.
+    sip_cycle : float, s
+        The robot reports pose, speed and turn rate every ``sip_cycle`` seconds (a
+        Pioneer's server information packet); observations hold the last report, as old
+        as it is. 0: every observation is current.
+    scan_period : float or None, s
+        Time between ladar scans (None: the ladar profile's rate).
+    scan_latency : Latency
+        From a scan being taken until the controller can read it.
     ladar_mount : (x, y, theta)
         Ladar origin in the robot frame (m, m, rad).
     odometry : OdometryNoise
-    source : str
-        Where the numbers come from.
+    description, source : str
+        What the robot is; where the numbers come from.
     """
 
     name: str
@@ -85,71 +135,48 @@ class RobotProfile:
     max_accel: float = math.inf
     max_decel: float = math.inf
     max_turn_accel: float = math.inf
+    max_turn_decel: float = math.inf
+    ramp: str = "firmware"
+    command_latency: float = 0.0
+    sip_cycle: float = 0.0
+    scan_period: float | None = None
+    scan_latency: Latency = field(default_factory=Latency)
     ladar_mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
     odometry: OdometryNoise = field(default_factory=OdometryNoise)
+    description: str = ""
     source: str = ""
 
     @property
+    def timed(self) -> bool:
+        """True when the profile delays commands, reports at a cycle or delays scans."""
+        return (self.command_latency > 0 or self.sip_cycle > 0 or self.scan_latency.enabled
+                or self.scan_period is not None)
+
+    def expected_scan_age(self, scan_period: float) -> float:
+        """Return the mean age of the newest scan at an unsynchronised tick, seconds.
+
+        The scan latency's mean plus half the scan period (the mean wait for the next scan).
+        """
+        if not self.timed:
+            return 0.0
+        return self.scan_latency.mean + 0.5 * scan_period
+
+    @property
     def limits(self) -> RobotLimits:
-        """The backend-facing limits."""
+        """The backend-facing limits (the scan age with the profile's own scan period)."""
+        return self.limits_with(self.scan_period or 0.0)
+
+    def limits_with(self, scan_period: float) -> RobotLimits:
+        """Return the backend-facing limits for a ladar scanning every ``scan_period`` s."""
         return RobotLimits(max_speed=self.max_speed, max_reverse_speed=self.max_reverse_speed,
                            max_turn_rate=self.max_turn_rate, max_accel=self.max_accel,
                            max_decel=self.max_decel, max_turn_accel=self.max_turn_accel,
-                           radius=self.radius)
+                           radius=self.radius, command_latency=self.command_latency,
+                           scan_latency=self.expected_scan_age(scan_period))
 
     def with_overrides(self, **changes: Any) -> RobotProfile:
         """Return a copy with some fields replaced (values already in SI)."""
         return replace(self, **changes)
-
-
-#: Pioneer 2-DX. Body radius, absolute speed limits and laser mount from ARIA's robot
-#: parameter file ``params/p2dx.p`` (RobotRadius 250 mm, MaxVelocity 2200 mm/s,
-#: MaxRVelocity 500 deg/s, LaserX 17 mm, LaserY 8 mm). Translational acceleration
-#: 300 mm/s^2 as the Pioneer simulator ramps (shared/hardware/pioneer-arcos.md: 0 -> 90
-#: -> 180 -> 200 mm/s over three 100 ms cycles); deceleration taken equal. Rotational
-#: acceleration 100 deg/s^2 is the ARCOS firmware's usual default (not verified against
-#: a robot's FLASH settings: override it in the world file if yours differ).
-PIONEER2DX = RobotProfile(
-    name="pioneer2dx",
-    radius=0.25,
-    max_speed=2.2,
-    max_reverse_speed=2.2,
-    max_turn_rate=math.radians(500.0),
-    max_accel=0.3,
-    max_decel=0.3,
-    max_turn_accel=math.radians(100.0),
-    ladar_mount=(0.017, 0.008, 0.0),
-    source="ARIA params/p2dx.p; shared/hardware/pioneer-arcos.md (simulator ramp); "
-           "ARCOS default rotational acceleration",
-)
-
-#: The paper's Matlab robot: a point unicycle at unit speed, |omega| <= 3 rad/s
-#: (control-law.md, section 0), reaching any command at once.
-IDEAL = RobotProfile(
-    name="ideal",
-    radius=0.0,
-    max_speed=1.0,
-    max_reverse_speed=1.0,
-    max_turn_rate=3.0,
-    source="paper's simulations; control-law.md (umax = 3 rad/s)",
-)
-
-ROBOT_PROFILES: dict[str, RobotProfile] = {p.name: p for p in (PIONEER2DX, IDEAL)}
-
-
-def robot_profile(name: str) -> RobotProfile:
-    """Return the named robot profile.
-
-    Raises
-    ------
-    WorldError
-        Unknown name; the message lists the known names.
-    """
-    try:
-        return ROBOT_PROFILES[name]
-    except KeyError:
-        known = ", ".join(sorted(ROBOT_PROFILES))
-        raise WorldError(f"unknown robot profile `{name}` (known: {known})") from None
 
 
 @dataclass(frozen=True)
@@ -179,12 +206,32 @@ class Phase:
         return max(abs(self.v0), abs(self.v_at(self.duration)))
 
 
-def _ramp(cur: float, target: float, accel: float, decel: float) -> tuple[float, float]:
+#: How the firmware ramps towards a command (the profile's ``ramp``).
+RAMPS = ("firmware", "stage")
+
+
+def ramp_rate(cur: float, target: float, accel: float, decel: float, ramp: str = "firmware"
+              ) -> float:
+    """Return the ramp rate from ``cur`` towards ``target`` (> 0, ``inf``: at once).
+
+    Slowing down (the change points towards zero from a moving start) uses ``decel``,
+    anything else ``accel``; one rate holds for the whole change, through zero, as a
+    Pioneer ramps. ``ramp="stage"`` is the ramp of the Stage-based Pioneer simulators
+    (AMRISim, MobileSim): the same, except that a positive value commanded negative
+    takes the command at once.
+    """
+    if ramp == "stage" and cur > 0 > target:
+        return math.inf
+    return decel if cur * (target - cur) < 0 else accel
+
+
+def _ramp(cur: float, target: float, accel: float, decel: float, ramp: str
+          ) -> tuple[float, float]:
     """Return (rate, time to reach) for one axis; slowing down uses ``decel``."""
     diff = target - cur
     if diff == 0.0:
         return 0.0, 0.0
-    rate = decel if cur * diff < 0 else accel
+    rate = ramp_rate(cur, target, accel, decel, ramp)
     if not math.isfinite(rate):
         return math.inf, 0.0
     return math.copysign(rate, diff), abs(diff) / rate
@@ -197,8 +244,8 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
     Returns the phases and the speed and turn rate at the end.
     Infinite accelerations jump to the command at the start.
     """
-    av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel)
-    aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_accel)
+    av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel, profile.ramp)
+    aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_decel, profile.ramp)
     if math.isinf(av):
         v, av, tv = v_cmd, 0.0, 0.0
     if math.isinf(aw):

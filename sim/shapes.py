@@ -140,13 +140,23 @@ class Parts:
         return int(self.seg_start.shape[0])
 
 
+#: Largest turn (rad) at a polygon vertex that joins two facets of a sampled curve.
+FACET_TURN = math.radians(30.0)
+
+
 def polygon_parts(geom: BaseGeometry, smooth: bool = False) -> Parts:
     """Split a shapely (Multi)Polygon's rings into segments, solid on the right.
 
     shapely's ``orient(sign=1)`` puts the interior on the left of every ring (exterior
     counter-clockwise, holes clockwise); reversing each ring puts it on the right.
-    Faces get curvature 0, or with ``smooth`` (rings sampled from smooth curves) the mean
-    of the sampled curvature at their two ends.
+
+    A vertex where the boundary turns by at most :data:`FACET_TURN` joins two facets of a
+    sampled curve (a rounded corner, a many-sided "circle"); a sharper one is a corner.
+    Each face gets the mean of the sampled curvature (the circle through the neighbouring
+    vertices) at its facet joints, and 0 between two corners: a true polygon's faces are
+    flat, and a curve given as a polygon has the curvature a robot following it meets,
+    as if it were given as a curve. With ``smooth`` (rings sampled from smooth curves)
+    every vertex is a facet joint.
     """
     from shapely.geometry.polygon import orient
 
@@ -160,12 +170,21 @@ def polygon_parts(geom: BaseGeometry, smooth: bool = False) -> Parts:
             pts = np.asarray(ring.coords)[::-1]  # closed ring, reversed: solid on the right
             starts.append(pts[:-1])
             ends.append(pts[1:])
-            if smooth:
-                v = pts[:-1]
-                k = _menger(np.roll(v, 1, axis=0), v, np.roll(v, -1, axis=0))
-                kappas.append(0.5 * (k + np.roll(k, -1)))
+            v = pts[:-1]
+            prv, nxt = np.roll(v, 1, axis=0), np.roll(v, -1, axis=0)
+            k = _menger(prv, v, nxt)
+            if not smooth:
+                a, b = v - prv, nxt - v
+                turn = np.abs(np.arctan2(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0],
+                                         (a * b).sum(axis=1)))
+                joint = turn <= FACET_TURN
+                k = np.where(joint, k, 0.0)
+                both = joint & np.roll(joint, -1)
+                kn = np.roll(k, -1)
+                # a face between a corner and a joint takes the joint's curvature
+                kappas.append(np.where(both, 0.5 * (k + kn), k + kn))
             else:
-                kappas.append(np.zeros(len(pts) - 1))
+                kappas.append(0.5 * (k + np.roll(k, -1)))
     s0 = np.concatenate(starts) if starts else np.zeros((0, 2))
     s1 = np.concatenate(ends) if ends else np.zeros((0, 2))
     k = np.concatenate(kappas) if kappas else np.zeros(0)

@@ -27,13 +27,19 @@ from mdle.backend import Pose
 from sim.distance import nearest_boundary
 from sim.ladar import LMS200, LadarProfile
 from sim.raycast import RayCaster, RayHits
-from sim.robot import PIONEER2DX, RobotProfile
+from sim.robot import RobotProfile
 from sim.shapes import Parts, Shape
 
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
 __all__ = ["Nearest", "World"]
+
+
+def _default_robot() -> RobotProfile:
+    from sim.profiles import DEFAULT_ROBOT, robot_profile
+
+    return robot_profile(DEFAULT_ROBOT)
 
 
 @dataclass(frozen=True)
@@ -73,7 +79,7 @@ class World:
     obstacles: tuple[Shape, ...] = ()
     start_pose: Pose = field(default_factory=Pose)
     seed: int = 0
-    robot: RobotProfile = PIONEER2DX
+    robot: RobotProfile = field(default_factory=lambda: _default_robot())
     ladar: LadarProfile = LMS200
     description: str = ""
     source: str | None = None

@@ -47,10 +47,7 @@ OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "curve": (("points",), ("thickness", "closed", "spacing")),
 }
 _TOP_KEYS = ("name", "description", "seed", "start", "robot", "ladar", "extent", "obstacles")
-_ROBOT_KEYS = ("profile", "radius", "max_speed", "max_reverse_speed", "max_turn_rate",
-               "max_accel", "max_decel", "max_turn_accel", "ladar_mount", "odometry")
 _LADAR_KEYS = ("profile", "beams", "fov", "max_range", "noise", "sigma", "resolution", "rate")
-_ODOM_KEYS = ("distance", "turn", "drift")
 _DEFAULT_WALL_THICKNESS = 0.1
 _FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
 _MAX_CURVE_SAMPLES = 100_000
@@ -479,43 +476,24 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
 
 
 def _robot(doc: _Doc, path: str, v: Any) -> Any:
-    from sim.robot import OdometryNoise, robot_profile
+    from sim.profiles import DEFAULT_ROBOT, robot_profile
+    from sim.robot_yaml import ROBOT_KEYS, check_mount, robot_overrides
+
+    def lookup(name: str) -> Any:
+        # A profile file named in a world file is found next to the world file.
+        if doc.file and not doc.file.startswith("<") and not os.path.isabs(name):
+            near = Path(doc.file).parent / name
+            if name.endswith((".yaml", ".yml")) and near.exists():
+                return robot_profile(str(near))
+        return robot_profile(name)
 
     if isinstance(v, str):
-        return _named(doc, path, v, robot_profile)
-    m = _mapping(doc, path, v, _ROBOT_KEYS, "a profile name, or `profile` and overrides")
-    base = _named(doc, f"{path}.profile", m.get("profile", "pioneer2dx"), robot_profile)
-    ch: dict[str, Any] = {}
-    for key in ("radius",):
-        if key in m:
-            ch[key] = _number(doc, f"{path}.{key}", m[key], nonneg=True)
-    for key in ("max_speed", "max_reverse_speed", "max_accel", "max_decel"):
-        if key in m:
-            ch[key] = _number(doc, f"{path}.{key}", m[key], positive=True)
-    for key in ("max_turn_rate", "max_turn_accel"):
-        if key in m:
-            ch[key] = math.radians(_number(doc, f"{path}.{key}", m[key], positive=True))
-    if "ladar_mount" in m:
-        lm = m["ladar_mount"]
-        if not isinstance(lm, list) or len(lm) != 3:
-            raise doc.fail(f"{path}.ladar_mount", f"expected [x, y, theta] (m, m, deg), got "
-                           f"{_show(lm)}")
-        ch["ladar_mount"] = (_number(doc, f"{path}.ladar_mount[0]", lm[0]),
-                             _number(doc, f"{path}.ladar_mount[1]", lm[1]),
-                             math.radians(_number(doc, f"{path}.ladar_mount[2]", lm[2])))
-    if "odometry" in m:
-        o = _mapping(doc, f"{path}.odometry", m["odometry"], _ODOM_KEYS, "odometry noise")
-        vals = {k: _number(doc, f"{path}.odometry.{k}", o.get(k, 0.0), nonneg=True)
-                for k in _ODOM_KEYS}
-        ch["odometry"] = OdometryNoise(distance=vals["distance"],
-                                       turn=vals["turn"] * math.sqrt(math.pi / 180.0),
-                                       drift=math.radians(vals["drift"]))
-    robot = base.with_overrides(**ch)
-    mx, my, _ = robot.ladar_mount
-    if math.hypot(mx, my) > robot.radius + 1e-12:
-        where = f"{path}.ladar_mount" if "ladar_mount" in m else f"{path}.radius"
-        raise doc.fail(where, f"the ladar at ({mx:g}, {my:g}) m must sit within the body "
-                       f"(radius {robot.radius:g} m)")
+        return _named(doc, path, v, lookup)
+    m = _mapping(doc, path, v, ("profile", *ROBOT_KEYS),
+                 "a profile name or file, or `profile` and overrides")
+    base = _named(doc, f"{path}.profile", m.get("profile", DEFAULT_ROBOT), lookup)
+    robot = base.with_overrides(**robot_overrides(doc, path, m))
+    check_mount(doc, path, m, robot)
     return robot
 
 
@@ -615,7 +593,7 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     """
     from sim.collision import CONTACT
     from sim.ladar import LMS200
-    from sim.robot import PIONEER2DX
+    from sim.profiles import DEFAULT_ROBOT, robot_profile
     from sim.world import World
 
     doc = _Doc(file, text)
@@ -627,7 +605,8 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     description = _string(doc, "description", top.get("description", ""))
     seed = _integer(doc, "seed", top["seed"], maximum=MAX_SEED) if "seed" in top else 0
     start = _start(doc, "start", top["start"]) if "start" in top else Pose()
-    robot = _robot(doc, "robot", top["robot"]) if "robot" in top else PIONEER2DX
+    robot = (_robot(doc, "robot", top["robot"]) if "robot" in top
+             else robot_profile(DEFAULT_ROBOT))
     ladar = _ladar(doc, "ladar", top["ladar"]) if "ladar" in top else LMS200
     extent = None
     if "extent" in top:

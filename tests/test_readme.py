@@ -35,3 +35,25 @@ def test_readme_first_command_names_an_existing_plan() -> None:
     text = README.read_text(encoding="utf-8")
     plans = re.findall(r"mdle run (plans/\S+\.mdle)", text)
     assert plans and all((README.parent / p).is_file() for p in plans)
+
+
+def test_ci_runs_the_readme_fresh_machine_commands_in_order() -> None:
+    # .ci/run runs exactly what this prints, so README and CI cannot drift apart
+    out = subprocess.run([sys.executable, str(README.parent / ".ci" / "readme_commands.py"),
+                          str(README)], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    first, second = out.stdout.splitlines()
+    assert "mdle run plans/" in first and "--plot" in first
+    assert "pip install '.[test]'" in second and second.endswith("pytest -n 2")
+    ci = (README.parent / ".ci" / "run").read_text(encoding="utf-8")
+    assert "readme_commands.py" in ci and "git clone" in ci
+
+
+def test_readme_says_its_mdle_commands_need_the_venv_before_the_first_one() -> None:
+    text = README.read_text(encoding="utf-8")
+    note = text.find(". .venv/bin/activate")
+    first_bare = re.search(r"(?<![/\w])mdle (run|check|fmt|show|plot|repl|worlds|experiment)\b",
+                           text)
+    assert note >= 0 and first_bare is not None
+    # the fresh-machine lines spell out .venv/bin/mdle; every later one relies on the note
+    assert note < first_bare.start()

@@ -48,10 +48,12 @@ def run(args: argparse.Namespace) -> int:
     """Check each file; returns the exit code."""
     from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
     from mdle.errors import MdleError
+    from mdle.frames import FRAME_NOTE, reads_pose
     from mdle.loader import load_program
 
     files = expand_paths(args.files)
     errors = warnings = failed = 0
+    pose = False
     for path in files:
         try:
             program = load_program(path)
@@ -60,6 +62,7 @@ def run(args: argparse.Namespace) -> int:
             errors += len(err.diagnostics)
             print_diagnostics(err.diagnostics, err.sources, stream=sys.stdout)
             continue
+        pose = pose or reads_pose(program)
         warnings += len(program.warnings)
         if program.warnings and not args.quiet:
             print_diagnostics(program.warnings, program.sources, stream=sys.stdout)
@@ -68,6 +71,8 @@ def run(args: argparse.Namespace) -> int:
                    f"{errors} error{'s' * (errors != 1)}, {warnings} warning"
                    f"{'s' * (warnings != 1)}")
         print(summary if files else "no .mdle files found", file=sys.stdout)
+        if pose:
+            print(f"note: {FRAME_NOTE}", file=sys.stdout)
     if failed or (args.strict and warnings) or not files:
         return EXIT_INPUT
     return EXIT_OK

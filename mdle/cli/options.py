@@ -18,7 +18,8 @@ def add_simulation_options(p: Any) -> None:
     p.add_argument("--seed", type=seed, help="random seed of the simulation, 0 to 2**32 - 1 "
                                              "(default: the world's)")
     p.add_argument("--robot", metavar="PROFILE",
-                   help="robot profile in simulation (pioneer2dx, ideal; default: the world's)")
+                   help="robot profile in simulation: a name (`mdle robots` lists them) or "
+                        "a profile YAML file (default: the world's)")
     p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
                    help="simulated ladar: a noisy scan (default) or exact oracle geometry")
 

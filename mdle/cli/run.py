@@ -12,7 +12,10 @@ before the run could start still leaves a trace (header and end record) saying s
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
 import os
+import re
 import sys
 import tempfile
 from dataclasses import dataclass, field
@@ -47,6 +50,16 @@ def add_parser(subparsers: Any) -> None:
                         "PLAN.world.yaml or PLAN.yaml beside the plan, else the default world)")
     p.add_argument("--plan", dest="element", metavar="NAME",
                    help="element to run (default: the file's `run` target, else `main`)")
+    p.add_argument("--set", dest="overrides", action="append", default=[],
+                   metavar="NAME=VALUE",
+                   help="override a parameter's default, with units as in a plan: "
+                        "`--set cruise.v=0.2m/s`, `--set 'rc=1 m'` (DEFINITION.PARAMETER, or "
+                        "a parameter name: every definition's parameter of that name); "
+                        "repeatable")
+    p.add_argument("--start", type=start_pose, metavar="X,Y,THETA",
+                   help="simulator only: start the robot at X, Y (metres) heading THETA "
+                        "(degrees, counter-clockwise from the world's x axis) instead of the "
+                        "world's start; units may be written: `--start '150cm,-2m,1.57rad'`")
     p.add_argument("--until", type=seconds, metavar="SECONDS",
                    help="stop after this many seconds of (simulated) time")
     p.add_argument("--realtime", action="store_true",
@@ -79,6 +92,48 @@ def _hertz(text: str) -> float:
     if not 0 < value <= 1000:
         raise argparse.ArgumentTypeError(f"the rate must be in (0, 1000] Hz, got {text!r}")
     return value
+
+
+def start_pose(text: str) -> tuple[float, float, float]:
+    """Read ``X,Y,THETA`` (an argparse ``type``): metres, metres, degrees unless units say.
+
+    Returns (x, y, theta) in SI (m, m, rad).
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        Not three comma-separated numbers, or a unit of the wrong kind.
+    """
+    import math
+
+    from mdle.units import ANGLE, LENGTH, unit_value
+
+    parts = text.split(",")
+    if len(parts) != 3:
+        raise argparse.ArgumentTypeError(
+            f"expected X,Y,THETA (metres, metres, degrees), got {text!r}")
+    out: list[float] = []
+    for part, name, dim, unit in zip(parts, ("X", "Y", "THETA"), (LENGTH, LENGTH, ANGLE),
+                                     ("m", "m", "deg"), strict=True):
+        m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/ ]*?)\s*",
+                         part)
+        if m is None:
+            raise argparse.ArgumentTypeError(f"{name} of --start: expected a number, got "
+                                             f"{part.strip()!r}")
+        try:
+            factor, got = unit_value(m.group(2) or unit)
+        except KeyError:
+            raise argparse.ArgumentTypeError(
+                f"{name} of --start: unknown unit {m.group(2)!r}") from None
+        if got != dim:
+            kind = "a length (m, cm, mm)" if dim == LENGTH else "an angle (deg, rad)"
+            raise argparse.ArgumentTypeError(f"{name} of --start is {kind}, got "
+                                             f"{part.strip()!r}")
+        value = float(m.group(1)) * factor
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{name} of --start must be finite")
+        out.append(value)
+    return out[0], out[1], out[2]
 
 
 def world_beside(plan: str | os.PathLike[str]) -> Path | None:
@@ -150,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
-    from mdle.errors import MdleError
+    from mdle.errors import Diagnostic, MdleError
     from mdle.loader import load_program
     from mdle.runtime import Scheduler, element_of
 
@@ -162,12 +217,26 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
         from mdle.ros import require
 
         require("--record" if args.record else "--rosbag")
-    program = load_program(args.plan)
+    if args.start is not None and args.backend != "sim":
+        raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
+                                         "starts where it stands"))
+    program = load_program(args.plan, settings=args.overrides)
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
     element = element_of(program, args.element)
     parts.header["program"].update(element=element.label, entry=program.entry)
+    if args.overrides:
+        parts.header["overrides"] = list(args.overrides)
     parts.backend, parts.world = _open_backend(args, parts.header)
+    from mdle.frames import FRAME_NOTE, reads_pose
+
+    if not args.quiet and reads_pose(program):
+        where = ""
+        if parts.world is not None:
+            s = parts.world.start_pose
+            where = (f" (here: the start pose in the world, x {s.x:g} m, y {s.y:g} m, heading "
+                     f"{math.degrees(s.theta):.4g} deg)")
+        _print(f"note: {FRAME_NOTE}{where}")
 
     with guard.deferring():  # the trace is made whole, header first, or not at all
         parts.trace_path = args.trace
@@ -227,7 +296,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if failed:
         return output.EXIT_IO
     if result.collided or result.fault:
-        why = [w for w in ("the robot collided" if result.collided else None,
+        hit = ("the robot collided: " + result.collision.describe(_t0(result))
+               if result.collision is not None else "the robot collided")
+        why = [w for w in (hit if result.collided else None,
                            result.fault) if w]
         _say(f"mdle run: {'; '.join(why)}")
         return output.EXIT_COLLISION
@@ -324,6 +395,11 @@ def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> 
     return out
 
 
+def _t0(result: Any) -> float:
+    """Return the time of the run's first tick (the first event's), to report run times."""
+    return result.events[0].time if result.events else 0.0
+
+
 def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any, Any]:
     """Return the backend the options ask for and its world (None on hardware).
 
@@ -361,4 +437,9 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     kwargs: dict[str, Any] = {"seed": args.seed, "sensing": args.sensing}
     if args.robot:
         kwargs["robot"] = args.robot
+    if args.start is not None:
+        from mdle.backend import Pose
+
+        world = dataclasses.replace(world, start_pose=Pose(*args.start))
+        header["start"] = {"x": args.start[0], "y": args.start[1], "theta": args.start[2]}
     return sim.SimBackend(world, **kwargs), world

@@ -46,6 +46,8 @@ def _show(args: argparse.Namespace) -> int:
     import matplotlib
 
     matplotlib.use("Agg")
+    import os
+
     import matplotlib.pyplot as plt
     import numpy as np
     import shapely
@@ -56,6 +58,11 @@ def _show(args: argparse.Namespace) -> int:
     import sim
     from mdle.errors import MdleError
 
+    ext = os.path.splitext(args.output)[1].lower().lstrip(".")
+    if ext not in ("png", "svg", "pdf"):
+        # matplotlib would add `.png` to a name without one and report nothing
+        raise MdleError(f"cannot draw to `{args.output}`: the file name must end in .png, "
+                        ".svg or .pdf")
     world = sim.load_world(args.world)
     fig, ax = plt.subplots(figsize=(8, 6), layout="constrained")
     for geom in shapely.get_parts(world.geometry):
@@ -94,7 +101,7 @@ def _show(args: argparse.Namespace) -> int:
     ax.set_title(f"{world.name}: {world.description}" if world.description else world.name,
                  fontsize=9)
     try:
-        fig.savefig(args.output, dpi=120)
+        fig.savefig(args.output, dpi=120, format=ext)
     except (OSError, ValueError) as err:
         raise MdleError(f"cannot write {args.output}: {err}") from None
     finally:

@@ -36,6 +36,9 @@ LASER_IDS = frozenset({0x60, 0x61})
 #: is no reading at all, never a hit 32 m away.
 NO_RETURN_MM = 32767
 MAX_READINGS_PER_PACKET = 32
+#: Scan sizes whose bearings are kept (a laser has one or two; a stream of garbage
+#: packets of every size must not grow the cache without bound).
+BEARING_CACHE_SIZE = 8
 
 _HEAD60 = struct.Struct("<hhhHHB")  # x y theta(deg) total first n
 _HEAD61 = struct.Struct("<HHB")  # total first n
@@ -184,6 +187,8 @@ class ScanAssembler:
         if bearings is None:
             bearings = sim_bearings(total, self.fov_deg)
             bearings.setflags(write=False)
+            if len(self._bearings) >= BEARING_CACHE_SIZE:
+                del self._bearings[next(iter(self._bearings))]  # the oldest size
             self._bearings[total] = bearings
         valid = (values < self.max_range_mm) & (values > 0)
         max_range = self.max_range_mm / 1000.0

@@ -18,6 +18,7 @@ import numpy as np
 
 from mdle.backend import Scan
 from mdle.drivers import lms200
+from mdle.drivers.arcos_laser import BEARING_CACHE_SIZE
 from mdle.drivers.lms200 import Ack, Telegram, TelegramReader
 from mdle.drivers.transport import Transport, TransportClosed, read_or_fail
 from mdle.errors import BackendError
@@ -224,6 +225,8 @@ class Lms200Driver:
         if bearings is None:
             bearings = lms200.lms_bearings(count, angle)
             bearings.setflags(write=False)
+            if len(self._bearings) >= BEARING_CACHE_SIZE:
+                del self._bearings[next(iter(self._bearings))]  # the oldest size
             self._bearings[key] = bearings
         max_range = self._opt.max_range
         ranges = np.where(mv.valid, mv.ranges_mm / 1000.0, max_range)

@@ -167,7 +167,7 @@ def run_spec(spec: RunSpec) -> Row:
     from mdle.runtime import Recorder, run_named
     from sim import SimBackend
     from sim.generated import generate_shape
-    from sim.robot import robot_profile
+    from sim.profiles import robot_profile
 
     shape = generate_shape(spec.shape_seed, spec.shape_index)
     world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
@@ -220,7 +220,7 @@ def replay_files(spec: RunSpec) -> tuple[str, str]:
 
     from mdle.backend import Pose
     from sim.generated import generate_shape
-    from sim.robot import robot_profile
+    from sim.profiles import robot_profile
     from sim.world_dump import world_to_yaml
 
     shape = generate_shape(spec.shape_seed, spec.shape_index)

@@ -97,6 +97,7 @@ class Repl:
     def __init__(self, session: Session, out: IO[str] | None = None,
                  err: IO[str] | None = None, *, debug: bool = False) -> None:
         self.session = session
+        self._unfinished = ""  # the last input is_complete found unfinished
         self.out = out or sys.stdout
         self.err = err or sys.stderr
         self.debug = debug
@@ -158,9 +159,13 @@ class Repl:
         A command always is; MDLe text is when its brackets balance and it does not end in
         the middle of a statement.
         """
-        if classify(text) in ("command", "empty"):
+        # an unfinished input stays MDLe as lines are added: classify it once
+        if not (self._unfinished and text.startswith(self._unfinished)) and \
+                classify(text) in ("command", "empty"):
             return True
-        return self.session.workspace.is_complete(text)
+        complete = self.session.workspace.is_complete(text)
+        self._unfinished = "" if complete else text
+        return complete
 
     def handle(self, text: str) -> bool:
         """Do one input; True when it succeeded.

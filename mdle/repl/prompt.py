@@ -129,6 +129,11 @@ class MdleCompleter(Completer):
     def __init__(self, repl: Repl) -> None:
         self.repl = repl
         self._paths = PathCompleter(expanduser=True)
+        # `:world` offers folders and world files only, `:load` folders and plans: a
+        # plot or trace lying in the folder is never a world or a plan
+        self._worlds = PathCompleter(expanduser=True, file_filter=_suffix_filter(
+            (".yaml", ".yml")))
+        self._plans = PathCompleter(expanduser=True, file_filter=_suffix_filter((".mdle",)))
 
     # ------------------------------------------------------------------ entry point
 
@@ -245,12 +250,23 @@ class MdleCompleter(Completer):
 
             yield from _starting(arg, ((n, "reference world") for n in sim.list_worlds()))
             if arg:
-                yield from self._files(arg)
+                yield from self._files(arg, self._worlds)
+        elif cmd.name == "load":
+            yield from self._files(arg, self._plans)
         elif cmd.completes == "file":
-            yield from self._files(arg)
+            yield from self._files(arg, self._paths)
 
-    def _files(self, arg: str) -> Iterable[Completion]:
-        return self._paths.get_completions(Document(arg, len(arg)), CompleteEvent())
+    @staticmethod
+    def _files(arg: str, completer: PathCompleter) -> Iterable[Completion]:
+        return completer.get_completions(Document(arg, len(arg)), CompleteEvent())
+
+
+def _suffix_filter(suffixes: tuple[str, ...]) -> Callable[[str], bool]:
+    """Return a filter keeping folders and files whose names end in one of ``suffixes``."""
+    def keep(path: str) -> bool:
+        return os.path.isdir(path) or path.lower().endswith(suffixes)
+
+    return keep
 
 
 def _starting(word: str, items: Iterable[tuple[str, ...]]) -> Iterator[Completion]:

@@ -10,7 +10,7 @@ return plain records; :mod:`mdle.repl.commands` turns them into text.
 >>> _ = s.define("atom creep = (go(0.5 m/s), never, 2 s)")
 >>> report = s.run("creep")
 >>> report.decisive.cause.value, round(report.pose.x, 2), round(report.result.distance, 2)
-('timer', -8.0, 1.0)
+('timer', 1.0, 1.0)
 """
 
 from __future__ import annotations

@@ -9,7 +9,15 @@ Public names: :func:`run`, :func:`run_named`, :func:`element_of`, :class:`Schedu
 from __future__ import annotations
 
 from mdle.runtime.api import element_of, run, run_named
-from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample, Termination
+from mdle.runtime.events import (
+    Cause,
+    Collision,
+    Event,
+    EventKind,
+    RunResult,
+    Sample,
+    Termination,
+)
 from mdle.runtime.observer import BaseObserver, Observer, Recorder
 from mdle.runtime.scheduler import ActiveElement, Scheduler
 
@@ -20,6 +28,7 @@ __all__ = [
     "Scheduler",
     "ActiveElement",
     "Cause",
+    "Collision",
     "EventKind",
     "Event",
     "Termination",

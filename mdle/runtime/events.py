@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 from mdle.backend import Pose, Scan
 
-__all__ = ["Cause", "EventKind", "Event", "Termination", "Sample", "RunResult"]
+__all__ = ["Cause", "EventKind", "Event", "Termination", "Collision", "Sample", "RunResult"]
 
 _NO_DIAG: Mapping[str, float] = MappingProxyType({})
 
@@ -82,6 +82,33 @@ class Termination:
     time: float
 
 
+@dataclass(frozen=True)
+class Collision:
+    """The robot's body touched an obstacle (simulator ground truth).
+
+    ``obstacle`` is its name in the world (else its kind), ``kind`` its shape
+    (``rectangle``, ``circle``, ``wall``...), ``index`` its place in the world's list (-1
+    unknown); ``time`` (s, backend clock), ``x``, ``y`` the robot's true position (m, world
+    frame); ``path`` the element that was running.
+    """
+
+    time: float
+    x: float
+    y: float
+    obstacle: str
+    kind: str
+    index: int
+    path: str
+
+    def describe(self, t0: float = 0.0) -> str:
+        """Return where, when and what was hit, in words (``hit `box` (rectangle) at ...``)."""
+        what = f"`{self.obstacle}`" if self.obstacle else "an obstacle"
+        kind = f" ({self.kind})" if self.kind and self.kind != self.obstacle else ""
+        where = f", while `{self.path}` ran" if self.path else ""
+        return (f"hit {what}{kind} at x {self.x:.2f} m, y {self.y:.2f} m, "
+                f"t = {self.time - t0:.1f} s{where}")
+
+
 class Sample(NamedTuple):
     """One tick as the robot saw it, after the control was computed and sent.
 
@@ -119,6 +146,7 @@ class Sample(NamedTuple):
     true_y: float | None = None
     true_theta: float | None = None
     scan: Scan | None = None
+    contact: Collision | None = None
 
 
 @dataclass(frozen=True)
@@ -145,6 +173,7 @@ class RunResult:
     collided: bool = False
     fault: str | None = None
     max_lateness: float = 0.0
+    collision: Collision | None = None
     reason: str | None = None
 
     @property

@@ -24,7 +24,7 @@ from atoms.registry import Context
 from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose
 from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
 from mdle.program import AtomNode, Element, StringNode
-from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample, Termination
+from mdle.runtime.events import Cause, Collision, Event, EventKind, RunResult, Sample, Termination
 from mdle.runtime.observer import Observer
 from mdle.runtime.pacing import Pacer
 
@@ -207,6 +207,8 @@ class Scheduler:
         self._distance = 0.0
         self._min_clearance: float | None = None
         self._collided = False
+        self._collision: Collision | None = None  # the first contact
+        self._ran = ""  # the path that ran during the last advance
         self._max_lateness = 0.0
         self._stall_since: float | None = None
         self._last_cmd = STOP
@@ -332,7 +334,7 @@ class Scheduler:
     def _tick(self) -> bool:
         obs = self.backend.observe()
         now = obs.time
-        self._absorb(obs)
+        contact = self._absorb(obs)
         pose = obs.pose
         truth = obs.truth
 
@@ -376,6 +378,7 @@ class Scheduler:
             cmd = STOP
         self.backend.command(cmd)
         self._last_cmd = cmd
+        self._ran = stack[-1].slot.path if stack else ""
 
         running = bool(stack)
         lateness = 0.0
@@ -395,7 +398,7 @@ class Scheduler:
                 stack[-1].slot.path if stack else "", lateness,
                 None if scan is None else now - scan.stamp, obs.stalled,
                 MappingProxyType(dict(trace)) if trace else _EMPTY,
-                *(_truth_fields(truth) if truth else _NO_TRUTH), scan,
+                *(_truth_fields(truth) if truth else _NO_TRUTH), scan, contact,
             ))
             for o in self.observers:
                 o.on_tick(sample)
@@ -403,8 +406,11 @@ class Scheduler:
             self._finish(None, fault)
         return running
 
-    def _absorb(self, obs: Observation) -> None:
-        """Make ``obs`` the latest observation: pose, distance, clearance, collision."""
+    def _absorb(self, obs: Observation) -> Collision | None:
+        """Make ``obs`` the latest observation: pose, distance, clearance, collision.
+
+        Returns the contact the backend reported at this observation (None: none).
+        """
         prev = self._obs
         self._obs = obs
         pose = obs.pose
@@ -419,6 +425,13 @@ class Scheduler:
                 self._min_clearance = float(clearance)
             if truth.get("collided"):
                 self._collided = True
+            reported = truth.get("contact")
+            if reported is not None:
+                contact = _collision(reported, self._ran)
+                if self._collision is None:
+                    self._collision = contact
+                return contact
+        return None
 
     def _settle(self, ctx: Context, now: float, tick: int) -> None:
         """Test the active elements outermost first until none fires (rules 3-6)."""
@@ -426,6 +439,7 @@ class Scheduler:
         stack = self._stack
         level = 0
         while True:
+            ctx.atom = stack[-1].state if stack else None  # for sensors reading the law's state
             checks = self._checks
             if checks is None:
                 checks = self._checks = tuple(
@@ -608,6 +622,7 @@ class Scheduler:
                     distance=self._distance,
                     min_clearance=self._min_clearance,
                     collided=self._collided,
+                    collision=self._collision,
                     fault=fault,
                     max_lateness=self._max_lateness,
                     reason=self._stop_reason if root.cause is Cause.STOPPED else None,
@@ -641,6 +656,13 @@ def _stop_sample(obs: Observation) -> Sample:
 
 _NO_TRUTH = (None, None, None, None, None)
 _new_sample = tuple.__new__
+
+
+def _collision(contact: Mapping[str, Any], path: str) -> Collision:
+    """Return the record of a contact the backend reported in its ground truth."""
+    return Collision(float(contact.get("t", 0.0)), float(contact.get("x", math.nan)),
+                     float(contact.get("y", math.nan)), str(contact.get("obstacle", "")),
+                     str(contact.get("kind", "")), int(contact.get("index", -1)), path)
 
 
 def _truth_fields(truth: Mapping[str, Any]) -> tuple[Any, ...]:

@@ -11,10 +11,10 @@ line, column and key path, as world files do (``parameters.grid.kf[2]: ...``).
 ... plan: {text: "atom f(rc = 1 m) = (follow_boundary(rc = rc, v = 1 m/s), never, 5 s)\\n"}
 ... entry: f
 ... worlds: [ellipse]
-... parameters: {grid: {rc: [0.8, 1.2]}}
+... parameters: {grid: {rc: [0.8 m, 1.2 m]}}
 ... ''')
 >>> [dict(p) for p in s.parameters]
-[{'rc': '0.8'}, {'rc': '1.2'}]
+[{'rc': '0.8 m'}, {'rc': '1.2 m'}]
 >>> try:
 ...     parse_study("plan: {text: 'plan main = ((halt), never, 1 s)'}\nrates: [fast]\n",
 ...                 file="study.yaml")

@@ -41,11 +41,12 @@ def build_world(text: str, label: str, robot: str | dict[str, Any] | None = None
 
     if text.startswith(_PREFIX):
         from sim.generated import generate_shape
-        from sim.robot import IDEAL
+        from sim.profiles import robot_profile
 
         g = json.loads(text)["generated"]
         shape = generate_shape(int(g["seed"]), int(g["index"]), g.get("family"))
-        return shape.world(robot=IDEAL if robot is None else robot_from(robot, label))
+        return shape.world(robot=robot_profile("ideal") if robot is None
+                           else robot_from(robot, label))
     if robot is not None:
         import yaml
 

@@ -97,10 +97,39 @@ def test_oracle_scan_values_are_used_as_given(world2d: World2D) -> None:
     scan = world2d.scan(shape, 0.0, 0.0, 0.0)
     view = boundary_view(scan, "right")
     assert view.exact
-    assert view.side.kappa == -1.0 and view.side.beta == pytest.approx(0.0, abs=1e-12)
+    # on a smooth boundary the exact curvature stands (no vertex ahead adds turning)
+    assert view.side.kappa == pytest.approx(-1.0, abs=1e-4)
+    assert view.side.beta == pytest.approx(0.0, abs=1e-12)
     left = boundary_view(world2d.scan(world2d.Shape("circle", center=(0.0, 1.5), radius=1.0),
                                       0.0, 0.0, 0.0), "left")
-    assert left.side.kappa == -1.0 and left.side.beta == pytest.approx(0.0, abs=1e-9)
+    assert left.side.kappa == pytest.approx(-1.0, abs=1e-4)
+    assert left.side.beta == pytest.approx(0.0, abs=1e-9)
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_exact_side_curvature_anticipates_a_convex_vertex_ahead(world2d: World2D,
+                                                                side: str) -> None:
+    # a face 0.5 m to the side with a 45-degree convex corner 0.2 m ahead: the exact
+    # curvature is 0 on the face, but the turning at the corner within the side window shows
+    sgn = -1.0 if side == "right" else 1.0
+    sq = [(-3.0, sgn * 0.5), (0.2, sgn * 0.5), (3.7, sgn * 4.0), (-3.0, sgn * 4.0)]
+    view = boundary_view(world2d.scan(world2d.Shape("polygon", vertices=sq), 0.0, 0.0, 0.0),
+                         side)
+    assert view.exact and view.side.hit
+    assert view.side.kappa < -0.5
+    # the corner far ahead, beyond the window: nothing to anticipate
+    far = [(-3.0, sgn * 0.5), (3.0, sgn * 0.5), (3.0, sgn * 4.0), (-3.0, sgn * 4.0)]
+    view = boundary_view(world2d.scan(world2d.Shape("polygon", vertices=far), 0.0, 0.0, 0.0),
+                         side)
+    assert view.side.kappa == pytest.approx(0.0, abs=1e-9)
+
+
+def test_exact_side_curvature_ignores_a_concave_corner_ahead(world2d: World2D) -> None:
+    # a wall on the right meeting a wall ahead (inside an L): the front ray's business
+    room = [(-3.0, -0.5), (1.0, -0.5), (1.0, 3.0), (5.0, 3.0), (5.0, -4.0), (-3.0, -4.0)]
+    view = boundary_view(world2d.scan(world2d.Shape("polygon", vertices=room), 0.0, 0.0, 0.0),
+                         "right")
+    assert view.side.kappa == pytest.approx(0.0, abs=1e-9)
 
 
 def test_depth_jump_at_the_side_ray_is_not_smoothed_over(raycast: Raycast) -> None:

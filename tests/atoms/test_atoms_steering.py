@@ -15,7 +15,7 @@ if TYPE_CHECKING:
 
 G = S.Gains()
 ARGS = dict(side="right", rc=0.5, v=1.0, zeta=1.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.15,
-            lookahead=0.8)
+            lookahead=0.8, latency=math.inf)
 
 
 @pytest.mark.parametrize("kappa", [-2.0, -1.0, -0.25, 0.0, 0.3, 0.7])
@@ -108,8 +108,8 @@ def test_corner_law_on_the_circle_is_the_circling_rate() -> None:
 def test_safety_filter_keeps_a_clear_arc_and_replaces_a_blocked_one() -> None:
     far = np.array([[5.0, 5.0]])
     assert S.safety_filter(far, 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (1.0, 0.2, math.inf)
-    post = np.array([[0.35, 0.02]])  # a thin post just left of straight ahead
-    v, u, own = S.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5)
+    post = np.array([[0.35, 0.02]])  # a thin post just left of straight ahead, followed side
+    v, u, own = S.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5, side=1)
     assert own < 0.05
     assert v == 1.0 and u != 0.0
     # the chosen arc really clears the post

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import subprocess
 import sys
 from pathlib import Path
 
@@ -54,11 +55,17 @@ def test_round_trip_on_every_plan(path: Path) -> None:
     roundtrip(text, str(path))
 
 
-@pytest.mark.parametrize("path", [p for p in ALL_PLANS if "language" in p.parts],
-                         ids=lambda p: p.name)
-def test_language_plans_are_already_canonical(path: Path) -> None:
+@pytest.mark.parametrize("path", ALL_PLANS, ids=[str(p.relative_to(REPO)) for p in ALL_PLANS])
+def test_shipped_plans_are_already_canonical(path: Path) -> None:
     text = path.read_text(encoding="utf-8")
     assert format_source(text, str(path)) == text
+
+
+def test_fmt_check_passes_on_the_shipped_plans(mdle_command: list[str], tmp_path: Path) -> None:
+    # what a user (and .ci/smoke) types: `mdle fmt --check plans/`, exit 0 and silent
+    out = subprocess.run([*mdle_command, "fmt", "--check", str(REPO / "plans")], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=60)
+    assert (out.returncode, out.stdout, out.stderr) == (0, "", "")
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -22,11 +22,16 @@ plan main = ((follow), stalled, inf)
 """
 
 
-def test_a_bare_number_takes_the_defaults_unit() -> None:
-    p = load_text(PLAN, settings={"rc": "80", "kf": "2"})
-    assert atom(p, "follow").args["rc"] == 80.0
-    p = load_text(PLAN, settings={"rc": "80 cm"})
+def test_a_bare_number_follows_the_checkers_unit_rules() -> None:
+    # a plain number fits a plain default (kf); where metres are meant it is an error
+    # with the unit to add, as everywhere in MDLe (a plan never guesses units)
+    p = load_text(PLAN, settings={"rc": "80 cm", "kf": "2"})
     assert atom(p, "follow").args["rc"] == pytest.approx(0.8)
+    assert atom(p, "follow").args["kf"] == 2.0
+    with pytest.raises(CheckError) as err:
+        load_text(PLAN, settings={"rc": "80"})
+    (d,) = err.value.diagnostics
+    assert d.hint == "add a unit: `80 m`" and d.span is not None and d.span.file == "--set"
 
 
 def test_symbols_and_the_elements_that_use_the_definition_follow() -> None:
@@ -50,8 +55,11 @@ def test_a_value_of_the_wrong_dimension_is_a_check_error() -> None:
 
 
 def test_a_value_that_does_not_parse_names_the_setting() -> None:
-    with pytest.raises(CheckError, match="--set rc=1 m m"):
+    with pytest.raises(CheckError) as err:
         load_text(PLAN, settings={"rc": "1 m m"})
+    (d,) = err.value.diagnostics
+    assert d.span is not None and (d.span.file, d.span.column) == ("--set", 8)
+    assert err.value.sources["--set"] == "rc=1 m m"
 
 
 def test_parse_setting() -> None:

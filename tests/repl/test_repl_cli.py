@@ -67,7 +67,8 @@ def test_define_run_save_then_load_in_a_second_session(tmp_path: Path, repl: Rep
     assert "creep (level 0) ended by timer at 2.00 s" in out
     assert "quarter (level 0) ended by timer at 1.00 s" in out
     # east 1 m, a quarter turn left, north 2 m
-    assert pose_in(out) == pytest.approx((-8.0, 2.3, 90.0), abs=0.006)
+    # odometry from the session's start, the world's (-9, 0.3): the world's (-8, 2.3)
+    assert pose_in(out) == pytest.approx((1.0, 2.0, 90.0), abs=0.006)
     assert "saved 2 definitions to tuned.mdle (2 lines)" in out
     saved = (tmp_path / "tuned.mdle").read_text()
     assert saved == ("atom creep(v = 0.5 m/s) = (go(v), never, 2 s)\n"
@@ -84,7 +85,7 @@ def test_define_run_save_then_load_in_a_second_session(tmp_path: Path, repl: Rep
     out = res.stdout
     assert out.startswith("loaded tuned.mdle: creep, quarter\n")
     # a quarter turn right (heading -90), then 1 m south
-    assert pose_in(out) == pytest.approx((-9.0, -0.7, -90.0), abs=0.006)
+    assert pose_in(out) == pytest.approx((0.0, -1.0, -90.0), abs=0.006)  # odometry
     assert "loaded tuned.mdle: nothing new" in out
     assert out.endswith(saved)
 
@@ -110,8 +111,10 @@ creep
     assert "creep (level 0) ended by timer at 2.00 s" in out
     assert "COLLIDED with `ellipse`" in out
     poses = re.findall(r"^odometry x (-?[0-9.]+) m  y (-?[0-9.]+) m", out, re.MULTILINE)
-    assert float(poses[0][0]) == pytest.approx(-3.95, abs=0.01)  # stopped at the ellipse
-    assert poses[1] == ("-9.00", "-3.00")
+    # stopped at the ellipse (world x -3.95), 5.05 m from the start; after `:reset X Y`
+    # odometry starts again at 0
+    assert float(poses[0][0]) == pytest.approx(5.05, abs=0.01)
+    assert poses[1] == ("0.00", "0.00")
     assert "Traceback" not in err
 
 
@@ -147,7 +150,9 @@ def test_until_seed_robot_and_sensing_options(tmp_path: Path, repl: Repl) -> Non
     res = repl("(go(1 m/s), never, 1 s)\n:pose\n:scan\n", "--seed", "4", "--robot", "ideal",
                "--sensing", "exact", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
-    assert pose_in(res.stdout) == pytest.approx((-3.0, -3.0, 0.0))  # from (-4, -3) east
+    # 1 m east of the default world's start (-4, -3): odometry (1, 0), the world's (-3, -3)
+    assert pose_in(res.stdout) == pytest.approx((1.0, 0.0, 0.0))
+    assert "true     x -3.00 m  y -3.00 m" in res.stdout
     assert "world `default`, seed 4" in res.stdout
     assert "max range 10 m (exact)" in res.stdout
 
@@ -172,7 +177,7 @@ def test_sigint_during_a_piped_run_stops_it_and_the_session_goes_on(
     assert proc.returncode == 1, err  # the stopped run counts as failed
     assert "turn (level 0) ended by stopped at" in out and "(Ctrl-C: robot stopped)" in out
     # turned in place, then the :pose after it ran (the first one was read above)
-    assert out.count("odometry x -9.00 m  y 0.30 m") == 1
+    assert out.count("odometry x 0.00 m  y 0.00 m") == 1
 
 
 def test_bytes_that_are_not_utf8_are_reported_and_the_session_goes_on(

@@ -54,7 +54,7 @@ def test_define_run_and_report(r: Run) -> None:
     assert ok and err == ""
     lines = out.splitlines()
     assert lines[0] == "creep (level 0) ended by timer at 2.00 s"
-    assert lines[1] == "  pose      x -8.50 m  y 0.30 m  heading 0.0 deg"
+    assert lines[1] == "  pose      x 0.50 m  y 0.00 m  heading 0.0 deg"  # odometry
     assert lines[2].startswith("  travelled 0.50 m in 2.00 s (21 ticks), min clearance ")
 
 
@@ -115,7 +115,8 @@ def test_pose_and_scan(r: Run) -> None:
     r("(go(1 m/s), range(0 deg) < 1.5 m, 20 s)")
     ok, out, _ = r(":pose")
     assert ok
-    assert "odometry x -5.40 m  y 0.30 m  heading 0.0 deg" in out
+    assert "odometry x 3.60 m  y 0.00 m  heading 0.0 deg" in out
+    assert "true     x -5.40 m  y 0.30 m  heading 0.0 deg" in out
     assert "world `ellipse`, seed 0" in out
     ok, out, _ = r(":scan")
     assert ok

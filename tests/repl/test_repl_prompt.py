@@ -93,15 +93,26 @@ def test_completer_offers_parameters_symbols_and_units(repl: Repl) -> None:
 
 def test_completer_offers_commands_worlds_and_files(repl: Repl, tmp_path: Path,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    # A folder cluttered as a newcomer's is after the README's first command: a plot
+    # beside the plans must not be offered as a world or a plan.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "ellipse.png").write_bytes(b"")
+    (tmp_path / "ellipse-run.jsonl").write_text("")
+    (tmp_path / "plans").mkdir()
+    (tmp_path / "plans" / "tune.mdle").write_text("")
+    (tmp_path / "plans" / "tune.png").write_bytes(b"")
+    (tmp_path / "worlds").mkdir()
+    (tmp_path / "worlds" / "lab.yaml").write_text("")
+    (tmp_path / "worlds" / "lab.txt").write_text("")
     assert completions(repl, ":s") == ["scan", "save", "step", "set"]
     assert completions(repl, ":wor") == ["world"]
     assert completions(repl, ":world ell") == ["ellipse"]
+    assert completions(repl, ":world worlds/l") == ["ab.yaml"]
     assert completions(repl, ":set u") == ["until"]
     assert completions(repl, ":help qu") == ["quit"]
-    (tmp_path / "plans").mkdir()
-    (tmp_path / "plans" / "tune.mdle").write_text("")
-    monkeypatch.chdir(tmp_path)
     assert completions(repl, ":load plans/tu") == ["ne.mdle"]
+    # outputs may be any file name: `:plot` offers what is there
+    assert sorted(completions(repl, ":plot plans/tu")) == ["ne.mdle", "ne.png"]
 
 
 def test_tab_completes_at_the_prompt_and_enter_continues_unfinished_input(repl: Repl) -> None:
@@ -175,7 +186,7 @@ def test_ctrl_c_during_a_run_stops_the_robot_and_gives_the_prompt_back(
     assert "turn (level 0) ended by stopped at" in out
     assert "(Ctrl-C: robot stopped)" in out
     # the prompt came back: the next input ran
-    assert "odometry x -9.00 m  y 0.30 m" in out
+    assert "odometry x 0.00 m  y 0.00 m" in out
     assert session.backend._cmd.v == 0.0 and session.backend._cmd.omega == 0.0
     assert repl.failures == 1  # a stopped run counts as not done
     t = session.observe().time
@@ -234,7 +245,7 @@ def test_progress_line_shows_long_runs_and_is_erased() -> None:
     shown = text.split("\r\x1b[K")
     assert shown[0] == "" and shown[-1] == ""  # each line overwrites; erased at the end
     lines = [x for x in shown if x]
-    assert lines[0] == "  running go: t 0.3 s  x -8.70 m  y 0.30 m  (Ctrl-C stops it)"
+    assert lines[0] == "  running go: t 0.3 s  x 0.30 m  y 0.00 m  (Ctrl-C stops it)"
     assert len(lines) == 2  # at 0.3 s and 0.7 s of simulated time (11 ticks)
     quick = io.StringIO()
     s.run("(go(1 m/s), never, 0.1 s)", [ProgressLine(quick)])

@@ -127,7 +127,8 @@ def test_step_advances_tick_by_tick_and_finishes(session: Session) -> None:
     assert out.started and out.report is None and session.stepping
     assert [r.tick for r in out.rows] == [1, 2, 3]
     assert [r.sample.cmd_v for r in out.rows] == [1.0, 1.0, 1.0]
-    assert out.rows[0].sample.x == pytest.approx(-8.5)
+    assert out.rows[0].sample.x == pytest.approx(0.5)       # odometry
+    assert out.rows[0].sample.true_x == pytest.approx(-8.5)
     assert out.rows[0].front == pytest.approx(8.5 - 4 * math.sqrt(1 - 0.15 ** 2) + 0.0, abs=0.2)
     assert pose_of(session)[0] == pytest.approx(-8.2)
     out = session.step(10)  # continues the same run: 2 more ticks of motion, then the end

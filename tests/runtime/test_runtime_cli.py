@@ -7,6 +7,7 @@ that are written, exit codes, Ctrl-C.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 import signal
@@ -153,6 +154,25 @@ def test_collision_exits_3(plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -
     assert "collided" in res.stderr
     end = read_trace(trace).end
     assert end is not None and end["collided"] is True
+
+
+def test_a_collision_is_named_in_stderr_the_trace_the_summary_and_the_plot(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
+    trace, png = tmp_path / "t.jsonl", tmp_path / "p.png"
+    res = run_mdle("run", str(plan(RAM)), "--world", "default", "--trace", str(trace),
+                   "--plot", str(png))
+    assert res.returncode == 3
+    # what was hit, where and when, and in which element (the box of the default room)
+    assert res.stderr.startswith("mdle run: the robot collided: hit `box` (rectangle) at "
+                                 "x 0.75 m, y -3.00 m, t = 10.3 s, while `main/go` ran"), res.stderr
+    assert "collided: YES: hit `box` (rectangle)" in res.stdout
+    t = read_trace(trace)
+    (hit,) = t.collisions()
+    assert (hit["obstacle"], hit["kind"], hit["index"], hit["path"]) == (
+        "box", "rectangle", 1, "main/go")
+    assert hit["x"] == pytest.approx(0.75, abs=0.01) and hit["t"] == pytest.approx(10.3)
+    assert t.end is not None and t.end["collision"]["obstacle"] == "box"
+    assert png.read_bytes().startswith(b"\x89PNG")
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
@@ -311,3 +331,34 @@ def test_second_ctrl_c_between_ticks_still_ends_the_run(
     assert t.end is not None and t.end["cause"] == "stopped"
     # two ticks, then the stop command sent when the run was ended between ticks
     assert len(t.samples) == 3 and t.samples[-1]["cmd_v"] == 0.0
+
+
+def test_set_overrides_a_parameter_and_start_places_the_robot(
+        plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
+    text = "atom cruise(v = 0.3 m/s) = (go(v), never, 2 s)\nplan main = ((cruise), never, inf)\n"
+    trace = tmp_path / "t.jsonl"
+    res = run_mdle("run", str(plan(text)), "--world", "empty", "-q", "--trace", str(trace),
+                   "--set", "cruise.v=0.5m/s", "--start", "1, -2 m, 90")
+    assert res.returncode == 0, res.stderr
+    t = read_trace(trace)
+    assert max(t.column("cmd_v")) == pytest.approx(0.5)
+    assert (t.samples[0]["true_x"], t.samples[0]["true_y"]) == (1.0, -2.0)
+    assert t.samples[0]["true_theta"] == pytest.approx(math.pi / 2)
+    assert t.header["overrides"] == ["cruise.v=0.5m/s"]
+    assert t.header["start"]["theta"] == pytest.approx(math.pi / 2)
+
+
+def test_bad_set_and_start_are_located_messages_not_tracebacks(
+        plan: WritePlan, run_mdle: RunMdle) -> None:
+    path = str(plan("atom cruise(v = 0.3 m/s) = (go(v), never, 2 s)\n"
+                    "plan main = ((cruise), never, inf)\n"))
+    res = run_mdle("run", path, "--world", "empty", "--set", "cruise.v=0.5 m")
+    assert res.returncode == 1
+    assert res.stderr.startswith("--set:1:10: error: `v` of `cruise` is a speed such as "
+                                 "`0.3 m/s`, found a length (`0.5 m`)\n    cruise.v=0.5 m\n")
+    res = run_mdle("run", path, "--world", "empty", "--start", "1,2")
+    assert res.returncode == 2 and "expected X,Y,THETA" in res.stderr
+    res = run_mdle("run", path, "--world", "empty", "--start", "1 s,2,0")
+    assert res.returncode == 2 and "X of --start is a length" in res.stderr
+    res = run_mdle("run", path, "--world", "default", "--start", "1.5,-3,0")  # in the box
+    assert res.returncode == 1 and "overlaps" in res.stderr and "Traceback" not in res.stderr

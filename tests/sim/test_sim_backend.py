@@ -12,17 +12,13 @@ from mdle.backend import Backend, ClockMode, Command, Pose
 from mdle.errors import BackendError, WorldError
 from sim.backend import SimBackend
 from sim.ladar import Ladar, LadarProfile
-from sim.robot import (
-    IDEAL,
-    PIONEER2DX,
-    OdometryNoise,
-    Phase,
-    RobotProfile,
-    integrate,
-    plan_phases,
-)
+from sim.profiles import robot_profile
+from sim.robot import OdometryNoise, Phase, RobotProfile, integrate, plan_phases
 from sim.shapes import Circle, Rectangle, Wall
 from sim.world import World
+
+IDEAL = robot_profile("ideal")
+PIONEER2DX = robot_profile("pioneer2dx")
 
 
 def wall_world(robot: RobotProfile = PIONEER2DX) -> World:
@@ -37,7 +33,10 @@ def test_implements_the_backend_protocol() -> None:
     assert b.limits.radius == 0.25
     obs = b.observe()
     assert set(obs.truth) == {"x", "y", "theta", "clearance", "collided"}
-    assert obs.time == 0.0 and obs.pose == b.world.start_pose
+    # Plans see odometry from the run's start (REP-105 odom); the world pose is ground truth.
+    s = b.world.start_pose
+    assert obs.time == 0.0 and obs.pose == Pose(0.0, 0.0, 0.0)
+    assert (obs.truth["x"], obs.truth["y"], obs.truth["theta"]) == (s.x, s.y, s.theta)
 
 
 def test_commands_are_clamped_to_limits() -> None:
@@ -284,8 +283,16 @@ def _run(seed: int, drift: bool) -> list[tuple[float, ...]]:
         b.advance(0.1)
         o = b.observe()
         assert o.scan is not None
-        out.append((o.pose.x, o.pose.y, o.pose.theta, o.truth["x"], float(o.scan.ranges.sum())))
+        out.append((o.pose.x, o.pose.y, o.pose.theta, o.truth["x"], float(o.scan.ranges.sum()),
+                    o.truth["y"]))
     return out
+
+
+def _start_frame(x: float, y: float) -> tuple[float, float]:
+    """Return a world point in the odometry frame of the office world's start pose."""
+    s = sim.load_world("office").start_pose
+    c, sn = math.cos(s.theta), math.sin(s.theta)
+    return c * (x - s.x) + sn * (y - s.y), c * (y - s.y) - sn * (x - s.x)
 
 
 def test_determinism_same_seed_same_trajectory() -> None:
@@ -295,20 +302,28 @@ def test_determinism_same_seed_same_trajectory() -> None:
 
 def test_odometry_drift_is_optional_and_seeded() -> None:
     exact = _run(1, drift=False)
-    assert all(r[0] == r[3] for r in exact)              # perfect odometry = truth
+    # perfect odometry = truth, seen from the start pose
+    assert all(abs(r[0] - _start_frame(r[3], r[5])[0]) < 1e-9 for r in exact)
+    assert all(abs(r[1] - _start_frame(r[3], r[5])[1]) < 1e-9 for r in exact)
     drifting = _run(1, drift=True)
-    assert any(abs(r[0] - r[3]) > 1e-4 for r in drifting)
+    assert any(abs(r[0] - _start_frame(r[3], r[5])[0]) > 1e-4 for r in drifting)
     # The true trajectory does not depend on the odometry noise.
     assert [r[3] for r in exact] == [r[3] for r in drifting]
 
 
 def test_reset_to_a_pose() -> None:
-    b = SimBackend(sim.load_world("empty"))
+    b = SimBackend(sim.load_world("empty"), robot="ideal")
     b.command(Command(0.5, 0.0))
     b.advance(1.0)
     b.reset(Pose(1.0, 1.0, 0.5))
     o = b.observe()
-    assert o.time == 0.0 and o.pose == Pose(1.0, 1.0, 0.5) and o.v == 0.0
+    assert o.time == 0.0 and o.pose == Pose(0.0, 0.0, 0.0) and o.v == 0.0  # odometry restarts
+    assert b.true_pose == Pose(1.0, 1.0, 0.5)
+    b.command(Command(1.0, 0.0))
+    b.advance(1.0)
+    o = b.observe()
+    assert o.pose.x == pytest.approx(1.0) and o.pose.y == pytest.approx(0.0, abs=1e-12)
+    assert b.true_pose.x == pytest.approx(1.0 + math.cos(0.5), abs=0.02)
 
 
 def test_phase_helpers() -> None:

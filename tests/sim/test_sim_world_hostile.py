@@ -132,3 +132,16 @@ def test_worlds_show_of_a_far_obstacle_is_a_message(tmp_path: Path,
                         str(tmp_path / "far.png")], capture_output=True, text=True, timeout=60)
     assert r.returncode == 1 and "far.yaml:2:" in r.stderr and "must be within" in r.stderr, \
         r.stderr
+
+
+def test_worlds_show_without_an_extension_says_what_it_needs(tmp_path: Path,
+                                                             mdle_command: list[str]) -> None:
+    out = tmp_path / "picture"
+    r = subprocess.run([*mdle_command, "worlds", "show", "ellipse", "-o", str(out)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1 and ".png, .svg or .pdf" in r.stderr, r.stderr
+    assert not out.exists() and not (tmp_path / "picture.png").exists()
+    r = subprocess.run([*mdle_command, "worlds", "show", "ellipse", "-o", str(out) + ".svg"],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and f"world drawn to {out}.svg" in r.stdout, r.stderr
+    assert (tmp_path / "picture.svg").stat().st_size > 0

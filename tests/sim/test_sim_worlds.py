@@ -122,7 +122,7 @@ BAD = [
     ('obstacle: []\n',
      'bad.yaml:1:1: error: obstacle: unknown key `obstacle` (did you mean `obstacles`?)'),
     ('robot: pioner\n',
-     'bad.yaml:1:8: error: robot: unknown robot profile `pioner` (known: ideal, pioneer2dx)'),
+     'bad.yaml:1:8: error: robot: unknown robot profile `pioner` (did you mean `pioneer2dx`?)'),
     ('ladar: {noise: pink}\n',
      ("bad.yaml:1:16: error: ladar.noise: unknown noise model 'pink'; one of: relative, "
       'absolute, none')),

@@ -1,0 +1,290 @@
+"""Fit a robot profile's timing to recorded runs by replaying their commands.
+
+The recorded command sequence is replayed, tick by tick at the recording's median tick,
+through the simulator's motion model (:class:`sim.backend.SimBackend` with a timed
+profile): each command takes effect ``command_latency`` after it was sent, the firmware
+ramps speed and turn rate at the profile's accelerations (decelerations when slowing
+down), and each tick reads the last report of the robot's ``sip_cycle``. The two axes
+are independent given the latency, so for each latency on a grid the accelerations of
+each axis are found by grid search (vectorised over the candidates), and the latency
+that minimises the summed, tolerance-weighted squared RMS errors of ``v`` and ``omega``
+is kept, then refined. The scan latency distribution (uniform, min-max) is fitted so that
+scans taken every ``scan_period`` at an unknown phase and read at the ticks have the
+recorded scan ages' quantiles.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim.recording import Recording
+from sim.robot import RAMPS, Latency, RobotProfile
+
+__all__ = ["OMEGA_SCALE", "V_SCALE", "AxisFit", "Fit", "fit_profile", "replay_axis"]
+
+#: Errors are weighed against these (the accuracy a fitted profile should reach).
+V_SCALE = 0.03       # m/s
+OMEGA_SCALE = 0.05   # rad/s
+_LATENCIES = np.arange(0.0, 0.601, 0.02)
+_ACC_V = np.geomspace(0.05, 5.0, 25)       # m/s^2
+_ACC_W = np.geomspace(0.1, 10.0, 25)       # rad/s^2
+_AGE_QUANTILES = np.linspace(0.05, 0.95, 19)
+_PHASES = 16
+
+
+def _events(n: int, tick: float, latency: float, cycle: float
+            ) -> list[tuple[float, int, int]]:
+    """Return (time, kind, index) sorted: 0 a command takes effect, 1 a report, 2 a tick."""
+    ev = [(round(i * tick + latency, 9), 0, i) for i in range(n)]
+    ev += [(round(i * tick, 9), 2, i) for i in range(n)]
+    if cycle > 0:
+        ev += [(round(j * cycle, 9), 1, j) for j in range(1, int(n * tick / cycle) + 1)]
+    ev.sort()
+    return ev
+
+
+def replay_axis(cmd: np.ndarray, tick: float, latency: float, accel: np.ndarray,
+                decel: np.ndarray, cycle: float, ramp: str = "firmware") -> np.ndarray:
+    """Replay one axis's commands for many (accel, decel) candidates at once.
+
+    Parameters
+    ----------
+    cmd : (n,) array
+        The command sent at each tick ``i * tick``.
+    accel, decel : (G,) arrays
+        Candidate ramp rates (ramping away from zero, towards zero).
+    cycle : float
+        Report cycle (0: ticks read the current value).
+
+    Returns
+    -------
+    (n, G) array
+        The value each tick observes, before its command is sent. The ramp is the
+        simulator's (:func:`sim.robot.ramp_rate`): one rate per change, ``decel`` while
+        the change points towards zero; with ``ramp="stage"`` a positive value commanded
+        negative jumps to the command.
+    """
+    jump = ramp == "stage"
+    accel = np.asarray(accel, dtype=float)
+    decel = np.asarray(decel, dtype=float)
+    cur = np.zeros(accel.shape)
+    rep = cur
+    out = np.empty((len(cmd), accel.size))
+    target = 0.0
+    t_prev = 0.0
+    for time, kind, i in _events(len(cmd), tick, latency, cycle):
+        h = time - t_prev
+        if h > 0:
+            diff = target - cur
+            step = np.where(cur * diff < 0, decel, accel) * h
+            if jump and target < 0:
+                step = np.where(cur > 0, np.inf, step)
+            cur = cur + np.clip(diff, -step, step)
+            t_prev = time
+        if kind == 0:
+            target = float(cmd[i])
+        elif kind == 1:
+            rep = cur
+        else:
+            out[i] = rep if cycle > 0 else cur
+    return out
+
+
+@dataclass(frozen=True)
+class AxisFit:
+    """Fitted ramp rates of one axis and the RMS error per recording and overall."""
+
+    accel: float
+    decel: float
+    rms: float
+    rms_each: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A fitted timing model and how well it reproduces the recordings.
+
+    Units: seconds, m/s^2 and rad/s^2, m/s and rad/s for the RMS errors.
+    """
+
+    sources: tuple[str, ...]
+    tick: float
+    sip_cycle: float
+    command_latency: float
+    ramp: str
+    v: AxisFit
+    omega: AxisFit
+    scan_period: float
+    scan_latency: Latency | None
+    scan_age: tuple[float, float, float, float] | None
+    """Recorded scan age: min, max, mean, std (None: the recordings have none)."""
+    scan_age_model: float | None
+    """Mean scan age the fitted scan model gives at the ticks."""
+
+    def profile(self, base: RobotProfile, name: str, description: str = "",
+                source: str = "") -> RobotProfile:
+        """Return ``base`` with the fitted timing (the ladar delay only if one was fitted)."""
+        changes: dict[str, object] = {
+            "name": name, "command_latency": self.command_latency,
+            "sip_cycle": self.sip_cycle, "ramp": self.ramp, "max_accel": self.v.accel,
+            "max_decel": self.v.decel, "max_turn_accel": self.omega.accel,
+            "max_turn_decel": self.omega.decel, "description": description or base.description,
+            "source": source or base.source}
+        if self.scan_latency is not None:
+            changes.update(scan_period=self.scan_period, scan_latency=self.scan_latency)
+        return base.with_overrides(**changes)
+
+    def report(self) -> str:
+        """Return the fit in words, one figure a line."""
+        lines = [f"fitted to {len(self.sources)} recording(s), replayed at a {self.tick:g} s "
+                 f"tick with a {self.sip_cycle:g} s report cycle:",
+                 f"  command latency    {self.command_latency:.3f} s",
+                 f"  ramp model         {self.ramp}",
+                 f"  speed ramp         accel {self.v.accel:.3f} m/s^2, "
+                 f"decel {self.v.decel:.3f} m/s^2",
+                 f"  turn-rate ramp     accel {math.degrees(self.omega.accel):.1f} deg/s^2, "
+                 f"decel {math.degrees(self.omega.decel):.1f} deg/s^2",
+                 f"  RMS error v        {self.v.rms:.4f} m/s  (" +
+                 ", ".join(f"{r:.4f}" for r in self.v.rms_each) + ")",
+                 f"  RMS error omega    {self.omega.rms:.4f} rad/s  (" +
+                 ", ".join(f"{r:.4f}" for r in self.omega.rms_each) + ")"]
+        if self.scan_latency is not None and self.scan_age is not None:
+            lo, hi, mean, std = self.scan_age
+            lines += [f"  scan latency       {self.scan_latency.describe()} "
+                      f"(scans every {self.scan_period:g} s)",
+                      f"  scan age           recorded {lo * 1e3:.0f}-{hi * 1e3:.0f} ms, mean "
+                      f"{mean * 1e3:.0f} ms, std {std * 1e3:.0f} ms; model mean "
+                      f"{(self.scan_age_model or 0.0) * 1e3:.0f} ms"]
+        else:
+            lines.append("  scan latency       not fitted (no scan ages recorded)")
+        return "\n".join(lines)
+
+
+def _axis_cost(recs: Sequence[Recording], field: str, latency: float, tick: float,
+               cycle: float, accel: np.ndarray, decel: np.ndarray, ramp: str
+               ) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Return pooled squared error sums per candidate, and each recording's mean square."""
+    total = np.zeros(accel.size)
+    each = []
+    for rec in recs:
+        pred = replay_axis(getattr(rec, "cmd_" + field), tick, latency, accel, decel, cycle,
+                           ramp)
+        err = ((pred - getattr(rec, field)[:, None]) ** 2)
+        total += err.sum(axis=0)
+        each.append(err.mean(axis=0))
+    return total, each
+
+
+def _best_axis(recs: Sequence[Recording], field: str, latency: float, tick: float,
+               cycle: float, grid: np.ndarray, ramp: str) -> tuple[float, float, float]:
+    """Return (accel, decel, pooled mean square) minimising one axis's error."""
+    n = sum(len(r) for r in recs)
+    a, d = np.meshgrid(grid, grid, indexing="ij")
+    cost, _ = _axis_cost(recs, field, latency, tick, cycle, a.ravel(), d.ravel(), ramp)
+    k = int(np.argmin(cost))
+    return float(a.ravel()[k]), float(d.ravel()[k]), float(cost[k] / n)
+
+
+def _refine_axis(recs: Sequence[Recording], field: str, latency: float, tick: float,
+                 cycle: float, accel: float, decel: float, ramp: str) -> AxisFit:
+    """Search a fine grid around (accel, decel) and return the best with its errors."""
+    fa = accel * np.linspace(0.8, 1.2, 21)
+    fd = decel * np.linspace(0.8, 1.2, 21)
+    a, d = np.meshgrid(fa, fd, indexing="ij")
+    cost, each = _axis_cost(recs, field, latency, tick, cycle, a.ravel(), d.ravel(), ramp)
+    k = int(np.argmin(cost))
+    n = sum(len(r) for r in recs)
+    return AxisFit(round(float(a.ravel()[k]), 4), round(float(d.ravel()[k]), 4),
+                   math.sqrt(cost[k] / n), tuple(math.sqrt(float(e[k])) for e in each))
+
+
+def _latency_cost(recs: Sequence[Recording], latency: float, tick: float, cycle: float,
+                  ramp: str) -> tuple[float, tuple[float, float], tuple[float, float]]:
+    av, dv, msv = _best_axis(recs, "v", latency, tick, cycle, _ACC_V, ramp)
+    aw, dw, msw = _best_axis(recs, "omega", latency, tick, cycle, _ACC_W, ramp)
+    return msv / V_SCALE ** 2 + msw / OMEGA_SCALE ** 2, (av, dv), (aw, dw)
+
+
+def scan_ages(tick: float, n: int, period: float, phase: float, delays: np.ndarray
+              ) -> np.ndarray:
+    """Return the age of the newest readable scan at ticks ``1..n-1`` (``tick`` apart).
+
+    Scans are taken at ``phase + k * period`` and readable ``delays[k]`` later.
+    """
+    taken = phase + period * np.arange(delays.size)
+    due = taken + delays
+    order = np.argsort(due, kind="stable")
+    newest = np.maximum.accumulate(taken[order])
+    t = tick * np.arange(1, n)
+    idx = np.searchsorted(due[order], t + 1e-9, side="right") - 1
+    ok = idx >= 0
+    return t[ok] - newest[idx[ok]]
+
+
+def _fit_scan(ages: np.ndarray, tick: float, n: int, period: float, seed: int
+              ) -> tuple[Latency, float]:
+    """Fit a uniform scan latency to recorded ages by quantiles; return it and the model mean."""
+    rng = np.random.default_rng(seed)
+    u = rng.random(int(n * tick / period) + 8)
+    target = np.quantile(ages, _AGE_QUANTILES)
+    phases = (np.arange(_PHASES) + 0.5) / _PHASES * period
+    steps = np.arange(0.0, 0.2001, 0.005)
+    best = (math.inf, 0.0, 0.0)
+    for lo in steps:
+        for hi in steps[steps >= lo]:
+            sim = np.concatenate([scan_ages(tick, n, period, ph, lo + (hi - lo) * u)
+                                  for ph in phases])
+            cost = float(np.mean((np.quantile(sim, _AGE_QUANTILES) - target) ** 2))
+            if cost < best[0]:
+                best = (cost, float(lo), float(hi))
+    _, lo, hi = best
+    sim = np.concatenate([scan_ages(tick, n, period, ph, lo + (hi - lo) * u) for ph in phases])
+    return Latency("uniform", round(lo, 3), round(hi, 3)), float(np.mean(sim))
+
+
+def fit_profile(recs: Sequence[Recording], *, sip_cycle: float = 0.1,
+                scan_period: float = 0.1, ramps: Sequence[str] = RAMPS, seed: int = 0) -> Fit:
+    """Fit command latency, ramp rates and scan latency to one or more recordings.
+
+    Parameters
+    ----------
+    recs : recordings of the same robot
+    sip_cycle : float, s
+        The robot's report cycle assumed in the replay (a Pioneer's is 0.1 s).
+    scan_period : float, s
+        Time between scans assumed for the scan-latency fit.
+    ramps : ramp models to try (:data:`sim.robot.RAMPS`); the one that fits better is kept.
+    seed : int
+        Seed of the scan-latency fit's random draws.
+    """
+    if not recs:
+        raise ValueError("fit_profile needs at least one recording")
+    tick = round(float(np.median(np.concatenate([np.diff(r.t) for r in recs]))), 4)
+    best: tuple[float, float, str, tuple[float, float], tuple[float, float]] | None = None
+    for ramp in ramps:
+        coarse = [(_latency_cost(recs, float(la), tick, sip_cycle, ramp), float(la))
+                  for la in _LATENCIES]
+        lat0 = min(coarse, key=lambda c: c[0][0])[1]
+        for la in np.arange(lat0 - 0.02, lat0 + 0.0201, 0.005):
+            if la < 0:
+                continue
+            cost, vd, wd = _latency_cost(recs, float(la), tick, sip_cycle, ramp)
+            if best is None or cost < best[0]:
+                best = (cost, round(float(la), 3), ramp, vd, wd)
+    assert best is not None
+    _, lat, ramp, (av, dv), (aw, dw) = best
+    v = _refine_axis(recs, "v", lat, tick, sip_cycle, av, dv, ramp)
+    w = _refine_axis(recs, "omega", lat, tick, sip_cycle, aw, dw, ramp)
+    ages = np.concatenate([r.scan_age[np.isfinite(r.scan_age)] for r in recs])
+    scan_latency: Latency | None = None
+    stats = model_mean = None
+    if ages.size >= 10:
+        n = max(len(r) for r in recs)
+        scan_latency, model_mean = _fit_scan(ages, tick, n, scan_period, seed)
+        stats = (float(ages.min()), float(ages.max()), float(ages.mean()), float(ages.std()))
+    return Fit(tuple(r.source for r in recs), tick, sip_cycle, lat, ramp, v, w, scan_period,
+               scan_latency, stats, model_mean)

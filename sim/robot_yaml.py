@@ -1,0 +1,228 @@
+r"""Robot profile files: YAML (metres, seconds, degrees) to a :class:`sim.robot.RobotProfile`.
+
+A profile file holds the keys of a world's ``robot:`` section plus ``name``,
+``description`` and ``source``; ``profile: NAME`` starts from another profile and
+overrides some keys. Problems are reported as :class:`mdle.errors.WorldError` naming the
+file, line, column and key path, as world files are. The keys are documented in
+``docs/robots.md``.
+
+>>> p = parse_robot('''
+... name: slow
+... radius: 0.2
+... max_speed: 0.5
+... max_turn_rate: 90
+... command_latency: 0.15
+... scan_latency: {min: 0.02, max: 0.06}
+... ''')
+>>> p.name, round(p.max_turn_rate, 4), p.command_latency, p.scan_latency.describe()
+('slow', 1.5708, 0.15, 'uniform 20-60 ms')
+>>> try:
+...     parse_robot("name: x\nradius: 0.2\nmax_speed: -1\nmax_turn_rate: 90\n", file="r.yaml")
+... except WorldError as err:
+...     print(err)
+r.yaml:3:12: error: max_speed: must be positive, got -1
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from mdle.errors import WorldError
+from sim.robot import RAMPS, Latency, OdometryNoise, RobotProfile
+from sim.world_yaml import _Doc, _mapping, _number, _show, _string, _yaml_value
+
+__all__ = ["ROBOT_KEYS", "check_mount", "dump_robot", "parse_robot", "read_robot",
+           "robot_overrides"]
+
+#: Keys a profile (or a world's ``robot:`` mapping) may override.
+ROBOT_KEYS = ("radius", "max_speed", "max_reverse_speed", "max_turn_rate", "max_accel",
+              "max_decel", "max_turn_accel", "max_turn_decel", "ramp", "command_latency",
+              "sip_cycle", "scan_period", "scan_latency", "ladar_mount", "odometry")
+_FILE_KEYS = ("name", "description", "source", "profile", *ROBOT_KEYS)
+_REQUIRED = ("radius", "max_speed", "max_turn_rate")
+_ODOM_KEYS = ("distance", "turn", "drift")
+_MAX_DELAY = 10.0  # s: a longer latency or cycle is a typo (milliseconds written as seconds)
+
+
+def _seconds(doc: _Doc, path: str, v: Any, *, positive: bool = False) -> float:
+    x = _number(doc, path, v, positive=positive, nonneg=True)
+    if x > _MAX_DELAY:
+        raise doc.fail(path, f"must be at most {_MAX_DELAY:g} s, got {v} (seconds, not ms)")
+    return x
+
+
+def _latency(doc: _Doc, path: str, v: Any) -> Latency:
+    if not isinstance(v, dict):
+        d = _seconds(doc, path, v)
+        return Latency("uniform", d, d)
+    if "min" in v or "max" in v:
+        m = _mapping(doc, path, v, ("min", "max"), "min and max in seconds")
+        if "min" not in m or "max" not in m:
+            raise doc.fail(path, "a uniform latency needs both `min` and `max` (seconds)")
+        lo, hi = _seconds(doc, f"{path}.min", m["min"]), _seconds(doc, f"{path}.max", m["max"])
+        if hi < lo:
+            raise doc.fail(f"{path}.max", f"must not be below min ({lo:g} s), got {hi:g}")
+        return Latency("uniform", lo, hi)
+    m = _mapping(doc, path, v, ("mean", "std"), "min and max, or mean and std, in seconds")
+    if "mean" not in m:
+        raise doc.fail(path, "expected `min` and `max`, or `mean` and `std` (seconds)")
+    return Latency("normal", _seconds(doc, f"{path}.mean", m["mean"]),
+                   _seconds(doc, f"{path}.std", m.get("std", 0.0)))
+
+
+def robot_overrides(doc: _Doc, path: str, m: dict[str, Any]) -> dict[str, Any]:
+    """Read the :data:`ROBOT_KEYS` present in mapping ``m`` into SI profile fields."""
+    def at(key: str) -> str:
+        return f"{path}.{key}" if path else key
+
+    ch: dict[str, Any] = {}
+    if "radius" in m:
+        ch["radius"] = _number(doc, at("radius"), m["radius"], nonneg=True)
+    for key in ("max_speed", "max_reverse_speed", "max_accel", "max_decel"):
+        if key in m:
+            ch[key] = _number(doc, at(key), m[key], positive=True)
+    for key in ("max_turn_rate", "max_turn_accel", "max_turn_decel"):
+        if key in m:
+            ch[key] = math.radians(_number(doc, at(key), m[key], positive=True))
+    if "ramp" in m:
+        ramp = _string(doc, at("ramp"), m["ramp"])
+        if ramp not in RAMPS:
+            raise doc.fail(at("ramp"), f"unknown ramp {ramp!r}; one of: {', '.join(RAMPS)}")
+        ch["ramp"] = ramp
+    for key in ("command_latency", "sip_cycle"):
+        if key in m:
+            ch[key] = _seconds(doc, at(key), m[key])
+    if "scan_period" in m:
+        ch["scan_period"] = _seconds(doc, at("scan_period"), m["scan_period"], positive=True)
+    if "scan_latency" in m:
+        ch["scan_latency"] = _latency(doc, at("scan_latency"), m["scan_latency"])
+    if "ladar_mount" in m:
+        lm = m["ladar_mount"]
+        if not isinstance(lm, list) or len(lm) != 3:
+            raise doc.fail(at("ladar_mount"), f"expected [x, y, theta] (m, m, deg), got "
+                           f"{_show(lm)}")
+        ch["ladar_mount"] = (_number(doc, at("ladar_mount") + "[0]", lm[0]),
+                             _number(doc, at("ladar_mount") + "[1]", lm[1]),
+                             math.radians(_number(doc, at("ladar_mount") + "[2]", lm[2])))
+    if "odometry" in m:
+        o = _mapping(doc, at("odometry"), m["odometry"], _ODOM_KEYS, "odometry noise")
+        vals = {k: _number(doc, f"{at('odometry')}.{k}", o.get(k, 0.0), nonneg=True)
+                for k in _ODOM_KEYS}
+        ch["odometry"] = OdometryNoise(distance=vals["distance"],
+                                       turn=vals["turn"] * math.sqrt(math.pi / 180.0),
+                                       drift=math.radians(vals["drift"]))
+    return ch
+
+
+def check_mount(doc: _Doc, path: str, m: dict[str, Any], robot: RobotProfile) -> None:
+    """Fail unless the ladar sits within the body."""
+    mx, my, _ = robot.ladar_mount
+    if math.hypot(mx, my) > robot.radius + 1e-12:
+        key = "ladar_mount" if "ladar_mount" in m else "radius"
+        raise doc.fail(f"{path}.{key}" if path else key,
+                       f"the ladar at ({mx:g}, {my:g}) m must sit within the body "
+                       f"(radius {robot.radius:g} m)")
+
+
+def parse_robot(text: str, file: str = "<string>", default_name: str = "robot",
+                lookup: Callable[[str], RobotProfile] | None = None) -> RobotProfile:
+    """Parse and validate robot profile YAML text.
+
+    ``lookup`` resolves a ``profile:`` base (default :func:`sim.profiles.robot_profile`).
+
+    Raises
+    ------
+    WorldError
+        With the file, line, column, key path and problem of the first error found.
+    """
+    doc = _Doc(file, text)
+    data = _yaml_value(doc)
+    top = _mapping(doc, "", {} if data is None else data, _FILE_KEYS, "a robot profile")
+    name = _string(doc, "name", top["name"]) if "name" in top else default_name
+    ch = robot_overrides(doc, "", top)
+    for key in ("description", "source"):
+        if key in top:
+            ch[key] = " ".join(_string(doc, key, top[key]).split())
+    if "profile" in top:
+        if lookup is None:
+            from sim.profiles import robot_profile
+
+            lookup = robot_profile
+        base_name = _string(doc, "profile", top["profile"])
+        try:
+            base = lookup(base_name)
+        except WorldError as err:
+            raise doc.fail("profile", err.diagnostics[0].message) from None
+        robot = base.with_overrides(name=name, **ch)
+    else:
+        for key in _REQUIRED:
+            if key not in top:
+                raise doc.fail("", f"missing key `{key}` (a profile needs "
+                                   f"{', '.join(_REQUIRED)}, or `profile: NAME` to start from)")
+        ch.setdefault("max_reverse_speed", ch["max_speed"])
+        robot = RobotProfile(name=name, **ch)
+    check_mount(doc, "", top, robot)
+    return robot
+
+
+def read_robot(path: str | os.PathLike[str]) -> RobotProfile:
+    """Read and validate a robot profile file (WorldError if unreadable or invalid)."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise WorldError(f"robot profile file not found: {p}") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise WorldError(f"cannot read robot profile file {p}: {err}") from None
+    return parse_robot(text, file=str(path), default_name=p.stem)
+
+
+def _g(x: float) -> str:
+    return f"{x:.6g}"
+
+
+def dump_robot(robot: RobotProfile, comment: str = "") -> str:
+    """Return a profile as YAML text in the file units (m, s, deg), readable by :func:`parse_robot`.
+
+    ``comment`` goes first, each line prefixed with ``# ``.
+    """
+    lines = [f"# {c}".rstrip() for c in comment.splitlines()]
+    lines.append("# Units: metres, seconds, degrees.")
+    lines.append(f"name: {robot.name}")
+    for key in ("description", "source"):
+        text = getattr(robot, key)
+        if text:
+            lines.append(f"{key}: {json.dumps(text)}")
+    lines += [f"radius: {_g(robot.radius)}", f"max_speed: {_g(robot.max_speed)}",
+              f"max_reverse_speed: {_g(robot.max_reverse_speed)}",
+              f"max_turn_rate: {_g(math.degrees(robot.max_turn_rate))}   # deg/s"]
+    for key in ("max_accel", "max_decel"):
+        if math.isfinite(getattr(robot, key)):
+            lines.append(f"{key}: {_g(getattr(robot, key))}   # m/s^2")
+    for key in ("max_turn_accel", "max_turn_decel"):
+        if math.isfinite(getattr(robot, key)):
+            lines.append(f"{key}: {_g(math.degrees(getattr(robot, key)))}   # deg/s^2")
+    if robot.ramp != "firmware":
+        lines.append(f"ramp: {robot.ramp}")
+    lines += [f"command_latency: {_g(robot.command_latency)}   # s",
+              f"sip_cycle: {_g(robot.sip_cycle)}   # s"]
+    if robot.scan_period is not None:
+        lines.append(f"scan_period: {_g(robot.scan_period)}   # s")
+    lat = robot.scan_latency
+    if lat.enabled:
+        inner = (f"min: {_g(lat.a)}, max: {_g(lat.b)}" if lat.kind == "uniform"
+                 else f"mean: {_g(lat.a)}, std: {_g(lat.b)}")
+        lines.append(f"scan_latency: {{{inner}}}   # s")
+    mx, my, mth = robot.ladar_mount
+    lines.append(f"ladar_mount: [{_g(mx)}, {_g(my)}, {_g(math.degrees(mth))}]   # m, m, deg")
+    o = robot.odometry
+    if o.enabled:
+        lines.append(f"odometry: {{distance: {_g(o.distance)}, "
+                     f"turn: {_g(o.turn / math.sqrt(math.pi / 180.0))}, "
+                     f"drift: {_g(math.degrees(o.drift))}}}")
+    return "\n".join(lines) + "\n"
