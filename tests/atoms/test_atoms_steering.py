@@ -156,3 +156,13 @@ def test_closed_loop_square_noisy_scan_uses_corner_mode(world2d: World2D) -> Non
     assert worst > 0.2
     assert err < 0.08
     assert 0.02 < np.mean(res.modes) < 0.4
+
+
+def test_own_arc_clearance_fast_path_equals_the_candidate_computation() -> None:
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        pts = rng.uniform(-2.0, 2.0, (int(rng.integers(1, 80)), 2))
+        v = float(rng.uniform(0.1, 1.0))
+        u = 0.0 if rng.random() < 0.2 else float(rng.uniform(-3.0, 3.0))
+        slow = S._arc_clearance(pts, v, np.array([u]), 0.8, 8)[0][0]
+        assert S._own_clearance(pts, v, u, 0.8, 8) == pytest.approx(slow, abs=1e-12)
