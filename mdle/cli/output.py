@@ -99,6 +99,11 @@ def guarded(handler: Callable[[argparse.Namespace], int], args: argparse.Namespa
         output_closed()
         return EXIT_PIPE
     except Exception as exc:  # an mdle bug: never a raw traceback unless asked
+        from mdle.cli.signals import interruption_of
+
+        signal_exc = interruption_of(exc)
+        if signal_exc is not None:  # a signal inside class creation, wrapped by Python
+            return interrupted(signal_exc, guard)
         if getattr(args, "debug", False):
             raise
         print(f"mdle: internal error: {type(exc).__name__}: {exc} (run with --debug for the "

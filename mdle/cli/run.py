@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
 from mdle.cli.options import add_simulation_options, seconds, writable_output
-from mdle.cli.signals import SignalGuard, signal_name
+from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 
 if TYPE_CHECKING:
     from mdle.live import LiveView
@@ -186,7 +186,13 @@ def run(args: argparse.Namespace) -> int:
     parts = _Parts(_header(args))
     try:
         guard.arm()
-        return _run(args, guard, parts)
+        try:
+            return _run(args, guard, parts)
+        except Exception as exc:
+            signal_exc = interruption_of(exc)  # a signal Python wrapped (class creation)
+            if signal_exc is None:
+                raise
+            raise signal_exc from None
     except KeyboardInterrupt as exc:
         with guard.deferring():
             stopped = _end_interrupted(args, parts, exc)

@@ -27,7 +27,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any, Protocol
 
-__all__ = ["SIGNALS", "Interrupted", "SignalGuard", "Stoppable", "ends_session", "signal_name"]
+__all__ = ["SIGNALS", "Interrupted", "SignalGuard", "Stoppable", "ends_session",
+           "interruption_of", "signal_name"]
 
 #: The signals that end mdle (SIGHUP: the terminal went away).
 SIGNALS: tuple[signal.Signals, ...] = tuple(
@@ -51,6 +52,23 @@ def ends_session(exc: BaseException) -> bool:
     SIGHUP end the program.
     """
     return getattr(exc, "signum", signal.SIGINT) != signal.SIGINT
+
+
+def interruption_of(exc: BaseException) -> KeyboardInterrupt | None:
+    """Return the KeyboardInterrupt behind ``exc`` (its cause or context chain), if any.
+
+    Python wraps an exception raised while a class is being made (``__set_name__``, as
+    dataclasses do while a module is imported) in a RuntimeError: a signal that lands
+    there must still read as the interruption it is, not as an internal error.
+    """
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return e
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return None
 
 
 class Interrupted(KeyboardInterrupt):

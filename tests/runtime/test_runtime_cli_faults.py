@@ -56,6 +56,18 @@ def _signals_blocked() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
+def _default_dispositions() -> None:
+    """In the child, before exec: SIGINT and SIGTERM to their defaults.
+
+    A test run from a non-interactive shell's background job (`... &`) inherits SIGINT
+    *ignored*; the child would inherit that too, and a SIGINT sent before mdle installs its
+    handlers would be discarded by the kernel (an ignored signal is dropped even while
+    blocked), so the run would never end. mdle started from a terminal has the defaults.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _finish(proc: subprocess.Popen[str], timeout: float = DEADLINE) -> tuple[str, str]:
     try:
         return proc.communicate(timeout=timeout)
@@ -114,7 +126,8 @@ def test_signals_at_fifty_random_moments_leave_complete_traces(
                 argv.append("--quiet")
             with _signals_blocked():
                 proc = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                                        text=True, env=_env())
+                                        text=True, env=_env(),
+                                        preexec_fn=_default_dispositions)
             running.append((k, sig, trace, proc, time.monotonic() + moments[k]))
         for _, sig, _, proc, at in sorted(running, key=lambda r: r[4]):
             time.sleep(max(0.0, at - time.monotonic()))
@@ -136,7 +149,7 @@ def test_a_signal_before_the_run_starts_still_leaves_a_trace(
     with _signals_blocked():
         proc = subprocess.Popen([*mdle_command, "run", str(circles), "--trace", str(trace)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env=_env())
+                                env=_env(), preexec_fn=_default_dispositions)
         proc.send_signal(signal.SIGTERM)  # held until mdle's handlers are in place
     out, err = _finish(proc)
     assert proc.returncode == 143, err
@@ -152,7 +165,8 @@ def test_ctrl_c_while_the_command_line_is_read_is_no_traceback(
     for argv in (["--version"], ["check", "--help"], ["worlds"]):
         with _signals_blocked():
             proc = subprocess.Popen([*mdle_command, *argv], stdout=subprocess.PIPE,
-                                    stderr=subprocess.PIPE, text=True, env=_env())
+                                    stderr=subprocess.PIPE, text=True, env=_env(),
+                                    preexec_fn=_default_dispositions)
             proc.send_signal(signal.SIGINT)
         out, err = _finish(proc)
         assert proc.returncode == 130, (argv, err)
@@ -229,7 +243,8 @@ def test_a_closed_standard_output_ends_the_run_like_a_pipeline(
     trace = tmp_path / "t.jsonl"
     proc = subprocess.Popen([*mdle_command, "run", str(circles), "--world", "empty",
                              "--trace", str(trace)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=_env())
+                            stderr=subprocess.PIPE, text=True, env=_env(),
+                            preexec_fn=_default_dispositions)
     try:
         assert proc.stdout is not None
         lines = [proc.stdout.readline() for _ in range(3)]
