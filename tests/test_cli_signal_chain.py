@@ -39,3 +39,59 @@ def test_guarded_reports_it_as_an_interruption_not_an_internal_error(capsys: Any
     assert output.guarded(handler, args) == 130
     err = capsys.readouterr().err
     assert "internal error" not in err and "interrupted by SIGINT" in err
+
+
+class _Target:
+    def __init__(self) -> None:
+        self.asked: list[str | None] = []
+        self.ending = False
+
+    def request_stop(self, reason: str | None = None) -> None:
+        self.asked.append(reason)
+
+
+class _RaisesOnCollect:
+    """Runs the guard's handler where Python cannot raise (as a signal landing in the
+    import system's module-lock weakref callback does): the exception is 'ignored'."""
+
+    def __init__(self, guard: SignalGuard) -> None:
+        self.guard = guard
+
+    def __del__(self) -> None:
+        self.guard._handle(2, None)
+
+
+def test_an_interruption_python_could_not_raise_is_kept_and_stops_the_run(
+        capsys: Any) -> None:
+    guard = SignalGuard().install(deferred=False)
+    try:
+        _RaisesOnCollect(guard)  # collected at once: the raise in __del__ is swallowed
+        assert guard.pending and guard.received == 2
+        target = _Target()
+        with guard.stopping(target):  # the next checkpoint acts on it
+            pass
+        assert target.asked == ["SIGINT (Ctrl-C)"] and not guard.pending
+    finally:
+        guard.restore()
+    assert "Exception ignored" not in capsys.readouterr().err  # no traceback either
+
+
+def test_other_unraisable_errors_still_reach_the_previous_hook(capsys: Any) -> None:
+    class _Fails:
+        def __del__(self) -> None:
+            raise ValueError("from __del__")
+
+    seen: list[BaseException | None] = []
+    import sys
+
+    old = sys.unraisablehook
+    sys.unraisablehook = lambda u: seen.append(u.exc_value)
+    guard = SignalGuard().install(deferred=False)
+    try:
+        _Fails()
+        assert not guard.pending
+        assert len(seen) == 1 and isinstance(seen[0], ValueError)
+    finally:
+        guard.restore()
+        sys.unraisablehook = old
+    assert sys.unraisablehook is old

@@ -14,6 +14,12 @@ the guard's mode, which the commands set around what they do:
   next tick (robot stopped, trace ended); a second one raises :class:`Interrupted`
   unless the run is already ending.
 
+Python cannot raise everywhere: an exception raised in a weakref callback or a
+``__del__`` (the import system's module locks have one) is only reported as "Exception
+ignored" and the program goes on. The guard replaces ``sys.unraisablehook`` so that such
+a lost :class:`Interrupted` prints nothing and is kept as pending: the next checkpoint
+(:meth:`SignalGuard.arm`, :meth:`SignalGuard.stopping`, the end of the command) acts on it.
+
 A process that must not lose even a signal sent while the Python interpreter itself
 starts (before any line of mdle runs) can start mdle with these signals blocked: the
 guard unblocks them once its handlers are in place, and a signal that was held is acted
@@ -23,6 +29,7 @@ on then.
 from __future__ import annotations
 
 import signal
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any, Protocol
@@ -105,6 +112,7 @@ class SignalGuard:
         self._target: Stoppable | None = None
         self._asked = False  # the target was asked to stop
         self._old: dict[int, Any] = {}
+        self._old_hook: Any = None
 
     # ------------------------------------------------------------------ installation
 
@@ -120,6 +128,8 @@ class SignalGuard:
                 self._old[sig] = signal.signal(sig, self._handle)
         except ValueError:  # not the main thread
             return self
+        self._old_hook = sys.unraisablehook
+        sys.unraisablehook = self._unraisable
         if hasattr(signal, "pthread_sigmask"):
             signal.pthread_sigmask(signal.SIG_UNBLOCK, SIGNALS)
         return self
@@ -129,6 +139,17 @@ class SignalGuard:
         for sig, old in self._old.items():
             signal.signal(sig, old if old is not None else signal.SIG_DFL)
         self._old.clear()
+        if self._old_hook is not None:
+            sys.unraisablehook = self._old_hook
+            self._old_hook = None
+
+    def _unraisable(self, unraisable: Any) -> None:
+        """Keep an Interrupted that Python could not raise (see the module doc) as pending."""
+        exc = unraisable.exc_value
+        if exc is not None and interruption_of(exc) is not None:
+            self._pending = True
+            return
+        (self._old_hook or sys.__unraisablehook__)(unraisable)
 
     # ------------------------------------------------------------------ modes
 
