@@ -94,7 +94,7 @@ def scan_points_cached(ctx: Context) -> Any:
     Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2", low=0.0,
           low_open=True),
     Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)", low=0.0,
-          low_open=True, finite=False),
+          low_open=True, finite=False, commanded=False),
     Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)",
           low=0.0),
     Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)",

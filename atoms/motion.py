@@ -46,7 +46,8 @@ def goto(args: Args, ctx: Context, state: Any) -> Command:
 
 
 @control_law(Param("theta", ANGLE, doc="heading to turn to, odometry frame"),
-             Param("rate", TURN_RATE, 1.0, doc="largest turn rate", low=0.0, low_open=True))
+             Param("rate", TURN_RATE, 1.0, doc="largest turn rate", low=0.0, low_open=True,
+                   commanded=False))
 def heading(args: Args, ctx: Context, state: Any) -> Command:
     """Turn on the spot to the heading theta (proportional, 2/s, capped at rate); hold there."""
     e = _wrap(float(args["theta"]) - ctx.obs.pose.theta)

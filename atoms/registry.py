@@ -97,6 +97,10 @@ class Param:
     high: float | None = None
     low_open: bool = False
     finite: bool = True
+    #: For a speed or turn rate: the law commands it as given, so the checker warns when a
+    #: constant exceeds the robot's limits. False for a ceiling the law keeps within the
+    #: robot's own limit (``umax`` of ``follow_boundary``).
+    commanded: bool = True
 
     @property
     def is_symbol(self) -> bool:

@@ -44,11 +44,12 @@ from mdle.dimensions import (
 )
 from mdle.errors import CheckError, Diagnostic, Severity, Span
 from mdle.format import format_expr
+from mdle.motion_limits import KnownRobot, excess
 from mdle.program import INF, AtomNode, Element, Interrupt, Program, StringKind, StringNode
 from mdle.resolve import Namespace, build_namespace, find_cycles
-from mdle.units import NONE, TIME, Dim
+from mdle.units import NONE, TIME, TURN_RATE, Dim
 
-__all__ = ["Checker", "check_program", "MAX_NESTING", "never_ends"]
+__all__ = ["Checker", "check_program", "MAX_NESTING", "missing_entry", "never_ends"]
 
 #: Deepest nesting of elements and interrupts, counting through named definitions.
 MAX_NESTING = 120
@@ -127,8 +128,14 @@ class Checker:
     returns None for a part that has errors (after reporting them).
     """
 
-    def __init__(self, ns: Namespace) -> None:
+    def __init__(self, ns: Namespace, robot: KnownRobot | None = None) -> None:
         self.ns = ns
+        #: The robot whose speed and turn-rate limits constants are compared with (None:
+        #: no comparison).
+        self.robot = robot
+        #: The scaled atom's own atom while :meth:`_scaled` compiles it: its limits are
+        #: checked after scaling, not before.
+        self._scaling: st.Expr | None = None
         self.errors: list[Diagnostic] = []
         self.warnings: list[Diagnostic] = []
         self._seen: set[tuple[Span | None, str]] = set()
@@ -157,13 +164,15 @@ class Checker:
         self.errors.append(Diagnostic(span, message, Severity.ERROR, hint,
                                       tuple(notes) + tuple(self._notes[-1:])))
 
-    def warn(self, span: Span | None, message: str, hint: str | None = None) -> None:
-        """Record a warning once."""
+    def warn(self, span: Span | None, message: str, hint: str | None = None,
+             in_use: bool = False) -> None:
+        """Record a warning once; ``in_use`` adds the use of a definition being checked."""
         key = (span, "w:" + message)
         if key in self._seen:
             return
         self._seen.add(key)
-        self.warnings.append(Diagnostic(span, message, Severity.WARNING, hint))
+        notes = tuple(self._notes[-1:]) if in_use else ()
+        self.warnings.append(Diagnostic(span, message, Severity.WARNING, hint, notes))
 
     def _enter(self, span: Span) -> None:
         """One level deeper (the caller leaves with ``self._depth -= 1`` in a finally)."""
@@ -693,9 +702,42 @@ class Checker:
                              else (), env, u.span)
         except _Abort:
             failed = True
+        else:
+            if self._scaling is not expr:  # a scaled atom is checked once scaled
+                self._within_limits(law, args, u)
         interrupt, t = self._ending(xi, timer, env, failed)
         return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
                         (1.0, 1.0), expr.span)
+
+    def _within_limits(self, law: LawSpec, args: Mapping[str, Value], call: st.Expr,
+                       scale: tuple[float, float] = (1.0, 1.0),
+                       span: Span | None = None) -> None:
+        """Warn about a constant speed or turn rate the robot cannot reach.
+
+        ``call`` is the law's call (each argument is pointed at where it is written; a
+        default, at the call); ``scale`` the scaled atom's (alpha_v, alpha_omega) and
+        ``span`` its place, when the values are scaled.
+        """
+        if self.robot is None:
+            return
+        given = call.args if isinstance(call, st.Call) else ()
+        for i, p in enumerate(law.params):
+            v = args.get(p.name)
+            if not p.commanded or not isinstance(v, Quantity) or math.isnan(v.value):
+                continue
+            factor = scale[1] if p.dim == TURN_RATE else scale[0]
+            why = excess(self.robot, p.dim, v.value * factor)
+            if why is None:
+                continue
+            arg = next((a for j, a in enumerate(given)
+                        if a.name == p.name or (a.name is None and j == i)), None)
+            where = span or (arg.span if arg is not None else call.span)
+            value = show_value(Quantity(v.value * factor, p.dim))
+            scaled = f" (scaled by {factor:g})" if span is not None else ""
+            self.warn(where, f"`{p.name}` of `{law.name}` is {value}{scaled}, more than the "
+                      f"robot can do: {why}", hint="the robot clamps the command to its limit, so the plan "
+                      "does not move as written; use a value within the limit, or name the "
+                      "robot meant (--robot, --world)", in_use=True)
 
     def _ending(self, xi: st.Expr, timer: st.Expr, env: Env,
                 failed: bool) -> tuple[Interrupt, float]:
@@ -743,19 +785,25 @@ class Checker:
                 failed = True
         except _Abort:
             failed = True
+        outer, self._scaling = self._scaling, sigma_e
         try:
             sigma = self.element(sigma_e, env)
         except _Abort:
             raise _Abort from None
+        finally:
+            self._scaling = outer
         if not isinstance(sigma, AtomNode):
             self.error(sigma_e.span, f"only atoms can be scaled; `{_short(sigma_e)}` is a string "
                        "of elements", hint="scale each of its atoms instead")
             raise _Abort
         if failed:
             raise _Abort
-        return dataclasses.replace(sigma, timer=sigma.timer * beta,
-                                   scale=(sigma.scale[0] * alpha[0], sigma.scale[1] * alpha[1]),
-                                   span=expr.span)
+        scale = (sigma.scale[0] * alpha[0], sigma.scale[1] * alpha[1])
+        if isinstance(sigma.law, LawSpec):
+            values = {k: Quantity(float(v), None) for k, v in sigma.args.items()
+                      if isinstance(v, (int, float))}
+            self._within_limits(sigma.law, values, sigma_e, scale, expr.span)
+        return dataclasses.replace(sigma, timer=sigma.timer * beta, scale=scale, span=expr.span)
 
     def _factor(self, expr: st.Expr, env: Env, what: str) -> float:
         q = self._number(expr, env)
@@ -926,7 +974,7 @@ def _after(expr: st.Group) -> Span:
 
 def check_program(modules: Sequence[st.Module], registry: Registry, *,
                   sources: Mapping[str, str] | None = None, main: st.Module | None = None,
-                  replace: bool = False) -> Program:
+                  replace: bool = False, robot: KnownRobot | None = None) -> Program:
     """Check the modules of a program (the main file last) and build its :class:`Program`.
 
     Parameters
@@ -941,6 +989,9 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
         The file whose ``run`` names the entry (default: the last module).
     replace : bool
         Later definitions replace earlier ones of the same name (the REPL).
+    robot : KnownRobot, optional
+        The robot the plan is meant for: a constant speed or turn rate beyond its limits
+        is a warning. None: no comparison.
 
     Raises
     ------
@@ -948,7 +999,7 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
         With every error found (warnings are in ``Program.warnings``).
     """
     srcs = dict(sources or {})
-    checker, errors = _checker(modules, registry, replace)
+    checker, errors = _checker(modules, registry, replace, robot)
     main = main if main is not None else (modules[-1] if modules else None)
     elements: dict[str, Element] = {}
     for d in _dependency_order(checker.ns, checker.broken):
@@ -1004,12 +1055,12 @@ def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
     return order
 
 
-def _checker(modules: Sequence[st.Module], registry: Registry,
-             replace: bool) -> tuple[Checker, list[Diagnostic]]:
+def _checker(modules: Sequence[st.Module], registry: Registry, replace: bool,
+             robot: KnownRobot | None = None) -> tuple[Checker, list[Diagnostic]]:
     defs = [d for m in modules for d in m.definitions]
     ns, errors = build_namespace(defs, registry, replace=replace)
     broken, cycle_errors = find_cycles(ns)
-    checker = Checker(ns)
+    checker = Checker(ns, robot)
     checker.broken = broken
     return checker, errors + cycle_errors
 
@@ -1040,6 +1091,27 @@ def _entry(checker: Checker, main: st.Module | None, elements: Mapping[str, Elem
         checker.error(run.name_span, f"`run` takes an atom, behavior or plan; `{run.name}` is "
                       f"{_kind_name(target)}")
     return None
+
+
+def missing_entry(program: Program, file: str) -> Diagnostic | None:
+    """Return the warning for a file ``mdle run`` cannot run: no ``run`` and no ``main``.
+
+    None when the program has an entry. The warning points at the line after the file's
+    last, where a ``run`` line would go.
+    """
+    if program.entry is not None:
+        return None
+    text = program.sources.get(file, "")
+    end = text.rstrip().count("\n") + 2 if text.strip() else 1
+    span = Span(file, end, 1, end, 2)
+    names = sorted(program.elements)
+    hint = (f"add `run {names[-1] if len(names) == 1 else 'NAME'}` (runnable here: "
+            f"{', '.join(names)}); a file that other plans only import needs none" if names
+            else "nothing here runs as it stands: define an atom, behavior or plan whose "
+                 "parameters all have defaults (or that calls others with arguments), and "
+                 "`run` it")
+    return Diagnostic(span, "nothing to run: the file has no `run NAME` line and no plan "
+                      "named `main`, so `mdle run` cannot run it", Severity.WARNING, hint)
 
 
 def _ordered(diags: list[Diagnostic]) -> list[Diagnostic]:

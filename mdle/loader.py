@@ -17,6 +17,7 @@ from atoms.registry import Registry
 from mdle import syntax as st
 from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
+from mdle.motion_limits import KnownRobot
 from mdle.parser import normalise_newlines, parse_module
 from mdle.program import Program
 from mdle.userfile import UserFileError, read_user_file
@@ -203,8 +204,8 @@ def _error(diags: list[Diagnostic], sources: dict[str, str], syntax: bool) -> Md
 
 def load_text(text: str, file: str = "<string>", registry: Registry | None = None, *,
               settings: Mapping[str, str] | Sequence[str] | None = None,
-              files: Mapping[str, str] | None = None, base_dir: str | None = None
-              ) -> Program:
+              files: Mapping[str, str] | None = None, base_dir: str | None = None,
+              robot: KnownRobot | None = None) -> Program:
     """Parse and check a program given as text.
 
     Parameters
@@ -222,6 +223,9 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
     files : mapping, optional
         Imported files' texts by relative path, instead of the disk (see
         :func:`load_modules`); ``base_dir`` is the folder they are relative to.
+    robot : KnownRobot, optional
+        The robot the plan is meant for: constants beyond its speed or turn-rate limits
+        are warnings (see :mod:`mdle.motion_limits`).
 
     Raises
     ------
@@ -237,14 +241,17 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         from mdle.overrides import override_defaults
 
         loaded = override_defaults(loaded, settings, registry)
-    return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main)
+    return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main,
+                         robot=robot)
 
 
 def load_program(path: str | os.PathLike[str], registry: Registry | None = None, *,
-                 settings: Mapping[str, str] | Sequence[str] | None = None) -> Program:
+                 settings: Mapping[str, str] | Sequence[str] | None = None,
+                 robot: KnownRobot | None = None) -> Program:
     """Read, parse, resolve imports and check a plan file.
 
-    ``registry=None`` means ``atoms.default_registry()``.
+    ``registry=None`` means ``atoms.default_registry()``; ``settings`` and ``robot`` as
+    for :func:`load_text`.
 
     Raises
     ------
@@ -254,7 +261,7 @@ def load_program(path: str | os.PathLike[str], registry: Registry | None = None,
     name = os.fspath(path)
     text = read_source(name)
     try:
-        return load_text(text, name, registry, settings=settings)
+        return load_text(text, name, registry, settings=settings, robot=robot)
     except RecursionError:  # a last guard; the nesting limits should make it unreachable
         raise CheckError(Diagnostic(Span(name, 1, 1, 1, 2), "the program nests too deeply",
                                     Severity.ERROR), {name: text}) from None

@@ -12,12 +12,16 @@ import os
 from functools import cache
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from mdle.errors import WorldError
-from sim.world import World
-from sim.world_yaml import parse_world, read_world
+from sim.world_yaml import parse_world, parse_world_robot, read_world, read_world_robot
 
-__all__ = ["DEFAULT_WORLD", "list_worlds", "load_world", "world_descriptions"]
+if TYPE_CHECKING:
+    from sim.robot import RobotProfile
+    from sim.world import World
+
+__all__ = ["DEFAULT_WORLD", "list_worlds", "load_world", "world_descriptions", "world_robot"]
 
 #: The world a newcomer's first ``mdle run`` uses.
 DEFAULT_WORLD = "default"
@@ -48,11 +52,35 @@ def load_world(spec: str | os.PathLike[str]) -> World:
         Unknown name, unreadable file, or an invalid world (file, key path, problem).
     """
     text = os.fspath(spec)
-    if text in list_worlds():
+    if _is_reference(text):
         return _reference(text)
+    return read_world(text)
+
+
+def world_robot(spec: str | os.PathLike[str]) -> RobotProfile:
+    """Return the robot a world names, reading only its ``robot`` key (no geometry).
+
+    What ``mdle check`` compares a plan's speeds with; cheaper than :func:`load_world`.
+
+    Raises
+    ------
+    WorldError
+        Unknown name, unreadable file, not YAML, or a bad ``robot`` entry.
+    """
+    text = os.fspath(spec)
+    if _is_reference(text):
+        entry = _folder().joinpath(f"{text}.yaml")
+        return parse_world_robot(entry.read_text(encoding="utf-8"), f"sim/worlds/{text}.yaml")
+    return read_world_robot(text)
+
+
+def _is_reference(text: str) -> bool:
+    """True for a reference world's name, False for a file; WorldError for neither."""
+    if text in list_worlds():
+        return True
     looks_like_path = text.endswith((".yaml", ".yml")) or os.sep in text or "/" in text
     if looks_like_path or _exists(text):
-        return read_world(text)
+        return False
     import difflib
 
     names = list_worlds()

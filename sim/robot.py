@@ -17,11 +17,13 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field, replace
-from typing import Any
-
-import numpy as np
+from functools import cache
+from typing import TYPE_CHECKING, Any
 
 from mdle.backend import RobotLimits
+
+if TYPE_CHECKING:
+    import numpy as np
 
 __all__ = [
     "Latency",
@@ -34,7 +36,18 @@ __all__ = [
     "ramp_rate",
 ]
 
-_GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(8), strict=True))
+
+
+@cache
+def _gauss_legendre() -> tuple[tuple[float, float], ...]:
+    """The 8 Gauss-Legendre nodes and weights (made on first use: reading a profile, as
+    ``mdle check`` does, needs no numpy)."""
+    import numpy as np
+
+    nodes, weights = np.polynomial.legendre.leggauss(8)
+    return tuple((float(x), float(w)) for x, w in zip(nodes, weights, strict=True))
+
+
 _MAX_TURN_PER_PIECE = 0.25  # rad: keeps the quadrature error far below 1e-12
 
 
@@ -287,9 +300,10 @@ def integrate(x: float, y: float, th: float, phase: Phase, tau: float
     half = h / 2.0
     v0, av, w0, aw = phase.v0, phase.a_v, phase.w0, phase.a_w
     dx = dy = 0.0
+    gl = _gauss_legendre()
     for i in range(pieces):
         mid = i * h + half
-        for xg, wg in _GL:
+        for xg, wg in gl:
             t = mid + half * xg
             a = th + w0 * t + 0.5 * aw * t * t
             vw = (v0 + av * t) * wg

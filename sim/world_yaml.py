@@ -34,7 +34,7 @@ from mdle.backend import Pose
 from mdle.errors import Diagnostic, Span, WorldError
 
 __all__ = ["OBSTACLE_TYPES", "MAX_COORDINATE", "MAX_LADAR_RATE", "MAX_SEED", "MAX_YAML_DEPTH",
-           "parse_world", "read_world"]
+           "parse_world", "parse_world_robot", "read_world", "read_world_robot"]
 
 #: Keys each obstacle type requires and allows (besides ``type`` and ``name``).
 OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -646,6 +646,34 @@ def read_world(path: str | os.PathLike[str]) -> Any:
 
     Only a regular file of at most :data:`mdle.userfile.MAX_FILE_BYTES` is read.
     """
+    return parse_world(_world_text(path), file=str(path), default_name=Path(path).stem)
+
+
+def read_world_robot(path: str | os.PathLike[str]) -> Any:
+    """Read only the robot of a world file (see :func:`parse_world_robot`)."""
+    return parse_world_robot(_world_text(path), file=str(path))
+
+
+def parse_world_robot(text: str, file: str = "<string>") -> Any:
+    """Return the :class:`sim.robot.RobotProfile` a world's YAML names (the default if none).
+
+    Only the YAML, the top-level keys and ``robot`` are checked: no obstacle is built,
+    so this needs neither numpy nor shapely.
+
+    Raises
+    ------
+    WorldError
+        Not YAML, an unknown top-level key, or a bad ``robot`` entry.
+    """
+    from sim.profiles import DEFAULT_ROBOT, robot_profile
+
+    doc = _Doc(file, text)
+    data = _yaml_value(doc)
+    top = _mapping(doc, "", {} if data is None else data, _TOP_KEYS, "a world")
+    return _robot(doc, "robot", top["robot"]) if "robot" in top else robot_profile(DEFAULT_ROBOT)
+
+
+def _world_text(path: str | os.PathLike[str]) -> str:
     from mdle.userfile import UserFileError, read_user_file
 
     p = Path(path)
@@ -656,8 +684,7 @@ def read_world(path: str | os.PathLike[str]) -> Any:
             raise WorldError(f"world file not found: {p}") from None
         raise WorldError(f"cannot read world file {p}: {err.reason}") from None
     try:
-        text = data.decode("utf-8")
+        return data.decode("utf-8")
     except UnicodeDecodeError as err:
         raise WorldError(f"cannot read world file {p}: not UTF-8 text (byte "
                          f"0x{data[err.start]:02x} at offset {err.start})") from None
-    return parse_world(text, file=str(path), default_name=p.stem)

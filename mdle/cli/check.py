@@ -3,6 +3,11 @@
 Everything the command prints goes to standard output (diagnostics and the summary),
 so ``mdle check plan.mdle | less`` shows it all; the exit code tells the result:
 0 clean (warnings allowed unless ``--strict``), 1 errors, 2 usage errors.
+
+Constant speeds and turn rates are compared with the robot ``mdle run`` would use
+(``--robot``, else the robot of ``--world``, of the world beside the plan, or the default
+robot). A file with nothing to run is a warning, unless another file checked with it
+imports it (a library of definitions).
 """
 
 from __future__ import annotations
@@ -10,7 +15,11 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from mdle.errors import Diagnostic, MdleError
+    from mdle.program import Program
 
 __all__ = ["add_parser", "run", "expand_paths"]
 
@@ -20,14 +29,21 @@ def add_parser(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "check", help="check plans for errors (syntax, names, units, timers)",
         description="Parse and check MDLe plans: names, arguments, units, interrupts, "
-                    "timers, imports. Prints every error and warning (to standard output) "
-                    "with file:line:col and the source line. Exit code: 0 clean, 1 errors, "
+                    "timers, imports, constant speeds and turn rates against the robot's "
+                    "limits. Prints every error and warning (to standard output) with "
+                    "file:line:col and the source line. Exit code: 0 clean, 1 errors, "
                     "2 usage errors.")
     p.add_argument("files", nargs="+", metavar="FILE",
                    help="plan files; a folder means every .mdle file under it")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="print errors only (no warnings, no summary)")
     p.add_argument("--strict", action="store_true", help="treat warnings as errors (exit 1)")
+    p.add_argument("--world", metavar="NAME|FILE",
+                   help="the world the plans run in: its robot's limits are checked (default: "
+                        "PLAN.world.yaml or PLAN.yaml beside each plan, else the default world)")
+    p.add_argument("--robot", metavar="PROFILE",
+                   help="the robot profile the plans run on (a name or a YAML file; default: "
+                        "the world's)")
     p.set_defaults(handler=run)
 
 
@@ -44,28 +60,46 @@ def expand_paths(paths: list[str]) -> list[str]:
     return out
 
 
+def _load(path: str, args: argparse.Namespace) -> Program | MdleError:
+    from mdle.cli.options import known_robot
+    from mdle.errors import MdleError
+    from mdle.loader import load_program
+
+    try:
+        robot = known_robot(path, args.world, args.robot)
+        return load_program(path, robot=robot)
+    except MdleError as err:
+        return err
+
+
 def run(args: argparse.Namespace) -> int:
     """Check each file; returns the exit code."""
     from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
+    from mdle.compile import missing_entry
     from mdle.errors import MdleError
     from mdle.frames import FRAME_NOTE, reads_pose
-    from mdle.loader import load_program
 
     files = expand_paths(args.files)
+    results = [(path, _load(path, args)) for path in files]
+    imported = {os.path.realpath(name) for path, r in results if not isinstance(r, MdleError)
+                for name in r.sources if name != path and not name.startswith("<")}
     errors = warnings = failed = 0
     pose = False
-    for path in files:
-        try:
-            program = load_program(path)
-        except MdleError as err:
+    for path, result in results:
+        if isinstance(result, MdleError):
             failed += 1
-            errors += len(err.diagnostics)
-            print_diagnostics(err.diagnostics, err.sources, stream=sys.stdout)
+            errors += len(result.diagnostics)
+            print_diagnostics(result.diagnostics, result.sources, stream=sys.stdout)
             continue
-        pose = pose or reads_pose(program)
-        warnings += len(program.warnings)
-        if program.warnings and not args.quiet:
-            print_diagnostics(program.warnings, program.sources, stream=sys.stdout)
+        pose = pose or reads_pose(result)
+        found: list[Diagnostic] = list(result.warnings)
+        if os.path.realpath(path) not in imported:
+            no_entry = missing_entry(result, path)
+            if no_entry is not None:
+                found.append(no_entry)
+        warnings += len(found)
+        if found and not args.quiet:
+            print_diagnostics(found, result.sources, stream=sys.stdout)
     if not args.quiet:
         summary = (f"checked {len(files)} file{'s' * (len(files) != 1)}: "
                    f"{errors} error{'s' * (errors != 1)}, {warnings} warning"

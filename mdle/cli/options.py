@@ -8,9 +8,14 @@ from __future__ import annotations
 
 import argparse
 import os
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-__all__ = ["add_simulation_options", "positive_seconds", "seconds", "seed", "writable_output"]
+if TYPE_CHECKING:
+    from mdle.motion_limits import KnownRobot
+
+__all__ = ["add_simulation_options", "known_robot", "positive_seconds", "seconds", "seed",
+           "world_beside", "writable_output"]
 
 
 def add_simulation_options(p: Any) -> None:
@@ -22,6 +27,41 @@ def add_simulation_options(p: Any) -> None:
                         "a profile YAML file (default: the world's)")
     p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
                    help="simulated ladar: a noisy scan (default) or exact oracle geometry")
+
+
+def world_beside(plan: str | os.PathLike[str]) -> Path | None:
+    """Find the world file of a plan: ``x.world.yaml`` or ``x.yaml`` beside ``x.mdle``."""
+    p = Path(plan)
+    for candidate in (p.with_suffix(".world.yaml"), p.with_suffix(".yaml")):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def known_robot(plan: str | os.PathLike[str] | None, world: str | None = None,
+                robot: str | None = None) -> KnownRobot:
+    """Return the robot a plan runs on in simulation, as ``mdle run`` chooses it.
+
+    ``--robot`` first, else the robot of ``--world``, else of the world beside the plan,
+    else of the default world. Only the robot is read (no world geometry: no numpy).
+
+    Raises
+    ------
+    WorldError
+        The profile or the world cannot be read, or its ``robot`` is bad.
+    """
+    from mdle.motion_limits import KnownRobot
+    from sim.catalog import DEFAULT_WORLD, world_robot
+    from sim.profiles import robot_profile
+
+    if robot:
+        return KnownRobot.of(robot_profile(robot), "--robot")
+    if world:
+        return KnownRobot.of(world_robot(world), f"the robot of --world `{world}`")
+    beside = world_beside(plan) if plan is not None else None
+    if beside is not None:
+        return KnownRobot.of(world_robot(beside), f"the robot of `{beside.name}` beside the plan")
+    return KnownRobot.of(world_robot(DEFAULT_WORLD), "the default robot")
 
 
 def _number_of_seconds(text: str) -> float:

@@ -23,7 +23,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
-from mdle.cli.options import add_simulation_options, seconds, writable_output
+from mdle.cli.options import (
+    add_simulation_options,
+    known_robot,
+    seconds,
+    world_beside,
+    writable_output,
+)
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 
 if TYPE_CHECKING:
@@ -136,15 +142,6 @@ def start_pose(text: str) -> tuple[float, float, float]:
     return out[0], out[1], out[2]
 
 
-def world_beside(plan: str | os.PathLike[str]) -> Path | None:
-    """Find the world file of a plan: ``x.world.yaml`` or ``x.yaml`` beside ``x.mdle``."""
-    p = Path(plan)
-    for candidate in (p.with_suffix(".world.yaml"), p.with_suffix(".yaml")):
-        if candidate.is_file():
-            return candidate
-    return None
-
-
 @dataclass
 class _Parts:
     """What a run has opened so far, for a clean end from wherever it was interrupted."""
@@ -226,7 +223,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.start is not None and args.backend != "sim":
         raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
                                          "starts where it stands"))
-    program = load_program(args.plan, settings=args.overrides)
+    robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
+        else known_robot(None)
+    program = load_program(args.plan, settings=args.overrides, robot=robot)
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
     element = element_of(program, args.element)
