@@ -166,3 +166,45 @@ def test_run_with_a_negative_seed_is_a_usage_error(tmp_path: Path) -> None:
     p.write_text("atom a = (go(0.1 m/s), never, 1 s)\n")
     res = mdle("run", str(p), "--seed", "-1")
     assert res.returncode == 2 and "a seed is a whole number from 0" in res.stderr
+
+
+def test_check_and_run_compare_speeds_with_the_robot_the_run_uses(tmp_path: Path) -> None:
+    plan = tmp_path / "dash.mdle"
+    plan.write_text("atom dash = (go(3 m/s), never, 1 s)\nrun dash\n")
+    r = mdle("check", "dash.mdle", cwd=tmp_path)
+    assert r.returncode == 0
+    assert r.stdout.startswith("dash.mdle:1:17: warning: `v` of `go` is 3 m/s, more than the "
+                               "robot can do: the top speed of `pioneer2dx` (the default "
+                               "robot) is 2.2 m/s\n"), r.stdout
+    assert mdle("check", "--strict", "dash.mdle", cwd=tmp_path).returncode == 1
+    # a world beside the plan names the robot; --robot overrides it
+    (tmp_path / "dash.world.yaml").write_text("robot: ideal\n")
+    r = mdle("check", "dash.mdle", cwd=tmp_path)
+    assert "the top speed of `ideal` (the robot of `dash.world.yaml` beside the plan) is 1 m/s" \
+        in r.stdout
+    assert "1 warning" in mdle("check", "--robot", "pioneer2dx", "dash.mdle", cwd=tmp_path).stdout
+    plan.write_text("atom dash = (go(2 m/s), never, 1 s)\nrun dash\n")
+    assert "0 warnings" in mdle("check", "--robot", "pioneer2dx", "dash.mdle", cwd=tmp_path).stdout
+    r = mdle("check", "--world", "corridor", "dash.mdle", cwd=tmp_path)
+    assert "0 warnings" in r.stdout, r.stdout
+    # mdle run warns with the same robot, and still runs
+    r = mdle("run", "dash.mdle", cwd=tmp_path)
+    assert r.returncode == 0 and "the top speed of `ideal`" in r.stdout + r.stderr
+    r = mdle("check", "--world", "no-such-world", "dash.mdle", cwd=tmp_path)
+    assert r.returncode == 1 and "unknown world `no-such-world`" in r.stdout
+
+
+def test_check_warns_about_a_file_run_cannot_run(tmp_path: Path) -> None:
+    (tmp_path / "lib.mdle").write_text("atom creep = (go(0.2 m/s), never, 1 s)\n")
+    r = mdle("check", "lib.mdle", cwd=tmp_path)
+    assert r.returncode == 0
+    assert r.stdout.splitlines()[:2] == [
+        "lib.mdle:2:1: warning: nothing to run: the file has no `run NAME` line and no plan "
+        "named `main`, so `mdle run` cannot run it",
+        "  hint: add `run creep` (runnable here: creep); a file that other plans only import "
+        "needs none"]
+    assert mdle("run", "lib.mdle", cwd=tmp_path).returncode == 1  # what the warning foretells
+    # checked with a plan that imports it, it is a library: no warning
+    (tmp_path / "main.mdle").write_text('import "lib.mdle"\nrun creep\n')
+    r = mdle("check", "lib.mdle", "main.mdle", cwd=tmp_path)
+    assert r.stdout == "checked 2 files: 0 errors, 0 warnings\n", r.stdout
