@@ -50,7 +50,7 @@ _MAX_DELAY = 10.0  # s: a longer latency or cycle is a typo (milliseconds writte
 
 
 def _seconds(doc: _Doc, path: str, v: Any, *, positive: bool = False) -> float:
-    x = _number(doc, path, v, positive=positive, nonneg=True)
+    x = _number(doc, path, v, positive=positive, nonneg=True, unit="s")
     if x > _MAX_DELAY:
         raise doc.fail(path, f"must be at most {_MAX_DELAY:g} s, got {v} (seconds, not ms)")
     return x
@@ -82,13 +82,15 @@ def robot_overrides(doc: _Doc, path: str, m: dict[str, Any]) -> dict[str, Any]:
 
     ch: dict[str, Any] = {}
     if "radius" in m:
-        ch["radius"] = _number(doc, at("radius"), m["radius"], nonneg=True)
+        ch["radius"] = _number(doc, at("radius"), m["radius"], nonneg=True, unit="m")
     for key in ("max_speed", "max_reverse_speed", "max_accel", "max_decel"):
         if key in m:
-            ch[key] = _number(doc, at(key), m[key], positive=True)
+            ch[key] = _number(doc, at(key), m[key], positive=True,
+                              unit="m/s" if "speed" in key else "m/s^2")
     for key in ("max_turn_rate", "max_turn_accel", "max_turn_decel"):
         if key in m:
-            ch[key] = math.radians(_number(doc, at(key), m[key], positive=True))
+            ch[key] = math.radians(_number(doc, at(key), m[key], positive=True,
+                                           unit="deg/s" if key == "max_turn_rate" else "deg/s^2"))
     if "ramp" in m:
         ramp = _string(doc, at("ramp"), m["ramp"])
         if ramp not in RAMPS:
@@ -106,9 +108,10 @@ def robot_overrides(doc: _Doc, path: str, m: dict[str, Any]) -> dict[str, Any]:
         if not isinstance(lm, list) or len(lm) != 3:
             raise doc.fail(at("ladar_mount"), f"expected [x, y, theta] (m, m, deg), got "
                            f"{_show(lm)}")
-        ch["ladar_mount"] = (_number(doc, at("ladar_mount") + "[0]", lm[0]),
-                             _number(doc, at("ladar_mount") + "[1]", lm[1]),
-                             math.radians(_number(doc, at("ladar_mount") + "[2]", lm[2])))
+        ch["ladar_mount"] = (_number(doc, at("ladar_mount") + "[0]", lm[0], unit="m"),
+                             _number(doc, at("ladar_mount") + "[1]", lm[1], unit="m"),
+                             math.radians(_number(doc, at("ladar_mount") + "[2]", lm[2],
+                                                  unit="deg")))
     if "odometry" in m:
         o = _mapping(doc, at("odometry"), m["odometry"], _ODOM_KEYS, "odometry noise")
         vals = {k: _number(doc, f"{at('odometry')}.{k}", o.get(k, 0.0), nonneg=True)

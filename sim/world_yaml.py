@@ -269,13 +269,17 @@ _NO_KEY = object()
 
 # ---------------------------------------------------------------- value checkers
 def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False,
-            size: bool = False, coordinate: bool = False, shown: str | None = None) -> float:
+            size: bool = False, coordinate: bool = False, shown: str | None = None,
+            unit: str | None = None) -> float:
+    """Read a plain number; ``unit`` is the unit it is in (sizes and coordinates: metres),
+    named when a unit was written (``1.6 m``: units are implied, never written)."""
     if isinstance(v, str) and _FLOAT.fullmatch(v.strip()):
         # YAML 1.1 reads 1e-3 (no dot) as text; take it as the number meant.
         return _number(doc, path, float(v), positive=positive, nonneg=nonneg, size=size,
-                       coordinate=coordinate, shown=v.strip())
+                       coordinate=coordinate, shown=v.strip(), unit=unit)
     if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise doc.fail(path, f"expected a number, got {_show(v)}")
+        implied = unit or ("m" if size or coordinate else None)
+        raise doc.fail(path, f"expected a number, got {_show(v)}" + _written_unit(v, implied))
     try:
         x = float(v)
     except OverflowError:  # an integer of hundreds of digits
@@ -293,6 +297,40 @@ def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: boo
         raise doc.fail(path, f"must be within \u00b1{MAX_COORDINATE:g} m of the origin, got "
                              f"{shown or v}")
     return x
+
+
+_WITH_UNIT = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z][A-Za-z/^0-9]*)\s*")
+_UNIT_WORDS = {"m": "metres", "deg": "degrees", "s": "seconds", "Hz": "hertz",
+               "m/s": "metres per second", "deg/s": "degrees per second",
+               "m/s^2": "metres per second squared", "deg/s^2": "degrees per second squared"}
+
+
+def _written_unit(v: Any, implied: str | None) -> str:
+    """Say, for a number written with a unit (``1.6 m``), that units are implied, and what
+    to write instead (converted when the unit written is another of the same kind)."""
+    m = _WITH_UNIT.fullmatch(v) if isinstance(v, str) else None
+    if m is None:
+        return ""
+    number, written = m.group(1), m.group(2)
+    value = number.lstrip("+")
+    if implied is not None and written != implied:
+        from mdle.units import unit_value
+
+        try:
+            (f_written, d_written), (f_implied, d_implied) = (unit_value(written),
+                                                              unit_value(implied))
+        except KeyError:
+            d_written, d_implied = None, None
+        if d_written is None or d_written != d_implied:
+            value = ""
+        else:
+            value = f"{float(number) * f_written / f_implied:.6g}"
+    if implied is None:
+        return f": a world file writes plain numbers (units are implied); write `{value}`"
+    words = _UNIT_WORDS.get(implied, implied)
+    if not value:
+        return f": this takes a number of {words}, with no unit written"
+    return f": {words} are implied, not written; write `{value}`"
 
 
 def _integer(doc: _Doc, path: str, v: Any, *, minimum: int = 0,
@@ -412,7 +450,7 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
             raise doc.fail(P("size"), f"expected [width, height] in metres, got {_show(size)}")
         w = _number(doc, P("size") + "[0]", size[0], size=True)
         h = _number(doc, P("size") + "[1]", size[1], size=True)
-        ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0)))
+        ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0), unit="deg"))
         return shapes.Rectangle(c, (w, h), ang, name)
     if kind == "circle":
         return shapes.Circle(_point(doc, P("center"), v["center"]),
@@ -424,7 +462,7 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
             raise doc.fail(P("axes"), f"expected semi-axes [a, b] in metres, got {_show(ax)}")
         a = _number(doc, P("axes") + "[0]", ax[0], size=True)
         b = _number(doc, P("axes") + "[1]", ax[1], size=True)
-        ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0)))
+        ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0), unit="deg"))
         return shapes.Ellipse(c, (a, b), ang, name)
     if kind == "wall":
         closed = _boolean(doc, P("closed"), v.get("closed", False))
@@ -439,8 +477,8 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
     if kind == "arc":
         c = _point(doc, P("center"), v["center"])
         r = _number(doc, P("radius"), v["radius"], size=True)
-        a0 = math.radians(_number(doc, P("start"), v["start"]))
-        a1 = math.radians(_number(doc, P("end"), v["end"]))
+        a0 = math.radians(_number(doc, P("start"), v["start"], unit="deg"))
+        a1 = math.radians(_number(doc, P("end"), v["end"], unit="deg"))
         t = _number(doc, P("thickness"), v.get("thickness", _DEFAULT_WALL_THICKNESS),
                     size=True)
         if t >= 2 * r:
@@ -510,12 +548,13 @@ def _ladar(doc: _Doc, path: str, v: Any) -> Any:
         if ch["beams"] > _MAX_BEAMS:
             raise doc.fail(f"{path}.beams", f"must be at most {_MAX_BEAMS}, got {m['beams']}")
     if "fov" in m:
-        fov = _number(doc, f"{path}.fov", m["fov"], positive=True)
+        fov = _number(doc, f"{path}.fov", m["fov"], positive=True, unit="deg")
         if fov > 360:
             raise doc.fail(f"{path}.fov", f"must be at most 360 degrees, got {m['fov']}")
         ch["fov"] = math.radians(fov)
     if "max_range" in m:
-        ch["max_range"] = _number(doc, f"{path}.max_range", m["max_range"], positive=True)
+        ch["max_range"] = _number(doc, f"{path}.max_range", m["max_range"], positive=True,
+                                   unit="m")
     if "noise" in m:
         if m["noise"] not in NOISE_MODELS:
             raise doc.fail(f"{path}.noise", f"unknown noise model {m['noise']!r}; one of: "
@@ -541,7 +580,8 @@ def _start(doc: _Doc, path: str, v: Any) -> Pose:
     if isinstance(v, list):
         if len(v) != 3:
             raise doc.fail(path, f"expected [x, y, theta] (m, m, deg), got {_show(v)}")
-        x, y, th = (_number(doc, f"{path}[{i}]", v[i], coordinate=i < 2) for i in range(3))
+        x, y, th = (_number(doc, f"{path}[{i}]", v[i], coordinate=i < 2,
+                             unit="m" if i < 2 else "deg") for i in range(3))
     else:
         m = _mapping(doc, path, v, ("x", "y", "theta"), "x, y in metres, theta in degrees")
         for key in ("x", "y"):
@@ -549,7 +589,7 @@ def _start(doc: _Doc, path: str, v: Any) -> Pose:
                 raise doc.fail(path, f"missing key `{key}`")
         x = _number(doc, f"{path}.x", m["x"], coordinate=True)
         y = _number(doc, f"{path}.y", m["y"], coordinate=True)
-        th = _number(doc, f"{path}.theta", m.get("theta", 0.0))
+        th = _number(doc, f"{path}.theta", m.get("theta", 0.0), unit="deg")
     return Pose(x, y, math.radians(th))
 
 
@@ -617,6 +657,13 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
         if ex[2] <= ex[0] or ex[3] <= ex[1]:
             raise doc.fail("extent", "xmax and ymax must exceed xmin and ymin")
         extent = (ex[0], ex[1], ex[2], ex[3])
+        if not (ex[0] <= start.x <= ex[2] and ex[1] <= start.y <= ex[3]):
+            raise doc.fail("start" if "start" in top else "extent",
+                           f"the start ({start.x:g}, {start.y:g}"
+                           + ("" if "start" in top else "; no `start` is given")
+                           + ") lies outside the world's "
+                           f"extent [{ex[0]:g}, {ex[1]:g}, {ex[2]:g}, {ex[3]:g}] (xmin, ymin, "
+                           "xmax, ymax): the robot would start off the map")
     obs_raw = top.get("obstacles", [])
     if obs_raw is None:
         obs_raw = []
