@@ -136,6 +136,9 @@ class Checker:
         #: The scaled atom's own atom while :meth:`_scaled` compiles it: its limits are
         #: checked after scaling, not before.
         self._scaling: st.Expr | None = None
+        #: The first item of a triple while :meth:`string` compiles it as an element: an
+        #: unknown name there may be a misspelt control law (``(g(1 m/s), never, 5 s)``).
+        self._atom_head: st.Expr | None = None
         self.errors: list[Diagnostic] = []
         self.warnings: list[Diagnostic] = []
         self._seen: set[tuple[Span | None, str]] = set()
@@ -279,8 +282,7 @@ class Checker:
     def _number(self, expr: st.Expr, env: Env) -> Quantity:
         v = self.value(expr, env)
         if isinstance(v, Symbol):
-            pool = [*env, *self._names()]
-            self._unknown(v.name, expr.span, "name", pool)
+            self._unknown(v.name, expr.span, "name", list(env))  # only parameters fit here
             raise _Abort
         return v
 
@@ -357,15 +359,16 @@ class Checker:
                 bound[slot.name] = self._argument(callee, slot, a.value, env)
             except _Abort:
                 ok = False
+        missing = [s for s in slots if s.name not in bound and s.name not in given
+                   and s.default is REQUIRED]
+        for s in missing:
+            self.error(span, f"`{callee}` needs `{s.name}`"
+                       + ("" if s.symbol else f" ({dim_example(s.dim)})"),
+                       hint=f"write it as `{_completed(callee, args, missing)}`")
+            ok = False
         for s in slots:
-            if s.name not in bound and s.name not in given:
-                if s.default is REQUIRED:
-                    self.error(span, f"`{callee}` needs `{s.name}`"
-                               + ("" if s.symbol else f" ({dim_example(s.dim)})"),
-                               hint=f"write it as `{callee}({s.name} = ...)`")
-                    ok = False
-                else:
-                    bound[s.name] = s.default
+            if s.name not in bound and s.name not in given and s.default is not REQUIRED:
+                bound[s.name] = s.default
         if not ok:
             raise _Abort
         return bound
@@ -387,8 +390,7 @@ class Checker:
         if isinstance(v, Symbol):
             if slot.symbol:
                 return v
-            pool = [*env, *self._names()]
-            self._unknown(v.name, expr.span, "name", pool)
+            self._unknown(v.name, expr.span, "name", list(env))  # only parameters fit here
             raise _Abort
         if slot.symbol:
             self.error(expr.span, f"`{slot.name}` of `{callee}` takes a symbol such as `right`, "
@@ -548,7 +550,11 @@ class Checker:
             bound = self.bind(name, slots, args, env, expr.span)
             return self._interrupt_body(target, bound, expr.span if args else None)
         if target is None:
-            pool = [*env, *self.ns.definitions, *self.ns.registry.sensors, "never"]
+            # what a condition can read: numeric parameters, interrupts, sensor functions
+            pool = [*(k for k, v in env.items() if not isinstance(v, Symbol)),
+                    *(n for n, d in self.ns.definitions.items()
+                      if d.kind is st.DefKind.INTERRUPT),
+                    *self.ns.registry.sensors, "never"]
             self._unknown(name, getattr(expr, "name_span", expr.span), "name", pool)
             raise _Abort
         self.error(expr.span, f"expected an interrupt such as `stalled` or `range(0 deg) < 1 m`; "
@@ -642,7 +648,8 @@ class Checker:
                        f"{_kind_name(target)}")
             raise _Abort
         pool = [n for n, d in self.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
-        pool += list(self.ns.registry.laws)
+        if expr is self._atom_head:  # `(g(1 m/s), never, 5 s)`: a control law fits here too
+            pool += list(self.ns.registry.laws)
         found = self._closest(name, pool)
         close = [found] if found else []
         self.error(span, f"unknown name `{name}`: not a control law, atom, behavior or plan",
@@ -735,9 +742,9 @@ class Checker:
             value = show_value(Quantity(v.value * factor, p.dim))
             scaled = f" (scaled by {factor:g})" if span is not None else ""
             self.warn(where, f"`{p.name}` of `{law.name}` is {value}{scaled}, more than the "
-                      f"robot can do: {why}", hint="the robot clamps the command to its limit, so the plan "
-                      "does not move as written; use a value within the limit, or name the "
-                      "robot meant (--robot, --world)", in_use=True)
+                      f"robot can do: {why}", hint="the robot clamps the command to its "
+                      "limit, so the plan does not move as written; use a value within the "
+                      "limit, or name the robot meant (--robot, --world)", in_use=True)
 
     def _ending(self, xi: st.Expr, timer: st.Expr, env: Env,
                 failed: bool) -> tuple[Interrupt, float]:
@@ -833,11 +840,15 @@ class Checker:
             items = (head,)
         elements: list[Element] = []
         failed = False
-        for item in items:
-            try:
-                elements.append(self.element(item, env))
-            except _Abort:
-                failed = True
+        outer, self._atom_head = self._atom_head, (None if isinstance(head, st.Group) else head)
+        try:
+            for item in items:
+                try:
+                    elements.append(self.element(item, env))
+                except _Abort:
+                    failed = True
+        finally:
+            self._atom_head = outer
         interrupt, t = self._ending(xi, timer, env, failed)
         for i in range(len(elements) - 1):
             if never_ends(elements[i], self._never_memo):
@@ -957,6 +968,16 @@ def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
 def _short(expr: st.Expr) -> str:
     text = format_expr(expr)
     return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _completed(callee: str, args: Sequence[st.Argument], missing: Sequence[_Slot]) -> str:
+    """Return the call as written with the missing parameters added.
+
+    ``arc(0.3 m/s)`` missing ``omega`` gives ``arc(0.3 m/s, omega = ...)``.
+    """
+    parts = [(f"{a.name} = " if a.name else "") + format_expr(a.value) for a in args]
+    parts += [f"{s.name} = ..." for s in missing]
+    return f"{callee}({', '.join(parts)})"
 
 
 def _called(expr: st.Expr) -> str:

@@ -32,9 +32,15 @@ _INDENT = "    "
 
 def format_source(text: str, file: str = "<string>") -> str:
     """Return the canonical form of a text (raises MdleSyntaxError if it does not parse)."""
+    from mdle.errors import MdleError
+    from mdle.hints import refine_error
     from mdle.parser import parse_module
 
-    return format_module(parse_module(text, file))
+    try:
+        module = parse_module(text, file)
+    except MdleError as err:
+        raise refine_error(err, {file: text}) from None
+    return format_module(module)
 
 
 def format_expr(expr: st.Expr, names: Mapping[str, str] | None = None) -> str:

@@ -17,6 +17,7 @@ from atoms.registry import Registry
 from mdle import syntax as st
 from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
+from mdle.hints import refine_hints
 from mdle.motion_limits import KnownRobot
 from mdle.parser import normalise_newlines, parse_module
 from mdle.program import Program
@@ -102,7 +103,7 @@ def load_modules(text: str, file: str, base_dir: str | None = None,
             return parse_module(src, name)
         except MdleError as err:
             syntax_failed = syntax_failed or isinstance(err, MdleSyntaxError)
-            diagnostics.extend(err.diagnostics)
+            diagnostics.extend(refine_hints(err.diagnostics, {name: src}))
             # Still follow the file's imports, so their errors are reported too.
             return st.Module(name, tuple(_scan_imports(src, name)))
 

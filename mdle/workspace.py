@@ -14,8 +14,9 @@ from typing import Any
 from atoms.registry import Registry
 from mdle import syntax as st
 from mdle.compile import _Abort, _checker, check_program
-from mdle.errors import CheckError, Diagnostic
+from mdle.errors import CheckError, Diagnostic, MdleError
 from mdle.format import format_statement
+from mdle.hints import refine_error
 from mdle.loader import load_modules, read_source
 from mdle.parser import MAX_DEPTH, lex_fragment, parse_expression
 from mdle.program import Element, Program
@@ -124,7 +125,10 @@ class Workspace:
         MdleError
             MdleSyntaxError or CheckError.
         """
-        expr = parse_expression(text, "<repl>")
+        try:
+            expr = parse_expression(text, "<repl>")
+        except MdleError as err:
+            raise refine_error(err, {"<repl>": text}) from None
         sources = {**self._sources, "<repl>": text}
         checker, errors = _checker([st.Module("<workspace>", tuple(self._defs.values()))],
                                    self.registry, False)

@@ -75,7 +75,7 @@ def world_robot(spec: str | os.PathLike[str]) -> RobotProfile:
 
 
 def _is_reference(text: str) -> bool:
-    """True for a reference world's name, False for a file; WorldError for neither."""
+    """Tell a reference world's name (True) from a file (False); WorldError for neither."""
     if text in list_worlds():
         return True
     looks_like_path = text.endswith((".yaml", ".yml")) or os.sep in text or "/" in text

@@ -40,8 +40,10 @@ __all__ = [
 
 @cache
 def _gauss_legendre() -> tuple[tuple[float, float], ...]:
-    """The 8 Gauss-Legendre nodes and weights (made on first use: reading a profile, as
-    ``mdle check`` does, needs no numpy)."""
+    """Return the 8 Gauss-Legendre nodes and weights.
+
+    Made on first use: reading a profile, as ``mdle check`` does, needs no numpy.
+    """
     import numpy as np
 
     nodes, weights = np.polynomial.legendre.leggauss(8)

@@ -271,8 +271,11 @@ _NO_KEY = object()
 def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: bool = False,
             size: bool = False, coordinate: bool = False, shown: str | None = None,
             unit: str | None = None) -> float:
-    """Read a plain number; ``unit`` is the unit it is in (sizes and coordinates: metres),
-    named when a unit was written (``1.6 m``: units are implied, never written)."""
+    """Read a plain number.
+
+    ``unit`` is the unit it is in (sizes and coordinates: metres), named when a unit was
+    written (``1.6 m``: units are implied, never written).
+    """
     if isinstance(v, str) and _FLOAT.fullmatch(v.strip()):
         # YAML 1.1 reads 1e-3 (no dot) as text; take it as the number meant.
         return _number(doc, path, float(v), positive=positive, nonneg=nonneg, size=size,
@@ -299,15 +302,18 @@ def _number(doc: _Doc, path: str, v: Any, *, positive: bool = False, nonneg: boo
     return x
 
 
-_WITH_UNIT = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z][A-Za-z/^0-9]*)\s*")
+_WITH_UNIT = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*"
+                        r"([A-Za-z][A-Za-z/^0-9]*)\s*")
 _UNIT_WORDS = {"m": "metres", "deg": "degrees", "s": "seconds", "Hz": "hertz",
                "m/s": "metres per second", "deg/s": "degrees per second",
                "m/s^2": "metres per second squared", "deg/s^2": "degrees per second squared"}
 
 
 def _written_unit(v: Any, implied: str | None) -> str:
-    """Say, for a number written with a unit (``1.6 m``), that units are implied, and what
-    to write instead (converted when the unit written is another of the same kind)."""
+    """Say, for a number written with a unit (``1.6 m``), that units are implied.
+
+    And what to write instead (converted when the unit written is another of the same kind).
+    """
     m = _WITH_UNIT.fullmatch(v) if isinstance(v, str) else None
     if m is None:
         return ""

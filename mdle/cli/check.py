@@ -69,7 +69,10 @@ def _load(path: str, args: argparse.Namespace) -> Program | MdleError:
         robot = known_robot(path, args.world, args.robot)
         return load_program(path, robot=robot)
     except MdleError as err:
-        return err
+        from mdle.hints import yaml_as_plan
+
+        return yaml_as_plan(path, err, "to check a plan for this world's robot: "
+                           f"`mdle check PLAN.mdle --world {path}`")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -19,7 +19,6 @@ import re
 import sys
 import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
@@ -225,7 +224,13 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
                                          "starts where it stands"))
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
         else known_robot(None)
-    program = load_program(args.plan, settings=args.overrides, robot=robot)
+    try:
+        program = load_program(args.plan, settings=args.overrides, robot=robot)
+    except MdleError as err:
+        from mdle.hints import yaml_as_plan
+
+        raise yaml_as_plan(args.plan, err, "to run a plan in this world: "
+                          f"`mdle run PLAN.mdle --world {args.plan}`") from None
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
     element = element_of(program, args.element)

@@ -391,7 +391,13 @@ class Repl:
             if run.note:
                 self.say(f"note: {run.note}")
             return True
-        names, warnings = self.session.load(path)
+        try:
+            names, warnings = self.session.load(path)
+        except MdleError as err:
+            from mdle.hints import yaml_as_plan
+
+            raise yaml_as_plan(path, err, "to make it the session's world: "
+                               f"`:world {path}`") from None
         if warnings:
             print_diagnostics(warnings, self.session.sources, self.err)
         self.say(f"loaded {path}: " + (", ".join(names) if names else "nothing new"))

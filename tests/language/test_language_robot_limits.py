@@ -19,13 +19,18 @@ from mdle.motion_limits import KnownRobot
 PIONEER = KnownRobot("pioneer2dx", 2.2, 2.2, math.radians(500), "the default robot")
 
 
+def place(d: Diagnostic) -> tuple[int, int, int]:
+    assert d.span is not None
+    return d.span.line, d.span.column, d.span.end_column
+
+
 def warnings(text: str, robot: KnownRobot | None = PIONEER) -> list[Diagnostic]:
     return list(load_text(text, "t.mdle", default_registry(), robot=robot).warnings)
 
 
 def test_speed_beyond_the_top_speed_is_a_located_warning_naming_robot_and_limit() -> None:
     (w,) = warnings("atom dash = (go(3 m/s), never, 5 s)\nrun dash\n")
-    assert (w.span.line, w.span.column, w.span.end_column) == (1, 17, 22)
+    assert place(w) == (1, 17, 22)
     assert w.message == ("`v` of `go` is 3 m/s, more than the robot can do: the top speed of "
                          "`pioneer2dx` (the default robot) is 2.2 m/s")
 
@@ -56,16 +61,16 @@ def test_no_robot_no_comparison() -> None:
 def test_a_scaled_atom_is_compared_once_scaled() -> None:
     (w,) = warnings("behavior b = (((2, 1, (go(2 m/s), never, 1 s))), never, inf)\n")
     assert w.message.startswith("`v` of `go` is 4 m/s (scaled by 2), more than")
-    assert (w.span.line, w.span.column) == (1, 16)  # the scaled atom
+    assert place(w)[:2] == (1, 16)  # the scaled atom
 
 
 def test_a_parameter_fixed_by_a_use_points_at_the_body_and_the_use() -> None:
     (w,) = warnings("atom f(v = 1 m/s) = (go(v), never, 1 s)\n"
                     "behavior b = ((f(1 m/s), f(2.5 m/s)), never, inf)\n")
     assert w.message.startswith("`v` of `go` is 2.5 m/s")
-    assert (w.span.line, w.span.column) == (1, 25)
+    assert place(w)[:2] == (1, 25)
     (note,) = w.notes
-    assert note.message == "in this use of `f`" and (note.span.line, note.span.column) == (2, 26)
+    assert note.message == "in this use of `f`" and place(note)[:2] == (2, 26)
 
 
 def test_the_robot_is_named_by_how_it_was_chosen() -> None:
