@@ -156,6 +156,24 @@ BAD = [
      'bad.yaml:1:8: error: start: expected [x, y, theta] (m, m, deg), got a list of 2'),
     ('obstacles:\n  - {type: arc, center: [5, 0], radius: 1, start: 0, end: 0}\n',
      'bad.yaml:2:59: error: obstacles[0].end: must differ from `start`'),
+    # issue 12.17: a start off the map; a unit written where it is implied
+    ('extent: [0, 0, 10, 10]\nstart: {x: 12, y: 3, theta: 0}\n',
+     ("bad.yaml:2:8: error: start: the start (12, 3) lies outside the world's extent "
+      "[0, 0, 10, 10] (xmin, ymin, xmax, ymax): the robot would start off the map")),
+    ('extent: [1, 1, 10, 10]\n',
+     "bad.yaml:1:9: error: extent: the start (0, 0; no `start` is given) lies outside"),
+    ('obstacles:\n  - {type: rectangle, center: [0, 3], size: [1.6 m, 2]}\n',
+     ("bad.yaml:2:46: error: obstacles[0].size[0]: expected a number, got '1.6 m': metres "
+      "are implied, not written; write `1.6`")),
+    ('obstacles:\n  - {type: circle, center: [0, 3], radius: 40 cm}\n',
+     ("bad.yaml:2:44: error: obstacles[0].radius: expected a number, got '40 cm': metres are "
+      "implied, not written; write `0.4`")),
+    ('start: {x: 0, y: 0, theta: 1.5 s}\n',
+     ("bad.yaml:1:28: error: start.theta: expected a number, got '1.5 s': this takes a number "
+      "of degrees, with no unit written")),
+    ('robot: {profile: ideal, max_speed: 1 m/s}\n',
+     ("bad.yaml:1:36: error: robot.max_speed: expected a number, got '1 m/s': metres per "
+      "second are implied, not written; write `1`")),
 ]
 
 
