@@ -19,9 +19,9 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from atoms.boundary import SIDES, Side, cached_view, parse_side
-from atoms.registry import Args, Context, Param, control_law, sensor
+from atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.backend import Command
-from mdle.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
+from mdle.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 if TYPE_CHECKING:
     from atoms.latency import Predictor
@@ -85,6 +85,22 @@ def scan_points_cached(ctx: Context) -> Any:
     return pts
 
 
+#: What ``follow_boundary`` records each tick (``ctx.cache["trace"]``), with units.
+REPORTS = {
+    **{f"{ray}_{key}": report for ray in ("front", "side") for key, report in (
+        ("hit", Report(flag=True, doc=f"the {ray} ray sees the boundary")),
+        ("range", Report(LENGTH, f"distance along the {ray} ray (0 without a hit)")),
+        ("tangent", Report(ANGLE, f"boundary direction at the {ray} hit")),
+        ("curvature", Report(CURVATURE, f"boundary curvature at the {ray} hit")))},
+    "mode": Report(codes=tuple(_MODE_CODES), doc="what the law is doing"),
+    "lost": Report(TIME, "how long the boundary has been lost"),
+    "u_law": Report(TURN_RATE, "the law's turn rate, before the safety layer"),
+    "safety": Report(flag=True, doc="the safety layer replaced the law's command"),
+    "predicted_clearance": Report(LENGTH, "clearance along the arc the safety layer checked",
+                                  absent=-1.0),
+}
+
+
 @control_law(
     Param("side", default="right", choices=SIDES, doc="side the boundary is on: right or left"),
     Param("rc", LENGTH, 0.5, doc="distance to keep from the boundary", low=0.0, low_open=True),
@@ -104,6 +120,7 @@ def scan_points_cached(ctx: Context) -> Any:
           doc="command latency to predict over (default: the robot's; 0 s: no prediction, "
               "not even of the scan's age)", low=0.0, finite=False),
     start=start_follow,
+    reports=REPORTS,
 )
 def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Command:
     """Follow a boundary at distance rc on one side at constant speed (the paper's atom)."""

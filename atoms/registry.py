@@ -40,6 +40,7 @@ __all__ = [
     "REQUIRED",
     "BOOL",
     "Param",
+    "Report",
     "Context",
     "LawSpec",
     "SensorSpec",
@@ -126,6 +127,22 @@ class Param:
         return what + (" " + " and ".join(parts) if parts else "")
 
 
+@dataclass(frozen=True)
+class Report:
+    """A diagnostic a control law records each tick: its unit and how to read its values.
+
+    ``dim`` is its dimension (SI inside: metres, radians, seconds). A ``flag`` is 0 or 1
+    (no or yes); ``codes`` name the values 0, 1, 2, ... of a mode; ``absent`` is the value
+    that stands for "nothing measured" (the trace holds numbers only).
+    """
+
+    dim: Dim = NONE
+    doc: str = ""
+    flag: bool = False
+    codes: tuple[str, ...] = ()
+    absent: float | None = None
+
+
 class Context:
     """What a control law or sensor function may read during one tick.
 
@@ -164,7 +181,9 @@ class LawSpec:
     """A control law U: its name, parameters and the functions that run it.
 
     ``start`` (optional) builds the per-atom state when an atom using this law starts;
-    the state is passed to every ``step`` and dropped when the atom ends.
+    the state is passed to every ``step`` and dropped when the atom ends. ``reports``
+    declares the diagnostics the law records each tick (``ctx.cache["trace"]``), so that
+    they can be shown with their units.
     """
 
     name: str
@@ -172,6 +191,7 @@ class LawSpec:
     step: StepFn
     start: StartFn | None = None
     doc: str = ""
+    reports: Mapping[str, Report] = field(default_factory=lambda: MappingProxyType({}))
 
     def param(self, name: str) -> Param | None:
         """Return the parameter called ``name``, or None."""
@@ -203,16 +223,18 @@ def _doc(fn: Callable[..., Any]) -> str:
     return inspect.cleandoc(fn.__doc__ or "").split("\n\n")[0]
 
 
-def control_law(*params: Param, name: str | None = None,
-                start: StartFn | None = None) -> Callable[[StepFn], StepFn]:
+def control_law(*params: Param, name: str | None = None, start: StartFn | None = None,
+                reports: Mapping[str, Report] | None = None) -> Callable[[StepFn], StepFn]:
     """Declare a function ``step(args, ctx, state) -> Command`` as a control law.
 
     The law's MDLe name is the function's name (trailing underscores dropped) unless
-    ``name`` is given. The function is returned unchanged, with its spec attached.
+    ``name`` is given. ``reports`` declares the diagnostics it records (see
+    :class:`Report`). The function is returned unchanged, with its spec attached.
     """
 
     def wrap(fn: StepFn) -> StepFn:
-        spec = LawSpec(name or fn.__name__.rstrip("_"), tuple(params), fn, start, _doc(fn))
+        spec = LawSpec(name or fn.__name__.rstrip("_"), tuple(params), fn, start, _doc(fn),
+                       MappingProxyType(dict(reports or {})))
         setattr(fn, _SPEC_ATTR, spec)
         return fn
 

@@ -176,11 +176,19 @@ class Workspace:
         """Return the definition of ``name``, or None."""
         return self._defs.get(name)
 
-    def format(self) -> str:
-        """Every definition so far in canonical form (as ``mdle fmt`` prints them)."""
+    def definitions(self) -> tuple[st.Definition, ...]:
+        """Return the definitions so far, oldest first (a replaced one counts as new)."""
+        return tuple(self._defs.values())
+
+    def format(self, entry: str | None = None) -> str:
+        """Every definition so far in canonical form (as ``mdle fmt`` prints them).
+
+        Then ``run ENTRY``: ``entry``, else the one a ``run`` input gave, if any.
+        """
         lines = [format_statement(d) for d in self._defs.values()]
-        if self._entry:
-            lines.append(f"run {self._entry}")
+        entry = entry or self._entry
+        if entry:
+            lines.append(f"run {entry}")
         return "\n".join(lines) + ("\n" if lines else "")
 
     def program(self) -> Program:

@@ -359,7 +359,7 @@ class Repl:
 
     def _defs(self, args: list[str]) -> bool:
         _no_args(":defs", args)
-        text = self.session.workspace.format()
+        text = self.session.save_text()
         self.say(text.rstrip("\n") if text.strip() else "nothing defined yet")
         return True
 
@@ -368,8 +368,12 @@ class Repl:
         text = self.session.save(path)
         n = len(self.session.workspace.names())
         lines = len(text.splitlines())
+        last = text.splitlines()[-1]
+        ending = (f", ending `{last}`: `mdle run {shlex.quote(path)}` runs it"
+                  if last.startswith("run ")
+                  else "; no `run` line: nothing here runs without arguments")
         self.say(f"saved {n} definition{'s' if n != 1 else ''} to {path} "
-                 f"({lines} line{'s' if lines != 1 else ''})")
+                 f"({lines} line{'s' if lines != 1 else ''}{ending})")
         return True
 
     def _load(self, args: list[str]) -> bool:
@@ -410,7 +414,8 @@ class Repl:
         outcome = self.session.step(n)
         if outcome.started:
             self.say(f"stepping `{self.session.last_element}` from the robot's current state")
-        self.say(*views.format_step_rows(outcome.rows, outcome.t0))
+        reports = views.law_reports(self.session.workspace.registry)
+        self.say(*views.format_step_rows(outcome.rows, outcome.t0, reports))
         if outcome.report is not None:
             self._say_report(outcome.report)
             return outcome.report.ok
@@ -525,8 +530,9 @@ COMMANDS: dict[str, Command] = {c.name: c for c in (
     Command("world", "[NAME|FILE]", "switch to another world (a reference name or a YAML "
             "file); without one, list them", Repl._world, "world"),
     Command("defs", "", "the definitions so far, as `mdle fmt` prints them", Repl._defs),
-    Command("save", "FILE", "write the definitions so far to FILE (formatted)", Repl._save,
-            "file"),
+    Command("save", "FILE", "write the definitions so far to FILE (formatted) and a `run` line "
+            "(the `run` entry, else the element last run, else the plan defined last)",
+            Repl._save, "file"),
     Command("load", "FILE", "add the definitions of an .mdle file; or bring in a recorded "
             "run (.jsonl trace, .mcap recording): its world, path and final pose",
             Repl._load, "file"),

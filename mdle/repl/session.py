@@ -465,15 +465,45 @@ class Session:
         return LoadedRun(run.label, run.result, len(run.samples),
                          self.world.name, trace.truncated or trace.end is None, note)
 
+    def save_entry(self) -> str | None:
+        """Return what ``:save`` writes as ``run NAME``, so that ``mdle run`` runs the file.
+
+        The entry a ``run`` input gave (or a plan ``main``); else the definition last run
+        (``creep`` after ``creep`` or ``creep(1 m/s)``), when it runs as it stands; else the
+        plan defined last; else whatever runnable element was defined last. None when
+        nothing runs without arguments.
+        """
+        import re
+
+        from mdle import syntax as st
+
+        program = self.workspace.program()
+        if program.entry is not None:
+            return program.entry
+        called = re.fullmatch(r"([A-Za-z_][A-Za-z0-9_]*)\s*(?:\(.*\))?", self.last_element or "",
+                              re.S)
+        if called is not None and called.group(1) in program.elements:
+            return called.group(1)
+        defs = [d for d in reversed(self.workspace.definitions()) if d.name in program.elements]
+        plans = [d for d in defs if d.kind is st.DefKind.PLAN]
+        return (plans or defs)[0].name if defs else None
+
+    def save_text(self) -> str:
+        """Return what ``:save`` writes (and ``:defs`` shows): definitions, then ``run``."""
+        return self.workspace.format(self.save_entry())
+
     def save(self, path: str | os.PathLike[str]) -> str:
-        """Write every definition, formatted as ``mdle fmt`` does; returns the text.
+        """Write every definition, formatted as ``mdle fmt`` does, then a ``run`` line.
+
+        The ``run`` line names :meth:`save_entry` (none when nothing runs as it stands).
+        Returns the text.
 
         Raises
         ------
         ReplError
             Nothing is defined yet, or the file cannot be written.
         """
-        text = self.workspace.format()
+        text = self.save_text()
         if not text.strip():
             raise ReplError("nothing to save: no definitions yet")
         try:

@@ -15,12 +15,13 @@ from mdle.backend import Observation, Pose
 if TYPE_CHECKING:
     import numpy as np
 
-    from atoms.registry import Registry
+    from atoms.registry import Registry, Report
     from mdle.backend import RobotLimits
     from mdle.repl.session import RunReport, StepRow
     from sim import World
 
-__all__ = ["format_pose", "format_report", "format_scan", "format_step_rows", "render_map"]
+__all__ = ["format_pose", "format_report", "format_scan", "format_step_rows", "law_reports",
+           "render_map"]
 
 #: Fewest rows of the map (a long, narrow world gets flatter cells rather than a sliver).
 MIN_ROWS = 12
@@ -136,10 +137,12 @@ def format_scan(obs: Observation, registry: Registry, limits: RobotLimits,
     return lines
 
 
-def format_step_rows(rows: Sequence[StepRow], t0: float) -> list[str]:
+def format_step_rows(rows: Sequence[StepRow], t0: float,
+                     reports: Mapping[str, Report] | None = None) -> list[str]:
     """Show one line per tick (time, active atom, command, pose, ranges).
 
-    When the control law reported diagnostics, a second line shows them.
+    When the control law reported diagnostics, a second line shows them, with the units
+    ``reports`` declares (see :func:`law_reports`).
     """
     out = []
     for row in rows:
@@ -154,12 +157,43 @@ def format_step_rows(rows: Sequence[StepRow], t0: float) -> list[str]:
                    f"cmd v {s.cmd_v:+.3f} m/s  omega {s.cmd_omega:+.3f} rad/s  "
                    f"x {s.x:.2f} y {s.y:.2f} heading {_deg(s.theta):.1f} deg{ranges}")
         if s.diag:
-            out.append("         " + _diag(s.diag))
+            out.append("         " + _diag(s.diag, reports or {}))
     return out
 
 
-def _diag(diag: Mapping[str, float]) -> str:
-    return "  ".join(f"{k} {v:.3g}" for k, v in diag.items())
+def law_reports(registry: Registry) -> dict[str, Report]:
+    """Return the diagnostics every control law of ``registry`` declares, by name."""
+    out: dict[str, Report] = {}
+    for law in registry.laws.values():
+        for name, report in law.reports.items():
+            out.setdefault(name, report)
+    return out
+
+
+def _diag(diag: Mapping[str, float], reports: Mapping[str, Report]) -> str:
+    return "  ".join(f"{k} {_reported(v, reports.get(k))}" for k, v in diag.items())
+
+
+def _reported(v: float, report: Report | None) -> str:
+    """Show a diagnostic's value as read: with its unit, a flag as yes/no, a mode by name.
+
+    Angles in degrees, turn rates in rad/s (as the command above), curvatures in 1/m.
+    """
+    from mdle.units import ANGLE, CURVATURE, NONE, TURN_RATE
+
+    if report is None:
+        return f"{v:.3g}"
+    if report.absent is not None and v == report.absent:
+        return "none"
+    if report.flag:
+        return "yes" if v else "no"
+    if report.codes and float(v).is_integer() and 0 <= int(v) < len(report.codes):
+        return report.codes[int(v)]
+    dim = report.dim
+    if dim == ANGLE:
+        return f"{math.degrees(v):.3g} deg"
+    unit = {NONE: "", TURN_RATE: "rad/s", CURVATURE: "1/m"}.get(dim, dim.symbol())
+    return f"{v:.3g} {unit}".rstrip()
 
 
 def render_map(world: World, path: np.ndarray, pose: Pose, width: int = 72,

@@ -69,14 +69,20 @@ def test_define_run_save_then_load_in_a_second_session(tmp_path: Path, repl: Rep
     # east 1 m, a quarter turn left, north 2 m
     # odometry from the session's start, the world's (-9, 0.3): the world's (-8, 2.3)
     assert pose_in(out) == pytest.approx((1.0, 2.0, 90.0), abs=0.006)
-    assert "saved 2 definitions to tuned.mdle (2 lines)" in out
+    assert ("saved 2 definitions to tuned.mdle (3 lines, ending `run creep`: `mdle run "
+            "tuned.mdle` runs it)") in out
     saved = (tmp_path / "tuned.mdle").read_text()
+    # the run line names the definition last run (`creep(1 m/s)`), so the file runs
     assert saved == ("atom creep(v = 0.5 m/s) = (go(v), never, 2 s)\n"
-                     "atom quarter(rate = 90 deg/s) = (turn(rate), never, 1 s)\n")
+                     "atom quarter(rate = 90 deg/s) = (turn(rate), never, 1 s)\n"
+                     "run creep\n")
     # the saved file is what `mdle fmt` prints: formatting it changes nothing
     fmt = subprocess.run([*mdle_command, "fmt", "--check", "tuned.mdle"], cwd=tmp_path,
                          capture_output=True, text=True, timeout=60, check=False)
     assert fmt.returncode == 0, fmt.stdout + fmt.stderr
+    run = subprocess.run([*mdle_command, "run", "-q", "tuned.mdle"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=60, check=False)
+    assert run.returncode == 0, run.stdout + run.stderr
 
     # a second session loads them (the FILE argument), goes on, and :load again is quiet
     second = "quarter(-90 deg/s)\ncreep\n:pose\n:load tuned.mdle\n:defs\n"

@@ -182,7 +182,8 @@ def test_defs_save_load(r: Run, tmp_path: Path) -> None:
     assert out == expected
     target = tmp_path / "saved.mdle"
     ok, out, _ = r(f":save {target}")
-    assert ok and out == f"saved 3 definitions to {target} (4 lines)\n"
+    assert ok and out == (f"saved 3 definitions to {target} (4 lines, ending `run both`: "
+                          f"`mdle run {target}` runs it)\n")
     assert target.read_text() == expected
     other = Run()
     ok, out, _ = other(f":load {target}")
@@ -202,10 +203,14 @@ def test_step_prints_each_tick(r: Run) -> None:
     lines = out.splitlines()
     assert ok and lines[0] == "stepping `hug` from the robot's current state"
     assert lines[1].startswith("  #1    t   0.00 s  hug  cmd v +1.000 m/s  omega ")
-    found = re.search(r"side_range ([0-9.]+)", lines[2])
+    found = re.search(r"side_range ([0-9.]+) m  side_tangent [-0-9.e]+ deg  side_curvature "
+                      r"[-0-9.e]+ 1/m", lines[2])
     assert found, lines[2]
     side = float(found.group(1))
-    assert side == pytest.approx(1.0, abs=0.05) and "side_hit 1" in lines[2]
+    assert side == pytest.approx(1.0, abs=0.05) and "side_hit yes" in lines[2]
+    # every diagnostic with its unit (or as a flag, a mode, `none`): issue 12.18
+    assert re.search(r"mode follow  lost [0-9.]+ s  u_law [-0-9.e]+ rad/s  safety (yes|no)  "
+                     r"predicted_clearance ([0-9.]+ m|none)$", lines[2]), lines[2]
     assert lines[3].startswith("  #2    t   0.10 s  hug")
     ok, out, _ = r(":step 5")
     lines = out.splitlines()
@@ -370,3 +375,17 @@ def test_reset_to_a_place_that_is_not_finite_is_a_message(r: Run, args: str) -> 
     assert not ok and ("must be a finite number" in err or "must be a number" in err)
     ok, out, err = r("(go(0.3 m/s), never, 1 s)")  # the robot was left where it was
     assert ok and "internal error" not in err, err
+
+
+def test_load_of_a_world_file_says_to_use_world(r: Run, tmp_path: Path) -> None:
+    world = tmp_path / "w.world.yaml"
+    world.write_text("name: w\nstart: {x: 0, y: 0, theta: 0}\n")
+    ok, _, err = r(f":load {world}")
+    assert not ok and f"`{world}` is a YAML file (a world file?), not an MDLe plan" in err
+    assert f"hint: to make it the session's world: `:world {world}`" in err
+
+
+def test_save_says_when_nothing_can_run(r: Run, tmp_path: Path) -> None:
+    r("atom need(v) = (go(v), never, 1 s)")
+    ok, out, _ = r(f":save {tmp_path / 'n.mdle'}")
+    assert ok and out.endswith("(1 line; no `run` line: nothing here runs without arguments)\n")

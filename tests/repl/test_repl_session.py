@@ -214,7 +214,8 @@ def test_save_and_load(session: Session, tmp_path: Path) -> None:
     assert added == ("spin",) and replaced == ("creep",)
     text = session.save(tmp_path / "defs.mdle")
     assert text == ("atom creep(v = 0.25 m/s) = (go(v), never, 2 s)\n"
-                    "atom spin = (turn(1 rad/s), never, 1 s)\n")
+                    "atom spin = (turn(1 rad/s), never, 1 s)\n"
+                    "run spin\n")
     other = Session("ellipse")
     names, _ = other.load(tmp_path / "defs.mdle")
     assert names == ("creep", "spin")
@@ -222,6 +223,29 @@ def test_save_and_load(session: Session, tmp_path: Path) -> None:
     assert pose_of(other)[0] == pytest.approx(-8.5)
     with pytest.raises(ReplError, match="cannot write"):
         session.save(tmp_path / "no" / "such" / "dir.mdle")
+
+
+def test_save_writes_a_run_line_mdle_run_can_use(session: Session, tmp_path: Path) -> None:
+    """Issue 12.18: the saved file runs. The entry given with `run`; else the definition
+    last run; else the plan defined last; else the runnable element defined last."""
+    session.define("atom creep(v = 0.25 m/s) = (go(v), never, 2 s)\n"
+                   "atom need(v) = (go(v), never, 1 s)")
+    assert session.save_entry() == "creep"  # the only one that runs as it stands
+    session.define("plan tour = ((creep, creep), never, inf)\n"
+                   "atom spin = (turn(1 rad/s), never, 1 s)")
+    assert session.save_entry() == "tour"  # a plan before a later atom
+    session.run("creep(0.5 m/s)")
+    assert session.save_entry() == "creep"  # the definition last run
+    session.run("(go(0.1 m/s), never, 0.1 s)")  # not a name: the plan again
+    assert session.save_entry() == "tour"
+    session.define("run spin")
+    assert session.save_entry() == "spin"
+    assert session.save(tmp_path / "s.mdle").endswith("atom spin = (turn(1 rad/s), never, 1 s)\n"
+                                                      "run spin\n")
+    other = Session("ellipse")
+    other.define("atom need(v) = (go(v), never, 1 s)")
+    assert other.save_entry() is None
+    assert "run" not in other.save(tmp_path / "n.mdle")
 
 
 def test_report_closest_approach_and_settled_boundary_distance(session: Session) -> None:
