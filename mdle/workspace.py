@@ -17,6 +17,7 @@ from mdle.compile import _Abort, _checker, check_program
 from mdle.errors import CheckError, Diagnostic, MdleError
 from mdle.format import format_statement
 from mdle.hints import refine_error
+from mdle.motion_limits import KnownRobot
 from mdle.loader import load_modules, read_source
 from mdle.parser import MAX_DEPTH, lex_fragment, parse_expression
 from mdle.program import Element, Program
@@ -63,6 +64,11 @@ class Workspace:
         self._sources: dict[str, str] = {}
         self._entry: str | None = None
         self._warnings: tuple[Diagnostic, ...] = ()
+        #: The robot definitions and elements are checked against (speed and turn-rate
+        #: limits; None: no comparison). The REPL sets it to the session's robot.
+        self.robot: KnownRobot | None = None
+        #: The warnings of the element :meth:`element` compiled last.
+        self.element_warnings: tuple[Diagnostic, ...] = ()
         #: is_complete's lexer state at the last line break it saw: (text up to there,
         #: bracket depth, brackets open for the depth guard, stopped, last token type)
         self._lexed: tuple[Any, ...] = ("", 0, 0, False, None)
@@ -108,7 +114,8 @@ class Workspace:
             defs[d.name] = d
         runs = [s for s in (main.statements if main else ()) if isinstance(s, st.Run)]
         entry_module = st.Module("<workspace>", (*defs.values(), *runs[-1:]))
-        program = check_program([entry_module], self.registry, sources=all_sources)
+        program = check_program([entry_module], self.registry, sources=all_sources,
+                                robot=self.robot)
         if runs:
             self._entry = program.entry
         old = {(w.span, w.message) for w in self._warnings}
@@ -131,7 +138,7 @@ class Workspace:
             raise refine_error(err, {"<repl>": text}) from None
         sources = {**self._sources, "<repl>": text}
         checker, errors = _checker([st.Module("<workspace>", tuple(self._defs.values()))],
-                                   self.registry, False)
+                                   self.registry, False, self.robot)
         element: Element | None = None
         try:
             element = checker.element(expr, {})
@@ -142,6 +149,7 @@ class Workspace:
         errors = errors + checker.errors
         if errors or element is None:
             raise CheckError(errors or [Diagnostic(expr.span, "not an element")], sources)
+        self.element_warnings = tuple(checker.warnings)
         return element
 
     def is_complete(self, text: str) -> bool:

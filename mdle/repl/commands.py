@@ -223,6 +223,9 @@ class Repl:
 
     def _run(self, text: str) -> bool:
         report = self.session.run(text, self.run_observers)
+        warnings = self.session.workspace.element_warnings
+        if warnings:
+            print_diagnostics(warnings, {**self.session.sources, "<repl>": text}, self.err)
         if report.error is not None:
             print_diagnostics(report.error.diagnostics, report.error.sources, self.err)
         self._say_report(report)

@@ -92,6 +92,11 @@ class RobotSession(Session):
         self._told_lost = False
         self._closed = False
         super().__init__(None, registry=registry, rate=rate, until=until, realtime=False)
+        from mdle.motion_limits import KnownRobot
+
+        limits = backend.limits
+        self.workspace.robot = KnownRobot(name, limits.max_speed, limits.max_reverse_speed,
+                                          limits.max_turn_rate, "the connected robot")
 
     # ------------------------------------------------------------------ the robot
 

@@ -309,6 +309,10 @@ class Session:
             backend.reset(pose)
         self._stop_stepping()
         self.world, self.backend = world, backend
+        from mdle.motion_limits import KnownRobot
+
+        self.workspace.robot = KnownRobot.of(
+            backend.profile, "--robot" if self._robot else f"the robot of world `{world.name}`")
         self.world_spec = os.path.abspath(text) if os.path.exists(text) else text
         self._runs = []
 

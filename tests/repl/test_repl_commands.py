@@ -389,3 +389,14 @@ def test_save_says_when_nothing_can_run(r: Run, tmp_path: Path) -> None:
     r("atom need(v) = (go(v), never, 1 s)")
     ok, out, _ = r(f":save {tmp_path / 'n.mdle'}")
     assert ok and out.endswith("(1 line; no `run` line: nothing here runs without arguments)\n")
+
+
+def test_speeds_are_compared_with_the_sessions_robot() -> None:
+    r = Run("default")  # its robot: pioneer2dx, 2.2 m/s
+    ok, _, err = r("atom dash = (go(3 m/s), never, 1 s)")
+    assert ok and ("warning: `v` of `go` is 3 m/s, more than the robot can do: the top speed of "
+                   "`pioneer2dx` (the robot of world `default`) is 2.2 m/s") in err
+    ok, _, err = r("(go(2.5 m/s), never, 0.1 s)")
+    assert ok and "<repl>:1:5: warning: `v` of `go` is 2.5 m/s" in err
+    ok, _, err = r("(go(2 m/s), never, 0.1 s)")
+    assert ok and err == ""
