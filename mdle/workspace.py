@@ -17,8 +17,8 @@ from mdle.compile import _Abort, _checker, check_program
 from mdle.errors import CheckError, Diagnostic, MdleError
 from mdle.format import format_statement
 from mdle.hints import refine_error
-from mdle.motion_limits import KnownRobot
 from mdle.loader import load_modules, read_source
+from mdle.motion_limits import KnownRobot
 from mdle.parser import MAX_DEPTH, lex_fragment, parse_expression
 from mdle.program import Element, Program
 from mdle.resolve import build_namespace
