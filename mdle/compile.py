@@ -209,13 +209,6 @@ class Checker:
         close = difflib.get_close_matches(name, near, n=1, cutoff=0.6)
         return close[0] if close else None
 
-    def _names(self) -> list[str]:
-        """Every name a plan may use (the namespace's, sorted once per checker)."""
-        names = self._cache.get(("names",))
-        if names is None:
-            names = self._cache[("names",)] = self.ns.names()
-        return names
-
     def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
         found = self._closest(name, list(pool))
         close = [found] if found else []
