@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from mdle.errors import Diagnostic, MdleError
+    from mdle.motion_limits import KnownRobot
     from mdle.program import Program
 
 __all__ = ["add_parser", "run", "expand_paths"]
@@ -60,13 +61,14 @@ def expand_paths(paths: list[str]) -> list[str]:
     return out
 
 
-def _load(path: str, args: argparse.Namespace) -> Program | MdleError:
+def _load(path: str, args: argparse.Namespace,
+          robots: dict[tuple[str, ...], KnownRobot]) -> Program | MdleError:
     from mdle.cli.options import known_robot
     from mdle.errors import MdleError
     from mdle.loader import load_program
 
     try:
-        robot = known_robot(path, args.world, args.robot)
+        robot = known_robot(path, args.world, args.robot, robots)
         return load_program(path, robot=robot)
     except MdleError as err:
         from mdle.hints import yaml_as_plan
@@ -83,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
     from mdle.frames import FRAME_NOTE, reads_pose
 
     files = expand_paths(args.files)
-    results = [(path, _load(path, args)) for path in files]
+    robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once
+    results = [(path, _load(path, args, robots)) for path in files]
     imported = {os.path.realpath(name) for path, r in results if not isinstance(r, MdleError)
                 for name in r.sources if name != path and not name.startswith("<")}
     errors = warnings = failed = 0

@@ -39,11 +39,13 @@ def world_beside(plan: str | os.PathLike[str]) -> Path | None:
 
 
 def known_robot(plan: str | os.PathLike[str] | None, world: str | None = None,
-                robot: str | None = None) -> KnownRobot:
+                robot: str | None = None,
+                memo: dict[tuple[str, ...], KnownRobot] | None = None) -> KnownRobot:
     """Return the robot a plan runs on in simulation, as ``mdle run`` chooses it.
 
     ``--robot`` first, else the robot of ``--world``, else of the world beside the plan,
     else of the default world. Only the robot is read (no world geometry: no numpy).
+    ``memo`` (a dict kept by the caller) reads each world or profile once across plans.
 
     Raises
     ------
@@ -54,14 +56,23 @@ def known_robot(plan: str | os.PathLike[str] | None, world: str | None = None,
     from sim.catalog import DEFAULT_WORLD, world_robot
     from sim.profiles import robot_profile
 
+    beside = world_beside(plan) if plan is not None and not (robot or world) else None
+    key = ("robot", robot) if robot else ("world", world) if world else (
+        ("beside", str(beside)) if beside is not None else ("default",))
+    found = memo.get(key) if memo is not None else None
+    if found is not None:
+        return found
     if robot:
-        return KnownRobot.of(robot_profile(robot), "--robot")
-    if world:
-        return KnownRobot.of(world_robot(world), f"the robot of --world `{world}`")
-    beside = world_beside(plan) if plan is not None else None
-    if beside is not None:
-        return KnownRobot.of(world_robot(beside), f"the robot of `{beside.name}` beside the plan")
-    return KnownRobot.of(world_robot(DEFAULT_WORLD), "the default robot")
+        found = KnownRobot.of(robot_profile(robot), "--robot")
+    elif world:
+        found = KnownRobot.of(world_robot(world), f"the robot of --world `{world}`")
+    elif beside is not None:
+        found = KnownRobot.of(world_robot(beside), f"the robot of `{beside.name}` beside the plan")
+    else:
+        found = KnownRobot.of(world_robot(DEFAULT_WORLD), "the default robot")
+    if memo is not None:
+        memo[key] = found
+    return found
 
 
 def _number_of_seconds(text: str) -> float:

@@ -8,6 +8,8 @@ limit and the robot.
 from __future__ import annotations
 
 import math
+from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -77,3 +79,25 @@ def test_the_robot_is_named_by_how_it_was_chosen() -> None:
     ideal = KnownRobot("ideal", 1.0, 1.0, 3.0, "--robot")
     (w,) = warnings("atom a = (go(1.5 m/s), never, 1 s)\n", robot=ideal)
     assert w.message.endswith("the top speed of `ideal` (--robot) is 1 m/s")
+
+
+def test_check_reads_each_world_once_across_plans(tmp_path: Path,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    import sim.catalog
+    from mdle.cli.options import known_robot
+
+    reads: list[str] = []
+    real = sim.catalog.world_robot
+
+    def counting(spec: Any) -> Any:
+        reads.append(str(spec))
+        return real(spec)
+
+    monkeypatch.setattr(sim.catalog, "world_robot", counting)
+    (tmp_path / "b.world.yaml").write_text("robot: ideal\n")
+    memo: dict[tuple[str, ...], KnownRobot] = {}
+    found = [known_robot(tmp_path / name, memo=memo) for name in ("a.mdle", "c.mdle", "b.mdle",
+                                                                   "b.mdle")]
+    assert [r.name for r in found] == ["pioneer2dx", "pioneer2dx", "ideal", "ideal"]
+    assert reads == ["default", str(tmp_path / "b.world.yaml")]
+    assert known_robot(tmp_path / "b.mdle", robot="pioneer2dx").how == "--robot"
