@@ -83,8 +83,8 @@ def test_figure_without_curvature_has_one_panel_and_marks_events(ir: SimpleNames
     fig = trace_figure(read_trace(trace))
     assert len(fig.axes) == 1
     labels = fig.axes[0].get_legend_handles_labels()[1]
-    assert {"atom go", "atom spin", "end: interrupt", "end: timer", "end: completed",
-            "start"} <= set(labels)
+    assert {"atom go", "atom spin", "end: interrupt fired", "end: timer ran out",
+            "end: string finished", "start"} <= set(labels)
 
 
 def test_world_obstacles_are_drawn_and_truth_is_used(ir: SimpleNamespace, tmp_path: Path) -> None:
