@@ -8,15 +8,17 @@ interactive backend for it; otherwise, or when the window cannot be opened, they
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["has_display", "open_window", "WindowError", "show_or_write", "save_figure"]
+__all__ = ["has_display", "open_window", "WindowError", "show_or_write", "save_figure",
+           "atomic_output"]
 
 #: matplotlib backends that draw to files only (no window).
 _FILE_BACKENDS = frozenset({"agg", "cairo", "pdf", "pgf", "ps", "svg", "template"})
@@ -69,6 +71,39 @@ def open_window(fig: "Figure", title: str) -> None:
         raise WindowError(f"{type(exc).__name__}: {exc}") from None
 
 
+@contextlib.contextmanager
+def atomic_output(out: str) -> Iterator[str]:
+    """Yield a temporary name beside ``out`` to write; it becomes ``out`` only when whole.
+
+    The temporary name keeps ``out``'s extension (encoders pick the format from it).
+
+    Raises
+    ------
+    PlotError
+        The file cannot be written (the message names it and says why).
+    """
+    from mdle.errors import Diagnostic
+    from mdle.plot import PlotError
+
+    head, name = os.path.split(os.path.abspath(out))
+    stem, ext = os.path.splitext(name)
+    tmp = os.path.join(head, f".{stem}.{os.getpid()}.part{ext}")
+    done = False
+    try:
+        yield tmp
+        os.replace(tmp, out)
+        done = True
+    except OSError as exc:
+        raise PlotError(Diagnostic(None, f"cannot write the plot `{out}`: "
+                                         f"{exc.strerror or exc}")) from None
+    finally:
+        if not done:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+
+
 def save_figure(fig: "Figure", out: str, dpi: int = 130) -> None:
     """Write ``fig`` to ``out`` (.png, .svg or .pdf) whole or not at all.
 
@@ -84,27 +119,12 @@ def save_figure(fig: "Figure", out: str, dpi: int = 130) -> None:
     if ext not in ("png", "svg", "pdf"):
         raise PlotError(Diagnostic(None, f"cannot write a plot to `{out}`: the file name must "
                                          "end in .png, .svg or .pdf"))
-    head, name = os.path.split(os.path.abspath(out))
-    tmp: str | None = os.path.join(head, f".{name}.{os.getpid()}.part")
-    try:
-        assert tmp is not None
-        with open(tmp, "wb") as f:  # created as any new file is (the umask applies)
-            fig.savefig(f, format=ext, dpi=dpi)
-        os.replace(tmp, out)
-        tmp = None
-    except OSError as exc:
-        raise PlotError(Diagnostic(None, f"cannot write the plot `{out}`: "
-                                         f"{exc.strerror or exc}")) from None
-    finally:
-        if tmp is not None:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
+    with atomic_output(out) as tmp, open(tmp, "wb") as f:  # the umask applies, as to any file
+        fig.savefig(f, format=ext, dpi=dpi)
 
 
 def show_or_write(fig: "Figure", name: str, *, display: bool | None = None,
-                  window: Callable[["Figure", str], None] = open_window) -> str:
+                  window: Callable[["Figure", str], None] | None = None) -> str:
     """Show ``fig`` in a window, or write ``NAME.png`` here; return what was done, as a line.
 
     ``display`` overrides :func:`has_display`; ``window`` opens the window (tests swap it).
@@ -112,7 +132,7 @@ def show_or_write(fig: "Figure", name: str, *, display: bool | None = None,
     reason = "no display"
     if has_display() if display is None else display:
         try:
-            window(fig, name)
+            (window or open_window)(fig, name)
             return f"plot of {name} shown in a window"
         except WindowError as exc:
             reason = f"cannot open a window ({exc})"
