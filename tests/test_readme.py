@@ -27,7 +27,7 @@ def test_readme_python_example_runs(tmp_path: Path) -> None:
     out = subprocess.run([sys.executable, "-c", code], cwd=README.parent, capture_output=True,
                          text=True, timeout=300)
     assert out.returncode == 0, out.stderr
-    assert re.fullmatch(r"main ended by completed at 60\.0 s; closest approach 0\.\d\d m\n",
+    assert re.fullmatch(r"main ran to its end at 60\.0 s; closest approach 0\.\d\d m\n",
                         out.stdout), out.stdout
 
 
