@@ -159,7 +159,7 @@ def animate_trace(trace: Trace, world: Any, out: str | os.PathLike[str],
                 seg[:, 0] = (px, py)
                 seg[:, 1, 0] = px + r[:n][good] * np.cos(a)
                 seg[:, 1, 1] = py + r[:n][good] * np.sin(a)
-                rays.set_segments(seg)
+                rays.set_segments(list(seg))
         label.set_text(f"t {t[i] - t0:6.1f} s   {paths[i] or '-'}")
 
     anim = animation.FuncAnimation(fig, draw, frames=[int(i) for i in frames],

@@ -188,7 +188,8 @@ def test_defs_save_load(r: Run, tmp_path: Path) -> None:
     ok, out, _ = other(f":load {target}")
     assert ok and out == f"loaded {target}: both, creep, near\n"
     ok, out, _ = other("both")
-    assert ok and out.startswith("both/turn (level 1) ended by timer at 3.00 s; both ran to its end")
+    assert ok and out.startswith("both/turn (level 1) ended by timer at 3.00 s; "
+                                 "both ran to its end")
 
 
 def test_step_prints_each_tick(r: Run) -> None:

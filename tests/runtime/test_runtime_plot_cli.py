@@ -28,8 +28,10 @@ def _trace(ir: SimpleNamespace, path: Path, v: float = 1.0, rc: float | None = N
         return Command(v, 0.4)
 
     law = ir.const_law("follow", step=step)
-    script = (lambda t, k: {"truth": {"x": v * t, "y": 0.1 * t, "theta": 0.1,
-                                      "clearance": 0.6 + 0.1 * t, "collided": False}})
+    def script(t: float, k: int) -> dict[str, Any]:
+        return {"truth": {"x": v * t, "y": 0.1 * t, "theta": 0.1,
+                          "clearance": 0.6 + 0.1 * t, "collided": False}}
+
     run(ir.atom("follow", law=law, timer=2.0), ScriptedBackend(script),
         observers=[TraceWriter(path, {})])
     return path
@@ -119,7 +121,7 @@ def test_animate_writes_a_gif(ir: SimpleNamespace, tmp_path: Path,
     out = tmp_path / "run.gif"
     assert main(["plot", str(_trace(ir, tmp_path / "r.jsonl")), "--animate", str(out)]) == 0
     with Image.open(out) as im:
-        assert im.n_frames > 5
+        assert getattr(im, "n_frames", 1) > 5
     assert "animation written to" in capsys.readouterr().out
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 

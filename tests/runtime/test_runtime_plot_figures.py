@@ -111,6 +111,7 @@ def test_legend_sits_beside_the_path_and_robot_marks_are_drawn(ir: SimpleNamespa
     fig.canvas.draw()
     ax = fig.axes[0]
     legend = ax.get_legend()
+    assert legend is not None
     assert legend.get_window_extent().x0 >= ax.get_window_extent().x1
     circles = [p for c in ax.collections for p in getattr(c, "get_paths", lambda: [])()]
     assert any(isinstance(c, Quiver) for c in ax.collections)
@@ -125,8 +126,10 @@ def test_doors_are_drawn_and_a_long_scene_is_stretched(ir: SimpleNamespace,
     import sim
 
     world = sim.load_world("corridor")
-    script = (lambda t, k: {"truth": {"x": 0.5 * t, "y": -0.45, "theta": 0.0,
-                                      "clearance": 0.3, "collided": False}})
+    def script(t: float, k: int) -> dict[str, Any]:
+        return {"truth": {"x": 0.5 * t, "y": -0.45, "theta": 0.0, "clearance": 0.3,
+                          "collided": False}}
+
     path = tmp_path / "c.jsonl"
     run(ir.atom("go", 0.5, timer=2.0), ScriptedBackend(script),
         observers=[TraceWriter(path, {})])
@@ -136,7 +139,7 @@ def test_doors_are_drawn_and_a_long_scene_is_stretched(ir: SimpleNamespace,
     assert labels.count("door") == 1
     doors = [p for p in ax.patches if p.get_label() == "door"]
     assert doors
-    assert "taller" in ax.get_ylabel() and ax.get_aspect() > 2.0
+    assert "taller" in ax.get_ylabel() and float(ax.get_aspect()) > 2.0
 
 
 def test_a_timer_mark_stays_visible_inside_its_strings_end(ir: SimpleNamespace,
