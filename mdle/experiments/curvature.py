@@ -156,6 +156,16 @@ def plot_figures(out: Path, seed: int = 0, draws: int = 5, dpi: int = 120) -> li
         truth = np.where(np.isfinite(exact.curvatures) & seen, exact.curvatures, np.nan)
         ax.plot(np.degrees(exact.bearings), truth, "k--", lw=1.4, label="exact curvature")
         ax.axhline(0.0, color="0.6", lw=0.6, ls=":")
+        # a corner is a jump of the exact tangent between neighbouring beams (its curvature
+        # is infinite: no value to draw), marked where it lies
+        tan = np.asarray(exact.tangents, dtype=float) if exact.tangents is not None else None
+        if tan is not None:
+            jump = np.abs(np.angle(np.exp(1j * np.diff(tan))))
+            corner = np.flatnonzero(np.nan_to_num(jump) > math.radians(20.0))
+            b = np.degrees(exact.bearings)
+            for n, k in enumerate(corner):
+                ax.axvline(0.5 * (b[k] + b[k + 1]), color="0.3", lw=1.0, ls=":",
+                           label="corner (curvature infinite)" if n == 0 else None)
         idx = np.flatnonzero(seen)
         if idx.size:
             b = np.degrees(exact.bearings)
