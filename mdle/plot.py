@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.errors import Diagnostic, MdleError
 from mdle.plot_curvature import CURVATURE_KEYS
+from mdle.runtime.events import Cause, ended_how
 from mdle.trace import Trace, read_trace
 
 if TYPE_CHECKING:
@@ -49,6 +50,7 @@ CAUSE_WORDS = {
     "error": "aborted by an error",
     "ended-by-parent": "ended with its parent",
 }
+_CAUSES = frozenset(c.value for c in Cause)
 #: A scene narrower than this (height / width) has its y axis stretched up to it.
 _MIN_ASPECT = 0.3
 #: Robot footprints drawn along the path.
@@ -369,7 +371,9 @@ def _title(trace: Trace) -> str:
         parts.append(f"seed {h['seed']}")
     end = trace.end
     if end:
-        parts.append(f"{end.get('cause')} at {float(end.get('duration') or 0.0):.1f} s")
+        cause = str(end.get("cause"))
+        how = ended_how(Cause(cause)) if cause in _CAUSES else f"ended: {cause}"
+        parts.append(f"{how} at {float(end.get('duration') or 0.0):.1f} s")
         if end.get("collided"):
             parts.append("COLLIDED")
     elif trace.truncated or end is None:

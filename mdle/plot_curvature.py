@@ -16,6 +16,7 @@ the corners, which the exact sensor spreads over its side window, show.
 from __future__ import annotations
 
 import math
+import textwrap
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -166,10 +167,12 @@ def draw_curvature(ax: "Axes", dist: "np.ndarray", measured: Curvature,
             label = None
     if truth is not None and np.isfinite(truth).any() and \
             bool(np.all(truth[np.isfinite(truth)] == 0.0)):
-        ax.text(0.01, 0.03, "straight faces: true curvature 0; the "
-                + ("exact sensor spreads each corner's turn over its side window" if exact
-                   else "scan's fit smears each corner over its window"),
-                transform=ax.transAxes, fontsize="small", color="0.25")
+        note = "straight faces: true curvature 0; the " + (
+            "exact sensor spreads each corner's turn over its side window" if exact
+            else "scan's fit smears each corner over its window")
+        # beside the panel, under its legend: never over the curves
+        ax.text(1.015, 0.0, textwrap.fill(note, 34), transform=ax.transAxes, va="bottom",
+                ha="left", fontsize="small", color="0.25")
     ax.set_ylim(lo, hi)
     ax.axhline(0.0, color="0.5", lw=0.6)
     ax.set_xlabel("distance travelled (m)")
