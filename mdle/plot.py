@@ -93,13 +93,14 @@ def robot_radius(trace: Trace, world: Any = None) -> float:
 
 
 def boundary_points(trace: Trace, pose: "tuple[np.ndarray, np.ndarray, np.ndarray] | None"
-                    = None) -> "np.ndarray":
-    """World-frame points (K, 2) of the boundary the law saw beside the robot.
+                    = None, truth: bool = False) -> "np.ndarray":
+    """Points (K, 2) of the boundary the law saw beside the robot, in the frame of ``pose``.
 
     From each sample whose diagnostics have a side range (``side_range``, with
     ``side_hit`` when given): the point at that range from the ladar, on the side the
     trace's ``side_bearing`` names (rad, robot frame: -pi/2 right, +pi/2 left; the right
-    when not recorded). ``pose`` (x, y, theta arrays) defaults to the odometry.
+    when not recorded). ``pose`` (x, y, theta arrays) is the path as drawn; without it the
+    odometry (the plan's frame), or with ``truth`` the simulator's true pose.
     """
     import numpy as np
 
@@ -112,8 +113,10 @@ def boundary_points(trace: Trace, pose: "tuple[np.ndarray, np.ndarray, np.ndarra
     bearing = trace.column("diag.side_bearing")
     bearing = np.where(np.isfinite(bearing), bearing, -math.pi / 2)
     ok = np.isfinite(r) & (r > 0) & ((hit > 0.5) | np.isnan(hit))
-    x, y, th = pose if pose is not None else (trace.column("x"), trace.column("y"),
-                                              trace.column("theta"))
+    if pose is None:
+        names = ("true_x", "true_y", "true_theta") if truth else ("x", "y", "theta")
+        pose = (trace.column(names[0]), trace.column(names[1]), trace.column(names[2]))
+    x, y, th = pose
     mx, my, mth = ladar_mount(trace)
     c, s = np.cos(th), np.sin(th)
     a = th + mth + bearing
