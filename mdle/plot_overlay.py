@@ -37,8 +37,8 @@ def following_error(trace: Trace, radius: float) -> "tuple[np.ndarray, str] | No
         return None
     rc = trace.column("diag.rc")
     if np.isfinite(rc).any():
-        return np.abs(clearance + radius - rc), "following error |d - rc| (m)"
-    return clearance, "clearance (m)"
+        return np.abs(clearance + radius - rc), "following error |d - rc| (m, log)"
+    return clearance, "clearance (m, log)"
 
 
 def overlay_figure(runs: Sequence[tuple[Trace, Any]]) -> "Figure":

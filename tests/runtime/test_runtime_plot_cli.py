@@ -110,7 +110,7 @@ def test_several_traces_are_overlaid(ir: SimpleNamespace, tmp_path: Path,
     path_ax, err_ax = fig.axes
     labels = path_ax.get_legend_handles_labels()[1]
     assert labels[:2] == ["a.jsonl", "b.jsonl"]
-    assert err_ax.get_ylabel() == "following error |d - rc| (m)"
+    assert err_ax.get_ylabel() == "following error |d - rc| (m, log)"
     assert [ln.get_label() for ln in err_ax.lines] == ["a.jsonl", "b.jsonl"]
 
 
