@@ -8,8 +8,10 @@ safety layer on top. Left-side following mirrors the law. Per-atom state (the co
 and the curvature filter) is made when the atom starts.
 
 Each tick writes ``ctx.cache["trace"]``: front/side range (m), tangent (rad) and curvature (1/m)
-in the side's convention (see :mod:`atoms.boundary`), hit flags, the mode (0 follow, 1 corner),
-the law's turn rate, whether the safety layer overrode it and the predicted clearance.
+in the side's convention (see :mod:`atoms.boundary`; left: convex positive), the side ray's
+bearing (-pi/2 right, +pi/2 left: plots draw the boundary on that side), ``rc``, hit flags,
+the mode (0 follow, 1 corner), the law's turn rate, whether the safety layer overrode it and
+the predicted clearance.
 """
 
 from __future__ import annotations
@@ -159,6 +161,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "side_range": s.r if s.hit else 0.0,
         "side_tangent": sgn * s.beta if s.hit else 0.0,
         "side_curvature": sgn * s.kappa if s.hit else 0.0,
+        "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
+        "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
         "mode": _MODE_CODES[state.memory.mode],
         "lost": state.memory.lost_for(ctx.t),
         "u_law": u_law,
