@@ -71,9 +71,14 @@ def _timing(robot: Any) -> str:
     if not robot.timed:
         return "timing: ideal (commands act at once, observations and scans are current)"
     period = f"every {robot.scan_period:g} s" if robot.scan_period else "at the ladar's rate"
-    return (f"timing: commands act after {robot.command_latency * 1e3:.0f} ms, reports every "
-            f"{robot.sip_cycle * 1e3:.0f} ms, scans {period} readable after "
-            f"{robot.scan_latency.describe()}")
+    if robot.control_cycle > 0:
+        acts = (f"commands reach the server after {robot.command_latency * 1e3:.0f} ms and act "
+                f"at its next motion step (every {robot.control_cycle * 1e3:.1f} ms; "
+                f"{robot.effective_latency * 1e3:.0f} ms on average until they show)")
+    else:
+        acts = f"commands act after {robot.command_latency * 1e3:.0f} ms"
+    return (f"timing: {acts}, reports every {robot.sip_cycle * 1e3:.1f} ms, scans {period} "
+            f"readable after {robot.scan_latency.describe()}")
 
 
 def _show(args: argparse.Namespace) -> int:
