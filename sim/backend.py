@@ -133,9 +133,10 @@ class SimBackend:
                              f"radius {self.profile.radius} m) at ({pose.x:g}, {pose.y:g}) "
                              f"overlaps obstacles[{owner}]")
         ss = np.random.SeedSequence(self.seed)
-        ladar_seq, odo_seq, timing_seq = ss.spawn(3)
+        ladar_seq, odo_seq, timing_seq, slip_seq = ss.spawn(4)   # a 4th keeps the first 3
         self._odo_rng = np.random.default_rng(odo_seq)
         self._timing_rng = np.random.default_rng(timing_seq)
+        self._slip_rng = np.random.default_rng(slip_seq)
         self._ladar = Ladar(self.ladar_profile, np.random.default_rng(ladar_seq),
                             mount=self.profile.ladar_mount, oracle=self._oracle)
         self._fan = (self._ladar.fan(self.world.caster)
@@ -280,6 +281,46 @@ class SimBackend:
         so a command waits for a read and then for a motion instant, as on AMRISim.
         """
         prof = self.profile
+        if prof.odometry.enabled:
+            self._advance_cycled_pieces(t1)
+            return
+        cycle, window, pending = prof.control_cycle, prof.input_window, self._pending
+        t = self._t
+        v, w = self._v, self._w
+        phases: list[Phase] = []
+        mark = -1
+        while True:
+            nc, nr = self._next_control, self._next_report
+            at = nc if nc <= nr else nr
+            if at > t1 - _EPS:
+                break
+            if at > t + _EPS:
+                phases.append(Phase(at - t, v, 0.0, w, 0.0))
+                t = at
+            if nc <= nr:
+                d = self._desired
+                v = ramp_step(v, d.v, prof.max_accel, prof.max_decel, prof.ramp, cycle)
+                w = ramp_step(w, d.omega, prof.max_turn_accel, prof.max_turn_decel, prof.ramp,
+                              cycle)
+                nc = self._next_control = nc + cycle
+            else:
+                mark = len(phases)       # the report: the pose there, these speeds
+                self._report = (0.0, 0.0, 0.0, v, w)
+                nr = self._next_report = self._following_report(nr)
+            if (nc if nc <= nr else nr) - at > window:
+                while pending and pending[0][0] <= at + _EPS:
+                    self._desired = pending.popleft()[1]
+        if t1 > t:
+            phases.append(Phase(t1 - t, v, 0.0, w, 0.0))
+        if phases:
+            self._step(t1, True, held=(phases, v, w, mark))
+        else:
+            self._v, self._w = v, w
+        self._release_scans(t1)
+
+    def _advance_cycled_pieces(self, t1: float) -> None:
+        """:meth:`_advance_cycled` a piece at a time (odometry noise draws per piece)."""
+        prof = self.profile
         cycle, window, pending = prof.control_cycle, prof.input_window, self._pending
         while True:
             t = self._t
@@ -317,8 +358,8 @@ class SimBackend:
         if prof.sip_cycle <= 0:
             return math.inf
         nxt = now + prof.sip_cycle
-        if prof.report_slip_rate > 0 and self._timing_rng.random() < prof.report_slip_rate:
-            nxt += prof.report_slip.draw(self._timing_rng)
+        if prof.report_slip_rate > 0 and self._slip_rng.random() < prof.report_slip_rate:
+            nxt += prof.report_slip.draw(self._slip_rng)
         return nxt
 
     def _advance_timed(self, t1: float) -> None:
@@ -359,7 +400,8 @@ class SimBackend:
             self._scan_queue = kept
 
     def _step(self, t1: float, final: bool,
-              switches: list[tuple[float, Command]] | None = None) -> None:
+              switches: list[tuple[float, Command]] | None = None,
+              held: tuple[list[Phase], float, float, int] | None = None) -> None:
         """Integrate from the current time to ``t1`` (collisions, scans).
 
         The held command changes at each ``(time, command)`` of ``switches`` (queued
@@ -379,8 +421,11 @@ class SimBackend:
                 scan_at = min(t1, max(t0, self._scan_phase + k * self._period))
                 self._scan_k = k
         x0, y0, th0 = self._x, self._y, self._th
-        if switches:
-            phases: list[Phase] = []
+        mark, marked = -1, (0.0, 0.0, 0.0)
+        if held is not None:        # the server loop's pieces, and where to note the pose
+            phases, v_end, w_end, mark = held
+        elif switches:
+            phases = []
             v, w, cmd, t = self._v, self._w, self._cmd, t0
             for ta, nxt in switches:
                 if ta > t:
@@ -402,6 +447,8 @@ class SimBackend:
         if not scanned and scan_at <= t0 + 1e-12:
             self._scanned(self._take_scan(x, y, th, scan_at))
             scanned = True
+        if mark == 0:
+            marked = (x, y, th)
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,
         # nothing can be touched this step and one distance query (at the end) suffices.
         reach = sum(ph.max_abs_v * ph.duration for ph in phases)
@@ -410,7 +457,7 @@ class SimBackend:
             clear = self._collider.clearance(x, y)   # the sweep needs the exact clearance
             safe = clear[0] - CONTACT >= reach
         self._clear_bound = False
-        for ph in phases:
+        for i, ph in enumerate(phases):
             pieces = [ph]
             if not scanned and t < scan_at < t + ph.duration:
                 cut = scan_at - t
@@ -431,6 +478,8 @@ class SimBackend:
                     scanned = True
             if contact:
                 break
+            if mark == i + 1:
+                marked = (x, y, th)
         if safe:
             if final:
                 clear = self._collider.clearance(x, y)
@@ -455,6 +504,14 @@ class SimBackend:
         self._x, self._y, self._th, self._clear = x, y, th, clear
         self._t = t1
         self._update_odometry(x0, y0, th0)
+        if mark >= 0:
+            if contact:     # the robot rests at the contact, stopped
+                self._report = (self._ox, self._oy, self._oth, 0.0, 0.0)
+            else:
+                xs, ys, c0, s0, ths = self._origin
+                dx, dy = marked[0] - xs, marked[1] - ys
+                self._report = (c0 * dx + s0 * dy, c0 * dy - s0 * dx, marked[2] - ths,
+                                self._report[3], self._report[4])
 
     # ------------------------------------------------------------------ extras
     @property

@@ -274,3 +274,25 @@ def test_cli_robots_list_show_and_fit_a_trace(tmp_path: Path) -> None:
     assert math.degrees(again.max_turn_accel) == pytest.approx(99.8, rel=0.1)
     out = mdle("robots", "fit", "missing.csv")
     assert out.returncode == 1 and "recording not found" in out.stderr
+
+
+def test_the_server_loop_fast_path_equals_the_piecewise_one() -> None:
+    """One integration per tick (no odometry noise) gives what a piece per instant gives."""
+
+    class Pieces(SimBackend):
+        def _advance_cycled(self, t1: float) -> None:
+            self._advance_cycled_pieces(t1)
+
+    world = World("empty", robot=robot_profile("pioneer-p3dx"))
+    fast, slow = SimBackend(world, seed=5), Pieces(world, seed=5)
+    for k in range(80):
+        cmd = Command(0.4 * math.sin(0.07 * k) + 0.1, 1.2 * math.sin(0.19 * k))
+        a, b = fast.observe(), slow.observe()
+        assert (a.v, a.omega) == (b.v, b.omega)
+        assert a.pose.x == pytest.approx(b.pose.x, abs=1e-12)
+        assert a.pose.theta == pytest.approx(b.pose.theta, abs=1e-12)
+        assert a.truth["x"] == pytest.approx(b.truth["x"], abs=1e-12)
+        fast.command(cmd)
+        slow.command(cmd)
+        fast.advance(0.1)
+        slow.advance(0.1)
