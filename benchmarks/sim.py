@@ -217,8 +217,8 @@ def main() -> None:
         print(load())
         med, lo, hi = interleaved_ratio(scattered_world(100), args.calls, args.runs,
                                         robot=args.robot)
-        print(f"timing model cost ({args.robot}), interleaved: x{med:.3f} (median over {args.runs} rounds; "
-              f"min x{lo:.3f}, max x{hi:.3f}) (target: <= x1.10)")
+        print(f"timing model cost ({args.robot}), interleaved: x{med:.3f} (median over "
+              f"{args.runs} rounds; min x{lo:.3f}, max x{hi:.3f}) (target: <= x1.10)")
         print(load())
         return
     print(f"sim benchmark: {args.runs} runs of {args.calls} calls; median over runs of the "
