@@ -57,7 +57,7 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
 
     umax = min(float(args["umax"]), ctx.limits.max_turn_rate)
     kf = float(args["kf"])
-    # critical damping of e'' + (mu/2) e' + 2 kf v^2 e = 0 at this speed (the derivation in docs/steering.md):
+    # critical damping of e'' + (mu/2) e' + 2 kf v^2 e = 0 at this speed (docs/steering.md):
     # the approach then takes the same path length whatever v
     mu = 4.0 * float(args["zeta"]) * abs(float(args["v"])) * math.sqrt(2.0 * max(kf, 0.0))
     gains = Gains(mu=mu, kf=kf, umax=umax, tau=float(args["tau"]))
@@ -191,8 +191,6 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
 
 def _nearest_on_side(points: Any, sgn: float) -> tuple[float, float] | None:
     """Return (distance, law-frame bearing) of the nearest scan point on the followed side."""
-    import numpy as np
-
     y = points[:, 1] * sgn
     ok = y < 0.0
     if not ok.any():
