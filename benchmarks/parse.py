@@ -29,14 +29,14 @@ def generated_plan(lines: int) -> str:
     """
     out = ["# Generated benchmark plan.", "",
            "interrupt blocked(d = 0.5 m) = range(0 deg) < d",
-           "interrupt lost = min_range(-100 deg, -80 deg) > 2 m or stalled", ""]
+           "interrupt astray = min_range(-100 deg, -80 deg) > 2 m or stalled", ""]
     i = 0
     while len(out) < lines - 12:
         out += [
             f"# Block {i}: cruise, spin and veer, then a nested patrol.",
             f"atom cruise{i}(v = 0.3 m/s) = (go(v), blocked(0.{i % 9 + 1} m) or x > {i} m, inf)",
             f"atom spin{i} = (turn({(i % 90) + 1} deg/s), never, {i % 7 + 1} s)",
-            f"atom veer{i} = (arc(0.2 m/s, -15 deg/s), lost and not (y < -1 m), 2 min)",
+            f"atom veer{i} = (arc(0.2 m/s, -15 deg/s), astray and not (y < -1 m), 2 min)",
             "",
             f"behavior patrol{i} = (",
             f"    (cruise{i}, (0.5, 2, spin{i}), veer{i})...,",
@@ -58,6 +58,31 @@ def generated_plan(lines: int) -> str:
     out += ["plan main = (", "    ("]
     out += [f"        nest{k}," for k in range(min(i, 8))]
     out += ["    ),", "    stalled,", "    inf,", ")", "", "run main"]
+    return "\n".join(out) + "\n"
+
+
+def definitions_plan(size: int) -> str:
+    """Return a plan of about ``size`` bytes with one definition per line.
+
+    Atoms, named interrupts and behaviors using the lines before them, each with its
+    own numbers (no two interrupts alike): the checker's work per definition, not the
+    parser's per line, dominates such a file. The result checks cleanly.
+    """
+    out = ["# Generated benchmark plan: one definition per line."]
+    n, i = len(out[0]) + 1, 0
+    while n < size - 200:
+        k = 4 * i
+        lines = [
+            f"atom a{k}(v = 0.{i % 9 + 1} m/s) = (go(v), range({i % 180} deg) < 0.{i % 7 + 2} m, "
+            f"{i % 50 + 1} s)",
+            f"interrupt near{k} = range({i % 90} deg) < {i % 5 + 1}.5 m and not stalled",
+            f"atom t{k} = (turn({i % 60 + 1} deg/s), near{k} or y > {i} m, {i % 9 + 1} s)",
+            f"behavior b{k} = ((a{k}, t{k}, a{k}(0.1 m/s)), near{k} or x > {i} m, 2 min)",
+        ]
+        out += lines
+        n += sum(len(line) + 1 for line in lines)
+        i += 1
+    out += [f"plan main = ((b{4 * (i - 1)}), stalled, inf)", "run main"]
     return "\n".join(out) + "\n"
 
 

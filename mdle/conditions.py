@@ -15,10 +15,12 @@ and nothing else.
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from types import CodeType
 from typing import Any
 
 from atoms.registry import BOOL, Context, SensorSpec
@@ -282,9 +284,20 @@ def _compile(node: Node, as_bool: bool) -> Fn:
                 "    return test\n")
         src.names["_U"] = _UNSET
     namespace: dict[str, Any] = {"__builtins__": {}}
-    exec(compile(code, "<interrupt>", "exec"), namespace)
+    exec(_code(code), namespace)
     fn: Fn = namespace["make"](**src.names)
     return fn
+
+
+@functools.lru_cache(maxsize=1024)
+def _code(source: str) -> CodeType:
+    """Compile generated source once per shape.
+
+    The bound objects are parameters of ``make``, so interrupts of the same shape
+    (``range(0 deg) < 1 m`` and ``range(90 deg) < 2 m``) share one source text; a plan
+    of thousands of definitions pays for a handful of compilations.
+    """
+    return compile(source, "<interrupt>", "exec")
 
 
 def to_interrupt(t: Typed, source: str) -> Interrupt:

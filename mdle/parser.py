@@ -20,11 +20,9 @@ import difflib
 import functools
 import hashlib
 import importlib.resources
-import math
 import os
 import re
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -41,17 +39,25 @@ from mdle.syntax_errors import (
     describe_expected,
     describe_token,
 )
-from mdle.units import NONE, UNITS, unit_value
+from mdle.treebuild import (
+    MAX_DEPTH,
+    BuildState,
+    Prefixed,
+    TooDeep,
+    deeper,
+    number,
+    over,
+    precedence,
+    token_span,
+    too_deep,
+)
 
 __all__ = ["parse_module", "parse_expression", "normalise_newlines", "MAX_DEPTH", "MAX_ERRORS",
            "lark_parser", "iter_tokens", "lex_fragment"]
 
-#: Deepest nesting of parentheses and operators accepted in one expression.
-MAX_DEPTH = 100
 #: Syntax errors reported per file before giving up.
 MAX_ERRORS = 20
 
-_NUMBER = re.compile(r"((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)[ \t]*(.*)", re.S)
 _STATEMENT_LINE = re.compile(r"^[ \t]*(?:import|run|atom|behavior|plan|interrupt)(?![A-Za-z0-9_])",
                              re.M)
 
@@ -96,23 +102,22 @@ def lark_parser() -> Lark:
 # --------------------------------------------------------------------------------------
 # Per-parse state (file name, comments, unit errors, nesting depth), scoped to one call
 
-
-@dataclass
-class _State:
-    file: str
-    comments: list[st.Comment] = field(default_factory=list)
-    diagnostics: list[Diagnostic] = field(default_factory=list)
-    depth: dict[int, int] = field(default_factory=dict)
-    open_brackets: int = 0
-
-
+_State = BuildState
+_TooDeep = TooDeep
+_Prefixed = Prefixed
+_token_span = token_span
+_deeper = deeper
+_too_deep = too_deep
 _STATE: contextvars.ContextVar[_State] = contextvars.ContextVar("mdle_parse_state")
 
 
-class _TooDeep(Exception):
-    def __init__(self, span: Span) -> None:
-        super().__init__("too deep")
-        self.span = span
+def _over(file: str, first: Any, last: Any) -> Span:
+    return over(file, first, last)
+
+
+def _end(file: str, part: Any) -> tuple[int, int]:
+    span = over(file, part, part)
+    return span.end_line, span.end_column
 
 
 def _on_comment(token: Token) -> None:
@@ -138,42 +143,8 @@ def _on_close(token: Token) -> Token:
     return token
 
 
-def _token_span(file: str, tok: Token) -> Span:
-    return Span(file, tok.line or 0, tok.column or 0, tok.end_line or 0, tok.end_column or 0)
-
-
-def _start(file: str, part: Any) -> tuple[int, int]:
-    if isinstance(part, Token):
-        return part.line or 0, part.column or 0
-    span = part.span
-    return span.line, span.column
-
-
-def _end(file: str, part: Any) -> tuple[int, int]:
-    if isinstance(part, Token):
-        return part.end_line or 0, part.end_column or 0
-    span = part.span
-    return span.end_line, span.end_column
-
-
-def _over(file: str, first: Any, last: Any) -> Span:
-    """Return the span from the start of ``first`` to the end of ``last`` (tokens or nodes)."""
-    line, col = _start(file, first)
-    end_line, end_col = _end(file, last)
-    return Span(file, line, col, end_line, end_col)
-
-
 # --------------------------------------------------------------------------------------
 # The tree builder: lark LALR callbacks, one per rule alias, called as rules reduce
-
-
-def _deeper(state: _State, node: Any, parts: Any) -> Any:
-    depth = 1 + max((state.depth.get(id(p), 1) for p in parts), default=0)
-    if depth > MAX_DEPTH:
-        raise _TooDeep(node.span)
-    if depth > 1:
-        state.depth[id(node)] = depth
-    return node
 
 
 @v_args(inline=True)
@@ -217,16 +188,7 @@ class _Build(Transformer):
 
     def number(self, tok: Token) -> st.Number:
         state = _STATE.get()
-        span = Span(state.file, tok.line, tok.column, tok.end_line, tok.end_column)  # type: ignore[arg-type]
-        text, unit, factor, dim = _split_number(str(tok))
-        value = float(text)
-        if not math.isfinite(value):
-            state.diagnostics.append(Diagnostic(span, f"the number `{text}` is too large"))
-            return st.Number(0.0, NONE, text, unit, span)
-        if dim is None:
-            state.diagnostics.append(_unknown_unit(unit, span))
-            return st.Number(value, NONE, text, unit, span)
-        return st.Number(value * factor, dim, text, unit, span)
+        return number(state, str(tok), _token_span(state.file, tok))
 
     def name(self, tok: Token) -> st.Name:
         _not_keyword(tok)
@@ -260,7 +222,7 @@ class _Build(Transformer):
     def expr(self, *parts: Any) -> st.Expr:
         if len(parts) == 1 and not isinstance(parts[0], _Prefixed):
             return parts[0]
-        return _precedence(_STATE.get(), parts)
+        return precedence(_STATE.get(), parts)
 
     def group(self, lpar: Token, *parts: Any) -> st.Group:
         state = _STATE.get()
@@ -275,83 +237,6 @@ class _Build(Transformer):
         return _deeper(state, st.Vector(tuple(items), _over(state.file, lsqb, rsqb)), items)
 
 
-@functools.lru_cache(maxsize=4096)
-def _split_number(token: str) -> tuple[str, str, float, Any]:
-    """(digits, unit without spaces, factor to SI, dimension or None if unknown)."""
-    m = _NUMBER.fullmatch(token)
-    assert m is not None  # the token's own pattern guarantees the shape
-    text, unit = m.group(1), m.group(2).replace(" ", "").replace("\t", "")
-    if not unit:
-        return text, "", 1.0, NONE
-    try:
-        factor, dim = unit_value(unit)
-    except KeyError:
-        return text, unit, 1.0, None
-    return text, unit, factor, dim
-
-
-class _Prefixed:
-    """A prefix operator and its operand as parsed, before precedence is applied."""
-
-    __slots__ = ("op", "operand")
-
-    def __init__(self, op: Token, operand: Any) -> None:
-        self.op = op
-        self.operand = operand
-
-
-#: Binding power of each operator (higher binds tighter); `not` sits between `and` and
-#: the comparisons, as in Python, and unary minus above `*`.
-_BINARY = {"or": 1, "xor": 2, "and": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5, "!=": 5,
-           "+": 6, "-": 6, "*": 7, "/": 7}
-_NOT, _SIGN, _COMPARISON = 4, 8, 5
-
-
-def _precedence(state: _State, parts: tuple[Any, ...]) -> st.Expr:
-    """Build the operator tree of ``unit (op unit)*`` by operator precedence.
-
-    Shunting yard: iterative, left associative, prefix operators as in Python.
-    """
-    file = state.file
-    operands: list[st.Expr] = []
-    ops: list[tuple[int, Token, bool]] = []  # (binding power, operator, is prefix)
-
-    def apply() -> None:
-        power, tok, prefix = ops.pop()
-        if prefix:
-            x = operands.pop()
-            operands.append(_deeper(state, st.Unary(str(tok), x, _over(file, tok, x)), (x,)))
-            return
-        right = operands.pop()
-        left = operands.pop()
-        if power == _COMPARISON and any(isinstance(side, st.Binary) and side.op in _CMP
-                                        for side in (left, right)):
-            state.diagnostics.append(Diagnostic(
-                _token_span(file, tok), "comparisons do not chain",
-                hint="write `0 m < x and x < 10 m`"))
-        node = st.Binary(str(tok), left, right, _over(file, left, right), _token_span(file, tok))
-        operands.append(_deeper(state, node, (left, right)))
-
-    for i, part in enumerate(parts):
-        if i % 2:  # a binary operator
-            power = _BINARY[str(part)]
-            while ops and ops[-1][0] >= power:
-                apply()
-            ops.append((power, part, False))
-            continue
-        while isinstance(part, _Prefixed):
-            ops.append((_NOT if part.op == "not" else _SIGN, part.op, True))
-            part = part.operand
-        operands.append(part)
-    while ops:
-        apply()
-    (result,) = operands
-    return result
-
-
-_CMP = frozenset({"<", "<=", ">", ">=", "==", "!="})
-
-
 def _not_keyword(tok: Token) -> None:
     # The contextual lexer reads a keyword as a NAME where only a name can stand
     # (`atom run = ...`); keywords stay reserved everywhere.
@@ -362,18 +247,6 @@ def _not_keyword(tok: Token) -> None:
             _token_span(state.file, tok),
             f"`{word}` is a keyword of MDLe and cannot be used as a name",
             hint=f"pick another name, such as `{word}_1`"))
-
-
-def _unknown_unit(unit: str, span: Span) -> Diagnostic:
-    known = sorted(UNITS)
-    parts = unit.split("/")
-    bad = next((p for p in parts if p not in UNITS), unit)
-    close = difflib.get_close_matches(bad, known, n=1, cutoff=0.5)
-    hint = (f"did you mean `{close[0]}`? " if close else "") + \
-        f"units are {', '.join(known)} and quotients such as m/s, deg/s"
-    if bad in ("x", "y", "v", "t") or len(parts) == 1 and bad not in UNITS and not close:
-        hint += "; to multiply, write `*`"
-    return Diagnostic(span, f"unknown unit `{bad}`", hint=hint)
 
 
 # --------------------------------------------------------------------------------------
@@ -450,11 +323,6 @@ def _sorted(diags: list[Diagnostic]) -> list[Diagnostic]:
             seen.add(key)
             out.append(d)
     return out
-
-
-def _too_deep(span: Span) -> Diagnostic:
-    return Diagnostic(span, f"this nests more than {MAX_DEPTH} levels deep",
-                      hint="split it into named definitions")
 
 
 def _parse_with_recovery(text: str, file: str
