@@ -45,7 +45,7 @@ from mdle.dimensions import (
 from mdle.errors import CheckError, Diagnostic, Severity, Span
 from mdle.format import format_expr
 from mdle.program import INF, AtomNode, Element, Interrupt, Program, StringKind, StringNode
-from mdle.resolve import Namespace, build_namespace, find_cycles
+from mdle.resolve import Namespace, build_namespace, find_cycles, uses_of
 from mdle.units import NONE, TIME, Dim
 
 __all__ = ["Checker", "check_program", "MAX_NESTING", "never_ends"]
@@ -948,10 +948,10 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
         With every error found (warnings are in ``Program.warnings``).
     """
     srcs = dict(sources or {})
-    checker, errors = _checker(modules, registry, replace)
+    checker, errors, uses = _checker(modules, registry, replace)
     main = main if main is not None else (modules[-1] if modules else None)
     elements: dict[str, Element] = {}
-    for d in _dependency_order(checker.ns, checker.broken):
+    for d in _dependency_order(checker.ns, checker.broken, uses):
         try:
             e = checker.check_definition(d)
         except RecursionError:  # a last guard: the nesting limits should prevent this
@@ -974,14 +974,13 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
                    tuple(_ordered(checker.warnings)))
 
 
-def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
+def _dependency_order(ns: Namespace, broken: set[str],
+                      uses: Mapping[str, list[st.Name | st.Call]]) -> list[st.Definition]:
     """Order definitions so that what each uses comes first.
 
     A long chain of definitions is then checked one link at a time (each use finds its
     element already built).
     """
-    from mdle.resolve import references
-
     order: list[st.Definition] = []
     done: set[str] = set()
     for root in ns.definitions:
@@ -998,20 +997,20 @@ def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
             done.add(name)
             stack.append((name, True))
             if name not in broken:
-                stack.extend((r.name, False) for r in references(ns.definitions[name],
-                                                                 ns.definitions, ns.registry)
-                             if r.name not in done)
+                stack.extend((r.name, False) for r in uses[name] if r.name not in done)
     return order
 
 
 def _checker(modules: Sequence[st.Module], registry: Registry,
-             replace: bool) -> tuple[Checker, list[Diagnostic]]:
+             replace: bool
+             ) -> tuple[Checker, list[Diagnostic], dict[str, list[st.Name | st.Call]]]:
     defs = [d for m in modules for d in m.definitions]
     ns, errors = build_namespace(defs, registry, replace=replace)
-    broken, cycle_errors = find_cycles(ns)
+    uses = uses_of(ns)
+    broken, cycle_errors = find_cycles(ns, uses)
     checker = Checker(ns)
     checker.broken = broken
-    return checker, errors + cycle_errors
+    return checker, errors + cycle_errors, uses
 
 
 def _entry(checker: Checker, main: st.Module | None, elements: Mapping[str, Element]) -> str | None:

@@ -307,4 +307,23 @@ def to_interrupt(t: Typed, source: str) -> Interrupt:
             return NEVER if source == "never" else Interrupt(NEVER.test, source, never=True)
         return Interrupt(lambda ctx: True, source)
     assert t.node is not None
-    return Interrupt(_compile(t.node, as_bool=True), source)
+    return _Deferred(t.node, source)
+
+
+class _Deferred(Interrupt):
+    """An interrupt compiled when its ``test`` is first read.
+
+    ``mdle check`` never reads it, so a plan of thousands of interrupts is checked
+    without generating their code; the runtime reads ``test`` once per string start and
+    gets the compiled function itself (no wrapper per call).
+    """
+
+    def __init__(self, node: Node, source: str) -> None:
+        object.__setattr__(self, "source", source)
+        object.__setattr__(self, "never", False)
+        object.__setattr__(self, "_node", node)
+
+    @functools.cached_property
+    def test(self) -> Fn:
+        """The compiled function of ``ctx``."""
+        return _compile(self.__dict__["_node"], as_bool=True)

@@ -8,6 +8,8 @@ every file are reported together, then the check errors.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import os
 import re
 from collections.abc import Iterator, Mapping, Sequence
@@ -232,12 +234,37 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         from atoms import default_registry
 
         registry = default_registry()
-    loaded = load_modules(text, file, base_dir, files)
-    if settings:
-        from mdle.overrides import override_defaults
+    with _collector_paused():
+        loaded = load_modules(text, file, base_dir, files)
+        if settings:
+            from mdle.overrides import override_defaults
 
-        loaded = override_defaults(loaded, settings, registry)
-    return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main)
+            loaded = override_defaults(loaded, settings, registry)
+        return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main)
+
+
+@contextlib.contextmanager
+def _collector_paused() -> Iterator[None]:
+    """Pause Python's cyclic garbage collector while a program is parsed and checked.
+
+    Parsing and checking allocate millions of small objects that all stay alive (the
+    syntax tree, the checked program) and make almost no cycles; each collection
+    would walk them all again, which took 40 % of the time of a large check. The
+    collector's previous state is restored on every way out. The new objects are then
+    moved to the oldest generation without a walk (``freeze`` then ``unfreeze``, when
+    nothing else is frozen): a collection of the youngest generation right after would
+    walk them all once more. Cycles made meanwhile are found by the next full collection.
+    """
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            if gc.get_freeze_count() == 0:
+                gc.freeze()
+                gc.unfreeze()
+            gc.enable()
 
 
 def load_program(path: str | os.PathLike[str], registry: Registry | None = None, *,

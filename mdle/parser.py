@@ -30,6 +30,7 @@ from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from mdle import syntax as st
+from mdle.descent import Lexer, parse_valid
 from mdle.errors import Diagnostic, MdleSyntaxError, Severity, Span
 from mdle.syntax_errors import (
     EXAMPLES,
@@ -97,6 +98,12 @@ def lark_parser() -> Lark:
         return Lark(grammar, cache=cache or False, **options)
     except OSError:  # an unreadable or unwritable cache: build without it
         return Lark(grammar, **options)
+
+
+@functools.lru_cache(maxsize=1)
+def _fast_lexer() -> Lexer:
+    """Return the fast path's lexer, made of the reference lexer's terminals."""
+    return Lexer(lark_parser().parser.lexer.terminals)
 
 
 # --------------------------------------------------------------------------------------
@@ -285,6 +292,9 @@ def parse_module(text: str, file: str = "<string>") -> st.Module:
         Every syntax error found (up to :data:`MAX_ERRORS`), and every unknown unit.
     """
     text = normalise_newlines(text)
+    valid = parse_valid(text, file, _fast_lexer())
+    if valid is not None:
+        return st.Module(file, tuple(valid[0]), tuple(valid[1]))
     statements, comments, diagnostics = _parse_with_recovery(text, file)
     if diagnostics:
         raise MdleSyntaxError(_sorted(diagnostics), {file: text})

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mdle import syntax as st
-from mdle.errors import Diagnostic, Span
+from mdle.errors import Diagnostic, Span, make_span
 from mdle.units import NONE, UNITS, unit_value
 
 __all__ = ["MAX_DEPTH", "BuildState", "TooDeep", "Op", "Prefixed", "token_span", "over",
@@ -82,7 +82,7 @@ class Prefixed:
 
 def token_span(file: str, tok: Any) -> Span:
     """Return the span of a token."""
-    return Span(file, tok.line or 0, tok.column or 0, tok.end_line or 0, tok.end_column or 0)
+    return make_span(file, tok.line or 0, tok.column or 0, tok.end_line or 0, tok.end_column or 0)
 
 
 def _start(part: Any) -> tuple[int, int]:
@@ -103,7 +103,7 @@ def over(file: str, first: Any, last: Any) -> Span:
     """Return the span from the start of ``first`` to the end of ``last`` (tokens or nodes)."""
     line, col = _start(first)
     end_line, end_col = _end(last)
-    return Span(file, line, col, end_line, end_col)
+    return make_span(file, line, col, end_line, end_col)
 
 
 def deeper(state: BuildState, node: Any, parts: Any) -> Any:
