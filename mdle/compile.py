@@ -576,13 +576,19 @@ class Checker:
                        f"`range(0 deg) < 1 m`, found {dim_words(t.dim)}",
                        hint="compare it with something, as in `range(0 deg) < 1 m`")
             raise _Abort
-        shown = {k: show_value(v) for k, v in env.items()
-                 if not (isinstance(v, Quantity) and math.isnan(v.value))}
         if t.is_const and t.const and not any(
                 isinstance(v, Quantity) and math.isnan(v.value) for v in env.values()):
             self.warn(expr.span, f"the interrupt `{_short(expr)}` is always true: the element "
                       "ends as soon as it starts", hint="did you mean `never`?")
-        return cond.to_interrupt(t, format_expr(expr, shown))
+        if isinstance(expr, st.Never):
+            return cond.to_interrupt(t, "never")
+
+        def source() -> str:  # the text `show` and traces print, made when first read
+            shown = {k: show_value(v) for k, v in env.items()
+                     if not (isinstance(v, Quantity) and math.isnan(v.value))}
+            return format_expr(expr, shown)
+
+        return cond.to_interrupt(t, source)
 
     # ------------------------------------------------------------------ elements
 

@@ -300,30 +300,40 @@ def _code(source: str) -> CodeType:
     return compile(source, "<interrupt>", "exec")
 
 
-def to_interrupt(t: Typed, source: str) -> Interrupt:
-    """Return the runtime's :class:`~mdle.program.Interrupt` for a checked condition."""
+def to_interrupt(t: Typed, source: str | Callable[[], str]) -> Interrupt:
+    """Return the runtime's :class:`~mdle.program.Interrupt` for a checked condition.
+
+    ``source`` is the interrupt's text, or a function making it when first read.
+    """
     if t.is_const:
+        text = source if isinstance(source, str) else source()
         if not t.const:
-            return NEVER if source == "never" else Interrupt(NEVER.test, source, never=True)
-        return Interrupt(lambda ctx: True, source)
+            return NEVER if text == "never" else Interrupt(NEVER.test, text, never=True)
+        return Interrupt(lambda ctx: True, text)
     assert t.node is not None
     return _Deferred(t.node, source)
 
 
 class _Deferred(Interrupt):
-    """An interrupt compiled when its ``test`` is first read.
+    """An interrupt compiled when its ``test`` is first read, its text made likewise.
 
-    ``mdle check`` never reads it, so a plan of thousands of interrupts is checked
+    ``mdle check`` reads neither, so a plan of thousands of interrupts is checked
     without generating their code; the runtime reads ``test`` once per string start and
     gets the compiled function itself (no wrapper per call).
     """
 
-    def __init__(self, node: Node, source: str) -> None:
-        object.__setattr__(self, "source", source)
+    def __init__(self, node: Node, source: str | Callable[[], str]) -> None:
         object.__setattr__(self, "never", False)
         object.__setattr__(self, "_node", node)
+        object.__setattr__(self, "_source", source)
 
     @functools.cached_property
     def test(self) -> Fn:
         """The compiled function of ``ctx``."""
         return _compile(self.__dict__["_node"], as_bool=True)
+
+    @functools.cached_property
+    def source(self) -> str:
+        """The canonical text of the interrupt."""
+        made = self.__dict__["_source"]
+        return made if isinstance(made, str) else made()

@@ -30,6 +30,13 @@ from mdle.treebuild import (
     Prefixed,
     TooDeep,
     deeper,
+    new_argument,
+    new_call,
+    new_definition,
+    new_group,
+    new_name,
+    new_param,
+    new_vector,
     number,
     over,
     precedence,
@@ -68,7 +75,8 @@ class Lexer:
                 self.keywords[t.pattern.value] = t.name
                 continue
             groups.append(f"(?P<{t.name}>{regexp})")
-        self.pattern = re.compile("|".join(groups))
+        # Spaces before a token are matched with it: one match per token, not two.
+        self.pattern = re.compile("[ \t\f\r]*(?:" + "|".join(groups) + ")")
 
     def tokens(self, text: str, file: str, comments: list[st.Comment]) -> Iterator[_Token]:
         """Yield the tokens of ``text``, then ``$END`` forever; comments go to ``comments``.
@@ -84,7 +92,7 @@ class Lexer:
             m = match(text, pos)
             if m is None:
                 raise _GiveUp
-            kind = m.lastgroup
+            kind: str = m.lastgroup  # type: ignore[assignment]  # a group always matched
             end = m.end()
             if kind == "WHITESPACE":
                 lines = count("\n", pos, end)
@@ -93,8 +101,8 @@ class Lexer:
                     line_start = text.rindex("\n", pos, end) + 1
                 pos = end
                 continue
-            value = m.group()
-            column = pos - line_start + 1
+            value = m.group(kind)
+            column = end - len(value) - line_start + 1
             end_column = end - line_start + 1
             pos = end
             if kind == "NAME":
@@ -108,7 +116,7 @@ class Lexer:
                     raise _GiveUp
             elif (kind == "RPAR" or kind == "RSQB") and opened:
                 opened -= 1
-            yield kind, value, line, column, end_column  # type: ignore[misc]
+            yield kind, value, line, column, end_column
         column = pos - line_start + 1
         while True:  # a parser looking past the end keeps finding it
             yield "$END", "", line, column, column
@@ -171,7 +179,7 @@ class _Descent:
         self.expect("_EQUALS")
         body = self.expr()
         end = body.span
-        return st.Definition(_KINDS[kw[0]], name[1], params, body,
+        return new_definition(_KINDS[kw[0]], name[1], params, body,
                              make_span(self.file, kw[2], kw[3], end.end_line, end.end_column),
                              self.span(name))
 
@@ -188,7 +196,7 @@ class _Descent:
                 self.advance()
                 default = self.expr()
             last = default.span if default is not None else self.span(name)
-            out.append(st.Param(name[1], default, make_span(self.file, name[2], name[3],
+            out.append(new_param(name[1], default, make_span(self.file, name[2], name[3],
                                                        last.end_line, last.end_column)))
             kind = self.tok[0]
             if kind == "_COMMA":
@@ -233,7 +241,7 @@ class _Descent:
         if kind == "NAME":
             if self.tok[0] == "LPAR":
                 return self.call(tok)
-            return st.Name(tok[1], self.span(tok))
+            return new_name(tok[1], self.span(tok))
         if kind == "NUMBER":
             return number(self.state, tok[1], self.span(tok))
         if kind == "LPAR":
@@ -244,12 +252,12 @@ class _Descent:
                 repeat = True
             else:
                 repeat = False
-            return deeper(self.state, st.Group(tuple(items), repeat, make_span(
+            return deeper(self.state, new_group(tuple(items), repeat, make_span(
                 self.file, tok[2], tok[3], close[2], close[4])), items)
         if kind == "LSQB":
             items = self.items("RSQB")
             close = self.advance()
-            return deeper(self.state, st.Vector(tuple(items), make_span(
+            return deeper(self.state, new_vector(tuple(items), make_span(
                 self.file, tok[2], tok[3], close[2], close[4])), items)
         if kind == "NEVER":
             return st.Never(self.span(tok))
@@ -288,7 +296,7 @@ class _Descent:
                 else:
                     raise _GiveUp
         close = self.advance()
-        node = st.Call(name[1], tuple(args),
+        node = new_call(name[1], tuple(args),
                        make_span(self.file, name[2], name[3], close[2], close[4]),
                        self.span(name))
         return deeper(self.state, node, [a.value for a in args])
@@ -301,9 +309,9 @@ class _Descent:
                 name = self.advance()
                 self.advance()
                 value = self.expr()
-                return st.Argument(name[1], value, over(self.file, _At(name), value))
+                return new_argument(name[1], value, over(self.file, _At(name), value))
         value = self.expr()
-        return st.Argument(None, value, value.span)
+        return new_argument(None, value, value.span)
 
 
 class _At:

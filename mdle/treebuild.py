@@ -10,12 +10,14 @@ A token here is anything with ``line``, ``column``, ``end_line``, ``end_column``
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import functools
 import math
 import re
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 from mdle import syntax as st
 from mdle.errors import Diagnostic, Span, make_span
@@ -27,7 +29,41 @@ __all__ = ["MAX_DEPTH", "BuildState", "TooDeep", "Op", "Prefixed", "token_span",
 #: Deepest nesting of parentheses and operators accepted in one expression.
 MAX_DEPTH = 100
 
+_T = TypeVar("_T")
 _NUMBER = re.compile(r"((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)[ \t]*(.*)", re.S)
+
+
+def builder(cls: type[_T]) -> Callable[..., _T]:
+    """Return a constructor of the frozen dataclass ``cls`` taking every field, in order.
+
+    A frozen dataclass's ``__init__`` sets each field through ``object.__setattr__``,
+    which is most of the cost of a small node; a parser makes one or two nodes per token.
+    The builder writes the fields into the new instance's ``__dict__`` (as
+    :func:`mdle.errors.make_span` does): the result is an ordinary, equal instance.
+    It suits plain data classes only (no ``__post_init__``, no slots).
+    """
+    names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
+    assert not hasattr(cls, "__post_init__") and not hasattr(cls, "__slots__")
+    body = "".join(f"    d[{n!r}] = {n}\n" for n in names)
+    code = (f"def build({', '.join(names)}):\n    o = new(cls)\n    d = o.__dict__\n{body}"
+            "    return o\n")
+    namespace: dict[str, Any] = {"new": object.__new__, "cls": cls}
+    exec(code, namespace)
+    build: Callable[..., _T] = namespace["build"]
+    return build
+
+
+#: Fast constructors of the nodes the parsers make most (every field given, in order).
+new_number = builder(st.Number)
+new_name = builder(st.Name)
+new_call = builder(st.Call)
+new_argument = builder(st.Argument)
+new_unary = builder(st.Unary)
+new_binary = builder(st.Binary)
+new_group = builder(st.Group)
+new_vector = builder(st.Vector)
+new_param = builder(st.Param)
+new_definition = builder(st.Definition)
 
 
 @dataclass
@@ -108,7 +144,12 @@ def over(file: str, first: Any, last: Any) -> Span:
 
 def deeper(state: BuildState, node: Any, parts: Any) -> Any:
     """Record ``node``'s nesting depth (one more than its deepest part); refuse past the limit."""
-    depth = 1 + max((state.depth.get(id(p), 1) for p in parts), default=0)
+    get = state.depth.get
+    depth = 1
+    for p in parts:
+        d = get(id(p), 1)
+        if d >= depth:
+            depth = d + 1
     if depth > MAX_DEPTH:
         raise TooDeep(node.span)
     if depth > 1:
@@ -141,7 +182,7 @@ def number(state: BuildState, token: str, span: Span) -> st.Number:
     if dim is None:
         state.diagnostics.append(_unknown_unit(unit, span))
         return st.Number(value, NONE, text, unit, span)
-    return st.Number(value * factor, dim, text, unit, span)
+    return new_number(value * factor, dim, text, unit, span)
 
 
 def _unknown_unit(unit: str, span: Span) -> Diagnostic:
@@ -177,7 +218,7 @@ def precedence(state: BuildState, parts: tuple[Any, ...] | list[Any]) -> st.Expr
         power, tok, prefix = ops.pop()
         if prefix:
             x = operands.pop()
-            operands.append(deeper(state, st.Unary(str(tok), x, over(file, tok, x)), (x,)))
+            operands.append(deeper(state, new_unary(str(tok), x, over(file, tok, x)), (x,)))
             return
         right = operands.pop()
         left = operands.pop()
@@ -186,7 +227,7 @@ def precedence(state: BuildState, parts: tuple[Any, ...] | list[Any]) -> st.Expr
             state.diagnostics.append(Diagnostic(
                 token_span(file, tok), "comparisons do not chain",
                 hint="write `0 m < x and x < 10 m`"))
-        node = st.Binary(str(tok), left, right, over(file, left, right), token_span(file, tok))
+        node = new_binary(str(tok), left, right, over(file, left, right), token_span(file, tok))
         operands.append(deeper(state, node, (left, right)))
 
     for i, part in enumerate(parts):
