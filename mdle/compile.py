@@ -141,6 +141,9 @@ class Checker:
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
         self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
+        #: Names defined by statements that did not parse: uses of them are not errors
+        #: of their own (the syntax error is reported)
+        self.unparsed: frozenset[str] = frozenset()
         #: True while a definition is checked with its required parameters unknown (NaN):
         #: a NaN is then no error (each use with arguments is checked again)
         self._partial = False
@@ -205,6 +208,8 @@ class Checker:
         return names
 
     def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
+        if name in self.unparsed:
+            return  # its statement has a syntax error, reported already
         found = self._closest(name, list(pool))
         close = [found] if found else []
         self.error(span, f"unknown {what} `{name}`",
@@ -638,6 +643,8 @@ class Checker:
             self.error(expr.span, f"expected an element (an atom, behavior or plan); `{name}` is "
                        f"{_kind_name(target)}")
             raise _Abort
+        if name in self.unparsed:
+            raise _Abort  # its statement has a syntax error, reported already
         pool = [n for n, d in self.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
         pool += list(self.ns.registry.laws)
         found = self._closest(name, pool)
@@ -932,7 +939,7 @@ def _after(expr: st.Group) -> Span:
 
 def check_program(modules: Sequence[st.Module], registry: Registry, *,
                   sources: Mapping[str, str] | None = None, main: st.Module | None = None,
-                  replace: bool = False) -> Program:
+                  replace: bool = False, unparsed: frozenset[str] = frozenset()) -> Program:
     """Check the modules of a program (the main file last) and build its :class:`Program`.
 
     Parameters
@@ -947,6 +954,9 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
         The file whose ``run`` names the entry (default: the last module).
     replace : bool
         Later definitions replace earlier ones of the same name (the REPL).
+    unparsed : frozenset of str
+        Names defined by statements with syntax errors (left out of ``modules``): using
+        one is not reported again.
 
     Raises
     ------
@@ -955,6 +965,7 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     """
     srcs = dict(sources or {})
     checker, errors, uses = _checker(modules, registry, replace)
+    checker.unparsed = unparsed
     main = main if main is not None else (modules[-1] if modules else None)
     elements: dict[str, Element] = {}
     for d in _dependency_order(checker.ns, checker.broken, uses):

@@ -23,6 +23,7 @@ import importlib.resources
 import os
 import re
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -53,8 +54,8 @@ from mdle.treebuild import (
     too_deep,
 )
 
-__all__ = ["parse_module", "parse_expression", "normalise_newlines", "MAX_DEPTH", "MAX_ERRORS",
-           "lark_parser", "iter_tokens", "lex_fragment"]
+__all__ = ["parse_module", "parse_partial", "Partial", "parse_expression", "normalise_newlines",
+           "MAX_DEPTH", "MAX_ERRORS", "lark_parser", "iter_tokens", "lex_fragment"]
 
 #: Syntax errors reported per file before giving up.
 MAX_ERRORS = 20
@@ -165,12 +166,17 @@ class _Build(Transformer):
         return expr
 
     def import_stmt(self, kw: Token, path: Token) -> st.Import:
-        return st.Import(str(path)[1:-1], _over(_STATE.get().file, kw, path))
+        state = _STATE.get()
+        node = st.Import(str(path)[1:-1], _over(state.file, kw, path))
+        state.statements.append(node)
+        return node
 
     def run_stmt(self, kw: Token, name: Token) -> st.Run:
-        file = _STATE.get().file
+        state = _STATE.get()
         _not_keyword(name)
-        return st.Run(str(name), _over(file, kw, name), _token_span(file, name))
+        node = st.Run(str(name), _over(state.file, kw, name), _token_span(state.file, name))
+        state.statements.append(node)
+        return node
 
     def def_head(self, kw: Token, name: Token, params: list[Any] | None
                  ) -> tuple[Token, Token, list[Any] | None]:
@@ -179,11 +185,13 @@ class _Build(Transformer):
     def definition(self, head: tuple[Token, Token, list[Any] | None],
                    body: st.Expr) -> st.Definition:
         kw, name, params = head
-        file = _STATE.get().file
+        state = _STATE.get()
         _not_keyword(name)
-        return st.Definition(st.DefKind(str(kw)), str(name),
+        node = st.Definition(st.DefKind(str(kw)), str(name),
                              None if params is None else tuple(params[1:-1]), body,
-                             _over(file, kw, body), _token_span(file, name))
+                             _over(state.file, kw, body), _token_span(state.file, name))
+        state.statements.append(node)
+        return node
 
     def params(self, *parts: Any) -> list[Any]:
         return list(parts)  # (LPAR, params..., RPAR): the brackets are dropped by `definition`
@@ -301,6 +309,67 @@ def parse_module(text: str, file: str = "<string>") -> st.Module:
     return st.Module(file, tuple(statements), tuple(comments))
 
 
+@dataclass(frozen=True)
+class Partial:
+    """What :func:`parse_partial` makes of a file: the good statements and the errors."""
+
+    module: st.Module
+    """The statements that parsed without an error (all of them for a valid file)."""
+    unparsed: frozenset[str]
+    """Names defined by statements left out for their errors."""
+    diagnostics: tuple[Diagnostic, ...]
+    """Every syntax error (as :func:`parse_module` raises them), in order."""
+
+
+def parse_partial(text: str, file: str = "<string>") -> Partial:
+    """Parse a file, keeping the statements that parse when others do not.
+
+    After a syntax error the parser resumes at the next statement, so every
+    independent error is found; the statements before and between the errors are kept,
+    so the checker can report their errors in the same pass. A statement holding an
+    error (a broken one, or one with an unknown unit) is left out, and the name it
+    defines is listed in ``unparsed`` so its uses are not reported as unknown.
+    """
+    text = normalise_newlines(text)
+    valid = parse_valid(text, file, _fast_lexer())
+    if valid is not None:
+        return Partial(st.Module(file, tuple(valid[0]), tuple(valid[1])), frozenset(), ())
+    statements, comments, diagnostics = _parse_with_recovery(text, file)
+    if not diagnostics:
+        return Partial(st.Module(file, tuple(statements), tuple(comments)), frozenset(), ())
+    places = [(d.span.line, d.span.column) for d in diagnostics if d.span is not None]
+    kept = [s for s in statements if not any(_inside(s.span, place) for place in places)]
+    return Partial(st.Module(file, tuple(kept), tuple(comments)),
+                   _names_defined_outside(text, kept, comments), tuple(_sorted(diagnostics)))
+
+
+def _inside(span: Span, place: tuple[int, int]) -> bool:
+    return (span.line, span.column) <= place < (span.end_line, span.end_column)
+
+
+_DEFINITION_HEAD = re.compile(r"(?<![A-Za-z0-9_])(?:atom|behavior|plan|interrupt)[ \t\f\n]+"
+                              r"([A-Za-z_][A-Za-z0-9_]*)")
+
+
+def _names_defined_outside(text: str, statements: list[st.Statement],
+                           comments: list[st.Comment]) -> frozenset[str]:
+    """Return the names after a definition keyword outside the given statements and comments."""
+    starts = [0] + [i + 1 for i, c in enumerate(text) if c == "\n"]
+
+    def offset(line: int, column: int) -> int:
+        return starts[line - 1] + column - 1 if 0 < line <= len(starts) else len(text)
+
+    taken = sorted((offset(x.span.line, x.span.column), offset(x.span.end_line, x.span.end_column))
+                   for x in [*statements, *comments])
+    rest, at = [], 0
+    for begin, end in taken:
+        rest.append(text[at:max(at, begin)])
+        at = max(at, end)
+    rest.append(text[at:])
+    names = {m.group(1) for piece in rest for m in _DEFINITION_HEAD.finditer(piece)}
+    return frozenset(names - KEYWORDS)
+
+
 def parse_expression(text: str, file: str = "<repl>") -> st.Expr:
     """Parse one expression: a bare element such as ``cruise`` or ``(go(1 m/s), never, 2 s)``.
 
@@ -353,7 +422,7 @@ def _parse_with_recovery(text: str, file: str
         token = _STATE.set(state)
         resume_at: int | None = None
         try:
-            statements = list(parser.parse(source, start="start"))  # type: ignore[call-overload]
+            parser.parse(source, start="start")
         except UnexpectedInput as err:
             diagnostics.append(_describe(err, text, file, "start", source))
             errors += 1
@@ -366,12 +435,11 @@ def _parse_with_recovery(text: str, file: str
             _STATE.reset(token)
         comments.extend(state.comments)
         diagnostics.extend(state.diagnostics)
+        statements.extend(state.statements)  # those completed before an error too
         if resume_at is None or errors >= MAX_ERRORS:
             break
         # Keep newlines so every later line and column is where it was.
         source = re.sub(r"[^\n]", " ", text[:resume_at]) + text[resume_at:]
-    if diagnostics:
-        statements = []
     comments.sort(key=lambda c: (c.span.line, c.span.column))
     unique = {(c.span.line, c.span.column): c for c in comments}
     return statements, list(unique.values()), diagnostics

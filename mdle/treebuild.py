@@ -75,6 +75,8 @@ class BuildState:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     depth: dict[int, int] = field(default_factory=dict)
     open_brackets: int = 0
+    #: Statements in the order they were completed (kept when a later one fails)
+    statements: list[Any] = field(default_factory=list)
 
 
 class TooDeep(Exception):
