@@ -31,7 +31,8 @@ if "mdle_language_plangen" not in sys.modules:
     sys.modules["mdle_language_plangen"] = plangen
     _spec.loader.exec_module(plangen)
 
-_bench = importlib.util.spec_from_file_location("mdle_bench_parse", ROOT / "benchmarks" / "parse.py")
+_bench = importlib.util.spec_from_file_location("mdle_bench_parse",
+                                                ROOT / "benchmarks" / "parse.py")
 assert _bench and _bench.loader
 bench = importlib.util.module_from_spec(_bench)
 _bench.loader.exec_module(bench)

@@ -9,6 +9,7 @@ import pytest
 from mdle import conditions
 from mdle.errors import CheckError
 from mdle.loader import load_text
+from mdle.program import StringNode
 
 PLAN = """
 atom a(d = 1 m) = (go(1 m/s), range(0 deg) < d, 2 s)
@@ -45,7 +46,8 @@ def test_interrupts_of_one_shape_share_their_code() -> None:
     conditions._code.cache_clear()
     program = load_text(PLAN)
     main = program.elements["main"]
-    tests = [e.interrupt.test for e in main.elements]  # type: ignore[attr-defined]
+    assert isinstance(main, StringNode)
+    tests = [e.interrupt.test for e in main.elements]
     assert tests[0] is not tests[1]  # each has its own constants...
     assert tests[0].__code__ is tests[1].__code__  # ...in one compiled shape
     assert conditions._code.cache_info().misses == 2  # `< d` and `< 2 m and not stalled`
