@@ -354,7 +354,7 @@ _DEFINITION_HEAD = re.compile(r"(?<![A-Za-z0-9_])(?:atom|behavior|plan|interrupt
 def _names_defined_outside(text: str, statements: list[st.Statement],
                            comments: list[st.Comment]) -> frozenset[str]:
     """Return the names after a definition keyword outside the given statements and comments."""
-    starts = [0] + [i + 1 for i, c in enumerate(text) if c == "\n"]
+    starts = [0] + [m.end() for m in re.finditer("\n", text)]
 
     def offset(line: int, column: int) -> int:
         return starts[line - 1] + column - 1 if 0 < line <= len(starts) else len(text)

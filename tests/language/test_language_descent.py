@@ -10,6 +10,7 @@ import dataclasses
 import importlib.util
 import sys
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import pytest
@@ -24,18 +25,20 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 PLANS = sorted((ROOT / "plans").rglob("*.mdle")) + sorted((ROOT / "tests").rglob("*.mdle"))
 
-_spec = importlib.util.spec_from_file_location("mdle_language_plangen", HERE / "plangen.py")
-assert _spec and _spec.loader
-plangen = sys.modules.get("mdle_language_plangen") or importlib.util.module_from_spec(_spec)
-if "mdle_language_plangen" not in sys.modules:
-    sys.modules["mdle_language_plangen"] = plangen
-    _spec.loader.exec_module(plangen)
 
-_bench = importlib.util.spec_from_file_location("mdle_bench_parse",
-                                                ROOT / "benchmarks" / "parse.py")
-assert _bench and _bench.loader
-bench = importlib.util.module_from_spec(_bench)
-_bench.loader.exec_module(bench)
+def _helper(name: str, path: Path) -> ModuleType:
+    """Return a helper module loaded by path (tests are imported in importlib mode)."""
+    module = sys.modules.get(name)
+    if module is None:
+        spec = importlib.util.spec_from_file_location(name, path)
+        assert spec is not None and spec.loader is not None
+        module = sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    return module
+
+
+plangen = _helper("mdle_language_plangen", HERE / "plangen.py")
+bench = _helper("mdle_bench_parse", ROOT / "benchmarks" / "parse.py")
 
 
 def reference(text: str) -> tuple[Any, Any, list[Any]]:
