@@ -105,7 +105,7 @@ class _Found:
     loaded: Loaded
     diagnostics: list[Diagnostic]
     syntax_failed: bool
-    imports_failed: bool  # an import missing, unreadable or in a cycle
+    imports_failed: bool  # an import missing, unreadable, in a cycle or with a syntax error
     unparsed: frozenset[str]  # names defined by statements with syntax errors
 
 
@@ -118,11 +118,12 @@ def _load(text: str, file: str, base_dir: str | None,
     syntax_failed = imports_failed = False
 
     def parse(src: str, name: str) -> st.Module:
-        nonlocal syntax_failed
+        nonlocal syntax_failed, imports_failed
         part = parse_partial(src, name)
         if not part.diagnostics:
             return part.module
         syntax_failed = True
+        imports_failed = imports_failed or part.broken_import
         diagnostics.extend(part.diagnostics)
         unparsed.update(part.unparsed)
         # Still follow every import of the file (those in broken statements too), so

@@ -319,6 +319,8 @@ class Partial:
     """Names defined by statements left out for their errors."""
     diagnostics: tuple[Diagnostic, ...]
     """Every syntax error (as :func:`parse_module` raises them), in order."""
+    broken_import: bool = False
+    """An ``import`` is among the statements left out: any name may be missing."""
 
 
 def parse_partial(text: str, file: str = "<string>") -> Partial:
@@ -339,8 +341,9 @@ def parse_partial(text: str, file: str = "<string>") -> Partial:
         return Partial(st.Module(file, tuple(statements), tuple(comments)), frozenset(), ())
     places = [(d.span.line, d.span.column) for d in diagnostics if d.span is not None]
     kept = [s for s in statements if not any(_inside(s.span, place) for place in places)]
-    return Partial(st.Module(file, tuple(kept), tuple(comments)),
-                   _names_defined_outside(text, kept, comments), tuple(_sorted(diagnostics)))
+    names, imports = _defined_outside(text, kept, comments)
+    return Partial(st.Module(file, tuple(kept), tuple(comments)), names,
+                   tuple(_sorted(diagnostics)), imports)
 
 
 def _inside(span: Span, place: tuple[int, int]) -> bool:
@@ -349,11 +352,15 @@ def _inside(span: Span, place: tuple[int, int]) -> bool:
 
 _DEFINITION_HEAD = re.compile(r"(?<![A-Za-z0-9_])(?:atom|behavior|plan|interrupt)[ \t\f\n]+"
                               r"([A-Za-z_][A-Za-z0-9_]*)")
+_IMPORT_WORD = re.compile(r"(?<![A-Za-z0-9_])import(?![A-Za-z0-9_])")
 
 
-def _names_defined_outside(text: str, statements: list[st.Statement],
-                           comments: list[st.Comment]) -> frozenset[str]:
-    """Return the names after a definition keyword outside the given statements and comments."""
+def _defined_outside(text: str, statements: list[st.Statement],
+                     comments: list[st.Comment]) -> tuple[frozenset[str], bool]:
+    """Return the names after a definition keyword outside the given statements and comments.
+
+    And whether the keyword ``import`` stands there too.
+    """
     starts = [0] + [m.end() for m in re.finditer("\n", text)]
 
     def offset(line: int, column: int) -> int:
@@ -367,7 +374,7 @@ def _names_defined_outside(text: str, statements: list[st.Statement],
         at = max(at, end)
     rest.append(text[at:])
     names = {m.group(1) for piece in rest for m in _DEFINITION_HEAD.finditer(piece)}
-    return frozenset(names - KEYWORDS)
+    return frozenset(names - KEYWORDS), any(_IMPORT_WORD.search(piece) for piece in rest)
 
 
 def parse_expression(text: str, file: str = "<repl>") -> st.Expr:

@@ -99,6 +99,15 @@ def test_no_check_errors_when_an_import_is_missing(tmp_path: Path) -> None:
     assert not any("unknown name" in m for m in messages)  # `a` would be in absent.mdle
 
 
+def test_no_check_errors_when_an_import_has_a_syntax_error() -> None:
+    text = 'import common.mdle\natom c = (go(1 m/s), never 1 s)\nplan main = ((a), never, inf)\n'
+    with pytest.raises(MdleError) as caught:
+        load_text(text, "main.mdle")
+    messages = [d.message for d in caught.value.diagnostics]
+    assert len(messages) == 2 and messages[0].startswith("expected a file name in double quotes")
+    assert parse_partial(text).broken_import
+
+
 def test_cli_lists_every_error(tmp_path: Path) -> None:
     plan = tmp_path / "several.mdle"
     plan.write_text(SEVERAL)
