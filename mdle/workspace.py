@@ -137,8 +137,8 @@ class Workspace:
         except MdleError as err:
             raise refine_error(err, {"<repl>": text}) from None
         sources = {**self._sources, "<repl>": text}
-        checker, errors = _checker([st.Module("<workspace>", tuple(self._defs.values()))],
-                                   self.registry, False, self.robot)
+        checker, errors, _ = _checker([st.Module("<workspace>", tuple(self._defs.values()))],
+                                      self.registry, False, self.robot)
         element: Element | None = None
         try:
             element = checker.element(expr, {})
