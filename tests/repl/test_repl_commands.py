@@ -210,6 +210,10 @@ def test_step_prints_each_tick(r: Run) -> None:
     side = float(found.group(1))
     assert side == pytest.approx(1.0, abs=0.05) and "side_hit yes" in lines[2]
     # every diagnostic with its unit (or as a flag, a mode, `none`): issue 12.18
+    for item in lines[2].split("  "):
+        if item.strip():
+            name, value, *unit = item.split()
+            assert unit or value in ("yes", "no", "follow", "corner", "search", "none"), item
     assert re.search(r"mode follow  lost [0-9.]+ s  u_law [-0-9.e]+ rad/s  safety (yes|no)  "
                      r"predicted_clearance ([0-9.]+ m|none)$", lines[2]), lines[2]
     assert lines[3].startswith("  #2    t   0.10 s  hug")
