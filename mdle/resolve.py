@@ -85,7 +85,7 @@ def symbol_argument(spec: LawSpec | SensorSpec | None, index: int, arg: st.Argum
         param = spec.param(arg.name)
     else:
         param = spec.params[index] if index < len(spec.params) else None
-    return param is not None and arg.value.name in param.choices
+    return param is not None and (arg.value.name in param.choices or bool(param.any_name))
 
 
 def references(definition: st.Definition, names: Mapping[str, st.Definition],

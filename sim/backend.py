@@ -38,6 +38,7 @@ import numpy as np
 
 from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.errors import BackendError, WorldError
+from mdle.messages import Inbox
 from sim.collision import CONTACT, Collider
 from sim.ladar import Ladar, LadarProfile, ladar_profile
 from sim.profiles import robot_profile
@@ -97,6 +98,8 @@ class SimBackend:
     """
 
     clock: ClockMode = ClockMode.SIMULATED
+    #: What the robot's radio has received (a team member's; None: a robot alone).
+    inbox: Inbox | None = None
 
     def __init__(self, world: World, *, seed: int | None = None,
                  robot: str | RobotProfile | None = None, ladar: str | None = None,
@@ -202,8 +205,7 @@ class SimBackend:
         if len(self.events) > self._reported:
             e = self.events[self._reported]
             self._reported = len(self.events)
-            kind = (self.world.obstacles[e.obstacle].kind
-                    if 0 <= e.obstacle < len(self.world.obstacles) else "")
+            kind = self._obstacle(e.obstacle)[1]
             truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
                                 "t": e.time, "x": e.x, "y": e.y}
         return Observation(
@@ -215,6 +217,7 @@ class SimBackend:
             stalled=self._stalled,
             motors_enabled=True,
             truth=truth,
+            inbox=self.inbox,
         )
 
     def command(self, cmd: Command) -> None:
@@ -362,11 +365,8 @@ class SimBackend:
             self._v = self._w = 0.0
             if not self._stalled:
                 obs_i = clear[1]
-                label = ""
-                if 0 <= obs_i < len(self.world.obstacles):
-                    o = self.world.obstacles[obs_i]
-                    label = o.name or o.kind
-                self.events.append(SimEvent("collision", t, x, y, obs_i, label))
+                self.events.append(SimEvent("collision", t, x, y, obs_i,
+                                            self._obstacle(obs_i)[0]))
             self._stalled = self._collided = True
             if not scanned:  # the robot rests at the contact point until the scan instant
                 self._scanned(self._take_scan(x, y, th, scan_at))
@@ -389,6 +389,13 @@ class SimBackend:
         return Pose(self._x, self._y, _wrap(self._th))
 
     # ------------------------------------------------------------------ internals
+    def _obstacle(self, index: int) -> tuple[str, str]:
+        """Return the label and kind of obstacle ``index`` ("", "" when none)."""
+        if 0 <= index < len(self.world.obstacles):
+            o = self.world.obstacles[index]
+            return o.name or o.kind, o.kind
+        return "", ""
+
     def _scanned(self, scan: Scan) -> None:
         """Make a new scan readable now, or after its seeded latency."""
         if self._scan_delay is None:

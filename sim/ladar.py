@@ -169,7 +169,7 @@ class Ladar:
         c, s = math.cos(th), math.sin(th)
         ranges, hit = fan.cast(x + c * mx - s * my, y + s * mx + c * my,
                                th + float(self.bearings[0]))
-        return self._finish(ranges, hit, stamp)
+        return self.finish(ranges, hit, stamp)
 
     def measure(self, hits: RayHits, heading: float, stamp: float) -> Scan:
         """Turn the ground truth of one fan of rays into a scan.
@@ -181,7 +181,7 @@ class Ladar:
         valid = hits.hit & (hits.ranges <= p.max_range * (1.0 + MAX_RANGE_SLACK))
         ranges = np.where(valid, hits.ranges, p.max_range)
         if not self.oracle:
-            return self._finish(ranges, valid, stamp)
+            return self.finish(ranges, valid, stamp)
         np.clip(ranges, 0.0, p.max_range, out=ranges)
         tangents = curvatures = None
         if hits.tangents is not None and hits.curvatures is not None:
@@ -195,7 +195,7 @@ class Ladar:
         return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
                     max_range=p.max_range, tangents=tangents, curvatures=curvatures)
 
-    def _finish(self, ranges: np.ndarray, valid: np.ndarray, stamp: float) -> Scan:
+    def finish(self, ranges: np.ndarray, valid: np.ndarray, stamp: float) -> Scan:
         """Add noise, quantise and clip, in place; return the scan.
 
         ``ranges`` (``max_range`` where not ``valid``) and ``valid`` are new arrays that

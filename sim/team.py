@@ -1,0 +1,295 @@
+"""Several simulated robots in one world, advanced together in simulated time.
+
+:class:`TeamSim` holds one :class:`Member` per robot. Each member is a full
+:class:`sim.backend.SimBackend` (its own profile, ladar, noise and seed) that also sees
+the others: its ladar's rays meet their discs (:func:`sim.crowd.cast_discs`, one
+(beams, robots) array per scan) and its body stops at them as at a wall
+(:class:`sim.crowd.CrowdCollider`). A member is driven through the ordinary backend
+protocol by its own scheduler, but its ``advance`` only marks the tick done:
+:meth:`TeamSim.step` moves every robot, one after the other, each seeing the others where
+they are at that moment (so two robots never overlap), then the radio delivers what was
+sent during the tick (at the next tick, so the order of the robots never matters).
+
+A robot that touches another stalls, like at a wall; both records name the other
+robot (obstacle kind ``robot``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from mdle.backend import Pose, Scan
+from mdle.errors import BackendError, WorldError
+from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
+from sim.backend import SimBackend, SimEvent
+from sim.crowd import CrowdCollider, Discs, cast_discs
+from sim.ladar import LadarProfile
+from sim.robot import RobotProfile
+from sim.world import World
+
+__all__ = ["RobotPlace", "Member", "Radio", "TeamSim"]
+
+
+@dataclass(frozen=True)
+class RobotPlace:
+    """One robot of a team: its name, profile, ladar and start pose (world frame)."""
+
+    name: str
+    profile: RobotProfile
+    ladar: LadarProfile
+    start: Pose
+
+
+@dataclass(frozen=True)
+class Outgoing:
+    """A message on its way: sent during a tick, delivered at the next."""
+
+    sender: int
+    channel: str
+    value: float | Pose
+    sent: float
+    x: float
+    y: float
+
+
+class Radio:
+    """The team's radio: collects what the robots send, delivers at the next tick.
+
+    ``log`` receives every delivery attempt as ``(message, receiver, delivered)``, for
+    traces and plots.
+    """
+
+    def __init__(self, names: Sequence[str], rules: DeliveryRules) -> None:
+        self.names = tuple(names)
+        self.rules = rules
+        self._rng = np.random.default_rng(rules.seed)
+        self._out: list[Outgoing] = []
+        self.sent: list[tuple[str, Message]] = []  # (sender, message) since last drained
+        self.delivered: list[tuple[str, Message]] = []  # (receiver, message)
+
+    def post(self, msg: Outgoing) -> None:
+        """Queue a message for the next delivery."""
+        self._out.append(msg)
+
+    def deliver(self, now: float, inboxes: Sequence[Inbox], positions: np.ndarray) -> None:
+        """Deliver the queued messages at time ``now`` (``positions``: (N, 2) when sent)."""
+        out, self._out = self._out, []
+        rules = self.rules
+        for o in out:
+            msg = Message(o.channel, o.value, self.names[o.sender], o.sent, now)
+            self.sent.append((msg.sender, msg))
+            for j, box in enumerate(inboxes):
+                if j == o.sender:
+                    continue
+                if math.isfinite(rules.range) and math.hypot(
+                        positions[j, 0] - o.x, positions[j, 1] - o.y) > rules.range:
+                    continue
+                if rules.loss > 0.0 and float(self._rng.random()) < rules.loss:
+                    continue
+                box.put(msg)
+                self.delivered.append((self.names[j], msg))
+
+
+class Member(SimBackend):
+    """One robot of a :class:`TeamSim`: a SimBackend that sees and meets the others.
+
+    Driven by a scheduler like any backend; :meth:`advance` only marks the tick, the team
+    moves it. :attr:`radio` takes what its plan sends.
+    """
+
+    def __init__(self, team: "TeamSim", index: int, world: World, place: RobotPlace,
+                 seed: int, sensing: str) -> None:
+        self.team = team
+        self.index = index
+        self.name = place.name
+        self.discs = Discs(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.intp))
+        super().__init__(world, seed=seed, robot=place.profile, ladar=None, sensing=sensing)
+        self.ladar_profile = place.ladar
+        self._collider = CrowdCollider(world.parts, self.profile.radius, len(world.obstacles))
+        self.inbox = Inbox(place.start)
+        self.reset(place.start)
+
+    # the scheduler's side
+    def advance(self, dt: float) -> float:
+        """Mark this robot's tick done; :meth:`TeamSim.step` moves every robot."""
+        if not (dt >= 0.0 and math.isfinite(dt)):
+            raise BackendError(f"advance(dt) needs a finite dt >= 0, got {dt}")
+        return 0.0
+
+    @property
+    def radio(self) -> "Member":
+        """The robot's transmitter (itself): see :meth:`send`."""
+        return self
+
+    def send(self, channel: str, value: float | None, now: float) -> None:
+        """Send ``value`` on ``channel`` (None: this robot's pose, on ``pose``)."""
+        if value is None:
+            odo = self.observe_pose()
+            self.team.radio.post(Outgoing(self.index, POSE_CHANNEL, self.inbox.me(odo), now,
+                                          self._x, self._y))
+        else:
+            self.team.radio.post(Outgoing(self.index, channel, float(value), now,
+                                          self._x, self._y))
+
+    def observe_pose(self) -> Pose:
+        """The odometry pose the robot reports now."""
+        if self.profile.sip_cycle > 0:
+            ox, oy, oth = self._report[:3]
+        else:
+            ox, oy, oth = self._ox, self._oy, self._oth
+        return Pose(ox, oy, oth)
+
+    # the team's side
+    def move(self, dt: float, discs: Discs) -> None:
+        """Advance ``dt`` with the other robots standing at ``discs``."""
+        self.discs = discs
+        assert isinstance(self._collider, CrowdCollider)
+        self._collider.discs = discs
+        self._clear = self._collider.clearance(self._x, self._y)  # the others moved
+        self._clear_bound = False
+        SimBackend.advance(self, dt)
+
+    def touched_by(self, event: SimEvent, name: str, index: int) -> None:
+        """Record that robot ``name`` ran into this one (a collision; not stalled)."""
+        self.events.append(SimEvent("collision", event.time, self._x, self._y, index, name))
+        self._collided = True
+
+    def _obstacle(self, index: int) -> tuple[str, str]:
+        base = len(self.world.obstacles)
+        if index >= base:
+            return self.team.places[index - base].name, "robot"
+        return super()._obstacle(index)
+
+    def _take_scan(self, x: float, y: float, th: float, stamp: float) -> Scan:
+        discs = getattr(self, "discs", None)
+        if discs is None or not len(discs):
+            return super()._take_scan(x, y, th, stamp)
+        lad = self._ladar
+        ox, oy = lad.origin(x, y, th)
+        angles = lad.world_angles(th)
+        t, which = cast_discs(ox, oy, angles, discs)
+        if self._fan is not None:
+            ranges, hit = self._fan.cast(ox, oy, th + float(lad.bearings[0]))
+            closer = t < np.where(hit, ranges, math.inf)
+            closer &= t <= lad.profile.max_range
+            ranges[closer] = t[closer]
+            hit |= closer
+            return lad.finish(ranges, hit, stamp)
+        hits = self.world.caster.cast(np.array((ox, oy)), angles, lad.profile.max_range,
+                                      detail=self._oracle, rel=lad.rel)
+        return lad.measure(_occluded(hits, ox, oy, angles, t, which, discs), th, stamp)
+
+
+def _occluded(hits: Any, ox: float, oy: float, angles: np.ndarray, t: np.ndarray,
+              which: np.ndarray, discs: Discs) -> Any:
+    """Return ray hits with the discs in front of the walls (tangents, curvature too)."""
+    from sim.raycast import RayHits
+
+    closer = t < hits.ranges
+    if not closer.any():
+        return hits
+    ranges = np.where(closer, t, hits.ranges)
+    hit = hits.hit | closer
+    tangents, curvatures = hits.tangents, hits.curvatures
+    if tangents is not None and curvatures is not None:
+        px = ox + t * np.cos(angles)
+        py = oy + t * np.sin(angles)
+        k = which.clip(min=0)
+        nx, ny = px - discs.cx[k], py - discs.cy[k]
+        # the boundary runs clockwise round an obstacle: the outward normal turned right
+        tangents = np.where(closer, np.arctan2(-nx, ny), tangents)
+        curvatures = np.where(closer, -1.0 / discs.r[k], curvatures)
+    owner = hits.owner
+    return RayHits(ranges, hit, tangents, curvatures, owner)
+
+
+class TeamSim:
+    """The robots of a team in one world.
+
+    Parameters
+    ----------
+    world : World
+    places : sequence of RobotPlace
+        The robots, each with a name unique in the team.
+    seed : int
+        Each robot's generators are seeded from it and the robot's position in the team.
+    sensing : {"scan", "exact"}
+    rules : DeliveryRules
+
+    Raises
+    ------
+    WorldError
+        A robot overlaps an obstacle or another robot at its start.
+    """
+
+    def __init__(self, world: World, places: Sequence[RobotPlace], *, seed: int = 0,
+                 sensing: str = "scan", rules: DeliveryRules | None = None) -> None:
+        self.world = world
+        self.places = tuple(places)
+        self.time = 0.0
+        n = len(self.places)
+        for i in range(n):
+            for j in range(i):
+                a, b = self.places[j], self.places[i]
+                gap = math.hypot(a.start.x - b.start.x, a.start.y - b.start.y)
+                if gap < a.profile.radius + b.profile.radius:
+                    raise WorldError(f"robots `{a.name}` and `{b.name}` overlap at their "
+                                     f"starts ({a.start.x:g}, {a.start.y:g}) and "
+                                     f"({b.start.x:g}, {b.start.y:g}): their centres are "
+                                     f"{gap:.3g} m apart, their radii add up to "
+                                     f"{a.profile.radius + b.profile.radius:.3g} m")
+        self.members: list[Member] = []
+        ss = np.random.SeedSequence(seed)
+        seeds = ss.generate_state(n + 1)
+        for i, p in enumerate(self.places):
+            try:
+                self.members.append(Member(self, i, world, p, int(seeds[i]), sensing))
+            except WorldError as err:
+                raise WorldError(f"robot `{p.name}`: {err.diagnostics[0].message}") from None
+        self.radio = Radio([p.name for p in self.places],
+                           rules if rules is not None else DeliveryRules(seed=int(seeds[n])))
+        self._radii = np.array([p.profile.radius for p in self.places])
+        self._ids = np.arange(n)
+        self._others = [np.delete(self._ids, i) for i in range(n)]
+        self._pos = np.array([[m._x, m._y] for m in self.members], dtype=float).reshape(n, 2)
+        self._place_discs()
+        for m in self.members:  # the first scans see the others too
+            m._scan = m._take_scan(m._x, m._y, m._th, m.time)
+
+    def positions(self) -> np.ndarray:
+        """True positions (N, 2), metres."""
+        return self._pos
+
+    def _discs(self, i: int) -> Discs:
+        k = self._others[i]
+        return Discs(self._pos[k, 0], self._pos[k, 1], self._radii[k], k)
+
+    def _place_discs(self) -> None:
+        """Let every robot's ladar see the others where they stand (between steps)."""
+        for i, m in enumerate(self.members):
+            d = self._discs(i)
+            m.discs = d
+            assert isinstance(m._collider, CrowdCollider)
+            m._collider.discs = d
+            m._clear = m._collider.clearance(m._x, m._y)
+
+    def step(self, dt: float) -> None:
+        """Move every robot by ``dt``, then deliver the messages sent during the tick."""
+        sent_at = self._pos.copy()
+        pos = self._pos
+        for i, m in enumerate(self.members):
+            before = len(m.events)
+            m.move(dt, self._discs(i))
+            pos[i, 0], pos[i, 1] = m._x, m._y
+            for e in m.events[before:]:
+                if e.obstacle >= len(self.world.obstacles):  # it touched another robot
+                    j = e.obstacle - len(self.world.obstacles)
+                    self.members[j].touched_by(e, m.name, len(self.world.obstacles) + i)
+        self.time += dt
+        self._place_discs()
+        self.radio.deliver(self.time, [m.inbox for m in self.members], sent_at)
