@@ -83,11 +83,13 @@ class SimBackend:
     robot : str or RobotProfile, optional
         A robot profile: a shipped name (``pioneer-p3dx``, ``pioneer2dx``, ``ideal``), a
         profile file, or a :class:`sim.robot.RobotProfile`; default the world's.
-    ladar : str, optional
-        A ladar profile name (``lms200``, ``lms200-ideal``); default the world's.
+    ladar : str or LadarProfile, optional
+        A ladar profile or its name (``lms200``, ``lms200-ideal``); default the world's.
     sensing : {"scan", "exact"}
         ``exact`` makes the ladar an oracle: noise-free ranges plus ``Scan.tangents``
         and ``Scan.curvatures``, and a fresh scan at every observation.
+    start : Pose, optional
+        Where :meth:`reset` puts the robot (world frame); default the world's start.
 
     Raises
     ------
@@ -102,8 +104,9 @@ class SimBackend:
     inbox: Inbox | None = None
 
     def __init__(self, world: World, *, seed: int | None = None,
-                 robot: str | RobotProfile | None = None, ladar: str | None = None,
-                 sensing: str = "scan") -> None:
+                 robot: str | RobotProfile | None = None,
+                 ladar: str | LadarProfile | None = None, sensing: str = "scan",
+                 start: Pose | None = None) -> None:
         if sensing not in SENSING_MODES:
             raise BackendError(f"unknown sensing mode `{sensing}` (one of: "
                                f"{', '.join(SENSING_MODES)})")
@@ -112,11 +115,13 @@ class SimBackend:
         self.profile: RobotProfile = (world.robot if robot is None else robot
                                       if isinstance(robot, RobotProfile) else robot_profile(robot))
         self.ladar_profile: LadarProfile = (world.ladar if ladar is None
-                                            else ladar_profile(ladar))
+                                            else ladar_profile(ladar) if isinstance(ladar, str)
+                                            else ladar)
         self.sensing = sensing
-        self._collider = Collider(world.parts, self.profile.radius)
+        self._collider = self._make_collider()
         self._oracle = sensing == "exact"
         self.events: list[SimEvent] = []
+        self._start = start
         self.reset()
 
     # ------------------------------------------------------------------ lifecycle
@@ -125,7 +130,8 @@ class SimBackend:
 
         Odometry restarts there at (0, 0, 0); ``pose`` is in world coordinates.
         """
-        pose = self.world.start_pose if pose is None else pose
+        if pose is None:
+            pose = self.world.start_pose if self._start is None else self._start
         clear, owner = self._collider.clearance(pose.x, pose.y)
         if clear < 0 or self.world.inside((pose.x, pose.y)):
             raise WorldError(f"world `{self.world.name}`: the robot ({self.profile.name}, "
@@ -389,6 +395,10 @@ class SimBackend:
         return Pose(self._x, self._y, _wrap(self._th))
 
     # ------------------------------------------------------------------ internals
+    def _make_collider(self) -> Collider:
+        """Return the collider of the robot's body in the world (made once)."""
+        return Collider(self.world.parts, self.profile.radius)
+
     def _obstacle(self, index: int) -> tuple[str, str]:
         """Return the label and kind of obstacle ``index`` ("", "" when none)."""
         if 0 <= index < len(self.world.obstacles):

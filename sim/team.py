@@ -28,21 +28,9 @@ from mdle.errors import BackendError, WorldError
 from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from sim.backend import SimBackend, SimEvent
 from sim.crowd import CrowdCollider, Discs, cast_discs
-from sim.ladar import LadarProfile
-from sim.robot import RobotProfile
-from sim.world import World
+from sim.world import RobotPlace, World
 
 __all__ = ["RobotPlace", "Member", "Radio", "TeamSim"]
-
-
-@dataclass(frozen=True)
-class RobotPlace:
-    """One robot of a team: its name, profile, ladar and start pose (world frame)."""
-
-    name: str
-    profile: RobotProfile
-    ladar: LadarProfile
-    start: Pose
 
 
 @dataclass(frozen=True)
@@ -108,11 +96,12 @@ class Member(SimBackend):
         self.index = index
         self.name = place.name
         self.discs = Discs(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.intp))
-        super().__init__(world, seed=seed, robot=place.profile, ladar=None, sensing=sensing)
-        self.ladar_profile = place.ladar
-        self._collider = CrowdCollider(world.parts, self.profile.radius, len(world.obstacles))
         self.inbox = Inbox(place.start)
-        self.reset(place.start)
+        super().__init__(world, seed=seed, robot=place.profile, ladar=place.ladar,
+                         sensing=sensing, start=place.start)
+
+    def _make_collider(self) -> CrowdCollider:
+        return CrowdCollider(self.world.parts, self.profile.radius, len(self.world.obstacles))
 
     # the scheduler's side
     def advance(self, dt: float) -> float:
