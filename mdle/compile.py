@@ -159,6 +159,21 @@ class Checker:
         self.uses: list[MessageUse] = []
         #: id of each `message(channel)` reading's node: (node, channel, span)
         self._messages: dict[int, tuple[Any, str, Span]] = {}
+        # the uses of the instance being checked (innermost last), and of each one checked
+        self._use_stack: list[list[MessageUse]] = []
+        self._key_uses: dict[tuple[Any, ...], list[MessageUse]] = {}
+        #: the uses of each runnable definition, as it runs with its defaults
+        self.element_uses: dict[str, tuple[MessageUse, ...]] = {}
+
+    def _use(self, use: MessageUse) -> None:
+        self.uses.append(use)
+        if self._use_stack:
+            self._use_stack[-1].append(use)
+
+    def _replay(self, key: tuple[Any, ...]) -> None:
+        """A cached instance used again: its uses belong to the instance using it too."""
+        if self._use_stack:
+            self._use_stack[-1].extend(self._key_uses.get(key, ()))
 
     # ------------------------------------------------------------------ diagnostics
 
@@ -439,14 +454,14 @@ class Checker:
             v = bound.get(p.name)
             if p.any_name and isinstance(v, Symbol):
                 kind = "read" if p.any_name == "channel" else "robot"
-                self.uses.append(MessageUse(kind, v.name, None, span, spec.name))
+                self._use(MessageUse(kind, v.name, None, span, spec.name))
 
     def _note_message_dim(self, a: cond.Typed, b: cond.Typed) -> None:
         """A `message(channel)` used with a number of known dimension: record what it asks."""
         for m, other in ((a, b), (b, a)):
             hit = self._messages.get(id(m.node)) if m.node is not None else None
             if hit is not None and other.dim is not None:
-                self.uses.append(MessageUse("read", hit[1], other.dim, hit[2], "message"))
+                self._use(MessageUse("read", hit[1], other.dim, hit[2], "message"))
 
     def slots_of(self, d: st.Definition) -> list[_Slot]:
         """Return the parameters of a definition; a parameter's dimension is its default's."""
@@ -597,12 +612,16 @@ class Checker:
                         call: Span | None) -> cond.Typed:
         key = ("interrupt", d.name, _freeze(bound))
         if key in self._cache:
+            self._replay(key)
             return self._cache[key]
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
+        self._use_stack.append([])
         try:
             t = self.condition(d.body, MappingProxyType(dict(bound)))
         finally:
+            self._key_uses[key] = self._use_stack.pop()
+            self._replay(key)
             if call is not None:
                 self._notes.pop()
         if not t.is_bool:
@@ -768,7 +787,7 @@ class Checker:
                            hint=f"write `send({channel}, 1)`, or `send(pose)` to send the "
                                 "robot's pose")
                 raise _Abort
-            self.uses.append(MessageUse("send", channel, "pose", call.span))
+            self._use(MessageUse("send", channel, "pose", call.span))
             return Send(channel, None, None, "send(pose)", call.span)
         if len(args) > 2:
             self.error(args[2].span, f"`send` takes a channel and one value, found {len(args)} "
@@ -784,7 +803,7 @@ class Checker:
                        f"(`{_short(args[1].value)}`)", hint="send 1 and test "
                        f"`received({channel})`, or send a number such as `range(0 deg)`")
             raise _Abort
-        self.uses.append(MessageUse("send", channel, t.dim, call.span))
+        self._use(MessageUse("send", channel, t.dim, call.span))
         return Send(channel, t.call(), t.dim, format_expr(call), call.span)
 
     def _ending(self, xi: st.Expr, timer: st.Expr, env: Env,
@@ -910,16 +929,20 @@ class Checker:
             cached = self._cache[key]
             if cached is None:  # failed before; its errors are already reported
                 raise _Abort
+            self._replay(key)
             return cached
         env = MappingProxyType(dict(bound))
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
+        self._use_stack.append([])
         try:
             self._enter(d.span)
             try:
                 result = self._definition_body(d, env)
             finally:
                 self._depth -= 1
+                self._key_uses[key] = self._use_stack.pop()
+                self._replay(key)
         except _Abort:
             self._cache[key] = None
             raise
@@ -975,6 +998,9 @@ class Checker:
             return None
         finally:
             self._partial = False
+        if runnable:
+            key = ("element", d.name, _freeze(bound))
+            self.element_uses[d.name] = tuple(dict.fromkeys(self._key_uses.get(key, ())))
         return e if runnable else None
 
 
@@ -1065,7 +1091,9 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     if errors:
         raise CheckError(_ordered(errors), srcs)
     return Program(MappingProxyType(elements), entry, MappingProxyType(srcs),
-                   tuple(_ordered(checker.warnings)), tuple(dict.fromkeys(checker.uses)))
+                   tuple(_ordered(checker.warnings)), tuple(dict.fromkeys(checker.uses)),
+                   MappingProxyType({n: u for n, u in checker.element_uses.items()
+                                     if n in elements}))
 
 
 def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:

@@ -149,7 +149,8 @@ class Program:
     defaults. ``entry`` is the ``run`` target, else ``main`` if defined, else None.
     ``sources`` maps each file read (imports included) to its text, for diagnostics.
     ``warnings`` are the checker's warnings (the program is valid). ``uses`` lists where
-    it sends, reads channels and names other robots (:class:`MessageUse`).
+    it sends, reads channels and names other robots (:class:`MessageUse`), anywhere;
+    ``element_uses`` those of each runnable element as it runs, with its defaults.
     """
 
     elements: Mapping[str, Element]
@@ -157,3 +158,9 @@ class Program:
     sources: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     warnings: tuple[Diagnostic, ...] = ()
     uses: tuple[MessageUse, ...] = ()
+    element_uses: Mapping[str, tuple[MessageUse, ...]] = field(
+        default_factory=lambda: MappingProxyType({}))
+
+    def uses_of(self, name: str) -> tuple[MessageUse, ...]:
+        """The channels and robots element ``name`` names as it runs (all: unknown name)."""
+        return self.element_uses.get(name, self.uses)

@@ -2,7 +2,8 @@
 
 Each path starts at a circle (the robot's start) and ends at its body's footprint; a
 collision is a red cross; messages (other than pose beacons) are marked where they were
-sent (a triangle) and where they arrived (a diamond), labelled with their channel once.
+sent (a triangle) and where they arrived (a diamond), labelled with their channel once;
+a stream of messages (an atom sends at every tick it runs) is marked where it starts.
 """
 
 from __future__ import annotations
@@ -16,6 +17,9 @@ from mdle.errors import Diagnostic
 from mdle.trace import Trace, read_trace
 
 __all__ = ["team_figure", "plot_team"]
+
+#: Messages of one stream (direction, channel, sender) closer than this (s) are marked once.
+_GAP = 1.0
 
 
 def _robot_name(trace: Trace) -> str:
@@ -66,11 +70,18 @@ def team_figure(traces: Sequence[Trace], world: Any = None) -> Any:
             ax.plot([c.get("x")], [c.get("y")], "X", color="tab:red", ms=9, zorder=6,
                     label=None if "collision" in labelled else "collision")
             labelled.add("collision")
+        last: dict[tuple[Any, ...], float] = {}
         for m in trace.extra:
             if m.get("type") != "message" or isinstance(m.get("value"), dict):
                 continue
             sent = m.get("dir") == "sent"
-            px, py = _at(trace, float(m.get("t") or 0.0))
+            t = float(m.get("t") or 0.0)
+            stream = (m.get("dir"), m.get("channel"), m.get("from"))
+            previous = last.get(stream, -math.inf)
+            last[stream] = t
+            if t - previous <= _GAP:  # a stream sent at every tick: its start is marked
+                continue
+            px, py = _at(trace, t)
             key = f"{'sent' if sent else 'received'} {m.get('channel')}"
             ax.plot([px], [py], "^" if sent else "D", color=colour, mec="black", ms=7,
                     zorder=5, ls="none")

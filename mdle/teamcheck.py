@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from mdle.dimensions import dim_words, same_kind
 from mdle.errors import Diagnostic, Severity, Span
 from mdle.messages import POSE_CHANNEL
-from mdle.program import MessageUse, Program
+from mdle.program import MessageUse
 from mdle.units import Dim
 
 __all__ = ["check_team"]
@@ -28,14 +28,18 @@ def _unit(dim: Dim | str | None) -> str:
     return "poses" if dim == POSE_CHANNEL else dim_words(dim if isinstance(dim, Dim) else None)
 
 
-def check_team(programs: Mapping[str, Program], robots: Sequence[str]
+def check_team(uses: Mapping[str, Sequence[MessageUse]], robots: Sequence[str]
                ) -> tuple[list[Diagnostic], list[Diagnostic]]:
-    """Return (errors, warnings) about the team's messages and robot names."""
+    """Return (errors, warnings) about the team's messages and robot names.
+
+    ``uses`` holds, by robot, what the element it runs names
+    (:meth:`mdle.program.Program.uses_of`); ``robots`` every robot of the world.
+    """
     errors: list[Diagnostic] = []
     warnings: list[Diagnostic] = []
     senders: dict[str, list[tuple[str, MessageUse]]] = {}
-    for robot, program in programs.items():
-        for use in program.uses:
+    for robot, robot_uses in uses.items():
+        for use in robot_uses:
             if use.kind == "send":
                 senders.setdefault(use.name, []).append((robot, use))
     for channel, sends in senders.items():
@@ -48,8 +52,8 @@ def check_team(programs: Mapping[str, Program], robots: Sequence[str]
                     f"`{first_robot}` sends {_unit(a)} there ({_where(first.span)})",
                     Severity.ERROR, hint="one channel carries one kind of number"))
     names = ", ".join(f"`{r}`" for r in robots)
-    for robot, program in programs.items():
-        for use in program.uses:
+    for robot, robot_uses in uses.items():
+        for use in robot_uses:
             if use.kind == "robot":
                 if use.name not in robots:
                     errors.append(Diagnostic(

@@ -144,7 +144,13 @@ class Member(SimBackend):
         SimBackend.advance(self, dt)
 
     def touched_by(self, event: SimEvent, name: str, index: int) -> None:
-        """Record that robot ``name`` ran into this one (a collision; not stalled)."""
+        """Record that robot ``name`` ran into this one (a collision; not stalled).
+
+        A contact this robot already recorded at that moment (both drove into each
+        other) is not recorded twice.
+        """
+        if self.events and _same_contact(self.events[-1], event, name):
+            return
         self.events.append(SimEvent("collision", event.time, self._x, self._y, index, name))
         self._collided = True
 
@@ -172,6 +178,11 @@ class Member(SimBackend):
         hits = self.world.caster.cast(np.array((ox, oy)), angles, lad.profile.max_range,
                                       detail=self._oracle, rel=lad.rel)
         return lad.measure(_occluded(hits, ox, oy, angles, t, which, discs), th, stamp)
+
+
+def _same_contact(a: SimEvent, b: SimEvent, label: str | None = None) -> bool:
+    """Whether two records are one contact: the same robot touched within half a second."""
+    return a.label == (b.label if label is None else label) and abs(a.time - b.time) < 0.5
 
 
 def _occluded(hits: Any, ox: float, oy: float, angles: np.ndarray, t: np.ndarray,
@@ -275,7 +286,11 @@ class TeamSim:
             before = len(m.events)
             m.move(dt, self._discs(i))
             pos[i, 0], pos[i, 1] = m._x, m._y
-            for e in m.events[before:]:
+            new = m.events[before:]
+            if new and before and _same_contact(m.events[before - 1], new[0]):
+                del m.events[before]  # it was run into, and drove on into the same robot
+                new = new[1:]
+            for e in new:
                 if e.obstacle >= len(self.world.obstacles):  # it touched another robot
                     j = e.obstacle - len(self.world.obstacles)
                     self.members[j].touched_by(e, m.name, len(self.world.obstacles) + i)

@@ -78,7 +78,8 @@ def _load(args: argparse.Namespace
         elements[name] = element_of(program, m.element)
         if program.warnings and not args.quiet:
             output.print_diagnostics(program.warnings, program.sources)
-    errors, warnings = check_team(programs, robots)
+    errors, warnings = check_team({n: programs[n].uses_of(e.label) for n, e in elements.items()},
+                                  robots)
     sources: dict[str, str] = {}
     for p in programs.values():
         sources.update(p.sources)
