@@ -171,7 +171,7 @@ class Checker:
             self._use_stack[-1].append(use)
 
     def _replay(self, key: tuple[Any, ...]) -> None:
-        """A cached instance used again: its uses belong to the instance using it too."""
+        """Count a cached instance's uses again, for the instance using it too."""
         if self._use_stack:
             self._use_stack[-1].extend(self._key_uses.get(key, ()))
 
@@ -457,7 +457,7 @@ class Checker:
                 self._use(MessageUse(kind, v.name, None, span, spec.name))
 
     def _note_message_dim(self, a: cond.Typed, b: cond.Typed) -> None:
-        """A `message(channel)` used with a number of known dimension: record what it asks."""
+        """Record the dimension a `message(channel)` is used with (known from the other side)."""
         for m, other in ((a, b), (b, a)):
             hit = self._messages.get(id(m.node)) if m.node is not None else None
             if hit is not None and other.dim is not None:
@@ -779,8 +779,9 @@ class Checker:
                        "name, then the number to send", hint="for example `send(gap, 1 m)`")
             raise _Abort
         channel = args[0].value.name
-        if channel in env and isinstance(env[channel], Symbol):
-            channel = env[channel].name  # a parameter holding a channel name
+        held = env.get(channel)
+        if isinstance(held, Symbol):
+            channel = held.name  # a parameter holding a channel name
         if len(args) == 1:
             if channel != POSE_CHANNEL:
                 self.error(call.span, f"`send({channel})` needs a value to send",

@@ -162,5 +162,5 @@ class Program:
         default_factory=lambda: MappingProxyType({}))
 
     def uses_of(self, name: str) -> tuple[MessageUse, ...]:
-        """The channels and robots element ``name`` names as it runs (all: unknown name)."""
+        """Return what element ``name`` names as it runs (every use for an unknown name)."""
         return self.element_uses.get(name, self.uses)

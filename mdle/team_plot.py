@@ -30,7 +30,7 @@ def _robot_name(trace: Trace) -> str:
 
 
 def _at(trace: Trace, t: float) -> tuple[float, float]:
-    """The robot's true position at time ``t`` (the first sample at or after it)."""
+    """Return the robot's true position at time ``t`` (the first sample at or after it)."""
     import numpy as np
 
     ts = trace.column("t")
@@ -67,7 +67,10 @@ def team_figure(traces: Sequence[Trace], world: Any = None) -> Any:
             ax.add_patch(Circle((float(x[-1]), float(y[-1])), radius, facecolor=colour,
                                 alpha=0.35, edgecolor=colour, zorder=4))
         for c in trace.collisions():
-            ax.plot([c.get("x")], [c.get("y")], "X", color="tab:red", ms=9, zorder=6,
+            cx, cy = c.get("x"), c.get("y")
+            if cx is None or cy is None:
+                continue
+            ax.plot([float(cx)], [float(cy)], "X", color="tab:red", ms=9, zorder=6,
                     label=None if "collision" in labelled else "collision")
             labelled.add("collision")
         last: dict[tuple[Any, ...], float] = {}

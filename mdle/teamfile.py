@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -24,7 +25,8 @@ from mdle.backend import Pose
 from mdle.errors import Diagnostic, MdleError, WorldError
 from mdle.messages import DeliveryRules
 
-__all__ = ["MemberSpec", "TeamSpec", "parse_team", "read_team", "robot_plan"]
+__all__ = ["MemberSpec", "TeamSpec", "LoadedTeam", "parse_team", "read_team", "robot_plan",
+           "load_team"]
 
 _TOP_KEYS = ("world", "seed", "rate", "until", "messages", "robots")
 _MEMBER_KEYS = ("plan", "element", "set", "start")
@@ -33,8 +35,11 @@ _MESSAGE_KEYS = ("range", "loss", "seed")
 
 @dataclass(frozen=True)
 class MemberSpec:
-    """A robot of the team and its plan: file, element (None: the file's entry), settings
-    (``NAME=VALUE`` as ``--set`` takes them), and a start pose overriding the world's."""
+    """A robot of the team and its plan.
+
+    The plan file, the element (None: the file's entry), settings (``NAME=VALUE`` as
+    ``--set`` takes them), and a start pose overriding the world's.
+    """
 
     name: str
     plan: str
@@ -148,3 +153,79 @@ def _parse(text: str, file: str) -> TeamSpec:
             _start(doc, f"{path}.start", m["start"]) if "start" in m else None))
     return TeamSpec(world, tuple(members), seed, rate, until, rules,
                     None if file.startswith("<") else file)
+
+
+@dataclass(frozen=True)
+class LoadedTeam:
+    """A team ready to run.
+
+    The world (robots placed), and by robot its checked program, the element it runs and
+    its plan file; the team checks' warnings and every source.
+    """
+
+    spec: TeamSpec
+    world: Any
+    programs: dict[str, Any]
+    elements: dict[str, Any]
+    plans: dict[str, str]
+    warnings: list[Diagnostic]
+    sources: dict[str, str]
+
+
+def load_team(spec: TeamSpec, *, world: str | None = None, overrides: Sequence[str] = ()
+              ) -> LoadedTeam:
+    """Load the world and every robot's plan, and check them together.
+
+    ``world`` replaces the spec's world; ``overrides`` (``NAME=VALUE``) apply to every
+    plan after its own settings. A robot named twice keeps its last plan.
+
+    Raises
+    ------
+    MdleError
+        The world or a plan has errors, a robot is not in the world, two robots overlap,
+        or the team's messages and robot names do not fit (every error, with places).
+    """
+    import dataclasses
+
+    import sim
+    from mdle.loader import load_program
+    from mdle.runtime import element_of
+    from mdle.teamcheck import check_team
+
+    members: dict[str, MemberSpec] = {m.name: m for m in spec.members}
+    world_spec = world or spec.world
+    if world_spec is None:
+        raise TeamError(Diagnostic(None, "a team needs a world with robots: give `world:` "
+                                         "in the team file or --world"))
+    w = sim.load_world(world_spec)
+    robots = [r.name for r in w.robots]
+    if not robots:
+        raise TeamError(Diagnostic(None, f"world `{w.name}` has no `robots:` list, so it "
+                                         "cannot hold a team", hint="list each robot with its "
+                                         "name and start (docs/teams.md)"))
+    if not members:
+        raise TeamError(Diagnostic(None, "no robot has a plan: map robots to plans in the "
+                                         "team file, or give --robot-plan NAME=PLAN.mdle"))
+    for name in members:
+        if name not in robots:
+            raise TeamError(Diagnostic(None, f"robot `{name}` is not in world `{w.name}`",
+                                       hint=f"its robots: {', '.join(robots)}"))
+    places = []
+    for r in w.robots:
+        start = members[r.name].start if r.name in members else None
+        places.append(r if start is None else dataclasses.replace(r, start=start))
+    w = dataclasses.replace(w, robots=tuple(places))
+    programs: dict[str, Any] = {}
+    elements: dict[str, Any] = {}
+    for name, m in members.items():
+        programs[name] = load_program(m.plan, settings=[*m.settings, *overrides])
+        elements[name] = element_of(programs[name], m.element)
+    sources: dict[str, str] = {}
+    for p in programs.values():
+        sources.update(p.sources)
+    errors, warnings = check_team({n: programs[n].uses_of(e.label)
+                                   for n, e in elements.items()}, robots)
+    if errors:
+        raise TeamError(errors, sources)
+    return LoadedTeam(spec, w, programs, elements, {n: m.plan for n, m in members.items()},
+                      warnings, sources)

@@ -98,7 +98,7 @@ class CrowdCollider(Collider):
         return c, owner
 
     def _outward(self, x: float, y: float) -> tuple[float, float]:
-        """The unit vector away from the nearest wall or robot."""
+        """Return the unit vector away from the nearest wall or robot."""
         d = self.discs
         if len(d):
             gaps = np.hypot(d.cx - x, d.cy - y) - d.r

@@ -96,7 +96,8 @@ class Member(SimBackend):
         self.index = index
         self.name = place.name
         self.discs = Discs(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.intp))
-        self.inbox = Inbox(place.start)
+        self.box = Inbox(place.start)  # what its radio receives (the observation's inbox)
+        self.inbox = self.box
         super().__init__(world, seed=seed, robot=place.profile, ladar=place.ladar,
                          sensing=sensing, start=place.start)
 
@@ -119,14 +120,14 @@ class Member(SimBackend):
         """Send ``value`` on ``channel`` (None: this robot's pose, on ``pose``)."""
         if value is None:
             odo = self.observe_pose()
-            self.team.radio.post(Outgoing(self.index, POSE_CHANNEL, self.inbox.me(odo), now,
+            self.team.radio.post(Outgoing(self.index, POSE_CHANNEL, self.box.me(odo), now,
                                           self._x, self._y))
         else:
             self.team.radio.post(Outgoing(self.index, channel, float(value), now,
                                           self._x, self._y))
 
     def observe_pose(self) -> Pose:
-        """The odometry pose the robot reports now."""
+        """Return the odometry pose the robot reports now."""
         if self.profile.sip_cycle > 0:
             ox, oy, oth = self._report[:3]
         else:
@@ -262,7 +263,7 @@ class TeamSim:
             m._scan = m._take_scan(m._x, m._y, m._th, m.time)
 
     def positions(self) -> np.ndarray:
-        """True positions (N, 2), metres."""
+        """Return the true positions (N, 2), metres."""
         return self._pos
 
     def _discs(self, i: int) -> Discs:
@@ -296,4 +297,4 @@ class TeamSim:
                     self.members[j].touched_by(e, m.name, len(self.world.obstacles) + i)
         self.time += dt
         self._place_discs()
-        self.radio.deliver(self.time, [m.inbox for m in self.members], sent_at)
+        self.radio.deliver(self.time, [m.box for m in self.members], sent_at)

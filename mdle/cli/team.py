@@ -32,67 +32,6 @@ def trace_paths(trace: str, names: list[str]) -> dict[str, str]:
     return {n: str(p.with_name(f"{p.stem}.{n}{suffix}")) for n in names}
 
 
-def _load(args: argparse.Namespace
-          ) -> tuple[Any, Any, dict[str, Any], dict[str, Any], dict[str, str]]:
-    """Return the spec, the world, and by robot: programs, elements, plan files.
-
-    Raises MdleError on any error in the team, the world or a plan."""
-    import sim
-    from mdle.loader import load_program
-    from mdle.runtime import element_of
-    from mdle.teamcheck import check_team
-    from mdle.teamfile import MemberSpec, TeamSpec, read_team, robot_plan
-
-    spec = read_team(args.team) if args.team else TeamSpec(None, ())
-    extra = [robot_plan(t) for t in args.robot_plan]
-    members: dict[str, MemberSpec] = {m.name: m for m in spec.members}
-    for m in extra:
-        members[m.name] = m
-    world_spec = args.world or spec.world
-    if world_spec is None:
-        raise MdleError(Diagnostic(None, "a team needs a world with robots: give `world:` in "
-                                         "the team file or --world"))
-    world = sim.load_world(world_spec)
-    robots = [r.name for r in world.robots]
-    if not robots:
-        raise MdleError(Diagnostic(None, f"world `{world.name}` has no `robots:` list, so it "
-                                         "cannot hold a team", hint="list the robots with "
-                                         "their names and starts: docs/teams.md"))
-    for name in members:
-        if name not in robots:
-            raise MdleError(Diagnostic(None, f"robot `{name}` is not in world `{world.name}`",
-                                       hint=f"its robots: {', '.join(robots)}"))
-    if not members:
-        raise MdleError(Diagnostic(None, "no robot has a plan: map robots to plans in the "
-                                         "team file, or give --robot-plan NAME=PLAN.mdle"))
-    places = []
-    for r in world.robots:
-        m = members.get(r.name)
-        places.append(dataclasses.replace(r, start=m.start) if m and m.start else r)
-    world = dataclasses.replace(world, robots=tuple(places))
-    programs: dict[str, Any] = {}
-    elements: dict[str, Any] = {}
-    for name, m in members.items():
-        program = load_program(m.plan, settings=list(m.settings) + list(args.overrides))
-        programs[name] = program
-        elements[name] = element_of(program, m.element)
-        if program.warnings and not args.quiet:
-            output.print_diagnostics(program.warnings, program.sources)
-    errors, warnings = check_team({n: programs[n].uses_of(e.label) for n, e in elements.items()},
-                                  robots)
-    sources: dict[str, str] = {}
-    for p in programs.values():
-        sources.update(p.sources)
-    if warnings and not args.quiet:
-        output.print_diagnostics(warnings, sources)
-    if errors:
-        err = MdleError(errors)
-        err.sources = sources
-        raise err
-    plans = {name: m.plan for name, m in members.items()}
-    return spec, world, programs, elements, plans
-
-
 def run_team(args: argparse.Namespace) -> int:
     """Run a team; returns the exit code."""
     from mdle.messages import DeliveryRules
@@ -114,7 +53,19 @@ def run_team(args: argparse.Namespace) -> int:
     if args.trace:
         writable_output(args.trace, "--trace")
     guard.arm()
-    spec, world, programs, elements, plans = _load(args)
+    from mdle.teamfile import TeamSpec, load_team, read_team, robot_plan
+
+    spec = read_team(args.team) if args.team else TeamSpec(None, ())
+    spec = dataclasses.replace(spec, members=spec.members + tuple(
+        robot_plan(t) for t in args.robot_plan))
+    team = load_team(spec, world=args.world, overrides=args.overrides)
+    if not args.quiet:
+        for program in team.programs.values():
+            if program.warnings:
+                output.print_diagnostics(program.warnings, program.sources)
+        if team.warnings:
+            output.print_diagnostics(team.warnings, team.sources)
+    world, programs, elements, plans = team.world, team.programs, team.elements, team.plans
     seed = args.seed if args.seed is not None else (
         spec.seed if spec.seed is not None else world.seed)
     rules = spec.rules if args.team else DeliveryRules(seed=seed)
@@ -130,13 +81,14 @@ def run_team(args: argparse.Namespace) -> int:
     run: TeamRun | None = None
     try:
         with guard.deferring():
-            team = TeamSim(world, world.robots, seed=seed, sensing=args.sensing, rules=rules)
+            sim_team = TeamSim(world, world.robots, seed=seed, sensing=args.sensing,
+                               rules=rules)
             if trace:
                 for name, path in trace_paths(trace, [n for n in names if n in elements]).items():
                     writers[name] = TraceWriter(path, _header(args, spec, world, seed, rate,
                                                               until, name, plans[name],
                                                               programs[name]))
-            run = TeamRun(team, elements, rate, until,
+            run = TeamRun(sim_team, elements, rate, until,
                           {n: [w] for n, w in writers.items()})
         with guard.stopping(run):
             results = run.run()

@@ -64,6 +64,7 @@ def test_each_robot_s_ladar_sees_the_others() -> None:
                    sensing="exact")
     for m in team.members:
         scan = m.observe().scan
+        assert scan is not None and scan.curvatures is not None
         i = int(np.argmin(np.abs(scan.bearings)))
         assert scan.valid[i]   # the other's disc: 3 m between centres, radius 0.25 m
         assert scan.ranges[i] == pytest.approx(2.75 - m.profile.ladar_mount[0], abs=2e-3)
@@ -71,6 +72,7 @@ def test_each_robot_s_ladar_sees_the_others() -> None:
     # with a noisy scan too, and the wall behind the other robot is hidden
     team = TeamSim(_world(), [_place("a", 0, 0), _place("b", 3, 0, math.pi)], seed=2)
     scan = team.members[0].observe().scan
+    assert scan is not None
     i = int(np.argmin(np.abs(scan.bearings)))
     assert scan.ranges[i] < 3.0
 
@@ -123,11 +125,11 @@ def test_messages_arrive_at_the_next_tick_within_range_and_lossy_by_seed() -> No
     team = TeamSim(_world(), places, rules=DeliveryRules(range=3.0))
     a, b, c = team.members
     a.send("go", 1.0, 0.0)
-    assert not b.inbox.since("go", 0.0)          # not at once
+    assert not b.box.since("go", 0.0)          # not at once
     team.step(0.1)
-    assert b.inbox.since("go", 0.0) and b.inbox.value("go") == 1.0
-    assert not c.inbox.since("go", 0.0)          # 6 m away: out of range
-    assert not a.inbox.since("go", 0.0)          # never one's own
+    assert b.box.since("go", 0.0) and b.box.value("go") == 1.0
+    assert not c.box.since("go", 0.0)          # 6 m away: out of range
+    assert not a.box.since("go", 0.0)          # never one's own
     got = []
     for seed in (1, 1, 2):
         team = TeamSim(_world(), places, rules=DeliveryRules(loss=0.5, seed=seed))
@@ -135,6 +137,6 @@ def test_messages_arrive_at_the_next_tick_within_range_and_lossy_by_seed() -> No
         for _ in range(200):
             team.members[0].send("n", 1.0, team.time)
             team.step(0.1)
-            heard += team.members[1].inbox.since("n", team.time)
+            heard += team.members[1].box.since("n", team.time)
         got.append(heard)
     assert got[0] == got[1] != got[2] and 60 < got[0] < 140
