@@ -103,6 +103,9 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
         e = stack.pop()
         if isinstance(e, (st.Name, st.Call)) and e.name in names and e.name not in shadow:
             found.append(e)
+        if isinstance(e, st.Call) and e.name == "send" and e.name not in names:
+            stack.extend(a.value for a in e.args[1:])  # the channel names no definition
+            continue
         if isinstance(e, st.Call) and registry is not None and e.name not in names:
             spec = registry.laws.get(e.name) or registry.sensors.get(e.name)
             stack.extend(a.value for i, a in enumerate(e.args)
