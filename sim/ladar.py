@@ -201,6 +201,16 @@ class Ladar:
         ``ranges`` (``max_range`` where not ``valid``) and ``valid`` are new arrays that
         the scan then owns.
         """
+        self.settle(ranges, valid)
+        return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
+                    max_range=self.profile.max_range)
+
+    def settle(self, ranges: np.ndarray, valid: np.ndarray) -> None:
+        """Add noise, quantise and clip the ranges in place, then make both read-only.
+
+        For a scan made before its ranges were final (a team's robots occlude each
+        other's scans once all have moved): the same draws as :meth:`finish`.
+        """
         p = self.profile
         if p.noise != "none" and p.sigma > 0:
             noise = self.rng.standard_normal(out=self._noise)
@@ -217,5 +227,3 @@ class Ladar:
         np.minimum(ranges, p.max_range, out=ranges)
         ranges.setflags(write=False)
         valid.setflags(write=False)
-        return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
-                    max_range=p.max_range)

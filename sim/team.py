@@ -27,7 +27,7 @@ from mdle.backend import Pose, Scan
 from mdle.errors import BackendError, WorldError
 from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from sim.backend import SimBackend, SimEvent
-from sim.crowd import CrowdCollider, Discs, cast_discs
+from sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlusions
 from sim.world import RobotPlace, World
 
 __all__ = ["RobotPlace", "Member", "Radio", "TeamSim"]
@@ -95,7 +95,8 @@ class Member(SimBackend):
         self.team = team
         self.index = index
         self.name = place.name
-        self.discs = Discs(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.intp))
+        self._batched = False
+        self.discs = NO_DISCS  # every robot's disc (its own skipped), from the team
         self.box = Inbox(place.start)  # what its radio receives (the observation's inbox)
         self.inbox = self.box
         super().__init__(world, seed=seed, robot=place.profile, ladar=place.ladar,
@@ -135,11 +136,21 @@ class Member(SimBackend):
         return Pose(ox, oy, oth)
 
     # the team's side
-    def move(self, dt: float, discs: Discs) -> None:
-        """Advance ``dt`` with the other robots standing at ``discs``."""
+    def join(self, discs: Discs) -> None:
+        """See and meet the team's robots at ``discs`` (a live view of where they are).
+
+        From now on a scan is finished by the team once every robot has moved
+        (:meth:`TeamSim.step`), with the others in it, unless the ladar is an oracle.
+        """
         self.discs = discs
         assert isinstance(self._collider, CrowdCollider)
-        self._collider.discs = discs
+        self._collider.join(discs, self.index)
+        self._clear = self._collider.clearance(self._x, self._y)
+        self._scan = self._take_scan(self._x, self._y, self._th, self._t)
+        self._batched = self._fan is not None
+
+    def move(self, dt: float) -> None:
+        """Advance ``dt``, the other robots standing where they are now."""
         self._clear = self._collider.clearance(self._x, self._y)  # the others moved
         self._clear_bound = False
         SimBackend.advance(self, dt)
@@ -162,13 +173,20 @@ class Member(SimBackend):
         return super()._obstacle(index)
 
     def _take_scan(self, x: float, y: float, th: float, stamp: float) -> Scan:
-        discs = getattr(self, "discs", None)
-        if discs is None or not len(discs):
+        discs = getattr(self, "discs", NO_DISCS)
+        if len(discs) < 2:
             return super()._take_scan(x, y, th, stamp)
         lad = self._ladar
         ox, oy = lad.origin(x, y, th)
+        if self._batched and self._fan is not None:
+            first = th + float(lad.bearings[0])
+            ranges, hit = self._fan.cast(ox, oy, first)
+            scan = Scan(ranges=ranges, bearings=lad.bearings, valid=hit, stamp=stamp,
+                        max_range=lad.profile.max_range)
+            self.team.pending.append((self, ox, oy, first, scan))
+            return scan  # its ranges are final once the team has occluded and settled it
         angles = lad.world_angles(th)
-        t, which = cast_discs(ox, oy, angles, discs)
+        t, which = cast_discs(ox, oy, angles, discs, self.index, which=self._oracle)
         if self._fan is not None:
             ranges, hit = self._fan.cast(ox, oy, th + float(lad.bearings[0]))
             closer = t < np.where(hit, ranges, math.inf)
@@ -187,7 +205,7 @@ def _same_contact(a: SimEvent, b: SimEvent, label: str | None = None) -> bool:
 
 
 def _occluded(hits: Any, ox: float, oy: float, angles: np.ndarray, t: np.ndarray,
-              which: np.ndarray, discs: Discs) -> Any:
+              which: np.ndarray | None, discs: Discs) -> Any:
     """Return ray hits with the discs in front of the walls (tangents, curvature too)."""
     from sim.raycast import RayHits
 
@@ -197,7 +215,7 @@ def _occluded(hits: Any, ox: float, oy: float, angles: np.ndarray, t: np.ndarray
     ranges = np.where(closer, t, hits.ranges)
     hit = hits.hit | closer
     tangents, curvatures = hits.tangents, hits.curvatures
-    if tangents is not None and curvatures is not None:
+    if tangents is not None and curvatures is not None and which is not None:
         px = ox + t * np.cos(angles)
         py = oy + t * np.sin(angles)
         k = which.clip(min=0)
@@ -254,30 +272,20 @@ class TeamSim:
                 raise WorldError(f"robot `{p.name}`: {err.diagnostics[0].message}") from None
         self.radio = Radio([p.name for p in self.places],
                            rules if rules is not None else DeliveryRules(seed=int(seeds[n])))
-        self._radii = np.array([p.profile.radius for p in self.places])
-        self._ids = np.arange(n)
-        self._others = [np.delete(self._ids, i) for i in range(n)]
         self._pos = np.array([[m._x, m._y] for m in self.members], dtype=float).reshape(n, 2)
-        self._place_discs()
+        # one set of discs for all, their centres views of _pos, which moves in place
+        self._z = self._pos[:, 0] + 1j * self._pos[:, 1]
+        self.discs = Discs(self._pos[:, 0], self._pos[:, 1],
+                           np.array([p.profile.radius for p in self.places]), np.arange(n),
+                           self._z)
+        #: scans taken during a step, finished at its end: (member, ox, oy, first, scan)
+        self.pending: list[tuple[Member, float, float, float, Scan]] = []
         for m in self.members:  # the first scans see the others too
-            m._scan = m._take_scan(m._x, m._y, m._th, m.time)
+            m.join(self.discs)
 
     def positions(self) -> np.ndarray:
         """Return the true positions (N, 2), metres."""
         return self._pos
-
-    def _discs(self, i: int) -> Discs:
-        k = self._others[i]
-        return Discs(self._pos[k, 0], self._pos[k, 1], self._radii[k], k)
-
-    def _place_discs(self) -> None:
-        """Let every robot's ladar see the others where they stand (between steps)."""
-        for i, m in enumerate(self.members):
-            d = self._discs(i)
-            m.discs = d
-            assert isinstance(m._collider, CrowdCollider)
-            m._collider.discs = d
-            m._clear = m._collider.clearance(m._x, m._y)
 
     def step(self, dt: float) -> None:
         """Move every robot by ``dt``, then deliver the messages sent during the tick."""
@@ -285,8 +293,9 @@ class TeamSim:
         pos = self._pos
         for i, m in enumerate(self.members):
             before = len(m.events)
-            m.move(dt, self._discs(i))
+            m.move(dt)
             pos[i, 0], pos[i, 1] = m._x, m._y
+            self._z[i] = complex(m._x, m._y)
             new = m.events[before:]
             if new and before and _same_contact(m.events[before - 1], new[0]):
                 del m.events[before]  # it was run into, and drove on into the same robot
@@ -296,5 +305,27 @@ class TeamSim:
                     j = e.obstacle - len(self.world.obstacles)
                     self.members[j].touched_by(e, m.name, len(self.world.obstacles) + i)
         self.time += dt
-        self._place_discs()
+        self._settle_scans()
         self.radio.deliver(self.time, [m.box for m in self.members], sent_at)
+
+    def _settle_scans(self) -> None:
+        """Put the robots into the scans taken during the step, then add their noise."""
+        pending, self.pending = self.pending, []
+        if not pending:
+            return
+        fans = [(m._ladar, ox, oy, first) for m, ox, oy, first, _ in pending]
+        scan_i, beam, t = occlusions(
+            np.array([f[1] for f in fans]), np.array([f[2] for f in fans]),
+            np.array([f[3] for f in fans]),
+            np.array([float(f[0].bearings[1] - f[0].bearings[0]) if len(f[0].bearings) > 1
+                      else 1.0 for f in fans]),
+            np.array([len(f[0].bearings) for f in fans]),
+            np.array([f[0].profile.max_range for f in fans]),
+            np.array([m.index for m, *_ in pending]), self.discs)
+        bounds = np.searchsorted(scan_i, np.arange(len(pending) + 1))
+        for k, (m, _, _, _, scan) in enumerate(pending):
+            a, b = int(bounds[k]), int(bounds[k + 1])
+            if b > a:
+                np.minimum.at(scan.ranges, beam[a:b], t[a:b])
+                scan.valid[beam[a:b]] = True
+            m._ladar.settle(scan.ranges, scan.valid)

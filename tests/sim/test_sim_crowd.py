@@ -27,7 +27,8 @@ def test_cast_discs_agrees_with_sampling_along_each_ray() -> None:
     d = Discs(rng.uniform(-4, 4, 6), rng.uniform(-4, 4, 6), rng.uniform(0.2, 0.6, 6),
               np.arange(6))
     angles = np.linspace(-math.pi, math.pi, 721)
-    t, which = cast_discs(0.0, 0.0, angles, d)
+    t, which = cast_discs(0.0, 0.0, angles, d, which=True)
+    assert which is not None
     for a, ti, w in zip(angles, t, which, strict=True):
         s = np.linspace(0.0, 12.0, 24001)
         px, py = s * math.cos(a), s * math.sin(a)
@@ -42,7 +43,8 @@ def test_cast_discs_agrees_with_sampling_along_each_ray() -> None:
 
 def test_a_ray_from_inside_a_disc_does_not_see_it() -> None:
     d = Discs(np.array([0.0]), np.array([0.0]), np.array([1.0]), np.array([0]))
-    t, which = cast_discs(0.1, 0.0, np.array([0.0]), d)
+    t, which = cast_discs(0.1, 0.0, np.array([0.0]), d, which=True)
+    assert which is not None
     assert math.isinf(t[0]) and which[0] == -1
 
 
@@ -50,7 +52,7 @@ def test_the_collider_stops_at_another_robot_and_names_it() -> None:
     from sim.robot import Phase
 
     c = CrowdCollider(Parts.concat([Rectangle((20.0, 0.0), (0.1, 4.0)).parts()]), 0.25, 1)
-    c.discs = Discs(np.array([3.0]), np.array([0.0]), np.array([0.25]), np.array([4]))
+    c.join(Discs(np.array([3.0]), np.array([0.0]), np.array([0.25]), np.array([4])), -1)
     r = c.sweep(0.0, 0.0, 0.0, Phase(10.0, 1.0, 0.0, 0.0, 0.0))
     assert r.contact and r.x == pytest.approx(2.5, abs=1e-3) and r.obstacle == 5
 
