@@ -96,6 +96,7 @@ def per_tick(w: World, n: int, ticks: int, beacons: bool) -> float:
 
 
 def main() -> None:
+    """Print the two series' figures (or run one team untimed, with --only)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--ticks", type=int, default=300)
     p.add_argument("--repeat", type=int, default=7)

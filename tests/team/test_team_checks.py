@@ -98,7 +98,8 @@ def test_a_message_of_the_wrong_unit_is_an_error_at_both_places(
 
 def test_two_senders_of_different_units_and_message_of_pose(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    a = "atom tell = (stop, never, 1 s, send(gap, 2 s), send(pose))\nplan main = ((tell), never, 5 s)\n"
+    a = ("atom tell = (stop, never, 1 s, send(gap, 2 s), send(pose))\n"
+         "plan main = ((tell), never, 5 s)\n")
     b = ("atom tell = (stop, message(pose) > 1 m, 1 s, send(gap, 2 m))\n"
          "plan main = ((tell), never, 5 s)\n")
     team = _files(tmp_path, {"red": a, "blue": b})
