@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from sim.team import TeamSim
 TEAM = Path(__file__).resolve().parents[2] / "plans" / "team"
 
 
-def _run(name: str, until: float | None = None, **changes: object
+def _run(name: str, until: float | None = None, **changes: Any
          ) -> tuple[TeamRun, dict[str, Recorder]]:
     import dataclasses
 
