@@ -805,7 +805,8 @@ class Checker:
                        f"`received({channel})`, or send a number such as `range(0 deg)`")
             raise _Abort
         self._use(MessageUse("send", channel, t.dim, call.span))
-        return Send(channel, t.call(), t.dim, format_expr(call), call.span)
+        return Send(channel, t.call(), t.dim, f"send({channel}, {format_expr(args[1].value)})",
+                    call.span)
 
     def _ending(self, xi: st.Expr, timer: st.Expr, env: Env,
                 failed: bool) -> tuple[Interrupt, float]:

@@ -177,3 +177,12 @@ def test_a_plan_that_talks_runs_alone_too() -> None:
                         "plan main = ((tell, near), never, 10 s)\n")
     result = run_named(program, None, sim.SimBackend(sim.load_world("default")))
     assert result.ok and [t.cause.value for t in result.terminations][:2] == ["timer", "timer"]
+
+
+def test_show_lists_what_an_atom_sends(capsys: pytest.CaptureFixture[str]) -> None:
+    from mdle.loader import load_text
+    from mdle.show import show_program
+
+    program = load_text("atom tell(ch = leg) = (stop, never, 1 s, send(ch, 2 * x), send(pose))\n"
+                        "plan main = ((tell(leg2)), never, 5 s)\n")
+    assert "[never | 1 s]  send(leg2, 2 * x), send(pose)" in show_program(program, "main")
