@@ -142,3 +142,30 @@ def test_messages_arrive_at_the_next_tick_within_range_and_lossy_by_seed() -> No
             heard += team.members[1].box.since("n", team.time)
         got.append(heard)
     assert got[0] == got[1] != got[2] and 60 < got[0] < 140
+
+
+def test_scans_taken_during_a_step_see_the_others_where_they_ended_it() -> None:
+    # a noise-free ladar: the batched occlusion must equal a direct cast at the new poses
+    places = [_place(n, x, y, th, ladar="lms200-ideal") for n, x, y, th in
+              (("a", 0, 0, 0), ("b", 2.5, 0.4, 2.0), ("c", 1.5, -1.8, 1.0), ("d", -2, 0, 0))]
+    team = TeamSim(_world(), places, seed=3)
+    for k in range(15):
+        for i, m in enumerate(team.members):
+            m.command(Command(0.2 + 0.05 * i, 0.3 * math.sin(k + i)))
+        team.step(0.1)
+    for m in team.members:
+        scan = m.observe().scan
+        assert scan is not None and not scan.ranges.flags.writeable
+        lad = m._ladar
+        x, y, th = m.true_pose.x, m.true_pose.y, m.true_pose.theta
+        ox, oy = lad.origin(x, y, th)
+        angles = th + lad.bearings
+        hits = team.world.caster.cast(np.array((ox, oy)), angles, lad.profile.max_range,
+                                      detail=False)
+        t, _ = cast_discs(ox, oy, angles, team.discs, m.index)
+        want = np.minimum(np.where(hits.hit, hits.ranges, lad.profile.max_range), t)
+        want = np.minimum(want, lad.profile.max_range)
+        seen = np.isfinite(t) & (t < np.where(hits.hit, hits.ranges, np.inf))
+        assert seen.any(), f"{m.name} sees no other robot"
+        assert np.allclose(scan.ranges, want, atol=1e-9)
+        assert (scan.valid == (hits.hit | (t <= lad.profile.max_range))).all()
