@@ -57,7 +57,7 @@ class TeamRun:
             if m.name in self.elements:
                 self.schedulers[m.name] = Scheduler(self.elements[m.name], m, self.rate,
                                                     tuple(obs.get(m.name, ())), until=self.until)
-        self._stop_reason: str | None = None
+        self.team.radio.log = bool(obs)
 
     # a Stoppable, for the signal guard
     @property

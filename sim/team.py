@@ -48,8 +48,8 @@ class Outgoing:
 class Radio:
     """The team's radio: collects what the robots send, delivers at the next tick.
 
-    ``log`` receives every delivery attempt as ``(message, receiver, delivered)``, for
-    traces and plots.
+    With :attr:`log` on (a team run with traces), :attr:`sent` keeps every message sent
+    and :attr:`delivered` every delivery, ``(robot name, message)``, until drained.
     """
 
     def __init__(self, names: Sequence[str], rules: DeliveryRules) -> None:
@@ -57,6 +57,7 @@ class Radio:
         self.rules = rules
         self._rng = np.random.default_rng(rules.seed)
         self._out: list[Outgoing] = []
+        self.log = False
         self.sent: list[tuple[str, Message]] = []  # (sender, message) since last drained
         self.delivered: list[tuple[str, Message]] = []  # (receiver, message)
 
@@ -68,19 +69,26 @@ class Radio:
         """Deliver the queued messages at time ``now`` (``positions``: (N, 2) when sent)."""
         out, self._out = self._out, []
         rules = self.rules
+        n = len(inboxes)
+        everyone = list(range(n))
         for o in out:
             msg = Message(o.channel, o.value, self.names[o.sender], o.sent, now)
-            self.sent.append((msg.sender, msg))
-            for j, box in enumerate(inboxes):
-                if j == o.sender:
-                    continue
-                if math.isfinite(rules.range) and math.hypot(
-                        positions[j, 0] - o.x, positions[j, 1] - o.y) > rules.range:
-                    continue
-                if rules.loss > 0.0 and float(self._rng.random()) < rules.loss:
-                    continue
-                box.put(msg)
-                self.delivered.append((self.names[j], msg))
+            if self.log:
+                self.sent.append((msg.sender, msg))
+            if math.isinf(rules.range) and rules.loss == 0.0:
+                receivers = everyone
+            else:  # one draw per robot and message, whether in range or not: reproducible
+                ok = np.ones(n, dtype=bool)
+                if math.isfinite(rules.range):
+                    ok &= np.hypot(positions[:, 0] - o.x, positions[:, 1] - o.y) <= rules.range
+                if rules.loss > 0.0:
+                    ok &= self._rng.random(n) >= rules.loss
+                receivers = np.flatnonzero(ok).tolist()
+            for j in receivers:
+                if j != o.sender:
+                    inboxes[j].put(msg)
+                    if self.log:
+                        self.delivered.append((self.names[j], msg))
 
 
 class Member(SimBackend):
