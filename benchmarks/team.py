@@ -15,9 +15,9 @@ at the ladar's instants) and the radio delivers. The figure is wall time per tea
 the median of ``--repeat`` runs of ``--ticks`` ticks, one-robot and ten-robot runs
 interleaved; the target (issue 15) is a ten-robot tick at most 10 times a one-robot tick.
 The load average is printed: compare figures at similar loads. On a loaded machine,
-count instructions instead (repeatable under load): ``--only N --ticks T`` runs N robots
-for T ticks untimed; under ``valgrind --tool=callgrind`` at two values of T, the
-difference over the difference of T is the instructions per tick.
+count instructions instead (repeatable under load): ``--instructions --ticks T`` runs
+each team under ``valgrind --tool=callgrind`` for T + 10 and for 10 ticks (``--only N``)
+and prints the difference over T, per team tick.
 """
 
 from __future__ import annotations
@@ -25,7 +25,9 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import statistics
+import subprocess
 import sys
 import time
 
@@ -95,6 +97,31 @@ def per_tick(w: World, n: int, ticks: int, beacons: bool) -> float:
     return (time.perf_counter() - t0) / ticks * 1e6
 
 
+def instructions(n: int, ticks: int, beacons: bool) -> int:
+    """Return the instructions callgrind counts for ``--only n --ticks ticks``."""
+    cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable,
+           os.path.abspath(__file__), "--only", str(n), "--ticks", str(ticks)]
+    out = subprocess.run(cmd + (["--beacons"] if beacons else []), capture_output=True,
+                         text=True, check=False).stderr
+    m = re.search(r"Collected\s*:\s*(\d+)", out)
+    if m is None:
+        raise SystemExit(f"callgrind gave no count:\n{out[-2000:]}")
+    return int(m.group(1))
+
+
+def count(ticks: int) -> None:
+    """Print instructions per team tick of one and ten robots, and their ratio.
+
+    Two runs each: the difference of ``ticks + 10`` and 10 ticks, over ``ticks``.
+    """
+    for beacons in (False, True):
+        per = {n: (instructions(n, ticks + 10, beacons) - instructions(n, 10, beacons)) / ticks
+               for n in (1, 10)}
+        print(("with pose beacons" if beacons else "sensing only") +
+              f": one robot {per[1] / 1e3:.1f} k instructions per tick, ten robots "
+              f"{per[10] / 1e3:.1f} k, ratio {per[10] / per[1]:.2f} (target <= 10)")
+
+
 def main() -> None:
     """Print the two series' figures (or run one team untimed, with --only)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -105,7 +132,13 @@ def main() -> None:
                         "count: run it under valgrind --tool=callgrind at two tick counts "
                         "and take the difference)")
     p.add_argument("--beacons", action="store_true", help="with --only: robots send poses")
+    p.add_argument("--instructions", action="store_true",
+                   help="count instructions under callgrind instead of timing (slow: "
+                        "minutes; repeatable on a loaded machine)")
     args = p.parse_args()
+    if args.instructions:
+        count(args.ticks)
+        return
     w = world()
     if args.only:
         run = team_run(w, args.only, beacons=args.beacons)
