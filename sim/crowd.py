@@ -148,6 +148,7 @@ class CrowdCollider(Collider):
         self.discs = NO_DISCS
         #: the robot's own disc in ``discs`` (-1: not there)
         self.skip = -1
+        self._others = False  # any disc but its own?
         self._reach = np.zeros(0)  # radius of each disc plus the body's (-inf: its own)
         self._static_at: tuple[float, float, float, int] | None = None
 
@@ -155,6 +156,7 @@ class CrowdCollider(Collider):
         """Meet the robots at ``discs`` (a live view), except disc ``skip``, its own."""
         self.discs = discs
         self.skip = skip
+        self._others = len(discs) > (skip >= 0)
         self._reach = discs.r + self.radius
         if skip >= 0:
             self._reach[skip] = -math.inf
@@ -168,7 +170,7 @@ class CrowdCollider(Collider):
             c, owner = super().clearance(x, y)
             self._static_at = (x, y, c, owner)
         d = self.discs
-        if len(d) > (self.skip >= 0):
+        if self._others:
             gaps = np.abs(d.z - complex(x, y)) if d.z is not None else np.hypot(d.cx - x,
                                                                                 d.cy - y)
             gaps -= self._reach                  # its own disc: +inf
@@ -181,7 +183,7 @@ class CrowdCollider(Collider):
     def _outward(self, x: float, y: float) -> tuple[float, float]:
         """Return the unit vector away from the nearest wall or robot."""
         d = self.discs
-        if len(d) > (self.skip >= 0):
+        if self._others:
             gaps = np.hypot(d.cx - x, d.cy - y) - d.r
             if self.skip >= 0:
                 gaps[self.skip] = math.inf

@@ -104,6 +104,7 @@ class Member(SimBackend):
         self.index = index
         self.name = place.name
         self._batched = False
+        self._crowd = False  # are there others to see?
         self.discs = NO_DISCS  # every robot's disc (its own skipped), from the team
         self.box = Inbox(place.start)  # what its radio receives (the observation's inbox)
         self.inbox = self.box
@@ -151,10 +152,15 @@ class Member(SimBackend):
         (:meth:`TeamSim.step`), with the others in it, unless the ladar is an oracle.
         """
         self.discs = discs
+        self._crowd = len(discs) > 1
         assert isinstance(self._collider, CrowdCollider)
         self._collider.join(discs, self.index)
         self._clear = self._collider.clearance(self._x, self._y)
         self._scan = self._take_scan(self._x, self._y, self._th, self._t)
+        lad = self._ladar
+        # (step between beams, beams, max range, own disc), for the team's batched scans
+        self._fan_shape = (float(lad.bearings[1] - lad.bearings[0]) if len(lad.bearings) > 1
+                           else 1.0, len(lad.bearings), lad.profile.max_range, self.index)
         self._batched = self._fan is not None
 
     def move(self, dt: float) -> None:
@@ -181,9 +187,9 @@ class Member(SimBackend):
         return super()._obstacle(index)
 
     def _take_scan(self, x: float, y: float, th: float, stamp: float) -> Scan:
-        discs = getattr(self, "discs", NO_DISCS)
-        if len(discs) < 2:
+        if not self._crowd:
             return super()._take_scan(x, y, th, stamp)
+        discs = self.discs
         lad = self._ladar
         ox, oy = lad.origin(x, y, th)
         if self._batched and self._fan is not None:
@@ -191,7 +197,7 @@ class Member(SimBackend):
             ranges, hit = self._fan.cast(ox, oy, first)
             scan = Scan(ranges=ranges, bearings=lad.bearings, valid=hit, stamp=stamp,
                         max_range=lad.profile.max_range)
-            self.team.pending.append((self, ox, oy, first, scan))
+            self.team.pending.append((self, scan, (ox, oy, first, *self._fan_shape)))
             return scan  # its ranges are final once the team has occluded and settled it
         angles = lad.world_angles(th)
         t, which = cast_discs(ox, oy, angles, discs, self.index, which=self._oracle)
@@ -286,8 +292,9 @@ class TeamSim:
         self.discs = Discs(self._pos[:, 0], self._pos[:, 1],
                            np.array([p.profile.radius for p in self.places]), np.arange(n),
                            self._z)
-        #: scans taken during a step, finished at its end: (member, ox, oy, first, scan)
-        self.pending: list[tuple[Member, float, float, float, Scan]] = []
+        #: scans taken during a step, finished at its end: (member, scan, (ox, oy, first
+        #: beam's angle, step between beams, beams, max range, own disc))
+        self.pending: list[tuple[Member, Scan, tuple[float, ...]]] = []
         for m in self.members:  # the first scans see the others too
             m.join(self.discs)
 
@@ -321,17 +328,12 @@ class TeamSim:
         pending, self.pending = self.pending, []
         if not pending:
             return
-        fans = [(m._ladar, ox, oy, first) for m, ox, oy, first, _ in pending]
-        scan_i, beam, t = occlusions(
-            np.array([f[1] for f in fans]), np.array([f[2] for f in fans]),
-            np.array([f[3] for f in fans]),
-            np.array([float(f[0].bearings[1] - f[0].bearings[0]) if len(f[0].bearings) > 1
-                      else 1.0 for f in fans]),
-            np.array([len(f[0].bearings) for f in fans]),
-            np.array([f[0].profile.max_range for f in fans]),
-            np.array([m.index for m, *_ in pending]), self.discs)
+        f = np.array([p[2] for p in pending])   # one row per scan: see `pending`
+        scan_i, beam, t = occlusions(f[:, 0], f[:, 1], f[:, 2], f[:, 3],
+                                     f[:, 4].astype(np.intp), f[:, 5],
+                                     f[:, 6].astype(np.intp), self.discs)
         bounds = np.searchsorted(scan_i, np.arange(len(pending) + 1))
-        for k, (m, _, _, _, scan) in enumerate(pending):
+        for k, (m, scan, _) in enumerate(pending):
             a, b = int(bounds[k]), int(bounds[k + 1])
             if b > a:
                 np.minimum.at(scan.ranges, beam[a:b], t[a:b])
