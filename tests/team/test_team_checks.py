@@ -186,3 +186,12 @@ def test_show_lists_what_an_atom_sends(capsys: pytest.CaptureFixture[str]) -> No
     program = load_text("atom tell(ch = leg) = (stop, never, 1 s, send(ch, 2 * x), send(pose))\n"
                         "plan main = ((tell(leg2)), never, 5 s)\n")
     assert "[never | 1 s]  send(leg2, 2 * x), send(pose)" in show_program(program, "main")
+
+
+def test_a_robot_without_a_plan_stands_where_it_starts(tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]
+                                                        ) -> None:
+    team = _files(tmp_path, {"red": AHEAD})  # blue has no plan: an obstacle
+    assert main(["run", "--team", str(team)]) == 3
+    out = capsys.readouterr().out
+    assert "robots `red` and `blue` touched at x 2.50 m" in out and "blue:" not in out
