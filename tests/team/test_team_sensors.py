@@ -61,7 +61,7 @@ def test_range_and_bearing_to_a_robot_from_its_last_pose() -> None:
 
 
 def test_pursue_waits_for_a_pose_then_follows_the_trail_and_keeps_its_gap() -> None:
-    args = {"robot": "lead", "gap": 1.0, "v": 0.4, "reach": 0.3}
+    args: dict[str, float | str | bool] = {"robot": "lead", "gap": 1.0, "v": 0.4, "reach": 0.3}
     box = Inbox(Pose())
     state: dict[str, Any] = {"trail": deque(), "last": None}
     cmd = pursue(args, _ctx(box), state)
