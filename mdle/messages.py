@@ -50,12 +50,12 @@ class DeliveryRules:
 
     ``range`` (m): only robots within it (true distance when sent) receive (``inf``:
     everyone). ``loss``: the probability that a message is lost for one receiver, drawn
-    from a generator seeded with ``seed``.
+    from a generator seeded with ``seed`` (None: from the run's seed).
     """
 
     range: float = math.inf
     loss: float = 0.0
-    seed: int = 0
+    seed: int | None = None
 
 
 def compose(origin: Pose, local: Pose) -> Pose:

@@ -126,7 +126,7 @@ def _parse(text: str, file: str) -> TeamSpec:
         if loss > 1:
             raise doc.fail("messages.loss", f"a probability is at most 1, got {m['loss']}")
         rules = DeliveryRules(rng, loss, _integer(doc, "messages.seed", m["seed"])
-                              if "seed" in m else (seed or 0))
+                              if "seed" in m else None)
     raw = top.get("robots")
     if not isinstance(raw, dict) or not raw:
         raise doc.fail("robots" if "robots" in top else "", "a team file needs `robots:`, a "

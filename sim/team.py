@@ -16,6 +16,7 @@ robot (obstacle kind ``robot``).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -284,8 +285,10 @@ class TeamSim:
                 self.members.append(Member(self, i, world, p, int(seeds[i]), sensing))
             except WorldError as err:
                 raise WorldError(f"robot `{p.name}`: {err.diagnostics[0].message}") from None
-        self.radio = Radio([p.name for p in self.places],
-                           rules if rules is not None else DeliveryRules(seed=int(seeds[n])))
+        rules = rules if rules is not None else DeliveryRules()
+        if rules.seed is None:
+            rules = dataclasses.replace(rules, seed=int(seeds[n]))
+        self.radio = Radio([p.name for p in self.places], rules)
         self._pos = np.array([[m._x, m._y] for m in self.members], dtype=float).reshape(n, 2)
         # one set of discs for all, their centres views of _pos, which moves in place
         self._z = self._pos[:, 0] + 1j * self._pos[:, 1]

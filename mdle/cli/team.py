@@ -34,7 +34,6 @@ def trace_paths(trace: str, names: list[str]) -> dict[str, str]:
 
 def run_team(args: argparse.Namespace) -> int:
     """Run a team; returns the exit code."""
-    from mdle.messages import DeliveryRules
     from mdle.teamrun import TeamRun
     from mdle.trace import TraceWriter
     from sim.team import TeamSim
@@ -68,7 +67,7 @@ def run_team(args: argparse.Namespace) -> int:
     world, programs, elements, plans = team.world, team.programs, team.elements, team.plans
     seed = args.seed if args.seed is not None else (
         spec.seed if spec.seed is not None else world.seed)
-    rules = spec.rules if args.team else DeliveryRules(seed=seed)
+    rules = spec.rules
     rate = spec.rate if spec.rate is not None and args.rate == 10.0 else args.rate
     until = args.until if args.until is not None else spec.until
     names = [r.name for r in world.robots]
@@ -87,7 +86,8 @@ def run_team(args: argparse.Namespace) -> int:
                 for name, path in trace_paths(trace, [n for n in names if n in elements]).items():
                     writers[name] = TraceWriter(path, _header(args, spec, world, seed, rate,
                                                               until, name, plans[name],
-                                                              programs[name]))
+                                                              programs[name],
+                                                              elements[name].label))
             run = TeamRun(sim_team, elements, rate, until,
                           {n: [w] for n, w in writers.items()})
         with guard.stopping(run):
@@ -149,10 +149,11 @@ def _summary(name: str, result: Any) -> str:
 
 
 def _header(args: argparse.Namespace, spec: Any, world: Any, seed: int, rate: float,
-            until: float | None, name: str, plan: str, program: Any) -> dict[str, Any]:
+            until: float | None, name: str, plan: str, program: Any, element: str
+            ) -> dict[str, Any]:
     r = next(r for r in world.robots if r.name == name)
     return {"program": {"file": os.path.abspath(plan),
-                        "element": None, "entry": program.entry},
+                        "element": element, "entry": program.entry},
             "rate": rate, "until": until, "backend": "sim", "argv": sys.argv[1:],
             "world": {"name": world.name, "spec": world.source or world.name},
             "seed": seed, "robot": r.profile.name, "sensing": args.sensing,
