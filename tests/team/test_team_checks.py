@@ -195,3 +195,16 @@ def test_a_robot_without_a_plan_stands_where_it_starts(tmp_path: Path,
     assert main(["run", "--team", str(team)]) == 3
     out = capsys.readouterr().out
     assert "robots `red` and `blue` touched at x 2.50 m" in out and "blue:" not in out
+
+
+def test_mdle_check_checks_a_team_file_whole(tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    near = "atom hold = (stop, range_to(green) < 1 m, 2 s)\nplan main = ((hold), never, 5 s)\n"
+    team = _files(tmp_path, {"red": near, "blue": STILL})
+    assert main(["check", str(team)]) == 1
+    assert "`range_to` names robot `green`, which is not in the team" in capsys.readouterr().out
+    waits = "atom hold = (stop, received(go), 2 s)\nplan main = ((hold), never, 5 s)\n"
+    team = _files(tmp_path, {"red": waits, "blue": STILL})
+    assert main(["check", str(team)]) == 0
+    assert "checked 1 file: 0 errors, 1 warning" in capsys.readouterr().out
+    assert main(["check", "--strict", str(team)]) == 1
