@@ -208,3 +208,11 @@ def test_mdle_check_checks_a_team_file_whole(tmp_path: Path,
     assert main(["check", str(team)]) == 0
     assert "checked 1 file: 0 errors, 1 warning" in capsys.readouterr().out
     assert main(["check", "--strict", str(team)]) == 1
+
+
+def test_worlds_show_draws_a_team_world_s_robots(tmp_path: Path) -> None:
+    _files(tmp_path, {})
+    out = tmp_path / "duel.png"
+    # the world has no `start:`; its robots are drawn where they start, each with its scan
+    assert main(["worlds", "show", str(tmp_path / "duel.world.yaml"), "-o", str(out)]) == 0
+    assert out.stat().st_size > 0
