@@ -164,10 +164,16 @@ class Member(SimBackend):
                            else 1.0, len(lad.bearings), lad.profile.max_range, self.index)
         self._batched = self._fan is not None
 
-    def move(self, dt: float) -> None:
-        """Advance ``dt``, the other robots standing where they are now."""
-        self._clear = self._collider.clearance(self._x, self._y)  # the others moved
-        self._clear_bound = False
+    def move(self, dt: float, others_moved: float) -> None:
+        """Advance ``dt``, the other robots standing where they are now.
+
+        ``others_moved`` bounds how far any other robot has moved since this one's last
+        step: its clearance then is at least the last one less that (the walls stay), and
+        the exact clearance is measured only if that bound does not cover the step.
+        """
+        c, owner = self._clear
+        self._clear = (c - others_moved, owner)
+        self._clear_bound = True
         SimBackend.advance(self, dt)
 
     def touched_by(self, event: SimEvent, name: str, index: int) -> None:
@@ -295,6 +301,7 @@ class TeamSim:
         self.discs = Discs(self._pos[:, 0], self._pos[:, 1],
                            np.array([p.profile.radius for p in self.places]), np.arange(n),
                            self._z)
+        self._moved = [0.0] * n  # how far each robot moved in its last step, m
         #: scans taken during a step, finished at its end: (member, scan, (ox, oy, first
         #: beam's angle, step between beams, beams, max range, own disc))
         self.pending: list[tuple[Member, Scan, tuple[float, ...]]] = []
@@ -309,9 +316,12 @@ class TeamSim:
         """Move every robot by ``dt``, then deliver the messages sent during the tick."""
         sent_at = self._pos.copy()
         pos = self._pos
+        moved = self._moved
         for i, m in enumerate(self.members):
             before = len(m.events)
-            m.move(dt)
+            x0, y0 = m._x, m._y
+            m.move(dt, max(moved))  # its own last step too: a bound, not the least one
+            moved[i] = math.hypot(m._x - x0, m._y - y0)
             pos[i, 0], pos[i, 1] = m._x, m._y
             self._z[i] = complex(m._x, m._y)
             new = m.events[before:]
