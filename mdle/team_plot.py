@@ -16,10 +16,15 @@ from typing import Any
 from mdle.errors import Diagnostic
 from mdle.trace import Trace, read_trace
 
-__all__ = ["team_figure", "plot_team"]
+__all__ = ["team_figure", "plot_team", "is_team_trace"]
 
 #: Messages of one stream (direction, channel, sender) closer than this (s) are marked once.
 _GAP = 1.0
+
+
+def is_team_trace(trace: Trace) -> bool:
+    """Tell whether ``trace`` is one robot's of a team run (its header names the team)."""
+    return isinstance(trace.header.get("team"), dict)
 
 
 def _robot_name(trace: Trace) -> str:
@@ -43,12 +48,12 @@ def team_figure(traces: Sequence[Trace], world: Any = None) -> Any:
     from matplotlib.figure import Figure
     from matplotlib.patches import Circle
 
-    from mdle.plot import PlotError, _draw_world
+    from mdle.plot import PlotError, draw_world
 
     fig = Figure(figsize=(7.5, 6.5))
     ax = fig.add_subplot(1, 1, 1)
     if world is not None and world.obstacles:
-        _draw_world(ax, world.geometry)
+        draw_world(ax, world)
     colours = [f"C{i % 10}" for i in range(len(traces))]
     labelled: set[str] = set()
     xs: list[float] = []
@@ -123,15 +128,12 @@ def _radius(world: Any, name: str) -> float:
 def plot_team(trace_paths: Sequence[str | os.PathLike[str]], out: str | os.PathLike[str],
               world: Any = None) -> str:
     """Draw the traces of a team's robots into one plot ``out`` (.png, .svg, .pdf)."""
-    from mdle.plot import PlotError, _save, world_of
+    from mdle.figure_output import save_figure
+    from mdle.plot import world_of
 
     out = os.fspath(out)
-    ext = os.path.splitext(out)[1].lower().lstrip(".")
-    if ext not in ("png", "svg", "pdf"):
-        raise PlotError(Diagnostic(None, f"cannot write a plot to `{out}`: the file name must "
-                                         "end in .png, .svg or .pdf"))
     traces = [read_trace(p) for p in trace_paths]
     if world is None and traces:
         world = world_of(traces[0])
-    _save(team_figure(traces, world), out, ext)
+    save_figure(team_figure(traces, world), out)
     return out
