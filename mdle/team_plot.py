@@ -16,7 +16,7 @@ from typing import Any
 from mdle.errors import Diagnostic
 from mdle.trace import Trace, read_trace
 
-__all__ = ["team_figure", "plot_team", "is_team_trace"]
+__all__ = ["team_figure", "plot_team", "is_team_trace", "robot_name"]
 
 #: Messages of one stream (direction, channel, sender) closer than this (s) are marked once.
 _GAP = 1.0
@@ -27,7 +27,8 @@ def is_team_trace(trace: Trace) -> bool:
     return isinstance(trace.header.get("team"), dict)
 
 
-def _robot_name(trace: Trace) -> str:
+def robot_name(trace: Trace) -> str:
+    """Return the robot a team trace is of (else the file's name)."""
     team = trace.header.get("team")
     if isinstance(team, dict) and isinstance(team.get("robot"), str):
         return team["robot"]
@@ -61,7 +62,7 @@ def team_figure(traces: Sequence[Trace], world: Any = None) -> Any:
     for trace, colour in zip(traces, colours, strict=True):
         if not trace.samples:
             raise PlotError(Diagnostic(None, f"trace `{trace.path}` has no samples to plot"))
-        name = _robot_name(trace)
+        name = robot_name(trace)
         x, y = trace.column("true_x"), trace.column("true_y")
         xs += [float(v) for v in x if math.isfinite(v)]
         ys += [float(v) for v in y if math.isfinite(v)]

@@ -50,6 +50,8 @@ def run(args: argparse.Namespace) -> int:
     from mdle.plot import trace_and_world, trace_figure
     from mdle.team_plot import is_team_trace, team_figure
 
+    if args.animate is not None and len(args.traces) > 1:
+        return _animate_team(args)
     if args.animate is not None:
         if len(args.traces) != 1:
             raise MdleError("--animate draws one run: give one trace")
@@ -80,4 +82,24 @@ def run(args: argparse.Namespace) -> int:
         return 0
     save_figure(fig, args.output)
     print(f"plot written to {args.output}")
+    return 0
+
+
+def _animate_team(args: argparse.Namespace) -> int:
+    """Animate the robots of one team run together (``--animate`` with several traces)."""
+    from mdle.cli.options import writable_output
+    from mdle.errors import MdleError
+    from mdle.plot import trace_and_world
+    from mdle.team_animate import animate_team
+    from mdle.team_plot import is_team_trace
+
+    if args.output is not None:
+        raise MdleError("--animate writes its own file: leave out -o")
+    runs = [trace_and_world(path, args.world) for path in args.traces]
+    if not all(is_team_trace(trace) for trace, _ in runs):
+        raise MdleError("--animate draws one run: give one trace, or the traces of the "
+                        "robots of one team run (mdle run --team --trace)")
+    writable_output(args.animate, "--animate", (".gif", ".mp4"))
+    out = animate_team([trace for trace, _ in runs], runs[0][1], args.animate)
+    print(f"animation written to {out}")
     return 0

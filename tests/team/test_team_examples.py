@@ -138,3 +138,22 @@ def test_every_example_runs_from_the_command_line(tmp_path: Path) -> None:
                      "--trace", str(tmp_path / "run.jsonl"), "--plot", str(out)])
         assert code == 0 and out.stat().st_size > 0
     assert (tmp_path / "run.first.jsonl").exists() and (tmp_path / "run.third.jsonl").exists()
+
+
+def test_a_team_run_is_drawn_and_animated_from_its_traces(tmp_path: Path) -> None:
+    from mdle.cli import main
+    from mdle.team_animate import animate_team
+    from mdle.trace import read_trace
+
+    assert main(["run", "--team", str(TEAM / "wait.team.yaml"), "-q",
+                 "--trace", str(tmp_path / "w.jsonl")]) == 0
+    paths = [str(tmp_path / "w.scout.jsonl"), str(tmp_path / "w.waiter.jsonl")]
+    sent = [m for m in read_trace(paths[0]).extra if m.get("type") == "message"]
+    heard = [m for m in read_trace(paths[1]).extra if m.get("type") == "message"]
+    assert sent and all(m["dir"] == "sent" and m["channel"] == "go" for m in sent)
+    assert heard and heard[0]["dir"] == "received" and heard[0]["from"] == "scout"
+    assert heard[0]["t"] == pytest.approx(sent[0]["t"] + 0.1)  # the next tick
+    assert main(["plot", *paths, "-o", str(tmp_path / "team.png")]) == 0
+    out = animate_team([read_trace(p) for p in paths], None, tmp_path / "team.gif",
+                       max_frames=4)
+    assert Path(out).stat().st_size > 0
