@@ -491,7 +491,7 @@ class SimBackend:
                 marked = (x, y, th)
         if safe:
             if final:
-                clear = self._collider.clearance(x, y)
+                clear = self._settled_clearance(x, y)
             else:
                 clear = (clear[0] - reach, clear[1])
                 self._clear_bound = True
@@ -531,6 +531,10 @@ class SimBackend:
         return Pose(self._x, self._y, _wrap(self._th))
 
     # ------------------------------------------------------------------ internals
+    def _settled_clearance(self, x: float, y: float) -> tuple[float, int]:
+        """Return the exact clearance where a step that touched nothing ended."""
+        return self._collider.clearance(x, y)
+
     def _make_collider(self) -> Collider:
         """Return the collider of the robot's body in the world (made once)."""
         return Collider(self.world.parts, self.profile.radius)

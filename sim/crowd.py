@@ -161,14 +161,18 @@ class CrowdCollider(Collider):
         if skip >= 0:
             self._reach[skip] = -math.inf
 
-    def clearance(self, x: float, y: float) -> tuple[float, int]:
-        """Return the clearance to the nearest wall or robot, and its index."""
+    def static_clearance(self, x: float, y: float) -> tuple[float, int]:
+        """Return the clearance to the nearest wall (kept: asked again at the same place)."""
         at = self._static_at
         if at is not None and at[0] == x and at[1] == y:
-            c, owner = at[2], at[3]          # the world is static: asked again at a tick
-        else:
-            c, owner = super().clearance(x, y)
-            self._static_at = (x, y, c, owner)
+            return at[2], at[3]
+        c, owner = super().clearance(x, y)
+        self._static_at = (x, y, c, owner)
+        return c, owner
+
+    def clearance(self, x: float, y: float) -> tuple[float, int]:
+        """Return the clearance to the nearest wall or robot, and its index."""
+        c, owner = self.static_clearance(x, y)
         d = self.discs
         if self._others:
             gaps = np.abs(d.z - complex(x, y)) if d.z is not None else np.hypot(d.cx - x,

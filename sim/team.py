@@ -176,6 +176,12 @@ class Member(SimBackend):
         self._clear_bound = True
         SimBackend.advance(self, dt)
 
+    def _settled_clearance(self, x: float, y: float) -> tuple[float, int]:
+        # the walls only: the team adds the others, for every robot at once, once all
+        # have moved (TeamSim.step)
+        assert isinstance(self._collider, CrowdCollider)
+        return self._collider.static_clearance(x, y)
+
     def touched_by(self, event: SimEvent, name: str, index: int) -> None:
         """Record that robot ``name`` ran into this one (a collision; not stalled).
 
@@ -333,8 +339,26 @@ class TeamSim:
                     j = e.obstacle - len(self.world.obstacles)
                     self.members[j].touched_by(e, m.name, len(self.world.obstacles) + i)
         self.time += dt
+        self._add_others_to_clearances()
         self._settle_scans()
         self.radio.deliver(self.time, [m.box for m in self.members], sent_at)
+
+    def _add_others_to_clearances(self) -> None:
+        """Fold the other robots into every robot's clearance, all pairs at once."""
+        n = len(self.members)
+        if n < 2:
+            return
+        z = self._z
+        gaps = np.abs(z[:, None] - z[None, :])
+        r = self.discs.r
+        gaps -= r[:, None] + r[None, :]
+        np.fill_diagonal(gaps, np.inf)
+        near = gaps.argmin(axis=1)
+        least = gaps[np.arange(n), near].tolist()
+        base = len(self.world.obstacles)
+        for m, gap, j in zip(self.members, least, near.tolist(), strict=True):
+            if gap < m._clear[0]:
+                m._clear = (gap, base + j)
 
     def _settle_scans(self) -> None:
         """Put the robots into the scans taken during the step, then add their noise."""
