@@ -35,7 +35,9 @@ def add_parser(subparsers: Any) -> None:
                     "file:line:col and the source line. Exit code: 0 clean, 1 errors, "
                     "2 usage errors.")
     p.add_argument("files", nargs="+", metavar="FILE",
-                   help="plan files; a folder means every .mdle file under it")
+                   help="plan files; a folder means every .mdle file under it; a team file "
+                        "(.yaml) is checked whole: its world, every robot's plan, and the "
+                        "messages and robot names across them")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="print errors only (no warnings, no summary)")
     p.add_argument("--strict", action="store_true", help="treat warnings as errors (exit 1)")
@@ -71,10 +73,21 @@ def _load(path: str, args: argparse.Namespace,
         robot = known_robot(path, args.world, args.robot, robots)
         return load_program(path, robot=robot)
     except MdleError as err:
-        from mdle.hints import yaml_as_plan
+        return err
 
-        return yaml_as_plan(path, err, "to check a plan for this world's robot: "
-                           f"`mdle check PLAN.mdle --world {path}`")
+
+def _check_team(path: str, quiet: bool) -> int:
+    """Check a team file and its plans (MdleError on errors); returns the warnings."""
+    from mdle.cli.output import print_diagnostics
+    from mdle.teamfile import load_team, read_team
+
+    team = load_team(read_team(path))
+    found = list(team.warnings)
+    for program in team.programs.values():
+        found += program.warnings
+    if found and not quiet:
+        print_diagnostics(found, team.sources, stream=sys.stdout)
+    return len(found)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -86,12 +99,23 @@ def run(args: argparse.Namespace) -> int:
 
     files = expand_paths(args.files)
     robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once
-    results = [(path, _load(path, args, robots)) for path in files]
-    imported = {os.path.realpath(name) for path, r in results if not isinstance(r, MdleError)
+    teams = (".yaml", ".yml")  # a team file (its plans are checked with it)
+    results = {path: _load(path, args, robots) for path in files if not path.endswith(teams)}
+    imported = {os.path.realpath(name) for path, r in results.items()
+                if not isinstance(r, MdleError)
                 for name in r.sources if name != path and not name.startswith("<")}
     errors = warnings = failed = 0
     pose = False
-    for path, result in results:
+    for path in files:
+        if path.endswith(teams):
+            try:
+                warnings += _check_team(path, args.quiet)
+            except MdleError as err:
+                failed += 1
+                errors += len(err.diagnostics)
+                print_diagnostics(err.diagnostics, err.sources, stream=sys.stdout)
+            continue
+        result = results[path]
         if isinstance(result, MdleError):
             failed += 1
             errors += len(result.diagnostics)

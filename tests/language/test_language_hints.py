@@ -81,9 +81,7 @@ def test_conditions_and_values_are_offered_only_what_fits_there() -> None:
 
 @pytest.mark.parametrize(("command", "hint"), [
     ("run", "hint: to run a plan in this world: `mdle run PLAN.mdle --world w.world.yaml`"),
-    ("check", "hint: to check a plan for this world's robot: `mdle check PLAN.mdle --world "
-              "w.world.yaml`"),
-])
+])  # (`mdle check` reads a .yaml as a team file)
 def test_a_world_file_given_as_a_plan_says_how_to_give_it(tmp_path: Path, command: str,
                                                           hint: str) -> None:
     (tmp_path / "w.world.yaml").write_text("name: w\nstart: {x: 0, y: 0, theta: 0}\n")
