@@ -64,7 +64,7 @@ def robot_profile(spec: str | os.PathLike[str]) -> RobotProfile:
     if text in names:
         return _shipped(text)
     looks_like_path = text.endswith((".yaml", ".yml")) or os.sep in text or "/" in text
-    if looks_like_path or Path(text).is_file():
+    if looks_like_path or _is_file(text):
         return read_robot(text)
     import difflib
 
@@ -72,6 +72,14 @@ def robot_profile(spec: str | os.PathLike[str]) -> RobotProfile:
     hint = f" (did you mean `{close[0]}`?)" if close else ""
     raise WorldError(f"unknown robot profile `{text}`{hint} (known: {', '.join(names)}; "
                      "or give the path of a .yaml profile file)")
+
+
+def _is_file(path: str) -> bool:
+    """Whether a file of that name exists (a name too long for the system does not)."""
+    try:
+        return Path(path).is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def robot_descriptions() -> list[tuple[str, str]]:

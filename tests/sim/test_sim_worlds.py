@@ -209,3 +209,8 @@ def test_ladar_must_sit_on_the_body() -> None:
         parse_world("robot: {profile: pioneer2dx, ladar_mount: [0.5, 0, 0]}\n")
     with pytest.raises(WorldError, match=r"robot.radius: the ladar at \(0.017, 0.008\) m"):
         parse_world("robot: {profile: pioneer2dx, radius: 0}\n")
+
+
+def test_a_robot_name_too_long_for_a_file_name_is_an_unknown_profile() -> None:
+    with pytest.raises(WorldError, match="unknown robot profile"):
+        parse_world("robot: " + "a" * 5000 + "\n", file="bad.yaml")
