@@ -18,7 +18,9 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from atoms import steering
 from atoms.boundary import SIDES, Side, cached_view, parse_side
+from atoms.latency import shift_front, shift_side
 from atoms.registry import Args, Context, Param, control_law, sensor
 from mdle.backend import Command
 from mdle.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
@@ -71,16 +73,15 @@ def scan_points_cached(ctx: Context) -> Any:
     """Return the robot-frame points (M, 2) of this tick's valid beams, once per tick."""
     pts = ctx.cache.get("scan_points")
     if pts is None:
-        import numpy as np
-
-        from atoms.estimators import scan_points
+        import atoms.estimators as est  # numpy, on first use (not `from`: no __path__ probe)
 
         scan = ctx.obs.scan
         if scan is None:
+            import numpy as np
+
             pts = np.zeros((0, 2))
         else:
-            p = scan_points(scan.ranges, scan.bearings, scan.valid)
-            pts = p[np.isfinite(p[:, 0])]
+            pts = est.valid_points(scan.ranges, scan.bearings, scan.valid)
         ctx.cache["scan_points"] = pts
     return pts
 
@@ -107,8 +108,6 @@ def scan_points_cached(ctx: Context) -> Any:
 )
 def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Command:
     """Follow a boundary at distance rc on one side at constant speed (the paper's atom)."""
-    from atoms import steering
-
     if state is None:  # run without start (a bare call): make the state now
         state = start_follow(args, ctx)
     g = state.gains
@@ -125,8 +124,6 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     pred = state.predictor
     if pred is not None and state.latency is not None:
         # answer the boundary as it will be when this command acts, not as it was scanned
-        from atoms.latency import shift_front, shift_side
-
         pred.record_pose(obs.time, law_pose)
         stamp = obs.scan.stamp if obs.scan is not None else obs.time
         moved, law_pose = pred.predict(obs.time, stamp, law_pose, obs.v, sgn * obs.omega,
