@@ -423,7 +423,8 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         header.update(connect=args.connect, laser=args.laser)
         try:
             return open_backend("pioneer", args.connect, args.laser, rate=args.rate), None
-        except SystemExit:  # SIGTERM while connecting: the backend stopped and closed it
+        except (KeyboardInterrupt, SystemExit):  # a signal while connecting: the backend
+            # stopped and closed the robot
             print("interrupted while connecting: robot stopped, session closed",
                   file=sys.stderr)
             raise
