@@ -171,14 +171,18 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
 
 def _nearest_on_side(points: Any, sgn: float) -> tuple[float, float] | None:
     """Return (distance, law-frame bearing) of the nearest scan point on the followed side."""
-    y = points[:, 1] * sgn
-    ok = y < 0.0
-    if not ok.any():
+    import numpy as np
+
+    if points.shape[0] == 0:
         return None
-    q = points[ok]
-    d2 = (q * q).sum(1)
-    k = int(d2.argmin())
-    return math.sqrt(float(d2[k])), math.atan2(float(y[ok][k]), float(q[k, 0]))
+    x, y = points[:, 0], points[:, 1] * sgn
+    d2 = x * x  # full-length operations only (a reduction over the short axis is slow)
+    d2 += y * y
+    d2[~(y < 0.0)] = math.inf  # the other side is never nearest (the points are finite)
+    k = int(np.argmin(d2))
+    if not d2[k] < math.inf:
+        return None
+    return math.sqrt(float(d2[k])), math.atan2(float(y[k]), float(x[k]))
 
 
 def _into(points: Any, dx: float, dy: float, dth: float) -> Any:
