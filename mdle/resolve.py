@@ -17,7 +17,8 @@ from atoms.registry import LawSpec, Registry, SensorSpec
 from mdle import syntax as st
 from mdle.errors import Diagnostic, Severity
 
-__all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "find_cycles"]
+__all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "uses_of",
+           "find_cycles"]
 
 
 @dataclass(frozen=True)
@@ -85,7 +86,7 @@ def symbol_argument(spec: LawSpec | SensorSpec | None, index: int, arg: st.Argum
         param = spec.param(arg.name)
     else:
         param = spec.params[index] if index < len(spec.params) else None
-    return param is not None and arg.value.name in param.choices
+    return param is not None and (arg.value.name in param.choices or bool(param.any_name))
 
 
 def references(definition: st.Definition, names: Mapping[str, st.Definition],
@@ -103,6 +104,9 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
         e = stack.pop()
         if isinstance(e, (st.Name, st.Call)) and e.name in names and e.name not in shadow:
             found.append(e)
+        if isinstance(e, st.Call) and e.name == "send" and e.name not in names:
+            stack.extend(a.value for a in e.args[1:])  # the channel names no definition
+            continue
         if isinstance(e, st.Call) and registry is not None and e.name not in names:
             spec = registry.laws.get(e.name) or registry.sensors.get(e.name)
             stack.extend(a.value for i, a in enumerate(e.args)
@@ -112,11 +116,22 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
     return found
 
 
-def find_cycles(ns: Namespace) -> tuple[set[str], list[Diagnostic]]:
-    """Definitions defined in terms of themselves; one error per cycle, at each member."""
+def uses_of(ns: Namespace) -> dict[str, list[st.Name | st.Call]]:
+    """Return :func:`references` of every definition, by name (one walk of each body)."""
     defs = ns.definitions
-    edges = {name: [(r.name, r) for r in references(d, defs, ns.registry)]
-             for name, d in defs.items()}
+    return {name: references(d, defs, ns.registry) for name, d in defs.items()}
+
+
+def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | None = None
+                ) -> tuple[set[str], list[Diagnostic]]:
+    """Definitions defined in terms of themselves; one error per cycle, at each member.
+
+    ``uses`` is :func:`uses_of` ``(ns)``, if the caller has it already.
+    """
+    defs = ns.definitions
+    if uses is None:
+        uses = uses_of(ns)
+    edges = {name: [(r.name, r) for r in uses[name]] for name in defs}
     color: dict[str, int] = {}  # 1: on the current path, 2: done
     in_cycle: set[str] = set()
     errors: list[Diagnostic] = []
