@@ -342,8 +342,8 @@ class TraceWriter:
         self.close()
 
 
-_HEAD = ('{"type":"sample","t":%r,"x":%s,"y":%s,"theta":%s,"v":%s,"omega":%s,"cmd_v":%s,'
-         '"cmd_omega":%s,"path":%s,"lateness":%.9g,"stalled":%s')
+_LINE_HEAD = ('{"type":"sample","t":%r,"x":%s,"y":%s,"theta":%s,"v":%s,"omega":%s,"cmd_v":%s,'
+              '"cmd_omega":%s,"path":')
 _SEVEN = ",".join(["%.9g"] * 7)
 _TEN = ",".join(["%.9g"] * 10)
 
@@ -359,6 +359,7 @@ class SampleFormat:
     def __init__(self) -> None:
         self._paths: dict[str, str] = {}
         self._diag: dict[tuple[str, ...], str] = {}
+        self._lines: dict[tuple[Any, ...], str] = {}
 
     def quoted(self, path: str) -> str:
         """Return ``path`` as a JSON string (cached)."""
@@ -407,32 +408,63 @@ class SampleFormat:
         true_theta) exactly as a reader of the line gets them (the true pose left out
         when the sample has none), or None when a number is not finite (then the caller
         rounds for itself). Formatting each number once serves the line and its reader.
+
+        The line is one ``%`` format of a template made once per shape of line (path,
+        flags, which optional fields, diagnostic names): the same text as :meth:`__call__`.
         """
         (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
          diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
+        has_truth = true_x is not None and true_y is not None and true_theta is not None
         try:
-            if true_x is not None and true_y is not None and true_theta is not None:
-                if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
-                                + true_x + true_y + true_theta):
-                    return self(s), None
+            total = t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
+            if has_truth:
+                total += true_x + true_y + true_theta
+            if scan_age is not None:
+                total += scan_age
+            if clearance is not None:
+                total += clearance
+            dvalues = tuple(diag.values()) if diag else ()
+            if not isfinite(total + sum(dvalues)):
+                return self(s), None
+            if has_truth:
                 digits = (_TEN % (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
                                   true_theta)).split(",")
-                truth: tuple[str, str, str] | None = (digits[7], digits[8], digits[9])
             else:
-                if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
-                    return self(s), None
                 digits = (_SEVEN % (x, y, theta, v, omega, cmd_v, cmd_omega)).split(",")
-                truth = None
-            quoted = self._paths.get(path)
-            if quoted is None:
-                quoted = self.quoted(path)
-            line = _HEAD % (float(t), digits[0], digits[1], digits[2], digits[3], digits[4],
-                            digits[5], digits[6], quoted, lateness,
-                            "true" if stalled else "false")
-            line = self._tail(line, scan_age, clearance, collided, truth, diag)
+            key = (path, not stalled, scan_age is None, clearance is None,
+                   None if collided is None else not collided, has_truth,
+                   tuple(diag) if diag else ())
+            template = self._lines.get(key)
+            if template is None:
+                template = self._template(key)
+            args: tuple[Any, ...] = (float(t), *digits[:7], lateness)
+            if scan_age is not None:
+                args += (scan_age,)
+            if clearance is not None:
+                args += (clearance,)
+            line = template % (*args, *digits[7:], *dvalues)
         except (TypeError, ValueError):  # a diagnostic that is not a number
             return self(s), None
         return line, tuple(map(float, digits))
+
+    def _template(self, key: tuple[Any, ...]) -> str:
+        """Make (and keep) the ``%`` template of one shape of sample line."""
+        path, running, no_age, no_clearance, not_collided, has_truth, names = key
+        parts = [_LINE_HEAD, self.quoted(path).replace("%", "%%"), ',"lateness":%.9g,"stalled":',
+                 "false" if running else "true"]
+        if not no_age:
+            parts.append(',"scan_age":%.9g')
+        if not no_clearance:
+            parts.append(',"clearance":%.9g')
+        if not_collided is not None:
+            parts.append(',"collided":false' if not_collided else ',"collided":true')
+        if has_truth:
+            parts.append(',"true_x":%s,"true_y":%s,"true_theta":%s')
+        if names:
+            parts.append(',"diag":{%s}' % ",".join(
+                [self.quoted(k).replace("%", "%%") + ":%.9g" for k in names]))
+        template = self._lines[key] = "".join(parts) + "}"
+        return template
 
     def _tail(self, line: str, scan_age: Any, clearance: Any, collided: Any,
               truth: tuple[str, str, str] | None, diag: Mapping[str, Any]) -> str:

@@ -26,11 +26,12 @@ import struct
 import time
 import zlib
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import IO
 
 import numpy as np
 
-__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile"]
+__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile", "RecordGroup"]
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -48,6 +49,21 @@ _INDEX_OP = 0x07
 _INDEX_HEAD = struct.Struct("<BQHI")  # opcode, length, channel, entries' byte length
 _CHUNK_OP = 0x06
 _CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc, name length
+
+
+@dataclass(eq=False)
+class RecordGroup:
+    """Channels whose messages are added together, as ready records (:meth:`McapFile.group`).
+
+    ``channels`` and the byte ``offsets`` of their records in the data of one
+    :meth:`McapFile.add_records`; ``count`` the calls so far (the next sequence number);
+    ``starts`` the (log time, chunk offset) of each call in the open chunk.
+    """
+
+    channels: tuple[int, ...]
+    offsets: tuple[int, ...]
+    count: int = 0
+    starts: list[tuple[int, int]] = field(default_factory=list)
 
 
 class McapFile:
@@ -102,6 +118,7 @@ class McapFile:
         self._counts: list[int] = [0]         # messages per channel id (index 0 unused)
         self._buf = bytearray()
         self._entries: list[list[tuple[int, int]]] = [[]]  # per channel: (time, offset)
+        self._groups: list[RecordGroup] = []
         self._chunk_start = 2**64 - 1
         self._chunk_end = 0
         self._start = 2**64 - 1
@@ -187,32 +204,40 @@ class McapFile:
         if len(buf) >= self._chunk_size:
             self.close_chunk()
 
-    def add_group(self, ns: int, items: Sequence[tuple[int, bytes]]) -> None:
-        """Add several messages logged at the same time ``ns``: (channel, data) each.
+    def group(self, channels: Sequence[int], offsets: Sequence[int]) -> RecordGroup:
+        """Register a group of channels written together as ready Message records.
 
-        The same as :meth:`add` for each, in one call (a tick's messages).
+        Each call of :meth:`add_records` with the group adds one message on each of
+        ``channels``, the records starting ``offsets`` bytes into the data added (the
+        caller packs the records: opcode, length, channel, sequence, times, data). The
+        channels are the group's alone (no :meth:`add` on them); their sequence number
+        is :attr:`RecordGroup.count` before the call.
+        """
+        taken = {ch for g in self._groups for ch in g.channels}
+        if len(channels) != len(offsets) or not channels or taken & set(channels) \
+                or any(self._counts[ch] for ch in channels):
+            raise ValueError("a group needs channels of its own, each with an offset")
+        g = RecordGroup(tuple(channels), tuple(int(o) for o in offsets))
+        self._groups.append(g)
+        return g
+
+    def add_records(self, group: RecordGroup, ns: int, *parts: bytes | memoryview) -> None:
+        """Add one message on each of ``group``'s channels, logged at ``ns``.
+
+        ``parts`` (concatenated) are the records, packed by the caller with sequence
+        number ``group.count`` and log time ``ns``.
         """
         buf = self._buf
-        counts = self._counts
-        entries = self._entries
-        pack = _MESSAGE.pack
-        offset = len(buf)
-        parts = []
-        for channel, data in items:
-            seq = counts[channel]
-            counts[channel] = seq + 1
-            entries[channel].append((ns, offset))
-            n = len(data)
-            parts.append(pack(_MESSAGE_OP, 22 + n, channel, seq, ns, ns))
-            parts.append(data)
-            offset += 31 + n
-        buf += b"".join(parts)
+        group.starts.append((ns, len(buf)))
+        for part in parts:
+            buf += part
+        group.count += 1
         if ns < self._chunk_start:
             self._chunk_start = ns
         if ns > self._chunk_end:
             self._chunk_end = ns
-        self._messages += len(items)
-        if offset >= self._chunk_size:
+        self._messages += len(group.channels)
+        if len(buf) >= self._chunk_size:
             self.close_chunk()
 
     def tick(self) -> None:
@@ -240,15 +265,11 @@ class McapFile:
         chunk_length = len(head) + len(comp) + 8 + len(data)
         index_offsets: dict[int, int] = {}
         at = chunk_offset + chunk_length
-        for ch, entries in enumerate(self._entries):
-            if not entries:
-                continue
-            body = np.asarray(entries, dtype="<u8").tobytes()
+        for ch, body in self._index_bodies():
             piece = _INDEX_HEAD.pack(_INDEX_OP, 6 + len(body), ch, len(body)) + body
             index_offsets[ch] = at
             at += len(piece)
             pieces.append(piece)
-            entries.clear()
         self._buf = bytearray()
         self._chunk_start, self._chunk_end = 2**64 - 1, 0
         self._start = min(self._start, start)
@@ -262,6 +283,29 @@ class McapFile:
             compression=self._compression, compressed_size=len(data),
             uncompressed_size=len(raw)))
 
+    def _index_bodies(self) -> list[tuple[int, bytes]]:
+        """Return the open chunk's message index entries per channel (and forget them).
+
+        A group's entries are its calls' (time, offset) with each channel's record
+        offset added, made for all its channels at once.
+        """
+        out = []
+        for ch, entries in enumerate(self._entries):
+            if entries:
+                out.append((ch, np.asarray(entries, dtype="<u8").tobytes()))
+                entries.clear()
+        for g in self._groups:
+            if not g.starts:
+                continue
+            starts = np.asarray(g.starts, dtype="<u8")
+            g.starts.clear()
+            for ch, offset in zip(g.channels, g.offsets, strict=True):
+                entries = starts.copy()
+                entries[:, 1] += offset
+                out.append((ch, entries.tobytes()))
+        out.sort(key=lambda item: item[0])
+        return out
+
     # ------------------------------------------------------------------ the end
 
     @property
@@ -271,7 +315,11 @@ class McapFile:
 
     def channel_counts(self) -> dict[int, int]:
         """Messages per channel id so far."""
-        return {i: n for i, n in enumerate(self._counts) if i}
+        counts = {i: n for i, n in enumerate(self._counts) if i}
+        for g in self._groups:
+            for ch in g.channels:
+                counts[ch] = g.count
+        return counts
 
     @property
     def time_range(self) -> tuple[int, int] | None:
@@ -309,7 +357,7 @@ class McapFile:
             channel_count=len(self._channels), attachment_count=0,
             metadata_count=len(self._metadata_index), chunk_count=len(self._chunk_index),
             message_start_time=span[0], message_end_time=span[1],
-            channel_message_counts={i: n for i, n in enumerate(self._counts) if i and n})
+            channel_message_counts={i: n for i, n in self.channel_counts().items() if n})
         group(Opcode.SCHEMA, self._schemas)
         group(Opcode.CHANNEL, self._channels)
         group(Opcode.STATISTICS, [stats])
