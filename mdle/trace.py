@@ -414,10 +414,11 @@ class SampleFormat:
         """
         (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
          diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
-        has_truth = true_x is not None and true_y is not None and true_theta is not None
+        has_truth = False
         try:
             total = t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
-            if has_truth:
+            if true_x is not None and true_y is not None and true_theta is not None:
+                has_truth = True
                 total += true_x + true_y + true_theta
             if scan_age is not None:
                 total += scan_age

@@ -300,9 +300,9 @@ class McapFile:
             starts = np.asarray(g.starts, dtype="<u8")
             g.starts.clear()
             for ch, offset in zip(g.channels, g.offsets, strict=True):
-                entries = starts.copy()
-                entries[:, 1] += offset
-                out.append((ch, entries.tobytes()))
+                table = starts.copy()
+                table[:, 1] += offset
+                out.append((ch, table.tobytes()))
         out.sort(key=lambda item: item[0])
         return out
 

@@ -96,7 +96,7 @@ def library_name() -> str:
 
 
 def _seconds(record: Mapping[str, Any], key: str) -> float:
-    """A ``laser`` record's optional timing (s): 0 when absent (unknown), else >= 0."""
+    """Return a ``laser`` record's optional timing (s): 0 when absent (unknown), else >= 0."""
     value = float(record.get(key) or 0.0)
     if not (math.isfinite(value) and value >= 0.0):
         raise ValueError(f"`{key}` must be a finite number of seconds, not below 0")

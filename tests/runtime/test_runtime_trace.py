@@ -290,7 +290,7 @@ def _sample(**changes: Any) -> Any:
 
     from mdle.runtime.events import Sample
 
-    base = dict(time=12.340000000000002, x=1.25, y=-2.000000001, theta=0.1234567891,
+    base: dict[str, Any] = dict(time=12.340000000000002, x=1.25, y=-2.000000001, theta=0.1234567891,
                 v=0.6, omega=-0.01, cmd_v=0.6, cmd_omega=0.0, path='main/"a"%s',
                 lateness=0.0, scan_age=0.02, stalled=False,
                 diag=MappingProxyType({"side_range": 1.0000000004, "mo%de": 2.0}),
