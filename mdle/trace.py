@@ -40,7 +40,7 @@ if TYPE_CHECKING:
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
            "TraceWriteError", "SampleFormat", "LaserRecords", "read_trace", "versions",
            "decode_ranges", "dumps", "start_record", "event_record", "end_record", "scan_ranges",
-           "encode_ranges", "laser_mount"]
+           "encode_ranges", "laser_mount", "laser_timing"]
 
 TRACE_FORMAT = "mdle-trace"
 TRACE_VERSION = 1
@@ -268,6 +268,7 @@ class TraceWriter:
     def on_start(self, scheduler: "Scheduler") -> None:
         """Record the element and rate the run uses."""
         self._laser.mount = laser_mount(scheduler.backend)
+        self._laser.timing = laser_timing(scheduler.backend, scheduler.rate)
         self._write(_dumps(start_record(scheduler)))
 
     def on_event(self, event: Event) -> None:
@@ -504,6 +505,27 @@ def laser_mount(backend: object) -> tuple[float, float, float]:
     return (x, y, th)
 
 
+def laser_timing(backend: object, rate: float) -> tuple[float, float]:
+    """Return (scan_time, time_increment) in seconds for a backend's scans, 0 when unknown.
+
+    ``scan_time`` is the time between scans: the backend's ``laser_timing`` period, or
+    the tick (``1 / rate``) for a backend that takes a scan at every tick (period 0);
+    ``time_increment`` the time between two beams of a scan (0 for a simulated scan,
+    taken at one instant).
+    """
+    timing = getattr(backend, "laser_timing", None)
+    try:
+        period, increment = (float(v) for v in timing)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        return (0.0, 0.0)
+    if not (math.isfinite(period) and period >= 0 and math.isfinite(increment)
+            and increment >= 0):
+        return (0.0, 0.0)
+    if period == 0.0 and rate > 0:
+        period = 1.0 / rate
+    return (period, increment)
+
+
 def scan_ranges(scan: "Scan") -> "np.ndarray":
     """Return a scan's ranges as little-endian float32, +inf on invalid beams (REP-117)."""
     import numpy as np
@@ -539,8 +561,11 @@ class LaserRecords:
     new scan. ``mount`` is the ladar's pose in the robot frame.
     """
 
-    def __init__(self, mount: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
+    def __init__(self, mount: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                 timing: tuple[float, float] = (0.0, 0.0)) -> None:
         self.mount = mount
+        #: (scan_time, time_increment), s: between scans and between beams (0: unknown).
+        self.timing = timing
         self.last: Scan | None = None
         self._geometry: tuple[Any, ...] | None = None
         self._bearings: Any = None
@@ -555,7 +580,8 @@ class LaserRecords:
         return {"type": "laser", "frame": "laser", "mount": list(self.mount),
                 "angle_min": a0, "angle_max": a1,
                 "angle_increment": (a1 - a0) / (n - 1) if n > 1 else 0.0, "count": n,
-                "range_min": 0.0, "range_max": float(scan.max_range)}
+                "range_min": 0.0, "range_max": float(scan.max_range),
+                "scan_time": self.timing[0], "time_increment": self.timing[1]}
 
     def changed(self, scan: "Scan") -> dict[str, Any] | None:
         """Return the ``laser`` record when ``scan``'s geometry is new, else None.
@@ -568,7 +594,7 @@ class LaserRecords:
             return None  # the same beams as the last scan (the usual case: shared arrays)
         self._bearings, self._max_range = b, scan.max_range
         geometry = (len(b), float(b[0]) if len(b) else 0.0, float(b[-1]) if len(b) else 0.0,
-                    float(scan.max_range), self.mount)
+                    float(scan.max_range), self.mount, self.timing)
         if geometry == self._geometry:
             return None
         self._geometry = geometry
@@ -708,6 +734,8 @@ _NUMBERS: dict[str, tuple[str, ...]] = {
     "event": ("t", "x", "y", "theta"),
     "end": ("t", "duration", "distance", "min_clearance", "max_lateness"),
     "scan": ("t", "stamp"),
+    "laser": ("angle_min", "angle_max", "angle_increment", "range_min", "range_max",
+              "scan_time", "time_increment"),
     "header": ("rate", "until"),
 }
 _STRINGS: dict[str, tuple[str, ...]] = {

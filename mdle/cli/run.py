@@ -421,12 +421,27 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         from mdle.drivers import open_backend
 
         header.update(connect=args.connect, laser=args.laser)
+        profile = None
+        if args.robot:  # read before connecting: a bad profile touches no robot
+            from sim.profiles import robot_profile
+
+            profile = robot_profile(args.robot)
+            header["robot"] = args.robot
         try:
-            return open_backend("pioneer", args.connect, args.laser, rate=args.rate), None
+            backend = open_backend("pioneer", args.connect, args.laser, rate=args.rate)
         except SystemExit:  # SIGTERM while connecting: the backend stopped and closed it
             print("interrupted while connecting: robot stopped, session closed",
                   file=sys.stderr)
             raise
+        from mdle.drivers.pioneer import PioneerBackend
+
+        if profile is not None and isinstance(backend, PioneerBackend):
+            # the recording's base_link -> laser and scan period
+            x, y, th = profile.ladar_mount
+            backend.laser_mount = (float(x), float(y), float(th))
+            if profile.scan_period is not None:
+                backend.laser_timing = (profile.scan_period, 0.0)
+        return backend, None
     import sim
 
     spec: str | os.PathLike[str] | None = args.world

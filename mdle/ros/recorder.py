@@ -24,6 +24,7 @@ from mdle.trace import (
     end_record,
     event_record,
     laser_mount,
+    laser_timing,
     scan_ranges,
     start_record,
 )
@@ -81,8 +82,9 @@ class McapRecorder:
     # ------------------------------------------------------------------ observer hooks
 
     def on_start(self, scheduler: "Scheduler") -> None:
-        """Take the ladar mount and the ``start`` record."""
+        """Take the ladar mount and timing, and the ``start`` record."""
         self._laser.mount = laser_mount(scheduler.backend)
+        self._laser.timing = laser_timing(scheduler.backend, scheduler.rate)
         self.recording.start(dumps(start_record(scheduler)))
 
     def on_event(self, event: Event) -> None:

@@ -117,7 +117,9 @@ def test_scan_messages(run: dict[str, Any], rosbags_read: Any, store: str) -> No
         assert s.angle_min == np.float32(-math.pi / 2) and s.angle_max == np.float32(math.pi / 2)
         assert s.angle_increment == np.float32(math.radians(1.0))
         assert s.range_min == 0.0 and s.range_max == 10.0
-        assert s.time_increment == 0.0 and s.scan_time == 0.0 and len(s.intensities) == 0
+        # scans every 0.1 s (the 10 Hz LMS-200), each taken at one instant (simulated)
+        assert s.scan_time == np.float32(laser["scan_time"]) == np.float32(0.1)
+        assert s.time_increment == 0.0 == laser["time_increment"] and len(s.intensities) == 0
         ranges = np.asarray(s.ranges)
         assert ranges.dtype == np.float32 and len(ranges) == 181
         np.testing.assert_array_equal(ranges, decode_ranges(rec["ranges"]))

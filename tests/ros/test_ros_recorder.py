@@ -63,6 +63,9 @@ def test_a_robot_run_has_no_simulation_topics(tmp_path: Path, doctor: Any,
                for t in tfs)
     (static,) = [m.msg.transforms[0] for m in msgs if m.topic == "/tf_static"]
     assert static.transform.translation.x == 0.0  # no mount known: at the robot's origin
+    # nor the scans' timing: 0, as LaserScan says for unknown
+    assert all(m.msg.scan_time == 0.0 == m.msg.time_increment for m in msgs
+               if m.topic == "/scan")
     # the exported trace gives the same messages
     from mdle.ros.export import export_trace
 
@@ -120,3 +123,22 @@ def test_a_recording_that_cannot_be_created(tmp_path: Path,
     err = capsys.readouterr().err
     assert code == 1 and "cannot write the recording" in err
     assert "No such file or directory" in err
+
+
+@pytest.mark.parametrize("rate", [10.0, 20.0])
+def test_scans_taken_at_every_tick_are_a_tick_apart(tmp_path: Path, rate: float) -> None:
+    """The reference world's ladar scans at every tick: scan_time is the tick."""
+    import sim
+
+    element = load_text(PLAN, "<test>").elements["hug"]
+    header = {"program": {"element": "hug"}, "world": {"name": "ellipse"}, "backend": "sim"}
+    rec = McapRecorder(tmp_path / "r.mcap", header)
+    trace = TraceWriter(tmp_path / "t.jsonl", header)
+    sch = Scheduler(element, sim.SimBackend(sim.load_world("ellipse")), rate, [trace, rec],
+                    until=1.0)
+    while sch.tick():
+        pass
+    (laser,) = read_trace(tmp_path / "t.jsonl").lasers
+    assert (laser["scan_time"], laser["time_increment"]) == (1.0 / rate, 0.0)
+    back = read_trace(tmp_path / "r.mcap")
+    assert back.lasers[0]["scan_time"] == pytest.approx(1.0 / rate, rel=1e-7)  # float32
