@@ -144,6 +144,15 @@ class McapFile:
             view = view[n:]
             self._pos += n
 
+    def _out_all(self, pieces: Sequence[bytes | bytearray]) -> None:
+        """Write ``pieces`` one after the other, in one system call when it takes them all."""
+        if self._file is None:
+            raise OSError(f"the recording `{self.path}` is closed")
+        n = os.writev(self._file.fileno(), pieces)
+        self._pos += n
+        if n < sum(len(p) for p in pieces):  # a short write: the rest as it comes
+            self._out(memoryview(b"".join(pieces))[n:])
+
     def _emit(self) -> None:
         """Write what the record builder holds."""
         self._out(self._builder.end())
@@ -252,7 +261,8 @@ class McapFile:
         self._close_at = self._clock() + self._max_age
         if not self._buf:
             return
-        raw = bytes(self._buf)
+        raw = self._buf  # compressed, checked and written as it is: no copy
+        self._buf = bytearray()
         data = self._compress(raw) if self._compress is not None else raw
         start, end = self._chunk_start, self._chunk_end
         chunk_offset = self._pos
@@ -270,12 +280,11 @@ class McapFile:
             index_offsets[ch] = at
             at += len(piece)
             pieces.append(piece)
-        self._buf = bytearray()
         self._chunk_start, self._chunk_end = 2**64 - 1, 0
         self._start = min(self._start, start)
         self._end = max(self._end, end)
         # one write: the chunk and its indexes reach the OS together
-        self._out(b"".join(pieces))
+        self._out_all(pieces)
         self._chunk_index.append(ChunkIndex(
             message_start_time=start, message_end_time=end, chunk_start_offset=chunk_offset,
             chunk_length=chunk_length, message_index_offsets=index_offsets,

@@ -19,13 +19,11 @@ from __future__ import annotations
 
 import math
 import struct
-from typing import TYPE_CHECKING
+
+import numpy as np
 
 from mdle.ros.cdr import ENCAPSULATION, Layout
 from mdle.ros.mcap_file import McapFile, RecordGroup
-
-if TYPE_CHECKING:
-    import numpy as np
 
 __all__ = ["TickRecords", "ScanRecords"]
 
@@ -34,6 +32,7 @@ _OP = 0x05
 _NS = 1_000_000_000
 _NUL = b"\x00"
 _NO_INTENSITIES = b"\x00\x00\x00\x00"
+_FLOAT32 = np.dtype("<f4")
 _UNKNOWN = (math.nan, math.nan, math.nan)  # a simulated sample without its true pose
 
 
@@ -168,6 +167,7 @@ class ScanRecords:
         self._out = out
         self.group = group
         self.count = count
+        self._nbytes = 4 * count
         lay = _stamp(Layout())
         frame_blob = lay.string(frame)
         lay.add("f", 7).add("I")
@@ -182,11 +182,15 @@ class ScanRecords:
         self._pack = struct.Struct(f"<{_MESSAGE}4siI{len(self._mid)}s").pack
 
     def __call__(self, ns: int, stamp: int, ranges: np.ndarray) -> None:
-        """Add a scan seen at ``ns``, taken at ``stamp``; ``ranges`` little-endian float32."""
-        if len(ranges) != self.count:
-            raise ValueError(f"a scan of {len(ranges)} beams, the laser has {self.count}")
-        if ranges.dtype.str != "<f4" or not ranges.flags.c_contiguous:
-            raise ValueError("scan ranges must be contiguous little-endian float32")
+        """Add a scan seen at ``ns``, taken at ``stamp``; ``ranges`` little-endian float32.
+
+        The ranges are appended as they lie in memory: a C-contiguous array (as
+        :func:`mdle.trace.scan_ranges` and :func:`mdle.trace.decode_ranges` make them).
+        """
+        if ranges.dtype is not _FLOAT32 or ranges.nbytes != self._nbytes:
+            if len(ranges) != self.count:
+                raise ValueError(f"a scan of {len(ranges)} beams, the laser has {self.count}")
+            raise ValueError("scan ranges must be little-endian float32")
         sec, nsec = divmod(stamp, _NS)
         self._out.add_records(
             self.group, ns, self._pack(_OP, self._length, self._channel, self.group.count,
