@@ -100,7 +100,7 @@ class McapFile:
         if compression == "lz4":
             import lz4.frame
 
-            self._compress: Callable[[bytes], bytes] | None = lz4.frame.compress
+            self._compress: Callable[[bytes | bytearray], bytes] | None = lz4.frame.compress
         else:
             self._compress = None
         self.path = os.fspath(path)
