@@ -12,9 +12,11 @@ too slow for a 30 us tick budget, so the records written as a run goes (messages
 chunks, message indexes) are packed here with :mod:`struct` and numpy, and checked
 against the library's reader in the tests.
 
-Durability: a chunk is closed once it holds ``chunk_size`` bytes or has been open for
-``max_age`` seconds of wall time, and goes to the operating system at once (with its
-indexes) with an unbuffered write. A process killed outright leaves a file whose closed
+Records are packed straight into the open chunk's buffer (allocated once, reused for
+every chunk). Durability: a chunk is closed once it holds ``chunk_size`` bytes (at the
+next record or :meth:`McapFile.tick`) or has been open for ``max_age`` seconds of wall
+time, and goes to the operating system at once (with its indexes) with an unbuffered
+write. A process killed outright leaves a file whose closed
 chunks a recovering reader (one that reads records until the file ends) reads back in
 full; everything else ends the file properly with :meth:`finish`.
 """
@@ -48,6 +50,7 @@ _MESSAGE_OP = 0x05
 _INDEX_OP = 0x07
 _INDEX_HEAD = struct.Struct("<BQHI")  # opcode, length, channel, entries' byte length
 _CHUNK_OP = 0x06
+_SLACK = 16 * 1024  # room past chunk_size for the records that fill a chunk
 _CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc, name length
 
 
@@ -55,9 +58,10 @@ _CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc
 class RecordGroup:
     """Channels whose messages are added together, as ready records (:meth:`McapFile.group`).
 
-    ``channels`` and the byte ``offsets`` of their records in the data of one
-    :meth:`McapFile.add_records`; ``count`` the calls so far (the next sequence number);
-    ``starts`` the (log time, chunk offset) of each call in the open chunk.
+    ``channels`` and the byte ``offsets`` of their records in the bytes of one
+    :meth:`McapFile.reserve`; ``count`` the calls so far (after the call, its sequence
+    number plus one); ``starts`` the (log time, chunk offset) of each call in the open
+    chunk.
     """
 
     channels: tuple[int, ...]
@@ -100,7 +104,7 @@ class McapFile:
         if compression == "lz4":
             import lz4.frame
 
-            self._compress: Callable[[bytes | bytearray], bytes] | None = lz4.frame.compress
+            self._compress: Callable[[memoryview], bytes] | None = lz4.frame.compress
         else:
             self._compress = None
         self.path = os.fspath(path)
@@ -116,7 +120,9 @@ class McapFile:
         self._metadata_index: list[object] = []
         self._chunk_index: list[object] = []
         self._counts: list[int] = [0]         # messages per channel id (index 0 unused)
-        self._buf = bytearray()
+        # the open chunk's records: one buffer, filled in place and reused for every chunk
+        self._buf = bytearray(self._chunk_size + _SLACK)
+        self._used = 0
         self._entries: list[list[tuple[int, int]]] = [[]]  # per channel: (time, offset)
         self._groups: list[RecordGroup] = []
         self._chunk_start = 2**64 - 1
@@ -144,7 +150,7 @@ class McapFile:
             view = view[n:]
             self._pos += n
 
-    def _out_all(self, pieces: Sequence[bytes | bytearray]) -> None:
+    def _out_all(self, pieces: Sequence[bytes | bytearray | memoryview]) -> None:
         """Write ``pieces`` one after the other, in one system call when it takes them all."""
         if self._file is None:
             raise OSError(f"the recording `{self.path}` is closed")
@@ -198,29 +204,41 @@ class McapFile:
     # ------------------------------------------------------------------ messages
 
     def add(self, channel: int, ns: int, data: bytes) -> None:
-        """Add a message on ``channel`` logged at ``ns`` (nanoseconds)."""
-        buf = self._buf
+        """Add a message on ``channel`` (not a group's) logged at ``ns`` (nanoseconds)."""
+        pos = self._reserve(31 + len(data), ns)
         seq = self._counts[channel]
         self._counts[channel] = seq + 1
-        self._entries[channel].append((ns, len(buf)))
-        buf += _MESSAGE.pack(_MESSAGE_OP, 22 + len(data), channel, seq, ns, ns)
-        buf += data
+        self._entries[channel].append((ns, pos))
+        _MESSAGE.pack_into(self._buf, pos, _MESSAGE_OP, 22 + len(data), channel, seq, ns, ns)
+        self._buf[pos + 31:pos + 31 + len(data)] = data
+        self._messages += 1
+
+    def _reserve(self, size: int, ns: int) -> int:
+        """Make room for ``size`` bytes of records logged at ``ns``; return their offset.
+
+        A chunk already full is closed first; the buffer grows for a large record.
+        """
+        pos = self._used
+        if pos >= self._chunk_size:
+            self.close_chunk()
+            pos = 0
+        end = pos + size
+        if end > len(self._buf):
+            self._buf.extend(bytes(end - len(self._buf)))
+        self._used = end
         if ns < self._chunk_start:
             self._chunk_start = ns
         if ns > self._chunk_end:
             self._chunk_end = ns
-        self._messages += 1
-        if len(buf) >= self._chunk_size:
-            self.close_chunk()
+        return pos
 
     def group(self, channels: Sequence[int], offsets: Sequence[int]) -> RecordGroup:
         """Register a group of channels written together as ready Message records.
 
-        Each call of :meth:`add_records` with the group adds one message on each of
-        ``channels``, the records starting ``offsets`` bytes into the data added (the
-        caller packs the records: opcode, length, channel, sequence, times, data). The
-        channels are the group's alone (no :meth:`add` on them); their sequence number
-        is :attr:`RecordGroup.count` before the call.
+        Each :meth:`reserve` for the group adds one message on each of ``channels``,
+        their records starting ``offsets`` bytes into the room reserved (the caller packs
+        the records: opcode, length, channel, sequence, times, data). The channels are
+        the group's alone (no :meth:`add` on them).
         """
         taken = {ch for g in self._groups for ch in g.channels}
         if len(channels) != len(offsets) or not channels or taken & set(channels) \
@@ -230,28 +248,23 @@ class McapFile:
         self._groups.append(g)
         return g
 
-    def add_records(self, group: RecordGroup, ns: int, *parts: bytes | memoryview) -> None:
-        """Add one message on each of ``group``'s channels, logged at ``ns``.
+    def reserve(self, group: RecordGroup, ns: int, size: int) -> tuple[bytearray, int]:
+        """Make room for one message on each of ``group``'s channels, logged at ``ns``.
 
-        ``parts`` (concatenated) are the records, packed by the caller with sequence
-        number ``group.count`` and log time ``ns``.
+        Returns the open chunk's buffer and the offset of ``size`` bytes there, which the
+        caller fills at once (before anything else is added) with the records, sequence
+        number ``group.count - 1``: the records go into the chunk where they will be
+        written, copied once.
         """
-        buf = self._buf
-        group.starts.append((ns, len(buf)))
-        for part in parts:
-            buf += part
+        pos = self._reserve(size, ns)
+        group.starts.append((ns, pos))
         group.count += 1
-        if ns < self._chunk_start:
-            self._chunk_start = ns
-        if ns > self._chunk_end:
-            self._chunk_end = ns
         self._messages += len(group.channels)
-        if len(buf) >= self._chunk_size:
-            self.close_chunk()
+        return self._buf, pos
 
     def tick(self) -> None:
-        """Close the open chunk if it has been open for ``max_age`` of wall time."""
-        if self._clock() >= self._close_at:
+        """Close the open chunk if it is full or has been open for ``max_age`` of wall time."""
+        if self._used >= self._chunk_size or self._clock() >= self._close_at:
             self.close_chunk()
 
     def close_chunk(self) -> None:
@@ -259,38 +272,42 @@ class McapFile:
         from mcap.records import ChunkIndex
 
         self._close_at = self._clock() + self._max_age
-        if not self._buf:
+        used = self._used
+        if not used:
             return
-        raw = self._buf  # compressed, checked and written as it is: no copy
-        self._buf = bytearray()
-        data = self._compress(raw) if self._compress is not None else raw
-        start, end = self._chunk_start, self._chunk_end
-        chunk_offset = self._pos
-        # the Chunk record packed directly (the library's writer copies it through a
-        # seekable buffer twice): start, end, uncompressed size and CRC, compression, data
-        comp = self._compression.encode()
-        head = _CHUNK_HEAD.pack(_CHUNK_OP, 8 + 8 + 8 + 4 + 4 + len(comp) + 8 + len(data),
-                                start, end, len(raw), zlib.crc32(raw), len(comp))
-        pieces = [head, comp, struct.pack("<Q", len(data)), data]
-        chunk_length = len(head) + len(comp) + 8 + len(data)
-        index_offsets: dict[int, int] = {}
-        at = chunk_offset + chunk_length
-        for ch, body in self._index_bodies():
-            piece = _INDEX_HEAD.pack(_INDEX_OP, 6 + len(body), ch, len(body)) + body
-            index_offsets[ch] = at
-            at += len(piece)
-            pieces.append(piece)
-        self._chunk_start, self._chunk_end = 2**64 - 1, 0
-        self._start = min(self._start, start)
-        self._end = max(self._end, end)
-        # one write: the chunk and its indexes reach the OS together
-        self._out_all(pieces)
+        with memoryview(self._buf) as whole, whole[:used] as raw:
+            # compressed, checked and written from the buffer itself: no copy
+            data = self._compress(raw) if self._compress is not None else raw
+            start, end = self._chunk_start, self._chunk_end
+            chunk_offset = self._pos
+            # the Chunk record packed directly (the library's writer copies it through a
+            # seekable buffer twice): start, end, uncompressed size and CRC, compression,
+            # data
+            comp = self._compression.encode()
+            head = _CHUNK_HEAD.pack(_CHUNK_OP, 8 + 8 + 8 + 4 + 4 + len(comp) + 8 + len(data),
+                                    start, end, used, zlib.crc32(raw), len(comp))
+            pieces = [head, comp, struct.pack("<Q", len(data)), data]
+            chunk_length = len(head) + len(comp) + 8 + len(data)
+            index_offsets: dict[int, int] = {}
+            at = chunk_offset + chunk_length
+            for ch, body in self._index_bodies():
+                piece = _INDEX_HEAD.pack(_INDEX_OP, 6 + len(body), ch, len(body)) + body
+                index_offsets[ch] = at
+                at += len(piece)
+                pieces.append(piece)
+            self._used = 0
+            self._chunk_start, self._chunk_end = 2**64 - 1, 0
+            self._start = min(self._start, start)
+            self._end = max(self._end, end)
+            # one write: the chunk and its indexes reach the OS together
+            self._out_all(pieces)
+            size = len(data)
+            del data, pieces  # no view of the buffer outlives the write
         self._chunk_index.append(ChunkIndex(
             message_start_time=start, message_end_time=end, chunk_start_offset=chunk_offset,
             chunk_length=chunk_length, message_index_offsets=index_offsets,
             message_index_length=at - chunk_offset - chunk_length,
-            compression=self._compression, compressed_size=len(data),
-            uncompressed_size=len(raw)))
+            compression=self._compression, compressed_size=size, uncompressed_size=used))
 
     def _index_bodies(self) -> list[tuple[int, bytes]]:
         """Return the open chunk's message index entries per channel (and forget them).

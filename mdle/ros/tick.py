@@ -5,9 +5,10 @@ Every tick a run publishes its odometry (``/odom``), transforms (``/tf``), comma
 line (``/mdle/state``). Their frame names are constant, so every byte of the five
 Message records (the MCAP record header and the CDR message each) is at an offset known
 in advance, except the state line's text, which comes last: :class:`TickRecords` packs
-them with one precompiled :class:`struct.Struct` and the MCAP file indexes them as one
-:class:`~mdle.ros.mcap_file.RecordGroup`. A new scan is one more record
-(:class:`ScanRecords`): header packed, the float32 ranges appended as they are.
+them with one precompiled :class:`struct.Struct` straight into the open chunk's buffer,
+and the MCAP file indexes them as one :class:`~mdle.ros.mcap_file.RecordGroup`. A new
+scan is one more record (:class:`ScanRecords`): header packed, the float32 ranges
+copied in as they are.
 
 Fields that are always zero (z, the quaternion's x and y, the covariances, a planar
 twist's other axes) are struct pad bytes: nothing to pass or convert. The records'
@@ -30,7 +31,6 @@ __all__ = ["TickRecords", "ScanRecords"]
 _MESSAGE = "BQHIQQ"  # MCAP Message record: opcode, length, channel, sequence, log, publish
 _OP = 0x05
 _NS = 1_000_000_000
-_NUL = b"\x00"
 _NO_INTENSITIES = b"\x00\x00\x00\x00"
 _FLOAT32 = np.dtype("<f4")
 _UNKNOWN = (math.nan, math.nan, math.nan)  # a simulated sample without its true pose
@@ -109,7 +109,8 @@ class TickRecords:
             size += 31 + n
             fmt += _MESSAGE + body
         self._lengths = tuple(lengths)
-        self._pack = struct.Struct(fmt).pack
+        self._size = size  # the records' bytes before the state line's text
+        self._pack_into = struct.Struct(fmt).pack_into
         self.group: RecordGroup = out.group(channels, offsets)
         self._channels = tuple(channels)
 
@@ -126,7 +127,10 @@ class TickRecords:
         sec, nsec = divmod(ns, _NS)
         half = 0.5 * theta
         qz, qw = math.sin(half), math.cos(half)
-        seq = self.group.count
+        group = self.group
+        at = self._size
+        buf, pos = self._out.reserve(group, ns, at + n)
+        seq = group.count - 1
         lo, lt, lc = self._lengths[:3]
         co, ct, cc = self._channels[:3]
         enc, fo, fb = ENCAPSULATION, self._f_odom, self._f_base
@@ -135,7 +139,8 @@ class TickRecords:
             # map -> odom: the true pose composed with the inverse of the odometry pose
             phi = tth - theta
             c, s = math.cos(phi), math.sin(phi)
-            head = self._pack(
+            self._pack_into(
+                buf, pos,
                 _OP, lo, co, seq, ns, ns, enc, sec, nsec, fo, fb, x, y, qz, qw, v, omega,
                 _OP, lt, ct, seq, ns, ns, enc, 2, sec, nsec, fo, fb, x, y, qz, qw,
                 sec, nsec, self._f_map, fo, tx - c * x + s * y, ty - s * x - c * y,
@@ -145,12 +150,15 @@ class TickRecords:
                 self._f_map, tx, ty, math.sin(0.5 * tth), math.cos(0.5 * tth),
                 _OP, 30 + n, self._channels[4], seq, ns, ns, enc, n)
         else:
-            head = self._pack(
+            self._pack_into(
+                buf, pos,
                 _OP, lo, co, seq, ns, ns, enc, sec, nsec, fo, fb, x, y, qz, qw, v, omega,
                 _OP, lt, ct, seq, ns, ns, enc, 1, sec, nsec, fo, fb, x, y, qz, qw,
                 _OP, lc, cc, seq, ns, ns, enc, cmd_v, cmd_omega,
                 _OP, 30 + n, self._channels[3], seq, ns, ns, enc, n)
-        self._out.add_records(self.group, ns, head, text, _NUL)
+        at += pos
+        buf[at:at + n - 1] = text
+        buf[at + n - 1] = 0
 
 
 class ScanRecords:
@@ -179,7 +187,9 @@ class ScanRecords:
         body = len(self._mid) + at_stamp + 4 * count + 4
         self._length = 22 + body
         self._channel = group.channels[0]
-        self._pack = struct.Struct(f"<{_MESSAGE}4siI{len(self._mid)}s").pack
+        packer = struct.Struct(f"<{_MESSAGE}4siI{len(self._mid)}s")
+        self._pack_into = packer.pack_into
+        self._head = packer.size
 
     def __call__(self, ns: int, stamp: int, ranges: np.ndarray) -> None:
         """Add a scan seen at ``ns``, taken at ``stamp``; ``ranges`` little-endian float32.
@@ -192,7 +202,10 @@ class ScanRecords:
                 raise ValueError(f"a scan of {len(ranges)} beams, the laser has {self.count}")
             raise ValueError("scan ranges must be little-endian float32")
         sec, nsec = divmod(stamp, _NS)
-        self._out.add_records(
-            self.group, ns, self._pack(_OP, self._length, self._channel, self.group.count,
-                                       ns, ns, ENCAPSULATION, sec, nsec, self._mid),
-            ranges.data, _NO_INTENSITIES)
+        head = self._head
+        buf, pos = self._out.reserve(self.group, ns, head + self._nbytes + 4)
+        self._pack_into(buf, pos, _OP, self._length, self._channel, self.group.count - 1, ns,
+                        ns, ENCAPSULATION, sec, nsec, self._mid)
+        at = pos + head + self._nbytes
+        buf[pos + head:at] = ranges.data
+        buf[at:at + 4] = _NO_INTENSITIES

@@ -81,11 +81,24 @@ def _same_angle(a: float, b: float) -> bool:
     return abs(math.remainder(a - b, math.tau)) < 1e-9
 
 
+def _compressions(path: Path) -> set[str]:
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None and summary.chunk_indexes
+    return {c.compression for c in summary.chunk_indexes}
+
+
 def test_files_pass_strict_validation(run: dict[str, Any], doctor: Any) -> None:
     d = run["dir"]
     counts = doctor(d / "r.mcap")
     assert doctor(d / "e.mcap") == counts
     assert doctor(d / "bag" / "bag_0.mcap") == counts
+    # a live recording's chunks are not compressed by default (the cheapest to write),
+    # an export's are (lz4)
+    assert _compressions(d / "r.mcap") == {""} == _compressions(d / "bag" / "bag_0.mcap")
+    assert _compressions(d / "e.mcap") == {"lz4"}
 
 
 def test_topic_counts_match_the_trace(run: dict[str, Any], rosbags_read: Any) -> None:

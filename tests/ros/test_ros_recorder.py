@@ -85,7 +85,7 @@ def test_a_disk_that_fills_up_ends_the_run_cleanly(
 
     def close_chunk(self: mcap_file.McapFile) -> None:
         # mid-run: the first chunk; at the end: the last one, when the file is finished
-        if self._buf and (when == "mid-run" or finishing):
+        if self._used and (when == "mid-run" or finishing):
             raise OSError(errno.ENOSPC, "No space left on device")
         real(self)
 
@@ -142,3 +142,20 @@ def test_scans_taken_at_every_tick_are_a_tick_apart(tmp_path: Path, rate: float)
     assert (laser["scan_time"], laser["time_increment"]) == (1.0 / rate, 0.0)
     back = read_trace(tmp_path / "r.mcap")
     assert back.lasers[0]["scan_time"] == pytest.approx(1.0 / rate, rel=1e-7)  # float32
+
+
+def test_record_compression_lz4(tmp_path: Path, doctor: Any) -> None:
+    from mcap.reader import make_reader
+
+    from mdle.cli import main
+
+    (tmp_path / "p.mdle").write_text(PLAN + "run hug\n")
+    code = main(["run", str(tmp_path / "p.mdle"), "--world", "ellipse", "--until", "3",
+                 "--record", str(tmp_path / "r.mcap"), "--record-compression", "lz4", "-q"])
+    assert code == 0
+    counts = doctor(tmp_path / "r.mcap")
+    assert counts["/odom"] == 31
+    with open(tmp_path / "r.mcap", "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    assert {c.compression for c in summary.chunk_indexes} == {"lz4"}
