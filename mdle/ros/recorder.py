@@ -53,7 +53,8 @@ class McapRecorder:
     rosbag : bool
         Write a rosbag2 folder.
     **options
-        ``chunk_size``, ``max_age``, ``compression`` for the MCAP file.
+        ``chunk_size``, ``max_age``, ``compression`` for the MCAP file (``compression``
+        ``""``, none, unless given: ``"lz4"``).
 
     Raises
     ------
@@ -64,6 +65,8 @@ class McapRecorder:
     def __init__(self, target: str | os.PathLike[str], header: Mapping[str, Any],
                  world: Any = None, *, rosbag: bool = False, **options: Any) -> None:
         self.target = os.fspath(target)
+        # chunks not compressed unless asked: the cheapest to write while a run goes
+        options.setdefault("compression", "")
         try:
             self.recording = RosRecording(target, header, world, rosbag=rosbag, **options)
         except OSError as exc:
