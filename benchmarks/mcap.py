@@ -210,11 +210,11 @@ def main() -> None:
     for compression in args.compression:
         ratios = overhead(args.repeat, args.seconds, compression)
         for what in ("cpu", "wall"):
-            xs = ratios[what]
+            rs = ratios[what]
             print(f"Figure 1 run, {n} ticks at 50 Hz, {what.upper():4s} with --record "
                   f"(chunks {compression or 'uncompressed'}) / without, median of "
-                  f"{len(xs)} interleaved rounds: x{statistics.median(xs):.3f} "
-                  f"(min x{min(xs):.3f}, max x{max(xs):.3f}; target <= x1.25)")
+                  f"{len(rs)} interleaved rounds: x{statistics.median(rs):.3f} "
+                  f"(min x{min(rs):.3f}, max x{max(rs):.3f}; target <= x1.25)")
 
 
 if __name__ == "__main__":
