@@ -52,13 +52,19 @@ def _records(tmp_path: Path, write: Any) -> dict[str, list[tuple[int, int, bytes
 
     from mdle.ros.mcap_file import McapFile
 
+    from tests.ros.conftest import mcap_doctor
+
     path = tmp_path / "m.mcap"
     out = McapFile(path, chunk_size=300)  # several chunks: indexes across chunks
-    schema = out.schema("x", "ros2msg", b"")
-    topics = ("/odom", "/tf", "/cmd_vel", "/ground_truth", "/mdle/state", "/scan")
-    channels = {t: out.channel(t, schema) for t in topics}
+    types = {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
+             "/cmd_vel": "geometry_msgs/msg/Twist",
+             "/ground_truth": "geometry_msgs/msg/PoseStamped",
+             "/mdle/state": "std_msgs/msg/String", "/scan": "sensor_msgs/msg/LaserScan"}
+    channels = {t: out.channel(t, out.schema(name, "ros2msg", schema_text(name).encode()))
+                for t, name in types.items()}
     write(out, channels)
     out.finish()
+    mcap_doctor(path)  # the strict validation, every message decoded
     found: dict[str, list[tuple[int, int, bytes]]] = {}
     with open(path, "rb") as f:
         for _, channel, m in make_reader(f, validate_crcs=True).iter_messages(
