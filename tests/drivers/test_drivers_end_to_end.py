@@ -119,6 +119,7 @@ def test_a_recording_on_the_robot_takes_the_ladar_from_the_robot_profile(
     from rosbags.typesys import Stores, get_typestore
 
     from mdle.cli import main
+    from tests.ros.conftest import mcap_doctor
 
     fake = fake_robot()
     fake.scan_mm = _wall_ahead(fake)
@@ -129,6 +130,7 @@ def test_a_recording_on_the_robot_takes_the_ladar_from_the_robot_profile(
                  "--laser", "sim", "--quiet", "--record", str(record),
                  *(["--robot", robot] if robot else [])])
     assert code == 0
+    mcap_doctor(record)
     ts = get_typestore(Stores.ROS2_HUMBLE)
     msgs: dict[str, list[Any]] = {}
     with Reader(record) as reader:

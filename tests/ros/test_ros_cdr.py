@@ -51,7 +51,6 @@ def _records(tmp_path: Path, write: Any) -> dict[str, list[tuple[int, int, bytes
     from mcap.reader import make_reader
 
     from mdle.ros.mcap_file import McapFile
-
     from tests.ros.conftest import mcap_doctor
 
     path = tmp_path / "m.mcap"

@@ -126,7 +126,8 @@ def test_a_recording_that_cannot_be_created(tmp_path: Path,
 
 
 @pytest.mark.parametrize("rate", [10.0, 20.0])
-def test_scans_taken_at_every_tick_are_a_tick_apart(tmp_path: Path, rate: float) -> None:
+def test_scans_taken_at_every_tick_are_a_tick_apart(tmp_path: Path, rate: float,
+                                                    doctor: Any) -> None:
     """The reference world's ladar scans at every tick: scan_time is the tick."""
     import sim
 
@@ -138,6 +139,7 @@ def test_scans_taken_at_every_tick_are_a_tick_apart(tmp_path: Path, rate: float)
                     until=1.0)
     while sch.tick():
         pass
+    assert doctor(tmp_path / "r.mcap")["/scan"] == int(rate) + 1
     (laser,) = read_trace(tmp_path / "t.jsonl").lasers
     assert (laser["scan_time"], laser["time_increment"]) == (1.0 / rate, 0.0)
     back = read_trace(tmp_path / "r.mcap")
