@@ -9,13 +9,23 @@ parts: the boundary view alone and the scan points the safety layer reads. The l
 latency bookkeeping and the safety layer are the difference. Each figure is the best of
 ``--repeat`` rounds, in microseconds per tick; the shares are ratios within the process,
 which stay meaningful on a loaded machine.
+
+    python benchmarks/follow.py --instructions
+
+counts instructions instead (valgrind's callgrind, repeatable whatever else the machine
+does): the recorded observations are saved once, then each part is replayed under callgrind
+with 0 and with ``--rounds`` passes; the difference per tick is the part's own count.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import pickle
+import re
+import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -78,17 +88,70 @@ def _per_tick(obs: list[Observation], backend: sim.SimBackend,
     return (time.perf_counter() - t0) / len(obs) * 1e6
 
 
+PARTS: dict[str, Callable[[Context, Any], object]] = {
+    "follow_boundary (whole step)": lambda c, s: follow_boundary(ARGS, c, s),
+    "boundary view alone": lambda c, s: cached_view(c, "right"),
+    "scan points alone": lambda c, s: scan_points_cached(c),
+}
+
+
+def _replay(saved: str, part: str, rounds: int) -> None:
+    """Replay ``part`` over the saved observations ``rounds`` times (run under callgrind)."""
+    with open(saved, "rb") as fh:
+        obs, limits = pickle.load(fh)
+    fn = PARTS[part]
+    fn(Context(obs[0], 0.0, DT, limits), start_follow(ARGS, Context(obs[0], 0.0, DT, limits)))
+    for _ in range(rounds):  # the first call above made every import and cache
+        state = start_follow(ARGS, Context(obs[0], 0.0, DT, limits))
+        for i, o in enumerate(obs):
+            fn(Context(o, i * DT, DT, limits), state)
+
+
+def _instructions(saved: str, part: str, rounds: int) -> int:
+    out = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
+                          sys.executable, __file__, "--replay", saved, part, str(rounds)],
+                         capture_output=True, text=True, check=True).stderr
+    found = re.search(r"Collected : (\d+)", out)
+    if found is None:
+        raise SystemExit(f"callgrind gave no count:\n{out[-2000:]}")
+    return int(found.group(1))
+
+
+def _count(obs: list[Observation], backend: sim.SimBackend, rounds: int) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        saved = f"{tmp}/obs.pkl"
+        with open(saved, "wb") as fh:
+            pickle.dump((obs, backend.limits), fh)
+        per = {}
+        for name in PARTS:
+            base = _instructions(saved, name, 0)
+            per[name] = (_instructions(saved, name, rounds) - base) / (rounds * len(obs))
+    print(f"{len(obs)} ticks of a hexagon run, 181 beams; callgrind, {rounds} rounds")
+    for name, n in per.items():
+        print(f"  {name:30} {n / 1e3:8.1f} k instructions/tick")
+    rest = per["follow_boundary (whole step)"] - per["boundary view alone"] \
+        - per["scan points alone"]
+    print(f"  law + latency + safety layer   {rest / 1e3:8.1f} k instructions/tick")
+
+
 def main() -> None:
     """Print the figures."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5, help="timing rounds (best is kept)")
+    ap.add_argument("--instructions", action="store_true",
+                    help="count instructions under callgrind instead of timing")
+    ap.add_argument("--rounds", type=int, default=2, help="callgrind passes per part")
+    ap.add_argument("--replay", nargs=3, metavar=("SAVED", "PART", "ROUNDS"),
+                    help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.replay:
+        _replay(a.replay[0], a.replay[1], int(a.replay[2]))
+        return
     obs, backend = _observations()
-    parts: dict[str, Callable[[Context, Any], object]] = {
-        "follow_boundary (whole step)": lambda c, s: follow_boundary(ARGS, c, s),
-        "boundary view alone": lambda c, s: cached_view(c, "right"),
-        "scan points alone": lambda c, s: scan_points_cached(c),
-    }
+    if a.instructions:
+        _count(obs, backend, a.rounds)
+        return
+    parts = PARTS
     best = {name: min(_per_tick(obs, backend, fn) for _ in range(a.repeat))
             for name, fn in parts.items()}
     print(f"{len(obs)} ticks of a hexagon run, 181 beams; best of {a.repeat} rounds")

@@ -42,12 +42,14 @@ class PlotError(MdleError):
     """A plot cannot be made: unknown output format, or a trace with no samples."""
 
 
-def boundary_points(trace: Trace) -> "np.ndarray":
-    """World-frame points (K, 2) of the boundary the law saw beside the robot.
+def boundary_points(trace: Trace, truth: bool = False) -> "np.ndarray":
+    """Points (K, 2) of the boundary the law saw beside the robot.
 
     From each sample whose diagnostics have a side range (``side_range``, with
-    ``side_hit`` when given): the point at that range from the odometry pose, at bearing
-    ``side_bearing`` (rad, robot frame; -pi/2, the robot's right, when not recorded).
+    ``side_hit`` when given): the point at that range from the robot's pose, at bearing
+    ``side_bearing`` (rad, robot frame; -pi/2, the robot's right, when not recorded). The
+    pose is the odometry (the plan's frame), or with ``truth`` the simulator's true pose,
+    so that the points lie in the frame the path is drawn in.
     """
     import numpy as np
 
@@ -58,7 +60,8 @@ def boundary_points(trace: Trace) -> "np.ndarray":
     bearing = trace.column("diag.side_bearing")
     bearing = np.where(np.isfinite(bearing), bearing, -math.pi / 2)
     ok = np.isfinite(r) & (r > 0) & ((hit > 0.5) | np.isnan(hit))
-    x, y, th = trace.column("x"), trace.column("y"), trace.column("theta")
+    pose = ("true_x", "true_y", "true_theta") if truth else ("x", "y", "theta")
+    x, y, th = (trace.column(name) for name in pose)
     a = th + bearing
     pts = np.column_stack([x + r * np.cos(a), y + r * np.sin(a)])
     return pts[ok]
@@ -138,7 +141,7 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
         raise PlotError(Diagnostic(None, f"trace `{trace.path}` has no sample with a finite "
                                          "position (x, y) to plot"))
     curv = _curvature(trace)
-    pts = boundary_points(trace)
+    pts = boundary_points(trace, truth=use_truth)
     (x0, x1), (y0, y1) = _extent(x, y, pts, world)
     # the path panel takes the shape of the scene (a long corridor makes a wide, low panel)
     width = 8.0

@@ -122,3 +122,28 @@ def test_first_collision_is_marked(ir: SimpleNamespace, tmp_path: Path) -> None:
     ax = trace_figure(read_trace(trace)).axes[0]
     [star] = [ln for ln in ax.lines if ln.get_label() == "first collision"]
     assert np.asarray(star.get_xdata())[0] == pytest.approx(0.3)
+
+
+def test_detected_boundary_is_drawn_where_the_obstacle_is(tmp_path: Path) -> None:
+    # The plan's x, y, theta are odometry (0, 0, 0 at the start); the path is drawn from
+    # the simulator's true pose: the boundary the law saw must be drawn in that frame too,
+    # on the hexagon, not beside the odometry origin.
+    import shapely
+
+    import sim
+    from mdle.loader import load_text
+
+    world = sim.load_world("hexagon")
+    program = load_text("atom f = (follow_boundary(side = right, rc = 0.5 m, v = 1 m/s), "
+                        "never, 15 s)\nrun f\n")
+    path = tmp_path / "hex.jsonl"
+    run(program.elements["f"], sim.SimBackend(world, seed=3), rate=50.0,
+        observers=[TraceWriter(path, {"program": {"element": "f"}, "world": {"name": "hexagon"}})])
+    trace = read_trace(path)
+    pts = boundary_points(trace, truth=True)
+    assert len(pts) > 100
+    obstacles = shapely.union_all([o.geometry() for o in world.obstacles]).boundary
+    d = shapely.distance(obstacles, shapely.points(pts))
+    assert float(np.median(d)) < 0.05  # on the boundary, up to the scan's noise
+    odo = boundary_points(trace)  # the plan's frame: the start is the origin, far from it
+    assert float(np.median(shapely.distance(obstacles, shapely.points(odo)))) > 1.0
