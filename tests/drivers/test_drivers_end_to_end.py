@@ -86,17 +86,23 @@ def test_dropped_robot_ends_the_run_with_the_robot_stopped(fake_robot: FakeRobot
         backend.close()
 
 
-def test_mdle_run_cli_on_the_fake_robot(fake_robot: FakeRobot, tmp_path: Path) -> None:
+def _run_on_fake(fake_robot: FakeRobot, tmp_path: Path, *options: str) -> FakeArcos:
+    """``mdle run`` the wall plan on a fake robot with its laser; return the robot."""
     from mdle.cli import main
 
     fake = fake_robot()
     fake.scan_mm = _wall_ahead(fake)
     plan = tmp_path / "wall.mdle"
     plan.write_text(PLAN)
-    trace = tmp_path / "run.jsonl"
     code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url,
-                 "--laser", "sim", "--quiet", "--trace", str(trace)])
+                 "--laser", "sim", "--quiet", *options])
     assert code == 0
+    return fake
+
+
+def test_mdle_run_cli_on_the_fake_robot(fake_robot: FakeRobot, tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    fake = _run_on_fake(fake_robot, tmp_path, "--trace", str(trace))
     lines = [json.loads(line) for line in trace.read_text().splitlines()]
     assert lines[0]["backend"] == "pioneer" and lines[0]["laser"] == "sim"
     samples = [x for x in lines if x["type"] == "sample"]
@@ -118,18 +124,11 @@ def test_a_recording_on_the_robot_takes_the_ladar_from_the_robot_profile(
     from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
 
-    from mdle.cli import main
     from tests.ros.conftest import mcap_doctor
 
-    fake = fake_robot()
-    fake.scan_mm = _wall_ahead(fake)
-    plan = tmp_path / "wall.mdle"
-    plan.write_text(PLAN)
     record = tmp_path / "r.mcap"
-    code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url,
-                 "--laser", "sim", "--quiet", "--record", str(record),
-                 *(["--robot", robot] if robot else [])])
-    assert code == 0
+    _run_on_fake(fake_robot, tmp_path, "--record", str(record),
+                 *(["--robot", robot] if robot else []))
     mcap_doctor(record)
     ts = get_typestore(Stores.ROS2_HUMBLE)
     msgs: dict[str, list[Any]] = {}
