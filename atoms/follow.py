@@ -8,8 +8,10 @@ safety layer on top. Left-side following mirrors the law. Per-atom state (the co
 and the curvature filter) is made when the atom starts.
 
 Each tick writes ``ctx.cache["trace"]``: front/side range (m), tangent (rad) and curvature (1/m)
-in the side's convention (see :mod:`atoms.boundary`), hit flags, the mode (0 follow, 1 corner),
-the law's turn rate, whether the safety layer overrode it and the predicted clearance.
+in the side's convention (see :mod:`atoms.boundary`; left: convex positive), the side ray's
+bearing (-pi/2 right, +pi/2 left: plots draw the boundary on that side), ``rc``, hit flags,
+the mode (0 follow, 1 corner), the law's turn rate, whether the safety layer overrode it and
+the predicted clearance.
 """
 
 from __future__ import annotations
@@ -55,7 +57,7 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
 
     umax = min(float(args["umax"]), ctx.limits.max_turn_rate)
     kf = float(args["kf"])
-    # critical damping of e'' + (mu/2) e' + 2 kf v^2 e = 0 at this speed (control-law.md s. 3):
+    # critical damping of e'' + (mu/2) e' + 2 kf v^2 e = 0 at this speed (docs/steering.md):
     # the approach then takes the same path length whatever v
     mu = 4.0 * float(args["zeta"]) * abs(float(args["v"])) * math.sqrt(2.0 * max(kf, 0.0))
     gains = Gains(mu=mu, kf=kf, umax=umax, tau=float(args["tau"]))
@@ -91,7 +93,7 @@ def scan_points_cached(ctx: Context) -> Any:
     Param("v", SPEED, 0.3, doc="constant forward speed", low=0.0, low_open=True),
     Param("zeta", NONE, 1.0, doc="damping ratio of the distance loop (mu = 4 zeta v sqrt(2 kf))",
           low=0.0, low_open=True),
-    Param("kf", NONE, 0.5, doc="distance gain of f(z) = kf (z - rc), 1/m^2", low=0.0,
+    Param("kf", NONE, 2.0, doc="distance gain of f(z) = kf (z - rc), 1/m^2", low=0.0,
           low_open=True),
     Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)", low=0.0,
           low_open=True, finite=False),
@@ -133,16 +135,17 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                                        state.latency, ctx.limits.max_accel,
                                        ctx.limits.max_turn_accel)
         front, side = shift_front(front, moved), shift_side(side, moved)
+    points = scan_points_cached(ctx)
+    if moved is not None and moved != (0.0, 0.0, 0.0):
+        points = _into(points, moved[0], sgn * moved[1], sgn * moved[2])
+    near = _nearest_on_side(points, sgn)
     u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
-                      g.umax, filter_kappa=not view.exact)
+                      g.umax, filter_kappa=not view.exact, near=near)
     u *= sgn
     u_law, v_law = u, v
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        points = scan_points_cached(ctx)
-        if moved is not None and moved != (0.0, 0.0, 0.0):
-            points = _into(points, moved[0], sgn * moved[1], sgn * moved[2])
         v, u, clearance = steering.safety_filter(points, v, u, g.umax, ctx.limits.radius,
                                                  margin, float(args["lookahead"]),
                                                  side=1 if left else -1)
@@ -158,6 +161,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "side_range": s.r if s.hit else 0.0,
         "side_tangent": sgn * s.beta if s.hit else 0.0,
         "side_curvature": sgn * s.kappa if s.hit else 0.0,
+        "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
+        "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
         "mode": _MODE_CODES[state.memory.mode],
         "lost": state.memory.lost_for(ctx.t),
         "u_law": u_law,
@@ -165,6 +170,18 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "predicted_clearance": clearance if math.isfinite(clearance) else -1.0,
     }
     return Command(v, u)
+
+
+def _nearest_on_side(points: Any, sgn: float) -> tuple[float, float] | None:
+    """Return (distance, law-frame bearing) of the nearest scan point on the followed side."""
+    y = points[:, 1] * sgn
+    ok = y < 0.0
+    if not ok.any():
+        return None
+    q = points[ok]
+    d2 = (q * q).sum(1)
+    k = int(d2.argmin())
+    return math.sqrt(float(d2[k])), math.atan2(float(y[ok][k]), float(q[k, 0]))
 
 
 def _into(points: Any, dx: float, dy: float, dth: float) -> Any:

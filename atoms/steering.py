@@ -130,10 +130,14 @@ class Gains:
     search_ahead : float, rad
         A lost boundary is searched for once the point seen last is further than this from
         the heading (closer to the heading, driving straight on approaches it).
+    bridge : float, m
+        In corner mode, a scan point on the followed side nearer than both ``rc`` and the
+        vertex circled, by more than this, becomes the point circled (a notch narrower than
+        ``2 rc`` is bridged, as the rc level set does).
     """
 
-    mu: float = 4.0
-    kf: float = 0.5
+    mu: float = 8.0
+    kf: float = 2.0
     fmax: float = 2.0
     umax: float = 3.0
     s_min: float = 0.05
@@ -156,6 +160,7 @@ class Gains:
     tau: float = 0.2
     kappa_reset: float = 0.3
     search_ahead: float = math.radians(75.0)
+    bridge: float = 0.05
 
 
 @dataclass
@@ -226,6 +231,14 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
         d = max(cb - ks * rs + 2.0 * f * rs * ch, g.d_min)
         u_ff = v * (ks - 2.0 * f * ch) / d
     damp = -a_th / max(1.0, a0) if a * a_th > 0 else -a / max(1.0, abs(a))
+    if not front.hit and side.hit:
+        # Any positive damping keeps dV/dt <= 0; two state-dependent scalings make the
+        # distance converge faster. On a convex curve the angle term carries the factor
+        # as = 1 - ks rs / cos bs > 1, which damps the return to rc as much as 2-3x
+        # (measured on a circle): divide it out. Beyond rc the damping fades as rc / rs,
+        # so the approach from far is a line at about 2 asin(v / (mu rc)) to the boundary
+        # instead of a slow spiral (the paper's law needs over 40 s from 4.5 m at kf = 2).
+        damp *= min(1.0, rc / rs) / max(as_, 1.0)
     return min(max(u_ff + g.mu * damp, -umax), umax)
 
 
@@ -300,7 +313,7 @@ def corner_law(d: float, e: float, v: float, rc: float, g: Gains, umax: float) -
 
 def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: float,
          mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
-         filter_kappa: bool = True) -> float:
+         filter_kappa: bool = True, near: tuple[float, float] | None = None) -> float:
     """Run one tick of right-hand following with the corner mode and the curvature filter.
 
     Parameters
@@ -319,6 +332,9 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
     umax : float, rad/s, optional
     filter_kappa : bool
         Low-pass the side curvature (for estimates from a noisy scan).
+    near : (distance, bearing) or None
+        The nearest scan point on the followed side (m, rad in this frame), for bridging
+        notches in corner mode (see :class:`Gains` ``bridge``); None: not known.
 
     Returns
     -------
@@ -356,6 +372,15 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
         # boundary again. (While it is ahead, driving straight on closes in on it.)
         mem.mode = SEARCH
         mem.corner = mem.seen
+    if mem.mode == CORNER and near is not None:
+        # The point circled is a vertex seen earlier; a scan point on the followed side that
+        # is nearer (the far face of a notch narrower than 2 rc) is what the rc level set
+        # turns around now: circle it instead, so the robot bridges the notch rather than
+        # following into it until the safety layer stops it.
+        dc = math.hypot(mem.corner[0] - x, mem.corner[1] - y)
+        if near[0] < min(dc, rc) - g.bridge:
+            a = theta + near[1]
+            mem.corner = (x + near[0] * math.cos(a), y + near[0] * math.sin(a))
     if mem.mode == CORNER:
         back = side.hit and abs(side.beta) < g.corner_exit_angle \
             and abs(side.r - math.hypot(mem.corner[0] - x, mem.corner[1] - y)) \

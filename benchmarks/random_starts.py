@@ -4,7 +4,8 @@
 
 Starts 8 m from each obstacle's centre, headed at it +-17 deg (the wall: anywhere 1-6 m above
 it, heading -11 to -169 deg), seeded; the ideal unicycle at 1 m/s; control at the rate
-control-law.md suggests (50 Hz scan, 100 Hz exact). Prints one line per shape.
+control-law.md suggests (50 Hz scan, 100 Hz exact), on every core with a progress bar on
+standard error. Prints one line per shape, then what the columns mean.
 """
 
 from __future__ import annotations
@@ -21,7 +22,14 @@ _HERE = Path(__file__).resolve().parent
 sys.path[:] = [str(_HERE.parent)] + [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 
 # After the sys.path fix: a run imports ``sim``, which benchmarks/sim.py would shadow.
-from mdle.experiments.following import SHAPES, random_starts, table  # noqa: E402 (see above)
+from mdle.cli.sweep import progress_bar  # noqa: E402 (see above)
+from mdle.experiments.following import (  # noqa: E402
+    SHAPES,
+    random_start_tasks,
+    run_many,
+    table,
+)
+from mdle.sweep.executors import default_jobs  # noqa: E402
 
 
 def main() -> None:
@@ -34,10 +42,12 @@ def main() -> None:
     parser.add_argument("--shapes", nargs="*", default=list(SHAPES))
     args = parser.parse_args()
     t0 = time.perf_counter()
-    runs = []
+    tasks = []
     for world in args.shapes:
-        runs += random_starts(world, args.runs, seed=args.seed, sensing=args.sensing,
-                              duration=args.duration)
+        tasks += random_start_tasks(world, args.runs, seed=args.seed, sensing=args.sensing,
+                                    duration=args.duration)
+    jobs = default_jobs()  # every core, one progress bar over all the runs (stderr)
+    runs = run_many(tasks, jobs=jobs, progress=progress_bar(f"{jobs} processes"))
     print(table(runs))
     worst = min(runs, key=lambda r: r.min_clearance)
     print(f"worst run: {worst.world} seed {worst.seed}, clearance {worst.min_clearance:.3f} m; "

@@ -1,6 +1,8 @@
 """Simulator speed: ladar scans and full simulated ticks, robust to a shared machine.
 
 Run:  python benchmarks/sim.py [--runs 15] [--calls 200]
+      python benchmarks/sim.py --timing-only          # the timing model's cost alone
+      valgrind --tool=callgrind python benchmarks/sim.py --ticks-only pioneer-p3dx 400
 
 Each figure is measured in ``--runs`` runs of ``--calls`` calls each; a run's figure is
 its median call (robust to other processes taking the CPU for a moment). Printed: the
@@ -140,6 +142,57 @@ def tick_cost(world: World, calls: int, runs: int, robot: str | None = None) -> 
     return timing
 
 
+def interleaved_ratio(world: World, calls: int, rounds: int, robot: str = "pioneer-p3dx",
+                      base: str = "pioneer2dx") -> tuple[float, float, float]:
+    """Return the timed/untimed tick-cost ratio measured in interleaved rounds.
+
+    Each round times ``calls`` ticks of ``base`` and of ``robot`` back to back (in
+    alternating order), so both see the same machine load; the ratio of the two
+    medians is taken per round. Returned: the median, the minimum and the maximum over
+    rounds.
+    """
+    backends = {name: SimBackend(world, seed=0, robot=name) for name in (base, robot)}
+    k = {name: 0 for name in backends}
+
+    def tick(name: str) -> None:
+        b = backends[name]
+        b.observe()
+        k[name] += 1
+        b.command(Command(0.3, 0.3 + 0.05 * math.sin(0.01 * k[name])))
+        b.advance(0.1)
+
+    clock = time.perf_counter
+    for name in backends:
+        for _ in range(20):
+            tick(name)
+    ratios = []
+    for r in range(rounds):
+        order = (base, robot) if r % 2 == 0 else (robot, base)
+        med = {}
+        for name in order:
+            times = []
+            for _ in range(calls):
+                t0 = clock()
+                tick(name)
+                times.append(clock() - t0)
+            med[name] = statistics.median(times)
+        ratios.append(med[robot] / med[base])
+    return statistics.median(ratios), min(ratios), max(ratios)
+
+
+def ticks_only(robot: str, n: int) -> None:
+    """Run ``n`` ticks of ``robot`` in the 100-segment world (for instruction counts).
+
+    Run it under ``valgrind --tool=callgrind`` with two ``n`` and take the difference
+    over the difference of ``n``: the instructions of one tick, startup excluded.
+    """
+    backend = SimBackend(scattered_world(100), seed=0, robot=robot)
+    for i in range(n):
+        backend.observe()
+        backend.command(Command(0.3, 0.3 + 0.05 * math.sin(0.01 * i)))
+        backend.advance(0.1)
+
+
 def load() -> str:
     """Return the 1, 5 and 15 minute load averages (2 cores here: above 2 means queueing)."""
     return "load average " + ", ".join(f"{x:.2f}" for x in os.getloadavg())
@@ -150,7 +203,24 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=15, help="runs per figure")
     parser.add_argument("--calls", type=int, default=200, help="calls per run")
+    parser.add_argument("--ticks-only", nargs=2, metavar=("ROBOT", "N"),
+                        help="only run N ticks of ROBOT (for callgrind instruction counts)")
+    parser.add_argument("--timing-only", action="store_true",
+                        help="only the timing model's cost (interleaved rounds)")
+    parser.add_argument("--robot", default="pioneer-p3dx",
+                        help="the timed profile of --timing-only (name or file)")
     args = parser.parse_args()
+    if args.ticks_only:
+        ticks_only(args.ticks_only[0], int(args.ticks_only[1]))
+        return
+    if args.timing_only:
+        print(load())
+        med, lo, hi = interleaved_ratio(scattered_world(100), args.calls, args.runs,
+                                        robot=args.robot)
+        print(f"timing model cost ({args.robot}), interleaved: x{med:.3f} (median over "
+              f"{args.runs} rounds; min x{lo:.3f}, max x{hi:.3f}) (target: <= x1.10)")
+        print(load())
+        return
     print(f"sim benchmark: {args.runs} runs of {args.calls} calls; median over runs of the "
           f"run's median call (min over runs, median mean call); {load()}")
     print("one 181-beam scan (ray cast + noise), fixed obstacle density "
@@ -175,6 +245,9 @@ def main() -> None:
     print(f"  {w.parts.n_segments:6d} segments, pioneer-p3dx (timing model on):  {timed}")
     print(f"  timing model cost: x{timed.median / untimed.median:.3f} (median), "
           f"x{timed.minimum / untimed.minimum:.3f} (min) (target: <= x1.10)")
+    med, lo, hi = interleaved_ratio(w, args.calls, args.runs)
+    print(f"  timing model cost, interleaved rounds: x{med:.3f} (median; min x{lo:.3f}, "
+          f"max x{hi:.3f})")
     w = scattered_world(10000)
     print(f"  {w.parts.n_segments:6d} segments: {tick_cost(w, args.calls, args.runs)}")
     w = load_world("ellipse")

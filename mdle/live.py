@@ -19,7 +19,8 @@ import time
 from collections import Counter, deque
 from typing import IO, TYPE_CHECKING, Any
 
-from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample
+from mdle.run_report import FollowingStats, MapPoints, path_map
+from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample, ended_how
 from mdle.runtime.observer import BaseObserver
 
 if TYPE_CHECKING:
@@ -29,6 +30,8 @@ __all__ = ["LiveView", "summary_rows", "format_event"]
 
 #: Live panel refreshes per second of wall time (the run itself may go much faster).
 REFRESH_HZ = 10.0
+#: Events the final frame's timeline keeps on a terminal (the last ones).
+TIMELINE = 40
 
 
 def _secs(t: float) -> str:
@@ -49,7 +52,7 @@ def format_event(e: Event, t0: float = 0.0) -> str:
 def summary_rows(result: RunResult, wall_seconds: float | None = None) -> list[tuple[str, str]]:
     """Return the summary as (label, value) rows, shared by the rich table and the plain lines."""
     t = result.termination
-    rows = [("ended", f"{t.path}: {t.cause.value} at {_secs(result.duration)}")]
+    rows = [("ended", f"{t.path} {ended_how(t.cause)} at {_secs(result.duration)}")]
     if result.fault:
         rows.append(("fault", result.fault))
     rows.append(("distance travelled", f"{result.distance:.2f} m"))
@@ -78,7 +81,7 @@ def _element_rows(result: RunResult) -> list[tuple[str, str, str]]:
     for path in order:
         counts = ends[path]
         n = sum(counts.values())
-        how = ", ".join(f"{c.value}" + (f" x{k}" if k > 1 else "") for c, k in counts.items())
+        how = ", ".join(ended_how(c) + (f" x{k}" if k > 1 else "") for c, k in counts.items())
         rows.append((path, str(n), how))
     return rows
 
@@ -109,6 +112,10 @@ class LiveView(BaseObserver):
         self._wall0 = 0.0
         self._next_refresh = 0.0
         self.wall_seconds: float | None = None
+        self._timeline: deque[str] = deque(maxlen=TIMELINE)
+        self._event_count = 0
+        self._following = FollowingStats(0.0)
+        self._map = MapPoints()
         #: The error that made the stream unusable (EPIPE...), None while it works.
         self.output_lost: OSError | None = None
 
@@ -127,6 +134,8 @@ class LiveView(BaseObserver):
         """Open the live panel (terminal only)."""
         self._scheduler = scheduler
         self._wall0 = time.monotonic()
+        limits = getattr(getattr(scheduler, "backend", None), "limits", None)
+        self._following = FollowingStats(float(getattr(limits, "radius", 0.0) or 0.0))
         if not self.plain and self.output_lost is None:
             from rich.console import Console
             from rich.live import Live
@@ -144,6 +153,8 @@ class LiveView(BaseObserver):
         if self._t0 is None:
             self._t0 = event.time
         line = format_event(event, self._t0)
+        self._timeline.append(line)
+        self._event_count += 1
         if self.output_lost is not None:
             return
         if self.plain:
@@ -158,6 +169,8 @@ class LiveView(BaseObserver):
     def on_tick(self, sample: Sample) -> None:
         """Refresh the panel at most :data:`REFRESH_HZ` times a second."""
         self._sample = sample
+        self._following.add(sample)
+        self._map.add(sample)
         if self._live is None:
             return
         now = time.monotonic()
@@ -183,30 +196,70 @@ class LiveView(BaseObserver):
 
     # ------------------------------------------------------------------ rendering
 
+    def following_lines(self) -> list[str]:
+        """One line per boundary-following atom: its rc, mean/max |d - rc|, closest approach."""
+        lines = []
+        for r in self._following.rows():
+            closest = f", closest approach {r.closest:.3f} m" if r.closest is not None else ""
+            source = "" if r.truth else " (d measured: no ground truth)"
+            lines.append(f"{r.path} (rc {r.rc:g} m): mean |d - rc| {r.mean_err:.3f} m, "
+                         f"max {r.max_err:.3f} m{closest}{source}")
+        return lines
+
     def print_summary(self, result: RunResult) -> None:
-        """Return the summary table (rich on a terminal, plain lines otherwise)."""
+        """Print the final frame: timeline (terminal), elements, following, map, summary."""
         rows = summary_rows(result, self.wall_seconds)
         elements = _element_rows(result)
+        following = self.following_lines()
+        drawing = path_map(self._map)
         if self.plain:
             out = self.stream
             print("elements run:", file=out)
             for path, n, how in elements:
-                print(f"  {path}  ran {n}x  ended: {how}", file=out)
+                print(f"  {path}  ran {n}x  {how}", file=out)
+            if following:
+                print("boundary following (d: distance from the robot's centre to the "
+                      "boundary; |d - rc| over the second half of each atom's run):", file=out)
+                for line in following:
+                    print(f"  {line}", file=out)
+            if drawing:
+                print("path (S start, E end, # boundary seen beside the robot):", file=out)
+                for line in drawing:
+                    print(f"  {line}", file=out)
             for label, value in rows:
                 print(f"{label}: {value}", file=out)
             out.flush()
             return
         from rich.console import Console
         from rich.table import Table
+        from rich.text import Text
 
-        console = Console(file=self.stream)
+        console = Console(file=self.stream, highlight=False)
+        # the live panel is gone: the events it showed stay on the screen as a timeline
+        skipped = self._event_count - len(self._timeline)
+        timeline = Text("\n".join(self._timeline), style="dim")
+        if skipped > 0:
+            timeline = Text(f"... {skipped} earlier events (`--trace` keeps them all)\n",
+                            style="dim") + timeline
+        console.print(Text("timeline", style="bold"))
+        console.print(timeline)
         table = Table(title="elements run", title_justify="left")
         table.add_column("element")
         table.add_column("runs", justify="right")
-        table.add_column("ended by")
+        table.add_column("how it ended")
         for path, n, how in elements:
             table.add_row(path, n, how)
         console.print(table)
+        if following:
+            console.print(Text("boundary following", style="bold")
+                          + Text(" (d: distance from the robot's centre to the boundary; "
+                                 "|d - rc| over the second half of each atom's run)"))
+            for line in following:
+                console.print("  " + line, soft_wrap=True)
+        if drawing:
+            console.print(Text("path", style="bold")
+                          + Text(" (S start, E end, # boundary seen beside the robot)"))
+            console.print(Text("\n".join("  " + line for line in drawing)))
         facts = Table(show_header=False, box=None)
         facts.add_column(style="bold")
         facts.add_column()

@@ -41,7 +41,7 @@ from mdle.errors import BackendError, WorldError
 from sim.collision import CONTACT, Collider
 from sim.ladar import Ladar, LadarProfile, ladar_profile
 from sim.profiles import robot_profile
-from sim.robot import Phase, RobotProfile, integrate, plan_phases
+from sim.robot import Phase, RobotProfile, RunClock, integrate, plan_phases, ramp_step
 from sim.world import World
 
 __all__ = ["SENSING_MODES", "SimBackend", "SimEvent"]
@@ -87,6 +87,9 @@ class SimBackend:
     sensing : {"scan", "exact"}
         ``exact`` makes the ladar an oracle: noise-free ranges plus ``Scan.tangents``
         and ``Scan.curvatures``, and a fresh scan at every observation.
+    clock : RunClock, optional
+        For a profile with a ``control_cycle``: the run's motion-cycle phase and report
+        instants (default: drawn from the seed). Replays of recorded runs set them.
 
     Raises
     ------
@@ -100,7 +103,7 @@ class SimBackend:
 
     def __init__(self, world: World, *, seed: int | None = None,
                  robot: str | RobotProfile | None = None, ladar: str | None = None,
-                 sensing: str = "scan") -> None:
+                 sensing: str = "scan", clock: RunClock | None = None) -> None:
         if sensing not in SENSING_MODES:
             raise BackendError(f"unknown sensing mode `{sensing}` (one of: "
                                f"{', '.join(SENSING_MODES)})")
@@ -113,6 +116,7 @@ class SimBackend:
         self.sensing = sensing
         self._collider = Collider(world.parts, self.profile.radius)
         self._oracle = sensing == "exact"
+        self._clock = clock or RunClock()
         self.events: list[SimEvent] = []
         self.reset()
 
@@ -129,9 +133,10 @@ class SimBackend:
                              f"radius {self.profile.radius} m) at ({pose.x:g}, {pose.y:g}) "
                              f"overlaps obstacles[{owner}]")
         ss = np.random.SeedSequence(self.seed)
-        ladar_seq, odo_seq, timing_seq = ss.spawn(3)
+        ladar_seq, odo_seq, timing_seq, slip_seq = ss.spawn(4)   # a 4th keeps the first 3
         self._odo_rng = np.random.default_rng(odo_seq)
         self._timing_rng = np.random.default_rng(timing_seq)
+        self._slip_rng = np.random.default_rng(slip_seq)
         self._ladar = Ladar(self.ladar_profile, np.random.default_rng(ladar_seq),
                             mount=self.profile.ladar_mount, oracle=self._oracle)
         self._fan = (self._ladar.fan(self.world.caster)
@@ -174,6 +179,24 @@ class SimBackend:
                             if self._timed and self._period > 0 else 0.0)
         self._scan_k = 0 if self._scan_phase == 0.0 else -1
         self._scan: Scan = self._take_scan(self._x, self._y, self._th, 0.0)
+        # The server loop (control_cycle): speeds step at the motion instants, reports
+        # come on their own clock, commands are read between them (see _advance_cycled).
+        self._cycled = prof.control_cycle > 0
+        self._reports_on = prof.sip_cycle > 0
+        if self._cycled:
+            clock = self._clock
+            self._desired = STOP
+            self._next_control = (clock.control_phase if clock.control_phase is not None
+                                  else float(self._timing_rng.uniform(0.0, prof.control_cycle)))
+            self._report_times = clock.report_times or ()
+            self._report_i = 0
+            if self._report_times:
+                self._reports_on = True
+                self._next_report = self._report_times[0]
+            elif prof.sip_cycle > 0:
+                self._next_report = float(self._timing_rng.uniform(0.0, prof.sip_cycle))
+            else:
+                self._next_report = math.inf
 
     def close(self) -> None:
         """Stop the robot (nothing to release)."""
@@ -201,7 +224,7 @@ class SimBackend:
     # ------------------------------------------------------------------ protocol
     def observe(self) -> Observation:
         """Report odometry pose, measured velocities, newest scan, flags and ground truth."""
-        if self.profile.sip_cycle > 0:
+        if self._reports_on:
             ox, oy, oth, v, w = self._report
         else:
             ox, oy, oth, v, w = self._ox, self._oy, self._oth, self._v, self._w
@@ -237,7 +260,7 @@ class SimBackend:
 
     def _send(self, cmd: Command) -> None:
         latency = self.profile.command_latency
-        if latency > 0:
+        if latency > 0 or self._cycled:
             self._pending.append((self._t + latency, cmd))
         else:
             self._cmd = cmd
@@ -251,9 +274,102 @@ class SimBackend:
         t1 = self._t + dt
         if not self._timed:
             self._step(t1, True)
+        elif self._cycled:
+            self._advance_cycled(t1)
         else:
             self._advance_timed(t1)
         return 0.0
+
+    def _advance_cycled(self, t1: float) -> None:
+        """Move to ``t1`` through the server loop's instants (``control_cycle`` profiles).
+
+        At a motion instant the speeds take one ramp step towards the command the server
+        holds, and hold until the next; at a report instant the pose and speeds are
+        reported. After either, the server reads the commands that have arrived (sent
+        ``command_latency`` earlier), unless its next instant is within ``input_window``:
+        so a command waits for a read and then for a motion instant, as on AMRISim.
+        """
+        prof = self.profile
+        if prof.odometry.enabled:
+            self._advance_cycled_pieces(t1)
+            return
+        cycle, window, pending = prof.control_cycle, prof.input_window, self._pending
+        t = self._t
+        v, w = self._v, self._w
+        phases: list[Phase] = []
+        mark = -1
+        while True:
+            nc, nr = self._next_control, self._next_report
+            at = nc if nc <= nr else nr
+            if at > t1 - _EPS:
+                break
+            if at > t + _EPS:
+                phases.append(Phase(at - t, v, 0.0, w, 0.0))
+                t = at
+            if nc <= nr:
+                d = self._desired
+                v = ramp_step(v, d.v, prof.max_accel, prof.max_decel, prof.ramp, cycle)
+                w = ramp_step(w, d.omega, prof.max_turn_accel, prof.max_turn_decel, prof.ramp,
+                              cycle)
+                nc = self._next_control = nc + cycle
+            else:
+                mark = len(phases)       # the report: the pose there, these speeds
+                self._report = (0.0, 0.0, 0.0, v, w)
+                nr = self._next_report = self._following_report(nr)
+            if (nc if nc <= nr else nr) - at > window:
+                while pending and pending[0][0] <= at + _EPS:
+                    self._desired = pending.popleft()[1]
+        if t1 > t:
+            phases.append(Phase(t1 - t, v, 0.0, w, 0.0))
+        if phases:
+            self._step(t1, True, held=(phases, v, w, mark))
+        else:
+            self._v, self._w = v, w
+        self._release_scans(t1)
+
+    def _advance_cycled_pieces(self, t1: float) -> None:
+        """:meth:`_advance_cycled` a piece at a time (odometry noise draws per piece)."""
+        prof = self.profile
+        cycle, window, pending = prof.control_cycle, prof.input_window, self._pending
+        while True:
+            t = self._t
+            nc, nr = self._next_control, self._next_report
+            at = nc if nc <= nr else nr
+            if at <= t + _EPS:
+                if nc <= nr:
+                    d = self._desired
+                    self._v = ramp_step(self._v, d.v, prof.max_accel, prof.max_decel,
+                                        prof.ramp, cycle)
+                    self._w = ramp_step(self._w, d.omega, prof.max_turn_accel,
+                                        prof.max_turn_decel, prof.ramp, cycle)
+                    nc = self._next_control = nc + cycle
+                else:
+                    self._report = (self._ox, self._oy, self._oth, self._v, self._w)
+                    nr = self._next_report = self._following_report(nr)
+                if (nc if nc <= nr else nr) - at > window:
+                    while pending and pending[0][0] <= at + _EPS:
+                        self._desired = pending.popleft()[1]
+                continue
+            if t >= t1 - _EPS:
+                break
+            final = at >= t1 - _EPS
+            self._cmd = Command(self._v, self._w)   # held: constant speeds until `at`
+            self._step(t1 if final else at, final)
+        self._release_scans(t1)
+
+    def _following_report(self, now: float) -> float:
+        """Return the report instant after ``now`` (recorded instants, then every cycle)."""
+        times = self._report_times
+        self._report_i += 1
+        if self._report_i < len(times):
+            return times[self._report_i]
+        prof = self.profile
+        if prof.sip_cycle <= 0:
+            return math.inf
+        nxt = now + prof.sip_cycle
+        if prof.report_slip_rate > 0 and self._slip_rng.random() < prof.report_slip_rate:
+            nxt += prof.report_slip.draw(self._slip_rng)
+        return nxt
 
     def _advance_timed(self, t1: float) -> None:
         """Move to ``t1`` in pieces cut where a report is due; queued commands switch inside."""
@@ -279,6 +395,10 @@ class SimBackend:
             while pending and pending[0][0] < end - _EPS:
                 switches.append(pending.popleft())
             self._step(end, final, switches)
+        self._release_scans(t1)
+
+    def _release_scans(self, t1: float) -> None:
+        """Make the newest scan whose latency has passed by ``t1`` the readable one."""
         if self._scan_queue:
             kept = []
             for due, scan in self._scan_queue:
@@ -289,7 +409,8 @@ class SimBackend:
             self._scan_queue = kept
 
     def _step(self, t1: float, final: bool,
-              switches: list[tuple[float, Command]] | None = None) -> None:
+              switches: list[tuple[float, Command]] | None = None,
+              held: tuple[list[Phase], float, float, int] | None = None) -> None:
         """Integrate from the current time to ``t1`` (collisions, scans).
 
         The held command changes at each ``(time, command)`` of ``switches`` (queued
@@ -309,8 +430,11 @@ class SimBackend:
                 scan_at = min(t1, max(t0, self._scan_phase + k * self._period))
                 self._scan_k = k
         x0, y0, th0 = self._x, self._y, self._th
-        if switches:
-            phases: list[Phase] = []
+        mark, marked = -1, (0.0, 0.0, 0.0)
+        if held is not None:        # the server loop's pieces, and where to note the pose
+            phases, v_end, w_end, mark = held
+        elif switches:
+            phases = []
             v, w, cmd, t = self._v, self._w, self._cmd, t0
             for ta, nxt in switches:
                 if ta > t:
@@ -332,6 +456,8 @@ class SimBackend:
         if not scanned and scan_at <= t0 + 1e-12:
             self._scanned(self._take_scan(x, y, th, scan_at))
             scanned = True
+        if mark == 0:
+            marked = (x, y, th)
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,
         # nothing can be touched this step and one distance query (at the end) suffices.
         reach = sum(ph.max_abs_v * ph.duration for ph in phases)
@@ -340,7 +466,7 @@ class SimBackend:
             clear = self._collider.clearance(x, y)   # the sweep needs the exact clearance
             safe = clear[0] - CONTACT >= reach
         self._clear_bound = False
-        for ph in phases:
+        for i, ph in enumerate(phases):
             pieces = [ph]
             if not scanned and t < scan_at < t + ph.duration:
                 cut = scan_at - t
@@ -361,6 +487,8 @@ class SimBackend:
                     scanned = True
             if contact:
                 break
+            if mark == i + 1:
+                marked = (x, y, th)
         if safe:
             if final:
                 clear = self._collider.clearance(x, y)
@@ -385,6 +513,14 @@ class SimBackend:
         self._x, self._y, self._th, self._clear = x, y, th, clear
         self._t = t1
         self._update_odometry(x0, y0, th0)
+        if mark >= 0:
+            if contact:     # the robot rests at the contact, stopped
+                self._report = (self._ox, self._oy, self._oth, 0.0, 0.0)
+            else:
+                xs, ys, c0, s0, ths = self._origin
+                dx, dy = marked[0] - xs, marked[1] - ys
+                self._report = (c0 * dx + s0 * dy, c0 * dy - s0 * dx, marked[2] - ths,
+                                self._report[3], self._report[4])
 
     # ------------------------------------------------------------------ extras
     @property

@@ -25,6 +25,7 @@ from mdle.backend import RobotLimits
 
 __all__ = [
     "Latency",
+    "RunClock",
     "OdometryNoise",
     "Phase",
     "RAMPS",
@@ -32,6 +33,7 @@ __all__ = [
     "integrate",
     "plan_phases",
     "ramp_rate",
+    "ramp_step",
 ]
 
 _GL = tuple((float(x), float(w)) for x, w in zip(*np.polynomial.legendre.leggauss(8), strict=True))
@@ -93,6 +95,23 @@ class Latency:
 
 
 @dataclass(frozen=True)
+class RunClock:
+    """Where a run's robot-side clocks stand, for a cycled profile (seconds of sim time).
+
+    Normally drawn from the run's seed; a replay of a recorded run sets them from the
+    recording (:func:`sim.fit.run_clock`).
+
+    ``control_phase``: the first motion-cycle instant, in ``[0, control_cycle)``
+    (None: seeded). ``report_times``: the report instants, increasing (None: every
+    ``sip_cycle`` from a seeded phase); after the last one, reports go on every
+    ``sip_cycle``.
+    """
+
+    control_phase: float | None = None
+    report_times: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
 class RobotProfile:
     """A robot's body, limits, timing, ladar mount and odometry model (SI units).
 
@@ -116,6 +135,19 @@ class RobotProfile:
         The robot reports pose, speed and turn rate every ``sip_cycle`` seconds (a
         Pioneer's server information packet); observations hold the last report, as old
         as it is. 0: every observation is current.
+    control_cycle : float, s
+        The robot's motion cycle (0: continuous). When set, the robot's server takes
+        commands and changes its speeds only at its own instants, one ramp step of
+        ``accel * control_cycle`` per cycle, and reports come on their own clock; both
+        clocks start at a seeded phase (see ``docs/robots.md``, "The server loop").
+    input_window : float, s
+        With ``control_cycle``: the server reads arrived commands right after a motion
+        step or a report, but only when neither is due within ``input_window``.
+    report_slip : Latency
+        With ``control_cycle``: how late a report that slips comes (its clock goes on
+        from there, as a server's timer restarted late does), drawn per slip.
+    report_slip_rate : float
+        The chance that a report slips (0: never).
     scan_period : float or None, s
         Time between ladar scans (None: the ladar profile's rate).
     scan_latency : Latency
@@ -139,6 +171,10 @@ class RobotProfile:
     ramp: str = "firmware"
     command_latency: float = 0.0
     sip_cycle: float = 0.0
+    control_cycle: float = 0.0
+    input_window: float = 0.0
+    report_slip: Latency = field(default_factory=Latency)
+    report_slip_rate: float = 0.0
     scan_period: float | None = None
     scan_latency: Latency = field(default_factory=Latency)
     ladar_mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -149,8 +185,18 @@ class RobotProfile:
     @property
     def timed(self) -> bool:
         """True when the profile delays commands, reports at a cycle or delays scans."""
-        return (self.command_latency > 0 or self.sip_cycle > 0 or self.scan_latency.enabled
-                or self.scan_period is not None)
+        return (self.command_latency > 0 or self.sip_cycle > 0 or self.control_cycle > 0
+                or self.scan_latency.enabled or self.scan_period is not None)
+
+    @property
+    def effective_latency(self) -> float:
+        """Return the mean time from a command being sent until it shows, seconds.
+
+        ``command_latency``; with a server loop (``control_cycle``) one and a half cycles
+        more: on average half a cycle until the server reads the command, half a cycle
+        until its next motion step, and half a cycle until a report shows the new speed.
+        """
+        return self.command_latency + 1.5 * self.control_cycle
 
     def expected_scan_age(self, scan_period: float) -> float:
         """Return the mean age of the newest scan at an unsynchronised tick, seconds.
@@ -171,7 +217,7 @@ class RobotProfile:
         return RobotLimits(max_speed=self.max_speed, max_reverse_speed=self.max_reverse_speed,
                            max_turn_rate=self.max_turn_rate, max_accel=self.max_accel,
                            max_decel=self.max_decel, max_turn_accel=self.max_turn_accel,
-                           radius=self.radius, command_latency=self.command_latency,
+                           radius=self.radius, command_latency=self.effective_latency,
                            scan_latency=self.expected_scan_age(scan_period))
 
     def with_overrides(self, **changes: Any) -> RobotProfile:
@@ -223,6 +269,21 @@ def ramp_rate(cur: float, target: float, accel: float, decel: float, ramp: str =
     if ramp == "stage" and cur > 0 > target:
         return math.inf
     return decel if cur * (target - cur) < 0 else accel
+
+
+def ramp_step(cur: float, target: float, accel: float, decel: float, ramp: str, dt: float
+              ) -> float:
+    """Return the value one discrete ramp step of ``dt`` seconds moves ``cur`` to.
+
+    The step a cycled firmware takes (:attr:`RobotProfile.control_cycle`): at most
+    ``rate * dt`` towards ``target``, the rate as :func:`ramp_rate` chooses it.
+    """
+    rate = ramp_rate(cur, target, accel, decel, ramp)
+    diff = target - cur
+    step = rate * dt
+    if not step < abs(diff):
+        return target
+    return cur + math.copysign(step, diff)
 
 
 def _ramp(cur: float, target: float, accel: float, decel: float, ramp: str

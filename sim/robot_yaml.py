@@ -42,7 +42,8 @@ __all__ = ["ROBOT_KEYS", "check_mount", "dump_robot", "parse_robot", "read_robot
 #: Keys a profile (or a world's ``robot:`` mapping) may override.
 ROBOT_KEYS = ("radius", "max_speed", "max_reverse_speed", "max_turn_rate", "max_accel",
               "max_decel", "max_turn_accel", "max_turn_decel", "ramp", "command_latency",
-              "sip_cycle", "scan_period", "scan_latency", "ladar_mount", "odometry")
+              "sip_cycle", "control_cycle", "input_window", "report_slip",
+              "report_slip_rate", "scan_period", "scan_latency", "ladar_mount", "odometry")
 _FILE_KEYS = ("name", "description", "source", "profile", *ROBOT_KEYS)
 _REQUIRED = ("radius", "max_speed", "max_turn_rate")
 _ODOM_KEYS = ("distance", "turn", "drift")
@@ -94,13 +95,20 @@ def robot_overrides(doc: _Doc, path: str, m: dict[str, Any]) -> dict[str, Any]:
         if ramp not in RAMPS:
             raise doc.fail(at("ramp"), f"unknown ramp {ramp!r}; one of: {', '.join(RAMPS)}")
         ch["ramp"] = ramp
-    for key in ("command_latency", "sip_cycle"):
+    for key in ("command_latency", "sip_cycle", "control_cycle", "input_window"):
         if key in m:
             ch[key] = _seconds(doc, at(key), m[key])
     if "scan_period" in m:
         ch["scan_period"] = _seconds(doc, at("scan_period"), m["scan_period"], positive=True)
     if "scan_latency" in m:
         ch["scan_latency"] = _latency(doc, at("scan_latency"), m["scan_latency"])
+    if "report_slip" in m:
+        ch["report_slip"] = _latency(doc, at("report_slip"), m["report_slip"])
+    if "report_slip_rate" in m:
+        rate = _number(doc, at("report_slip_rate"), m["report_slip_rate"], nonneg=True)
+        if rate > 1:
+            raise doc.fail(at("report_slip_rate"), f"must be a chance in [0, 1], got {rate:g}")
+        ch["report_slip_rate"] = rate
     if "ladar_mount" in m:
         lm = m["ladar_mount"]
         if not isinstance(lm, list) or len(lm) != 3:
@@ -211,13 +219,19 @@ def dump_robot(robot: RobotProfile, comment: str = "") -> str:
         lines.append(f"ramp: {robot.ramp}")
     lines += [f"command_latency: {_g(robot.command_latency)}   # s",
               f"sip_cycle: {_g(robot.sip_cycle)}   # s"]
+    if robot.control_cycle > 0:
+        lines += [f"control_cycle: {_g(robot.control_cycle)}   # s",
+                  f"input_window: {_g(robot.input_window)}   # s"]
     if robot.scan_period is not None:
         lines.append(f"scan_period: {_g(robot.scan_period)}   # s")
-    lat = robot.scan_latency
-    if lat.enabled:
-        inner = (f"min: {_g(lat.a)}, max: {_g(lat.b)}" if lat.kind == "uniform"
-                 else f"mean: {_g(lat.a)}, std: {_g(lat.b)}")
-        lines.append(f"scan_latency: {{{inner}}}   # s")
+    for key in ("scan_latency", "report_slip"):
+        lat = getattr(robot, key)
+        if lat.enabled:
+            inner = (f"min: {_g(lat.a)}, max: {_g(lat.b)}" if lat.kind == "uniform"
+                     else f"mean: {_g(lat.a)}, std: {_g(lat.b)}")
+            lines.append(f"{key}: {{{inner}}}   # s")
+            if key == "report_slip":
+                lines.append(f"report_slip_rate: {_g(robot.report_slip_rate)}")
     mx, my, mth = robot.ladar_mount
     lines.append(f"ladar_mount: [{_g(mx)}, {_g(my)}, {_g(math.degrees(mth))}]   # m, m, deg")
     o = robot.odometry

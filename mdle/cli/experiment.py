@@ -76,13 +76,29 @@ def run(args: argparse.Namespace) -> int:
     if args.generated:
         return generated_study.run(args)
     if args.name == "curvature":
-        from mdle.experiments.curvature import format_table, plot_figures, run_table
+        from mdle.cli.progress import steps
+        from mdle.experiments.curvature import (
+            OBJECTS,
+            ROWS,
+            format_table,
+            plot_figures,
+            run_table,
+        )
 
-        print(format_table(run_table(args.draws, args.seed)))
+        with steps("Table 1", len(OBJECTS) * len(ROWS)) as step:
+            result = run_table(args.draws, args.seed, step=step)
+        print(format_table(result))
         for path in plot_figures(args.out, seed=args.seed):
             print(f"wrote {path}")
         return output.EXIT_OK
-    from mdle.experiments.following import SHAPES, follow_task, random_start_tasks, table
+    from mdle.cli.tables import metres, print_table, yes_no
+    from mdle.experiments.following import (
+        SHAPES,
+        TABLE_NOTES,
+        follow_task,
+        random_start_tasks,
+        table_rows,
+    )
 
     out = args.out / args.name if args.resume else None
     if args.name == "following":
@@ -90,12 +106,18 @@ def run(args: argparse.Namespace) -> int:
                              duration=args.duration or 60.0, index=i)
                  for i, world in enumerate(SHAPES)]
         runs = _run(tasks, args, out)
-        print(f"{'world':9} {'rc':>4} {'collided':>8} {'min clearance':>13} "
-              f"{'mean |d-rc|':>11} {'max |d-rc|':>10}  (second half of the run)")
-        for r in runs:
-            print(f"{r.world:9} {r.rc:4.1f} {str(r.collided):>8} {r.min_clearance:13.3f} "
-                  f"{r.mean_err:11.3f} {r.max_err:10.3f}")
-        return output.EXIT_OK
+        print_table(sys.stdout, f"boundary following, {args.sensing} sensing, {args.side} side, "
+                    f"{args.duration or 60.0:g} s runs",
+                    [("world", "left"), ("rc (m)", "right"), ("collided", "left"),
+                     ("min clearance (m)", "right"), ("mean |d - rc| (m)", "right"),
+                     ("max |d - rc| (m)", "right")],
+                    [(r.world, f"{r.rc:g}", yes_no(r.collided), metres(r.min_clearance),
+                      metres(r.mean_err), metres(r.max_err)) for r in runs],
+                    ["d: true distance from the robot's centre to the nearest boundary; "
+                     "|d - rc| over the second half of the run (the approach left out)",
+                     "min clearance: the smallest gap between the robot's body and an "
+                     "obstacle over the whole run"])
+        return output.EXIT_COLLISION if any(r.collided for r in runs) else output.EXIT_OK
     tasks = []
     for world in SHAPES:
         tasks += random_start_tasks(world, 50 if args.runs is None else args.runs,
@@ -103,7 +125,13 @@ def run(args: argparse.Namespace) -> int:
                                     duration=args.duration or 40.0, rate=args.rate,
                                     v=1.0 if args.v is None else args.v)
     runs = _run(tasks, args, out)
-    print(table(runs))
+    print_table(sys.stdout, f"random starts, {args.sensing} sensing, {args.side} side",
+                [("world", "left"), ("sensing", "left"), ("runs", "right"),
+                 ("collisions", "right"), ("worst clearance (m)", "right"),
+                 ("median mean |d - rc| (m)", "right"), ("engaged", "right")],
+                [(w, sensing, str(n), str(hits), metres(worst), metres(err), f"{eng}/{n}")
+                 for w, sensing, n, hits, worst, err, eng in table_rows(runs)],
+                TABLE_NOTES)
     return output.EXIT_COLLISION if any(r.collided for r in runs) else output.EXIT_OK
 
 

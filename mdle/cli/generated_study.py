@@ -158,25 +158,11 @@ def save_failures(rows: Sequence[Row], folder: Path) -> int:
 
 def _run_with_progress(cfg: StudyConfig, jobs: int | None, total: int,
                        out: Path | None = None) -> list[Row]:
+    from mdle.cli.progress import steps
     from mdle.experiments.generated import run_study
 
-    if not sys.stderr.isatty():
-        return run_study(cfg, jobs=jobs, out=out)
-    from rich.console import Console
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeElapsedColumn(), TimeRemainingColumn(),
-                  console=Console(file=sys.stderr)) as bar:
-        task = bar.add_task("runs", total=total)
-        return run_study(cfg, jobs=jobs, on_row=lambda _row: bar.advance(task), out=out)
+    with steps("runs", total) as step:
+        return run_study(cfg, jobs=jobs, on_row=lambda _row: step(), out=out)
 
 
 def _fmt(x: float, digits: int = 3) -> str:

@@ -116,7 +116,8 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
                                         "--connect serial:///dev/ttyS0"))
     try:
         backend = open_backend("pioneer", args.connect, args.laser)
-    except SystemExit:  # SIGTERM while connecting: the backend stopped and closed it
+    except (KeyboardInterrupt, SystemExit):  # a signal while connecting: the backend
+        # stopped and closed the robot
         print("interrupted while connecting: robot stopped, session closed", file=sys.stderr)
         raise
     assert isinstance(backend, PioneerBackend), "open_backend('pioneer') makes a Pioneer"

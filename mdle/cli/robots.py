@@ -25,11 +25,12 @@ def add_parser(subparsers: Any) -> None:
                                       "file) as a profile file, with its timing summary.")
     show.add_argument("robot", metavar="NAME|FILE", help="a profile name or a YAML file")
     fit = sub.add_parser(
-        "fit", help="fit latency, ramps and scan latency to recorded runs",
+        "fit", help="fit latency or server loop, ramps and scan latency to recorded runs",
         description="Replay the commands of recorded runs through the simulator's motion "
-                    "model and fit the command latency, the speed and turn-rate ramps and "
-                    "the scan latency that reproduce the measured speed and turn rate "
-                    "(least RMS error); print the fit and write a profile.",
+                    "model and fit the command latency (or the robot server's loop: its "
+                    "cycle, when it reads commands, its clock in each run), the speed and "
+                    "turn-rate ramps and the scan latency that reproduce the measured speed "
+                    "and turn rate (least RMS error); print the fit and write a profile.",
         epilog="A recording is a trace of a run on the robot (`mdle run --backend pioneer "
                "--trace F.jsonl`) or a CSV with columns t_s, v_mps, omega_radps, cmd_v_mps, "
                "cmd_omega_radps and optionally scan_age_s, one row per control tick.")
@@ -44,7 +45,8 @@ def add_parser(subparsers: Any) -> None:
                      help="profile giving what the fit does not (body, speed limits, ladar "
                           "mount, odometry noise; default: pioneer2dx)")
     fit.add_argument("--sip-cycle", type=float, default=0.1, metavar="S",
-                     help="the robot's report cycle in seconds (default: 0.1, a Pioneer's)")
+                     help="the robot's report cycle in seconds (default: 0.1, a Pioneer's); "
+                          "the server loop's cycle is searched from here")
     fit.add_argument("--scan-period", type=float, default=0.1, metavar="S",
                      help="seconds between ladar scans (default: 0.1)")
     p.set_defaults(handler=run)
@@ -71,9 +73,14 @@ def _timing(robot: Any) -> str:
     if not robot.timed:
         return "timing: ideal (commands act at once, observations and scans are current)"
     period = f"every {robot.scan_period:g} s" if robot.scan_period else "at the ladar's rate"
-    return (f"timing: commands act after {robot.command_latency * 1e3:.0f} ms, reports every "
-            f"{robot.sip_cycle * 1e3:.0f} ms, scans {period} readable after "
-            f"{robot.scan_latency.describe()}")
+    if robot.control_cycle > 0:
+        acts = (f"commands reach the server after {robot.command_latency * 1e3:.0f} ms and act "
+                f"at its next motion step (every {robot.control_cycle * 1e3:.1f} ms; "
+                f"{robot.effective_latency * 1e3:.0f} ms on average until they show)")
+    else:
+        acts = f"commands act after {robot.command_latency * 1e3:.0f} ms"
+    return (f"timing: {acts}, reports every {robot.sip_cycle * 1e3:.1f} ms, scans {period} "
+            f"readable after {robot.scan_latency.describe()}")
 
 
 def _show(args: argparse.Namespace) -> int:
@@ -106,8 +113,9 @@ def _fit(args: argparse.Namespace) -> int:
         f" --base {args.base}" if args.base != "pioneer2dx" else "") + (
         f" --description {json.dumps(args.description)}" if args.description else "")
     description = args.description or f"fitted to {', '.join(args.recordings)}"
+    fitted = "server loop" if fit.control_cycle else "command latency"
     profile = fit.profile(base, args.name, description=description,
-                          source=f"mdle robots fit (command latency, ramps, scan latency); "
+                          source=f"mdle robots fit ({fitted}, ramps, scan latency); "
                                  f"the rest from {base.name}")
     comment = (f"Written by `{command}`.\n"
                f"Fit: RMS error v {fit.v.rms:.4f} m/s, omega {fit.omega.rms:.4f} rad/s over "

@@ -434,7 +434,8 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
             header["robot"] = args.robot
         try:
             backend = open_backend("pioneer", args.connect, args.laser, rate=args.rate)
-        except SystemExit:  # SIGTERM while connecting: the backend stopped and closed it
+        except (KeyboardInterrupt, SystemExit):  # a signal while connecting: the backend
+            # stopped and closed the robot
             print("interrupted while connecting: robot stopped, session closed",
                   file=sys.stderr)
             raise

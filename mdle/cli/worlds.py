@@ -1,4 +1,8 @@
-"""``mdle worlds``: list the reference worlds, or draw one (``mdle worlds show NAME -o F.png``)."""
+"""``mdle worlds``: list the reference worlds, or draw one (``mdle worlds show NAME [-o F.png]``).
+
+Without ``-o`` the drawing opens in a window when there is a display, else it is written to
+``NAME.png`` here (:mod:`mdle.figure_output`).
+"""
 
 from __future__ import annotations
 
@@ -6,7 +10,7 @@ import argparse
 import math
 from typing import Any
 
-__all__ = ["add_parser", "run"]
+__all__ = ["add_parser", "run", "world_title", "world_figure"]
 
 
 def add_parser(subparsers: Any) -> None:
@@ -15,15 +19,17 @@ def add_parser(subparsers: Any) -> None:
         "worlds", help="list the simulator's reference worlds, or draw one",
         description="List the reference worlds shipped with the simulator (usable as "
                     "`mdle run --world NAME`), or draw one world, or a world file, to an image.",
-        epilog="Examples: `mdle worlds`; `mdle worlds show corridor -o corridor.png`; "
+        epilog="Examples: `mdle worlds`; `mdle worlds show corridor` (a window, or "
+               "corridor.png); `mdle worlds show corridor -o corridor.png`; "
                "`mdle worlds show my_room.yaml -o room.png --no-scan`.")
     sub = p.add_subparsers(dest="action", metavar="ACTION")
-    show = sub.add_parser("show", help="draw a world to an image",
+    show = sub.add_parser("show", help="draw a world (a window, or an image)",
                           description="Draw a world's obstacles, the robot at its start pose "
                                       "and, unless --no-scan, the ladar scan it sees there.")
     show.add_argument("world", metavar="NAME|FILE", help="a reference world name or a YAML file")
-    show.add_argument("-o", "--output", required=True, metavar="FILE",
-                      help="the image to write: .png, .svg or .pdf")
+    show.add_argument("-o", "--output", metavar="FILE",
+                      help="the image to write: .png, .svg or .pdf (default: a window when "
+                           "there is a display, else NAME.png here)")
     show.add_argument("--no-scan", action="store_true", help="do not draw the start scan")
     p.set_defaults(handler=run)
 
@@ -42,52 +48,45 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _show(args: argparse.Namespace) -> int:
-    import matplotlib
+def world_title(world: Any) -> str:
+    """Return ``name: description``, without repeating a name the description starts with.
 
-    matplotlib.use("Agg")
-    import os
+    >>> import types
+    >>> world_title(types.SimpleNamespace(name="default", description="Default: a room"))
+    'default: a room'
+    """
+    desc = str(world.description or "").strip()
+    head, sep, rest = desc.partition(":")
+    if sep and head.strip().lower() == str(world.name).lower():
+        desc = rest.strip()
+    return f"{world.name}: {desc}" if desc else str(world.name)
 
-    import matplotlib.pyplot as plt
+
+def world_figure(world: Any, scan: bool = True) -> Any:
+    """Return a figure of ``world``: obstacles, the robot at its start and its start scan."""
     import numpy as np
-    import shapely
+    from matplotlib.figure import Figure
     from matplotlib.patches import Circle as DiscPatch
-    from matplotlib.patches import PathPatch
-    from matplotlib.path import Path as MplPath
 
     import sim
-    from mdle.errors import MdleError
+    from mdle.plot import draw_world
 
-    ext = os.path.splitext(args.output)[1].lower().lstrip(".")
-    if ext not in ("png", "svg", "pdf"):
-        # matplotlib would add `.png` to a name without one and report nothing
-        raise MdleError(f"cannot draw to `{args.output}`: the file name must end in .png, "
-                        ".svg or .pdf")
-    world = sim.load_world(args.world)
-    fig, ax = plt.subplots(figsize=(8, 6), layout="constrained")
-    for geom in shapely.get_parts(world.geometry):
-        for poly in shapely.get_parts(geom):
-            verts: list[tuple[float, float]] = []
-            codes: list[Any] = []
-            for ring in [poly.exterior, *poly.interiors]:
-                xy = list(ring.coords)
-                verts += xy
-                codes += [MplPath.MOVETO] + [MplPath.LINETO] * (len(xy) - 2) + [MplPath.CLOSEPOLY]
-            ax.add_patch(PathPatch(MplPath(verts, codes), facecolor="0.8", edgecolor="0.3",
-                                   lw=0.8))
+    fig = Figure(figsize=(8, 6), layout="constrained")
+    ax = fig.subplots()
+    draw_world(ax, world)
     s = world.start_pose
-    if not args.no_scan:
-        scan = sim.SimBackend(world, ladar="lms200-ideal").observe().scan
-        if scan is not None:
+    if scan:
+        first = sim.SimBackend(world, ladar="lms200-ideal").observe().scan
+        if first is not None:
             mx, my, _ = world.robot.ladar_mount
             ox = s.x + math.cos(s.theta) * mx - math.sin(s.theta) * my
             oy = s.y + math.sin(s.theta) * mx + math.cos(s.theta) * my
-            a = s.theta + scan.bearings
-            ex, ey = ox + scan.ranges * np.cos(a), oy + scan.ranges * np.sin(a)
+            a = s.theta + first.bearings
+            ex, ey = ox + first.ranges * np.cos(a), oy + first.ranges * np.sin(a)
             ax.plot(np.column_stack([np.full_like(ex, ox), ex]).T,
                     np.column_stack([np.full_like(ey, oy), ey]).T, color="tab:orange",
                     lw=0.3, alpha=0.5)
-            ax.plot(ex[scan.valid], ey[scan.valid], ".", ms=2, color="tab:red")
+            ax.plot(ex[first.valid], ey[first.valid], ".", ms=2, color="tab:red")
     r = max(world.robot.radius, 0.1)
     ax.add_patch(DiscPatch((s.x, s.y), r, facecolor="tab:blue", alpha=0.5, edgecolor="tab:blue"))
     ax.annotate("", xy=(s.x + 2 * r * math.cos(s.theta), s.y + 2 * r * math.sin(s.theta)),
@@ -98,13 +97,29 @@ def _show(args: argparse.Namespace) -> int:
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
-    ax.set_title(f"{world.name}: {world.description}" if world.description else world.name,
-                 fontsize=9)
-    try:
-        fig.savefig(args.output, dpi=120, format=ext)
-    except (OSError, ValueError) as err:
-        raise MdleError(f"cannot write {args.output}: {err}") from None
-    finally:
-        plt.close(fig)
+    ax.set_title(world_title(world), fontsize=9)
+    return fig
+
+
+def _show(args: argparse.Namespace) -> int:
+    import os
+
+    import sim
+    from mdle.figure_output import save_figure, show_or_write
+
+    if args.output is not None:
+        ext = os.path.splitext(args.output)[1].lower().lstrip(".")
+        if ext not in ("png", "svg", "pdf"):
+            # matplotlib would add `.png` to a name without one and report nothing
+            from mdle.errors import MdleError
+
+            raise MdleError(f"cannot draw to `{args.output}`: the file name must end in .png, "
+                            ".svg or .pdf")
+    world = sim.load_world(args.world)
+    fig = world_figure(world, scan=not args.no_scan)
+    if args.output is None:
+        print(show_or_write(fig, world.name))
+        return 0
+    save_figure(fig, args.output, dpi=120)
     print(f"world drawn to {args.output}")
     return 0

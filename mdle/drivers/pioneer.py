@@ -15,9 +15,10 @@ velocities, a wait (bounded by ``goodbye_timeout``) until a SIP shows the wheels
 or the link is gone, then CLOSE, and the stream is ended gracefully (every byte handed
 over, the peer's last packets drained) before it is released. The SIGTERM handler and
 the exit hook are in place before the first motor command, so a signal while connecting
-also stops the robot. Stale data or a lost connection raise
-:class:`~mdle.errors.BackendError` after a best-effort stop; the runtime stops the robot
-at the end of every run.
+also stops the robot; the handler is the driver's only when SIGTERM had none (under
+mdle's command line its signal guard owns SIGTERM and ends runs cleanly). Stale data or
+a lost connection raise :class:`~mdle.errors.BackendError` after a best-effort stop; the
+runtime stops the robot at the end of every run.
 """
 
 from __future__ import annotations
@@ -86,7 +87,9 @@ class PioneerOptions:
     bauds: tuple[int, ...] = ()
     """Serial rates to try in turn (empty: the transport's current rate)."""
     handle_sigterm: bool = False
-    """Turn SIGTERM into SystemExit while connected, so ``finally`` blocks stop the robot."""
+    """Turn SIGTERM into SystemExit while connected, so ``finally`` blocks stop the robot,
+    unless a handler is already installed (it stays the one owner: mdle's command line
+    installs one that ends runs cleanly)."""
     goodbye_timeout: float = 0.5
     """On close, wait this long at most for a SIP showing the wheels stopped, and again
     for the stream to end gracefully."""
@@ -646,8 +649,12 @@ class PioneerBackend:
 
         self._atexit = _close_at_exit
         atexit.register(_close_at_exit)
+        # One owner of SIGTERM: a handler already there (mdle's command-line guard, an
+        # application's) keeps it; it must end the program through ``finally`` blocks,
+        # which stop and close the robot. Only an unhandled SIGTERM (SIG_DFL) is taken.
         if (self._opt.handle_sigterm
-                and threading.current_thread() is threading.main_thread()):
+                and threading.current_thread() is threading.main_thread()
+                and signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None)):
 
             def _sigterm_to_exit(signum: int, frame: object) -> None:
                 # SIGTERM as SystemExit(143): ``finally`` blocks run and stop the robot;

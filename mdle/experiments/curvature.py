@@ -15,7 +15,7 @@ Filtering is a Gaussian filter on the positions along each connected surface, si
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -90,8 +90,13 @@ def object_scans(world: str, draws: int, seed: int) -> tuple[list[Any], Any]:
     return scans, exact
 
 
-def run_table(draws: int = 200, seed: int = 0, rows: Sequence[Row] = ROWS) -> Result:
-    """Compute Table 1 from ``draws`` noisy scans of each object."""
+def run_table(draws: int = 200, seed: int = 0, rows: Sequence[Row] = ROWS,
+              step: Callable[[], None] | None = None) -> Result:
+    """Compute Table 1 from ``draws`` noisy scans of each object.
+
+    ``step`` is called once per (object, estimator) pair done (``2 * len(rows)`` calls):
+    a progress bar's counter.
+    """
     import numpy as np
 
     out: dict[Row, dict[str, float]] = {r: {} for r in rows}
@@ -106,6 +111,8 @@ def run_table(draws: int = 200, seed: int = 0, rows: Sequence[Row] = ROWS) -> Re
                 if ok.any():
                     per_scan.append(math.sqrt(float(np.mean((est.curvature[ok] - truth[ok]) ** 2))))
             out[row][label] = float(np.mean(per_scan)) if per_scan else math.nan
+            if step is not None:
+                step()
     return Result(out, draws, seed)
 
 
@@ -122,17 +129,15 @@ def format_table(result: Result) -> str:
     return "\n".join(lines)
 
 
-def plot_figures(out: Path, seed: int = 0, draws: int = 5) -> list[Path]:
+def plot_figures(out: Path, seed: int = 0, draws: int = 5, dpi: int = 120) -> list[Path]:
     """Plot Figures 4 (cabinet) and 5 (trash can); return the files written.
 
-    The averaged geometric estimate (w 7-9) of a few scans against the scan angle, with the
-    exact curvature.
+    The averaged geometric estimate (w 7-9) of a few scans against the scan angle, one
+    colour and one legend entry per scan, with the exact curvature over the beams that saw
+    the object (where the estimates are).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
+    from matplotlib.figure import Figure
 
     from atoms import estimators as E
 
@@ -140,27 +145,38 @@ def plot_figures(out: Path, seed: int = 0, draws: int = 5) -> list[Path]:
     files = []
     for fig_no, (label, world) in ((4, OBJECTS[1]), (5, OBJECTS[0])):
         scans, exact = object_scans(world, draws, seed)
-        fig, ax = plt.subplots(figsize=(7, 4))
+        fig = Figure(figsize=(8, 4), layout="constrained")
+        ax = fig.subplots()
         seen = np.zeros(exact.ranges.shape, bool)
         for i, scan in enumerate(scans):
             est = E.averaged_curvature(E.surfaces(scan.ranges, scan.bearings, scan.valid))
             seen |= est.valid
             ax.plot(np.degrees(scan.bearings), est.curvature, ".-", lw=0.8, ms=3,
-                    label="estimate, w 7-9" if i == 0 else None, alpha=0.8)
-        truth = np.where(np.isfinite(exact.curvatures), exact.curvatures, np.nan)
-        ax.plot(np.degrees(exact.bearings), truth, "k--", lw=1.2, label="exact curvature")
+                    color=f"C{i % 10}", alpha=0.85, label=f"scan {i + 1}: estimate, w 7-9")
+        truth = np.where(np.isfinite(exact.curvatures) & seen, exact.curvatures, np.nan)
+        ax.plot(np.degrees(exact.bearings), truth, "k--", lw=1.4, label="exact curvature")
         ax.axhline(0.0, color="0.6", lw=0.6, ls=":")
-        idx = np.flatnonzero(seen | np.isfinite(truth))
+        # a corner is a jump of the exact tangent between neighbouring beams (its curvature
+        # is infinite: no value to draw), marked where it lies
+        tan = np.asarray(exact.tangents, dtype=float) if exact.tangents is not None else None
+        if tan is not None:
+            jump = np.abs(np.angle(np.exp(1j * np.diff(tan))))
+            corner = np.flatnonzero(np.nan_to_num(jump) > math.radians(20.0))
+            b = np.degrees(exact.bearings)
+            for n, k in enumerate(corner):
+                ax.axvline(0.5 * (b[k] + b[k + 1]), color="0.3", lw=1.0, ls=":",
+                           label="corner (curvature infinite)" if n == 0 else None)
+        idx = np.flatnonzero(seen)
         if idx.size:
             b = np.degrees(exact.bearings)
-            ax.set_xlim(b[max(idx[0] - 3, 0)], b[min(idx[-1] + 3, b.size - 1)])
+            ax.set_xlim(b[max(idx[0] - 2, 0)], b[min(idx[-1] + 2, b.size - 1)])
         ax.set_xlabel("scan angle (deg, counter-clockwise from the heading)")
         ax.set_ylabel("curvature (1/m, convex negative)")
         ax.set_title(f"Figure {fig_no}: geometric estimate over windows 7-9, {label}")
-        ax.legend(loc="best", fontsize=8)
-        fig.tight_layout()
+        ax.grid(True, lw=0.3, alpha=0.5)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                  fontsize="small")
         path = out / f"figure{fig_no}-{world}.png"
-        fig.savefig(path, dpi=120)
-        plt.close(fig)
+        fig.savefig(path, dpi=dpi)
         files.append(path)
     return files

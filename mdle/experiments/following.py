@@ -22,7 +22,7 @@ if TYPE_CHECKING:  # the runtime is imported inside run_follow, when a run needs
     from mdle.sweep.tasks import RunTask
 
 __all__ = ["FollowRun", "follow_plan", "follow_task", "run_follow", "run_many", "random_starts",
-           "random_start_tasks", "SHAPES"]
+           "random_start_tasks", "SHAPES", "table", "table_rows", "TABLE_NOTES", "ENGAGED_ERR"]
 
 #: The paper's shapes with their following distance (reference world name -> rc, m).
 SHAPES: dict[str, float] = {"ellipse": 1.0, "hexagon": 0.5, "u-shape": 0.5, "square": 0.5,
@@ -226,19 +226,45 @@ def random_starts(world: str, n: int = 50, *, seed: int = 0, side: str = "right"
                                        duration=duration, rate=rate, v=v), jobs=jobs, out=out)
 
 
-def table(runs: Sequence[FollowRun]) -> str:
-    """Return a plain-text summary: collisions, worst clearance, mean error, per world."""
+#: A run counts as engaged when its mean |d - rc| over the second half is below this (m).
+ENGAGED_ERR = 0.25
+
+
+def table_rows(runs: Sequence[FollowRun]) -> list[tuple[str, str, int, int, float, float, int]]:
+    """Summarise the runs per world and sensing.
+
+    Each row: world, sensing, runs, collisions, worst clearance (m), median of the mean
+    |d - rc| (m), engaged runs (mean |d - rc| over the second half below
+    :data:`ENGAGED_ERR`).
+    """
     from collections import defaultdict
 
     by: dict[tuple[str, str], list[FollowRun]] = defaultdict(list)
     for r in runs:
         by[(r.world, r.sensing)].append(r)
-    lines = [f"{'world':10} {'sensing':7} {'runs':>4} {'collisions':>10} {'worst clearance':>15} "
-             f"{'median |d-rc|':>13} {'engaged':>7}"]
+    out = []
     for (world, sensing), rs in sorted(by.items()):
         errs = sorted(r.mean_err for r in rs)
-        engaged = sum(r.mean_err < 0.25 for r in rs)
-        lines.append(f"{world:10} {sensing:7} {len(rs):4d} {sum(r.collided for r in rs):10d} "
-                     f"{min(r.min_clearance for r in rs):15.3f} {errs[len(errs) // 2]:13.3f} "
-                     f"{engaged:4d}/{len(rs)}")
-    return "\n".join(lines)
+        out.append((world, sensing, len(rs), sum(r.collided for r in rs),
+                    min(r.min_clearance for r in rs), errs[len(errs) // 2],
+                    sum(r.mean_err < ENGAGED_ERR for r in rs)))
+    return out
+
+
+#: What the random-starts table's columns measure (printed under it).
+TABLE_NOTES = (
+    "d: true distance from the robot's centre to the nearest boundary; mean |d - rc| over "
+    "the second half of each run",
+    "worst clearance: the smallest gap between the robot's body and an obstacle in any run",
+    f"engaged: runs that ended up following (mean |d - rc| below {ENGAGED_ERR:g} m)",
+)
+
+
+def table(runs: Sequence[FollowRun]) -> str:
+    """Return a plain-text summary per world: collisions, worst clearance, error, engaged."""
+    lines = [f"{'world':10} {'sensing':7} {'runs':>4} {'collisions':>10} "
+             f"{'worst clearance (m)':>19} {'median mean |d-rc| (m)':>22} {'engaged':>7}"]
+    for world, sensing, n, hits, worst, err, engaged in table_rows(runs):
+        lines.append(f"{world:10} {sensing:7} {n:4d} {hits:10d} {worst:19.3f} {err:22.3f} "
+                     f"{engaged:4d}/{n}")
+    return "\n".join(lines + list(TABLE_NOTES))

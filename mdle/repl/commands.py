@@ -35,6 +35,7 @@ from mdle.errors import Diagnostic, MdleError
 from mdle.repl import views
 from mdle.repl.session import ReplError, RunReport, Session
 from mdle.runtime import Observer
+from mdle.runtime.events import ended_how
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 
@@ -384,7 +385,7 @@ class Repl:
             self.say(f"loaded {path}: a run of `{run.label}` in world `{run.world}`, "
                      f"{run.ticks} ticks, {r.duration:.1f} s, "
                      + ("cut short (no end record)" if run.cut
-                        else f"ended by {r.cause.value}")
+                        else ended_how(r.cause))
                      + (", COLLIDED" if r.collided else ""),
                      f"robot at {views.format_pose(pose)}; :where and :plot show the run's "
                      "path, :trace writes it")

@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from mdle.backend import Observation, Pose
+from mdle.runtime.events import ended_how
 
 if TYPE_CHECKING:
     import numpy as np
@@ -44,9 +45,9 @@ def format_report(report: RunReport) -> list[str]:
     d = report.decisive
     root = r.termination
     lines = []
-    how = f"{d.path} (level {d.level}) ended by {d.cause.value} at {d.time - report.t0:.2f} s"
+    how = f"{d.path} (level {d.level}) {ended_how(d.cause)} at {d.time - report.t0:.2f} s"
     if d is not root:
-        how += f"; {root.path} {root.cause.value}"
+        how += f"; {root.path} {ended_how(root.cause)}"
     if report.interrupted:
         how += " (Ctrl-C: robot stopped)"
     elif report.limit is not None:

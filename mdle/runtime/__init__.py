@@ -17,6 +17,7 @@ from mdle.runtime.events import (
     RunResult,
     Sample,
     Termination,
+    ended_how,
 )
 from mdle.runtime.observer import BaseObserver, Observer, Recorder
 from mdle.runtime.scheduler import ActiveElement, Scheduler
@@ -34,6 +35,7 @@ __all__ = [
     "Termination",
     "Sample",
     "RunResult",
+    "ended_how",
     "Observer",
     "BaseObserver",
     "Recorder",

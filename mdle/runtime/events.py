@@ -15,7 +15,8 @@ from typing import NamedTuple
 
 from mdle.backend import Pose, Scan
 
-__all__ = ["Cause", "EventKind", "Event", "Termination", "Collision", "Sample", "RunResult"]
+__all__ = ["Cause", "EventKind", "Event", "Termination", "Collision", "Sample", "RunResult",
+           "ended_how"]
 
 _NO_DIAG: Mapping[str, float] = MappingProxyType({})
 
@@ -37,6 +38,26 @@ class Cause(enum.Enum):
     ERROR = "error"
     """The run was aborted by an error: a failing control law or interrupt, a backend
     fault (dropped connection), or the robot stalled or refusing to move for too long."""
+
+
+#: How an element ended, as words after its name ("main ran to its end at 60.0 s").
+_HOW = {
+    Cause.INTERRUPT: "ended by interrupt",
+    Cause.TIMER: "ended by timer",
+    Cause.COMPLETED: "ran to its end",
+    Cause.ENDED_BY_PARENT: "ended with its parent",
+    Cause.STOPPED: "was stopped from outside",
+    Cause.ERROR: "was aborted by an error",
+}
+
+
+def ended_how(cause: Cause) -> str:
+    """Say how an element ended, to follow its name.
+
+    >>> ended_how(Cause.COMPLETED), ended_how(Cause.STOPPED)
+    ('ran to its end', 'was stopped from outside')
+    """
+    return _HOW[cause]
 
 
 class EventKind(enum.Enum):

@@ -182,7 +182,8 @@ def _spawn_run(fake: FakeArcos, tmp_path: Path) -> subprocess.Popen[str]:
     plan.write_text("atom fwd = (go(0.2 m/s), never, 30 s)\nrun fwd\n")
     return subprocess.Popen(
         [sys.executable, "-m", "mdle", "run", str(plan), "--backend", "pioneer",
-         "--connect", fake.url, "--laser", "sim", "--quiet"],
+         "--connect", fake.url, "--laser", "sim", "--quiet", "--trace",
+         str(tmp_path / "run.jsonl")],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -203,6 +204,13 @@ def test_mdle_run_process_stopped_by_a_signal_stops_the_robot(fake_robot: FakeRo
     assert proc.returncode == 128 + getattr(signal, signame), err
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
     assert fake.v_mm == 0 and fake.w_deg == 0 and fake.args(Cmd.VEL)[-1] == 0
+    # one owner of the signal (mdle's guard, not the driver's own SIGTERM handler): the
+    # run stopped at a tick and its trace ends with a record naming the signal
+    records = [json.loads(line) for line in (tmp_path / "run.jsonl").read_text().splitlines()]
+    end = records[-1]
+    assert end["type"] == "end" and signame in end["reason"], end
+    stops = fake.commands(Cmd.STOP)
+    assert stops and stops[-1].t < fake.commands(Cmd.CLOSE)[-1].t
 
 
 @pytest.mark.parametrize("serial", [False, True], ids=["tcp", "serial"])

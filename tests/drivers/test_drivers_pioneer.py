@@ -7,7 +7,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
@@ -384,8 +384,19 @@ def test_bad_laser_and_kind() -> None:
         open_backend("pioneer", "tcp://localhost:8101", "tcp://localhost:1")
 
 
+@pytest.fixture
+def default_sigterm() -> Iterator[None]:
+    """SIGTERM unhandled (SIG_DFL) for the test, as in a program that never set it."""
+    old = signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def test_sigterm_becomes_system_exit_while_connected(fake_robot: FakeRobot,
-                                                     fast: PioneerOptions) -> None:
+                                                     fast: PioneerOptions,
+                                                     default_sigterm: None) -> None:
     assert threading.current_thread() is threading.main_thread()
     before = signal.getsignal(signal.SIGTERM)
     fake = fake_robot()
@@ -401,6 +412,35 @@ def test_sigterm_becomes_system_exit_while_connected(fake_robot: FakeRobot,
         backend.close()  # what the runtime's finally block does
     assert signal.getsignal(signal.SIGTERM) is before
     assert fake.wait_for(lambda: fake.v_mm == 0 and fake.commands(Cmd.CLOSE) != [])
+
+
+def test_a_sigterm_handler_already_there_stays_the_one_owner(fake_robot: FakeRobot,
+                                                             fast: PioneerOptions) -> None:
+    """Under mdle's command line its SignalGuard owns SIGTERM: the driver leaves it so,
+    and the guard's Interrupted still ends in the driver's goodbye (stop, then CLOSE)."""
+    from mdle.cli.signals import Interrupted, SignalGuard
+
+    guard = SignalGuard().install(deferred=False)
+    try:
+        owner = signal.getsignal(signal.SIGTERM)
+        fake = fake_robot()
+        backend = _open(fake.url, options=replace(fast, handle_sigterm=True))
+        try:
+            assert signal.getsignal(signal.SIGTERM) is owner   # not replaced
+            backend.command(Command(0.3, 0.0))
+            assert fake.wait_for(lambda: fake.v_mm == 300)
+            with pytest.raises(Interrupted) as info:
+                signal.raise_signal(signal.SIGTERM)
+                time.sleep(1.0)   # the handler runs between bytecodes: never gets here
+            assert info.value.signum == signal.SIGTERM
+        finally:
+            backend.close()   # what the runtime's finally block does
+        assert signal.getsignal(signal.SIGTERM) is owner       # still the guard's
+    finally:
+        guard.restore()
+    assert fake.wait_for(lambda: fake.v_mm == 0 and fake.commands(Cmd.CLOSE) != [])
+    stop = fake.commands(Cmd.STOP)
+    assert stop and stop[-1].t < fake.commands(Cmd.CLOSE)[-1].t
 
 
 def test_random_commands_arrive_clamped_and_rounded(fake_robot: FakeRobot,

@@ -111,7 +111,7 @@ def test_a_user_at_the_robot(fake_robot: FakeRobot, tmp_path: Path) -> None:
         term._read(0.2)
         shown = term.raw.count(b"\x1b[?2004h")  # prompts so far (the run shows none)
         term.send("\x03")  # Ctrl-C mid-run
-        term.expect(r"creep \(level 0\) ended by stopped at [0-9.]+ s \(Ctrl-C: robot "
+        term.expect(r"creep \(level 0\) was stopped from outside at [0-9.]+ s \(Ctrl-C: robot "
                     r"stopped\)")
         assert fake.wait_for(lambda: any(r.arg == 0 and r.t > moved
                                          for r in fake.commands(Cmd.VEL)), timeout=2.0)

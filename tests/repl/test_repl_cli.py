@@ -145,7 +145,7 @@ def test_until_seed_robot_and_sensing_options(tmp_path: Path, repl: Repl) -> Non
     res = repl("(turn(1 rad/s), never, inf)\n", "--world", "ellipse", "--until", "1.5",
                cwd=tmp_path)
     assert res.returncode == 0, res.stderr
-    assert "turn (level 0) ended by stopped at 1.50 s (the run limit of 1.5 s" in res.stdout
+    assert "turn (level 0) was stopped from outside at 1.50 s (the run limit of 1.5 s" in res.stdout
     # the default world with the ideal unicycle (no acceleration limits) and an exact ladar
     res = repl("(go(1 m/s), never, 1 s)\n:pose\n:scan\n", "--seed", "4", "--robot", "ideal",
                "--sensing", "exact", cwd=tmp_path)
@@ -175,7 +175,7 @@ def test_sigint_during_a_piped_run_stops_it_and_the_session_goes_on(
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(":pose\n", timeout=60)
     assert proc.returncode == 1, err  # the stopped run counts as failed
-    assert "turn (level 0) ended by stopped at" in out and "(Ctrl-C: robot stopped)" in out
+    assert "turn (level 0) was stopped from outside at" in out and "(Ctrl-C: robot stopped)" in out
     # turned in place, then the :pose after it ran (the first one was read above)
     assert out.count("odometry x 0.00 m  y 0.00 m") == 1
 

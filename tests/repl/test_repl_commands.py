@@ -93,7 +93,7 @@ def test_a_collision_fails_the_input_and_the_next_one_works(r: Run) -> None:
     assert "COLLIDED with `ellipse`" in out
     # stalled against it: the runtime aborts after 5 s
     assert "aborted: the robot stalled for 5.0 s" in out
-    assert "ended by error at 10.10 s" in out  # stalled from the tick at 5.1 s
+    assert "was aborted by an error at 10.10 s" in out  # stalled from the tick at 5.1 s
     ok, out, _ = r(":reset")
     assert ok and "x -9.00 m  y 0.30 m" in out
     ok, _, _ = r("(go(1 m/s), never, 1 s)")
@@ -188,7 +188,8 @@ def test_defs_save_load(r: Run, tmp_path: Path) -> None:
     ok, out, _ = other(f":load {target}")
     assert ok and out == f"loaded {target}: both, creep, near\n"
     ok, out, _ = other("both")
-    assert ok and out.startswith("both/turn (level 1) ended by timer at 3.00 s; both completed")
+    assert ok and out.startswith("both/turn (level 1) ended by timer at 3.00 s; "
+                                 "both ran to its end")
 
 
 def test_step_prints_each_tick(r: Run) -> None:
@@ -314,7 +315,7 @@ def test_a_failing_control_law_is_reported_and_the_session_goes_on() -> None:
     repl = Repl(Session("ellipse", registry=reg), out, err)
     assert not repl.handle("(explode, never, 5 s)")
     assert "control law `explode` of `explode` failed at t = 0.300 s" in err.getvalue()
-    assert "ended by error at 0.30 s" in out.getvalue()
+    assert "was aborted by an error at 0.30 s" in out.getvalue()
     assert repl.session.backend._cmd.v == 0.0  # stopped
     assert repl.handle("(go(1 m/s), never, 1 s)")
     assert repl.session.backend.true_pose.x == pytest.approx(-9.0 + 0.3 + 1.0)

@@ -183,7 +183,7 @@ def test_ctrl_c_during_a_run_stops_the_robot_and_gives_the_prompt_back(
     sigint_after(lambda: session.backend.time > 2.0)  # type: ignore[operator]
     drive(repl, "(turn(30 deg/s), never, inf)\r", ":pose\r")
     out = _text(repl.out)
-    assert "turn (level 0) ended by stopped at" in out
+    assert "turn (level 0) was stopped from outside at" in out
     assert "(Ctrl-C: robot stopped)" in out
     # the prompt came back: the next input ran
     assert "odometry x 0.00 m  y 0.00 m" in out

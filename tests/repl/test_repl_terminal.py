@@ -168,7 +168,7 @@ def test_interactive_session_on_a_terminal(
     term.send("spin\r")
     term.expect(r"running spin: t [0-9.]+ s")
     term.send("\x03")
-    term.expect(r"spin \(level 0\) ended by stopped at [0-9.]+ s \(Ctrl-C: robot stopped\)")
+    term.expect(r"spin \(level 0\) was stopped from outside at [0-9.]+ s \(Ctrl-C: robot stopped\)")
     term.prompt(3)
     term.send(":po\t\r")
     term.expect(r"odometry x 0\.00 m  y 0\.00 m")
@@ -190,7 +190,7 @@ def test_ctrl_c_stops_a_run_on_a_terminal_left_in_raw_mode(
     term.send("(turn(1 rad/s), never, inf)\r")
     term.expect(r"running \S+: t [0-9.]+ s")
     term.send("\x03")
-    term.expect(r"ended by stopped at [0-9.]+ s \(Ctrl-C: robot stopped\)")
+    term.expect(r"was stopped from outside at [0-9.]+ s \(Ctrl-C: robot stopped\)")
     term.prompt(2)
     term.send("\x04")
     assert term.wait() == 0

@@ -83,8 +83,8 @@ def test_figure_without_curvature_has_one_panel_and_marks_events(ir: SimpleNames
     fig = trace_figure(read_trace(trace))
     assert len(fig.axes) == 1
     labels = fig.axes[0].get_legend_handles_labels()[1]
-    assert {"atom go", "atom spin", "end: interrupt", "end: timer", "end: completed",
-            "start"} <= set(labels)
+    assert {"atom go", "atom spin", "end: interrupt fired", "end: timer ran out",
+            "end: string finished", "start"} <= set(labels)
 
 
 def test_world_obstacles_are_drawn_and_truth_is_used(ir: SimpleNamespace, tmp_path: Path) -> None:
@@ -102,7 +102,8 @@ def test_world_obstacles_are_drawn_and_truth_is_used(ir: SimpleNamespace, tmp_pa
     path_line = path_collection.get_segments()
     assert path_line[0][0][1] == pytest.approx(0.01)  # true y, not odometry's 0
     x0, x1 = ax.get_xlim()
-    assert x0 <= -0.5 and x1 >= 3.5
+    # the obstacles and the path fill the panel (the world's free-space bounds may not)
+    assert -0.5 < x0 < 0.0 and 3.0 < x1 < 3.5
 
 
 def test_plot_errors_are_clear(ir: SimpleNamespace, tmp_path: Path) -> None:

@@ -12,39 +12,48 @@ from mdle.runtime import run
 from mdle.runtime.events import Sample
 from mdle.runtime.observer import Recorder
 from sim import SimBackend, load_world
+from sim.fit import run_clock
+from sim.profiles import robot_profile
+from sim.recording import read_recording
+from sim.robot import RunClock
 
 ROOT = Path(__file__).resolve().parents[2]
 RECORDING = ROOT / "tests" / "data" / "recordings" / "amrisim-p3dx-corridor.csv"
 PLANS = ROOT / "plans" / "paper"
 
 
-def _corridor(robot: str, latency: str) -> list[Sample]:
+def _corridor(robot: str, latency: str, clock: RunClock | None = None) -> list[Sample]:
     """Run the paper's corridor plan, its law's latency prediction set to ``latency``."""
     path = PLANS / "fig6-corridor.mdle"
     text = path.read_text().replace("kf = 2)", f"kf = 2, latency = {latency})")
     assert "latency" in text
     program = load_text(text, file=str(path))
-    backend = SimBackend(load_world(PLANS / "fig6-corridor.world.yaml"), robot=robot)
+    backend = SimBackend(load_world(PLANS / "fig6-corridor.world.yaml"), robot=robot,
+                         clock=clock)
     rec = Recorder()
     result = run(program.elements["main"], backend, rate=10.0, observers=[rec])
     assert not result.collided
     return rec.samples
 
 
-def _peak_swing(robot: str) -> float:
+def _peak_swing(robot: str, clock: RunClock | None = None) -> float:
     # the law as the recording ran it: no latency prediction
-    return float(np.max(np.abs([s.theta for s in _corridor(robot, "0 s")])))
+    return float(np.max(np.abs([s.theta for s in _corridor(robot, "0 s", clock)])))
 
 
 def test_corridor_door_jamb_overshoot_matches_the_recording() -> None:
     """Peak heading swing at the door jambs: simulated with pioneer-p3dx vs recorded, within x1.5.
 
-    The plan's law is the uncompensated one the recording ran (no latency compensation).
-    Without the lag (pioneer2dx) the swing is far smaller.
+    The plan's law is the uncompensated one the recording ran (no latency compensation),
+    and the server's clock is the recorded run's (its report instants and motion-cycle
+    phase, :func:`sim.fit.run_clock`): the recording's 37 deg swing came at its first
+    door, while a late report had put its commands a whole cycle later than usual (its
+    other doors swung 14-16 deg). Without the lag (pioneer2dx) the swing is far smaller.
     """
     with RECORDING.open(newline="") as f:
         recorded = max(abs(float(r["theta_rad"])) for r in csv.DictReader(f))
-    lagged = _peak_swing("pioneer-p3dx")
+    profile = robot_profile("pioneer-p3dx")
+    lagged = _peak_swing("pioneer-p3dx", run_clock(read_recording(RECORDING), profile))
     assert recorded / 1.5 <= lagged <= recorded * 1.5, (np.degrees(lagged), np.degrees(recorded))
     ideal = _peak_swing("pioneer2dx")
     assert ideal < lagged / 1.5, (np.degrees(ideal), np.degrees(lagged))
