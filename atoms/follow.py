@@ -60,7 +60,8 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
     # critical damping of e'' + (mu/2) e' + 2 kf v^2 e = 0 at this speed (docs/steering.md):
     # the approach then takes the same path length whatever v
     mu = 4.0 * float(args["zeta"]) * abs(float(args["v"])) * math.sqrt(2.0 * max(kf, 0.0))
-    gains = Gains(mu=mu, kf=kf, umax=umax, tau=float(args["tau"]))
+    gains = Gains(mu=mu, kf=kf, umax=umax, tau=float(args["tau"]),
+                  scaled_damping=str(args.get("damping", "scaled")) == "scaled")
     latency = float(args["latency"])
     if math.isinf(latency):
         latency = ctx.limits.command_latency
@@ -97,6 +98,8 @@ def scan_points_cached(ctx: Context) -> Any:
           low_open=True),
     Param("umax", TURN_RATE, math.inf, doc="turn-rate limit (default: the robot's)", low=0.0,
           low_open=True, finite=False),
+    Param("damping", default="scaled", choices=("scaled", "paper"),
+          doc="scaled: quicker return to rc on curves and from far away; paper: as derived"),
     Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)",
           low=0.0),
     Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)",

@@ -134,6 +134,10 @@ class Gains:
         In corner mode, a scan point on the followed side nearer than both ``rc`` and the
         vertex circled, by more than this, becomes the point circled (a notch narrower than
         ``2 rc`` is bridged, as the rc level set does).
+    scaled_damping : bool
+        Scale the side law's damping by ``min(1, rc/rs) / max(1, 1 - ks rs / cos bs)`` (a
+        quicker return to rc on convex curves, a line rather than a spiral from far away);
+        False: the paper's damping.
     """
 
     mu: float = 8.0
@@ -161,6 +165,7 @@ class Gains:
     kappa_reset: float = 0.3
     search_ahead: float = math.radians(75.0)
     bridge: float = 0.05
+    scaled_damping: bool = True
 
 
 @dataclass
@@ -231,7 +236,7 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
         d = max(cb - ks * rs + 2.0 * f * rs * ch, g.d_min)
         u_ff = v * (ks - 2.0 * f * ch) / d
     damp = -a_th / max(1.0, a0) if a * a_th > 0 else -a / max(1.0, abs(a))
-    if not front.hit and side.hit:
+    if g.scaled_damping and not front.hit and side.hit:
         # Any positive damping keeps dV/dt <= 0; two state-dependent scalings make the
         # distance converge faster. On a convex curve the angle term carries the factor
         # as = 1 - ks rs / cos bs > 1, which damps the return to rc as much as 2-3x

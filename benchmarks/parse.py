@@ -1,7 +1,11 @@
 """Measure the parser and checker speed.
 
-Lines per second on a generated 10,000-line plan, and the wall time of `mdle check` on a
-small plan (targets: >= 10,000 lines/s; < 0.5 s).
+Lines per second on a generated 10,000-line plan (the fast parser against lark's, in
+one process); `mdle check` on plans of 10,000 lines, 1 MB and 5 MB of two shapes
+(blocks of atoms and behaviors laid out as `mdle fmt` does; one definition per line),
+as lines per CPU second with the peak memory per source byte; and the wall time of
+`mdle check` on a small plan (targets: >= 10,000 lines/s at any size, <= 200 bytes per
+source byte; < 0.5 s).
 
 Run: python benchmarks/parse.py [--lines N] [--repeat R]
 """
@@ -13,6 +17,7 @@ import os
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -29,14 +34,14 @@ def generated_plan(lines: int) -> str:
     """
     out = ["# Generated benchmark plan.", "",
            "interrupt blocked(d = 0.5 m) = range(0 deg) < d",
-           "interrupt lost = min_range(-100 deg, -80 deg) > 2 m or stalled", ""]
+           "interrupt astray = min_range(-100 deg, -80 deg) > 2 m or stalled", ""]
     i = 0
     while len(out) < lines - 12:
         out += [
             f"# Block {i}: cruise, spin and veer, then a nested patrol.",
             f"atom cruise{i}(v = 0.3 m/s) = (go(v), blocked(0.{i % 9 + 1} m) or x > {i} m, inf)",
             f"atom spin{i} = (turn({(i % 90) + 1} deg/s), never, {i % 7 + 1} s)",
-            f"atom veer{i} = (arc(0.2 m/s, -15 deg/s), lost and not (y < -1 m), 2 min)",
+            f"atom veer{i} = (arc(0.2 m/s, -15 deg/s), astray and not (y < -1 m), 2 min)",
             "",
             f"behavior patrol{i} = (",
             f"    (cruise{i}, (0.5, 2, spin{i}), veer{i})...,",
@@ -61,14 +66,60 @@ def generated_plan(lines: int) -> str:
     return "\n".join(out) + "\n"
 
 
+def definitions_plan(size: int) -> str:
+    """Return a plan of about ``size`` bytes with one definition per line.
+
+    Atoms, named interrupts and behaviors using the lines before them, each with its
+    own numbers (no two interrupts alike): the checker's work per definition, not the
+    parser's per line, dominates such a file. The result checks cleanly.
+    """
+    out = ["# Generated benchmark plan: one definition per line."]
+    n, i = len(out[0]) + 1, 0
+    while n < size - 200:
+        k = 4 * i
+        lines = [
+            f"atom a{k}(v = 0.{i % 9 + 1} m/s) = (go(v), range({i % 180} deg) < 0.{i % 7 + 2} m, "
+            f"{i % 50 + 1} s)",
+            f"interrupt near{k} = range({i % 90} deg) < {i % 5 + 1}.5 m and not stalled",
+            f"atom t{k} = (turn({i % 60 + 1} deg/s), near{k} or y > {i} m, {i % 9 + 1} s)",
+            f"behavior b{k} = ((a{k}, t{k}, a{k}(0.1 m/s)), near{k} or x > {i} m, 2 min)",
+        ]
+        out += lines
+        n += sum(len(line) + 1 for line in lines)
+        i += 1
+    out += [f"plan main = ((b{4 * (i - 1)}), stalled, inf)", "run main"]
+    return "\n".join(out) + "\n"
+
+
 def best_of(fn: Callable[[], object], repeat: int) -> float:
-    """Return the best wall time of ``repeat`` calls of ``fn`` (seconds)."""
+    """Return the least CPU time of ``repeat`` calls of ``fn`` (seconds; steadier under load)."""
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(time.process_time() - t0)
     return min(times)
+
+
+def _cpu_of_check(mdle: Path, path: Path) -> tuple[float, float, int]:
+    """Run `mdle check` on a file; return (CPU seconds, wall seconds, peak RSS in bytes).
+
+    CPU time (user + system, of the child) is what the machine gave the check: on a
+    loaded machine it is far steadier than the wall time. The peak RSS is read by the
+    child itself (``ru_maxrss`` of a process that only runs `mdle check`).
+    """
+    probe = ("import resource, sys; from mdle.cli import main; sys.argv = ['mdle', 'check', "
+             f"'-q', {str(path)!r}]\n"
+             "try:\n    code = main()\nexcept SystemExit as e:\n    code = e.code\n"
+             "r = resource.getrusage(resource.RUSAGE_SELF)\n"
+             "print(r.ru_utime + r.ru_stime, r.ru_maxrss * 1024, code, file=sys.stderr)")
+    t0 = time.perf_counter()
+    r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    cpu, rss, code = r.stderr.split()[-3:]
+    if code not in ("0", "None"):
+        raise SystemExit(f"mdle check {path} failed:\n{r.stdout}{r.stderr}")
+    return float(cpu), wall, int(rss)
 
 
 def main() -> int:
@@ -76,8 +127,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--lines", type=int, default=10_000)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--sizes", default="10k,1MB,5MB",
+                    help="plans `mdle check` reads: 10k (lines), 1MB, 5MB (bytes)")
     args = ap.parse_args()
 
+    from mdle import parser
     from mdle.loader import load_text
     from mdle.parser import iter_tokens, lark_parser, parse_module
 
@@ -86,14 +140,43 @@ def main() -> int:
     tokens = sum(1 for _ in iter_tokens(text))
     lark_parser()  # build (or load the cached tables) outside the timing
     parse = best_of(lambda: parse_module(text, "bench.mdle"), args.repeat)
+    lark = best_of(lambda: parser._parse_with_recovery(text, "bench.mdle"), args.repeat)
     whole = best_of(lambda: load_text(text, "bench.mdle"), args.repeat)
     print(f"generated plan: {n} lines, {len(text)} bytes, {tokens} tokens "
           f"({tokens / n:.1f} per line; the plans in plans/ have 3-9)")
-    print(f"parse:          {parse * 1000:8.1f} ms  {n / parse:10,.0f} lines/s  (target >= 10,000)")
+    print(f"parse:          {parse * 1000:8.1f} ms  {n / parse:10,.0f} lines/s  "
+          f"(lark's parser, the reference for files with errors: {n / lark:,.0f} lines/s, "
+          f"{lark / parse:.1f}x slower)")
     print(f"parse + check:  {whole * 1000:8.1f} ms  {n / whole:10,.0f} lines/s")
     print(f"                            {tokens / parse:10,.0f} tokens/s parsed")
 
     mdle = Path(sys.executable).parent / "mdle"
+    print("mdle check, whole process (CPU = user + system time of the check; target "
+          ">= 10,000 lines/s, <= 200 bytes of memory per source byte):")
+    with tempfile.TemporaryDirectory() as folder:
+        empty = Path(folder) / "empty.mdle"
+        empty.write_text("atom a = (stop, never, 1 s)\nrun a\n", encoding="utf-8")
+        _, _, base_rss = _cpu_of_check(mdle, empty)
+        print(f"  (a one-line plan: peak RSS {base_rss / 1e6:.0f} MB; the figures below "
+              "count the memory above that)")
+        for size in args.sizes.split(","):
+            for shape, make in (("blocks", generated_plan), ("one definition per line",
+                                                             definitions_plan)):
+                if size.endswith("MB"):
+                    nbytes = int(float(size[:-2]) * 1_000_000)
+                    body = make(nbytes // 27) if make is generated_plan else make(nbytes)
+                else:
+                    lines = int(size.rstrip("k")) * 1000 if size.endswith("k") else int(size)
+                    body = make(lines) if make is generated_plan else make(lines * 65)
+                path = Path(folder) / "plan.mdle"
+                path.write_text(body, encoding="utf-8")
+                lines_n = body.count("\n")
+                cpu, wall, rss = _cpu_of_check(mdle, path)
+                print(f"  {size:>5} {shape:<24} {lines_n:7,} lines {len(body) / 1e6:5.2f} MB: "
+                      f"CPU {cpu:6.2f} s {lines_n / cpu:8,.0f} lines/s (wall {wall:6.2f} s), "
+                      f"peak RSS {rss / 1e6:4.0f} MB, "
+                      f"{(rss - base_rss) / len(body):4.0f} B/source byte")
+
     small = REPO / "plans" / "language" / "tour.mdle"
     runs = []
     for _ in range(max(5, args.repeat)):

@@ -45,7 +45,7 @@ from mdle.dimensions import (
 from mdle.errors import CheckError, Diagnostic, Severity, Span
 from mdle.format import format_expr
 from mdle.program import INF, AtomNode, Element, Interrupt, Program, StringKind, StringNode
-from mdle.resolve import Namespace, build_namespace, find_cycles
+from mdle.resolve import Namespace, build_namespace, find_cycles, uses_of
 from mdle.units import NONE, TIME, Dim
 
 __all__ = ["Checker", "check_program", "MAX_NESTING", "never_ends"]
@@ -141,6 +141,9 @@ class Checker:
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
         self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
+        #: Names defined by statements that did not parse: uses of them are not errors
+        #: of their own (the syntax error is reported)
+        self.unparsed: frozenset[str] = frozenset()
         #: True while a definition is checked with its required parameters unknown (NaN):
         #: a NaN is then no error (each use with arguments is checked again)
         self._partial = False
@@ -205,6 +208,8 @@ class Checker:
         return names
 
     def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
+        if name in self.unparsed:
+            return  # its statement has a syntax error, reported already
         found = self._closest(name, list(pool))
         close = [found] if found else []
         self.error(span, f"unknown {what} `{name}`",
@@ -576,13 +581,19 @@ class Checker:
                        f"`range(0 deg) < 1 m`, found {dim_words(t.dim)}",
                        hint="compare it with something, as in `range(0 deg) < 1 m`")
             raise _Abort
-        shown = {k: show_value(v) for k, v in env.items()
-                 if not (isinstance(v, Quantity) and math.isnan(v.value))}
         if t.is_const and t.const and not any(
                 isinstance(v, Quantity) and math.isnan(v.value) for v in env.values()):
             self.warn(expr.span, f"the interrupt `{_short(expr)}` is always true: the element "
                       "ends as soon as it starts", hint="did you mean `never`?")
-        return cond.to_interrupt(t, format_expr(expr, shown))
+        if isinstance(expr, st.Never):
+            return cond.to_interrupt(t, "never")
+
+        def source() -> str:  # the text `show` and traces print, made when first read
+            shown = {k: show_value(v) for k, v in env.items()
+                     if not (isinstance(v, Quantity) and math.isnan(v.value))}
+            return format_expr(expr, shown)
+
+        return cond.to_interrupt(t, source)
 
     # ------------------------------------------------------------------ elements
 
@@ -632,6 +643,8 @@ class Checker:
             self.error(expr.span, f"expected an element (an atom, behavior or plan); `{name}` is "
                        f"{_kind_name(target)}")
             raise _Abort
+        if name in self.unparsed:
+            raise _Abort  # its statement has a syntax error, reported already
         pool = [n for n, d in self.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
         pool += list(self.ns.registry.laws)
         found = self._closest(name, pool)
@@ -926,7 +939,7 @@ def _after(expr: st.Group) -> Span:
 
 def check_program(modules: Sequence[st.Module], registry: Registry, *,
                   sources: Mapping[str, str] | None = None, main: st.Module | None = None,
-                  replace: bool = False) -> Program:
+                  replace: bool = False, unparsed: frozenset[str] = frozenset()) -> Program:
     """Check the modules of a program (the main file last) and build its :class:`Program`.
 
     Parameters
@@ -941,6 +954,9 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
         The file whose ``run`` names the entry (default: the last module).
     replace : bool
         Later definitions replace earlier ones of the same name (the REPL).
+    unparsed : frozenset of str
+        Names defined by statements with syntax errors (left out of ``modules``): using
+        one is not reported again.
 
     Raises
     ------
@@ -948,10 +964,11 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
         With every error found (warnings are in ``Program.warnings``).
     """
     srcs = dict(sources or {})
-    checker, errors = _checker(modules, registry, replace)
+    checker, errors, uses = _checker(modules, registry, replace)
+    checker.unparsed = unparsed
     main = main if main is not None else (modules[-1] if modules else None)
     elements: dict[str, Element] = {}
-    for d in _dependency_order(checker.ns, checker.broken):
+    for d in _dependency_order(checker.ns, checker.broken, uses):
         try:
             e = checker.check_definition(d)
         except RecursionError:  # a last guard: the nesting limits should prevent this
@@ -974,14 +991,13 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
                    tuple(_ordered(checker.warnings)))
 
 
-def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
+def _dependency_order(ns: Namespace, broken: set[str],
+                      uses: Mapping[str, list[st.Name | st.Call]]) -> list[st.Definition]:
     """Order definitions so that what each uses comes first.
 
     A long chain of definitions is then checked one link at a time (each use finds its
     element already built).
     """
-    from mdle.resolve import references
-
     order: list[st.Definition] = []
     done: set[str] = set()
     for root in ns.definitions:
@@ -998,20 +1014,20 @@ def _dependency_order(ns: Namespace, broken: set[str]) -> list[st.Definition]:
             done.add(name)
             stack.append((name, True))
             if name not in broken:
-                stack.extend((r.name, False) for r in references(ns.definitions[name],
-                                                                 ns.definitions, ns.registry)
-                             if r.name not in done)
+                stack.extend((r.name, False) for r in uses[name] if r.name not in done)
     return order
 
 
 def _checker(modules: Sequence[st.Module], registry: Registry,
-             replace: bool) -> tuple[Checker, list[Diagnostic]]:
+             replace: bool
+             ) -> tuple[Checker, list[Diagnostic], dict[str, list[st.Name | st.Call]]]:
     defs = [d for m in modules for d in m.definitions]
     ns, errors = build_namespace(defs, registry, replace=replace)
-    broken, cycle_errors = find_cycles(ns)
+    uses = uses_of(ns)
+    broken, cycle_errors = find_cycles(ns, uses)
     checker = Checker(ns)
     checker.broken = broken
-    return checker, errors + cycle_errors
+    return checker, errors + cycle_errors, uses
 
 
 def _entry(checker: Checker, main: st.Module | None, elements: Mapping[str, Element]) -> str | None:

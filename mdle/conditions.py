@@ -15,10 +15,12 @@ and nothing else.
 
 from __future__ import annotations
 
+import functools
 import math
 import operator
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from types import CodeType
 from typing import Any
 
 from atoms.registry import BOOL, Context, SensorSpec
@@ -282,16 +284,56 @@ def _compile(node: Node, as_bool: bool) -> Fn:
                 "    return test\n")
         src.names["_U"] = _UNSET
     namespace: dict[str, Any] = {"__builtins__": {}}
-    exec(compile(code, "<interrupt>", "exec"), namespace)
+    exec(_code(code), namespace)
     fn: Fn = namespace["make"](**src.names)
     return fn
 
 
-def to_interrupt(t: Typed, source: str) -> Interrupt:
-    """Return the runtime's :class:`~mdle.program.Interrupt` for a checked condition."""
+@functools.lru_cache(maxsize=1024)
+def _code(source: str) -> CodeType:
+    """Compile generated source once per shape.
+
+    The bound objects are parameters of ``make``, so interrupts of the same shape
+    (``range(0 deg) < 1 m`` and ``range(90 deg) < 2 m``) share one source text; a plan
+    of thousands of definitions pays for a handful of compilations.
+    """
+    return compile(source, "<interrupt>", "exec")
+
+
+def to_interrupt(t: Typed, source: str | Callable[[], str]) -> Interrupt:
+    """Return the runtime's :class:`~mdle.program.Interrupt` for a checked condition.
+
+    ``source`` is the interrupt's text, or a function making it when first read.
+    """
     if t.is_const:
+        text = source if isinstance(source, str) else source()
         if not t.const:
-            return NEVER if source == "never" else Interrupt(NEVER.test, source, never=True)
-        return Interrupt(lambda ctx: True, source)
+            return NEVER if text == "never" else Interrupt(NEVER.test, text, never=True)
+        return Interrupt(lambda ctx: True, text)
     assert t.node is not None
-    return Interrupt(_compile(t.node, as_bool=True), source)
+    return _Deferred(t.node, source)
+
+
+class _Deferred(Interrupt):
+    """An interrupt compiled when its ``test`` is first read, its text made likewise.
+
+    ``mdle check`` reads neither, so a plan of thousands of interrupts is checked
+    without generating their code; the runtime reads ``test`` once per string start and
+    gets the compiled function itself (no wrapper per call).
+    """
+
+    def __init__(self, node: Node, source: str | Callable[[], str]) -> None:
+        object.__setattr__(self, "never", False)
+        object.__setattr__(self, "_node", node)
+        object.__setattr__(self, "_source", source)
+
+    @functools.cached_property
+    def test(self) -> Fn:
+        """The compiled function of ``ctx``."""
+        return _compile(self.__dict__["_node"], as_bool=True)
+
+    @functools.cached_property
+    def source(self) -> str:
+        """The canonical text of the interrupt."""
+        made = self.__dict__["_source"]
+        return made if isinstance(made, str) else made()

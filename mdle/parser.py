@@ -20,11 +20,10 @@ import difflib
 import functools
 import hashlib
 import importlib.resources
-import math
 import os
 import re
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,6 +31,7 @@ from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from mdle import syntax as st
+from mdle.descent import Lexer, parse_valid
 from mdle.errors import Diagnostic, MdleSyntaxError, Severity, Span
 from mdle.syntax_errors import (
     EXAMPLES,
@@ -41,17 +41,25 @@ from mdle.syntax_errors import (
     describe_expected,
     describe_token,
 )
-from mdle.units import NONE, UNITS, unit_value
+from mdle.treebuild import (
+    MAX_DEPTH,
+    BuildState,
+    Prefixed,
+    TooDeep,
+    deeper,
+    number,
+    over,
+    precedence,
+    token_span,
+    too_deep,
+)
 
-__all__ = ["parse_module", "parse_expression", "normalise_newlines", "MAX_DEPTH", "MAX_ERRORS",
-           "lark_parser", "iter_tokens", "lex_fragment"]
+__all__ = ["parse_module", "parse_partial", "Partial", "parse_expression", "normalise_newlines",
+           "MAX_DEPTH", "MAX_ERRORS", "lark_parser", "iter_tokens", "lex_fragment"]
 
-#: Deepest nesting of parentheses and operators accepted in one expression.
-MAX_DEPTH = 100
 #: Syntax errors reported per file before giving up.
 MAX_ERRORS = 20
 
-_NUMBER = re.compile(r"((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)[ \t]*(.*)", re.S)
 _STATEMENT_LINE = re.compile(r"^[ \t]*(?:import|run|atom|behavior|plan|interrupt)(?![A-Za-z0-9_])",
                              re.M)
 
@@ -93,26 +101,31 @@ def lark_parser() -> Lark:
         return Lark(grammar, **options)
 
 
+@functools.lru_cache(maxsize=1)
+def _fast_lexer() -> Lexer:
+    """Return the fast path's lexer, made of the reference lexer's terminals."""
+    return Lexer(lark_parser().parser.lexer.terminals)
+
+
 # --------------------------------------------------------------------------------------
 # Per-parse state (file name, comments, unit errors, nesting depth), scoped to one call
 
-
-@dataclass
-class _State:
-    file: str
-    comments: list[st.Comment] = field(default_factory=list)
-    diagnostics: list[Diagnostic] = field(default_factory=list)
-    depth: dict[int, int] = field(default_factory=dict)
-    open_brackets: int = 0
-
-
+_State = BuildState
+_TooDeep = TooDeep
+_Prefixed = Prefixed
+_token_span = token_span
+_deeper = deeper
+_too_deep = too_deep
 _STATE: contextvars.ContextVar[_State] = contextvars.ContextVar("mdle_parse_state")
 
 
-class _TooDeep(Exception):
-    def __init__(self, span: Span) -> None:
-        super().__init__("too deep")
-        self.span = span
+def _over(file: str, first: Any, last: Any) -> Span:
+    return over(file, first, last)
+
+
+def _end(file: str, part: Any) -> tuple[int, int]:
+    span = over(file, part, part)
+    return span.end_line, span.end_column
 
 
 def _on_comment(token: Token) -> None:
@@ -138,42 +151,8 @@ def _on_close(token: Token) -> Token:
     return token
 
 
-def _token_span(file: str, tok: Token) -> Span:
-    return Span(file, tok.line or 0, tok.column or 0, tok.end_line or 0, tok.end_column or 0)
-
-
-def _start(file: str, part: Any) -> tuple[int, int]:
-    if isinstance(part, Token):
-        return part.line or 0, part.column or 0
-    span = part.span
-    return span.line, span.column
-
-
-def _end(file: str, part: Any) -> tuple[int, int]:
-    if isinstance(part, Token):
-        return part.end_line or 0, part.end_column or 0
-    span = part.span
-    return span.end_line, span.end_column
-
-
-def _over(file: str, first: Any, last: Any) -> Span:
-    """Return the span from the start of ``first`` to the end of ``last`` (tokens or nodes)."""
-    line, col = _start(file, first)
-    end_line, end_col = _end(file, last)
-    return Span(file, line, col, end_line, end_col)
-
-
 # --------------------------------------------------------------------------------------
 # The tree builder: lark LALR callbacks, one per rule alias, called as rules reduce
-
-
-def _deeper(state: _State, node: Any, parts: Any) -> Any:
-    depth = 1 + max((state.depth.get(id(p), 1) for p in parts), default=0)
-    if depth > MAX_DEPTH:
-        raise _TooDeep(node.span)
-    if depth > 1:
-        state.depth[id(node)] = depth
-    return node
 
 
 @v_args(inline=True)
@@ -187,12 +166,17 @@ class _Build(Transformer):
         return expr
 
     def import_stmt(self, kw: Token, path: Token) -> st.Import:
-        return st.Import(str(path)[1:-1], _over(_STATE.get().file, kw, path))
+        state = _STATE.get()
+        node = st.Import(str(path)[1:-1], _over(state.file, kw, path))
+        state.statements.append(node)
+        return node
 
     def run_stmt(self, kw: Token, name: Token) -> st.Run:
-        file = _STATE.get().file
+        state = _STATE.get()
         _not_keyword(name)
-        return st.Run(str(name), _over(file, kw, name), _token_span(file, name))
+        node = st.Run(str(name), _over(state.file, kw, name), _token_span(state.file, name))
+        state.statements.append(node)
+        return node
 
     def def_head(self, kw: Token, name: Token, params: list[Any] | None
                  ) -> tuple[Token, Token, list[Any] | None]:
@@ -201,11 +185,13 @@ class _Build(Transformer):
     def definition(self, head: tuple[Token, Token, list[Any] | None],
                    body: st.Expr) -> st.Definition:
         kw, name, params = head
-        file = _STATE.get().file
+        state = _STATE.get()
         _not_keyword(name)
-        return st.Definition(st.DefKind(str(kw)), str(name),
+        node = st.Definition(st.DefKind(str(kw)), str(name),
                              None if params is None else tuple(params[1:-1]), body,
-                             _over(file, kw, body), _token_span(file, name))
+                             _over(state.file, kw, body), _token_span(state.file, name))
+        state.statements.append(node)
+        return node
 
     def params(self, *parts: Any) -> list[Any]:
         return list(parts)  # (LPAR, params..., RPAR): the brackets are dropped by `definition`
@@ -217,16 +203,7 @@ class _Build(Transformer):
 
     def number(self, tok: Token) -> st.Number:
         state = _STATE.get()
-        span = Span(state.file, tok.line, tok.column, tok.end_line, tok.end_column)  # type: ignore[arg-type]
-        text, unit, factor, dim = _split_number(str(tok))
-        value = float(text)
-        if not math.isfinite(value):
-            state.diagnostics.append(Diagnostic(span, f"the number `{text}` is too large"))
-            return st.Number(0.0, NONE, text, unit, span)
-        if dim is None:
-            state.diagnostics.append(_unknown_unit(unit, span))
-            return st.Number(value, NONE, text, unit, span)
-        return st.Number(value * factor, dim, text, unit, span)
+        return number(state, str(tok), _token_span(state.file, tok))
 
     def name(self, tok: Token) -> st.Name:
         _not_keyword(tok)
@@ -260,7 +237,7 @@ class _Build(Transformer):
     def expr(self, *parts: Any) -> st.Expr:
         if len(parts) == 1 and not isinstance(parts[0], _Prefixed):
             return parts[0]
-        return _precedence(_STATE.get(), parts)
+        return precedence(_STATE.get(), parts)
 
     def group(self, lpar: Token, *parts: Any) -> st.Group:
         state = _STATE.get()
@@ -275,83 +252,6 @@ class _Build(Transformer):
         return _deeper(state, st.Vector(tuple(items), _over(state.file, lsqb, rsqb)), items)
 
 
-@functools.lru_cache(maxsize=4096)
-def _split_number(token: str) -> tuple[str, str, float, Any]:
-    """(digits, unit without spaces, factor to SI, dimension or None if unknown)."""
-    m = _NUMBER.fullmatch(token)
-    assert m is not None  # the token's own pattern guarantees the shape
-    text, unit = m.group(1), m.group(2).replace(" ", "").replace("\t", "")
-    if not unit:
-        return text, "", 1.0, NONE
-    try:
-        factor, dim = unit_value(unit)
-    except KeyError:
-        return text, unit, 1.0, None
-    return text, unit, factor, dim
-
-
-class _Prefixed:
-    """A prefix operator and its operand as parsed, before precedence is applied."""
-
-    __slots__ = ("op", "operand")
-
-    def __init__(self, op: Token, operand: Any) -> None:
-        self.op = op
-        self.operand = operand
-
-
-#: Binding power of each operator (higher binds tighter); `not` sits between `and` and
-#: the comparisons, as in Python, and unary minus above `*`.
-_BINARY = {"or": 1, "xor": 2, "and": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5, "!=": 5,
-           "+": 6, "-": 6, "*": 7, "/": 7}
-_NOT, _SIGN, _COMPARISON = 4, 8, 5
-
-
-def _precedence(state: _State, parts: tuple[Any, ...]) -> st.Expr:
-    """Build the operator tree of ``unit (op unit)*`` by operator precedence.
-
-    Shunting yard: iterative, left associative, prefix operators as in Python.
-    """
-    file = state.file
-    operands: list[st.Expr] = []
-    ops: list[tuple[int, Token, bool]] = []  # (binding power, operator, is prefix)
-
-    def apply() -> None:
-        power, tok, prefix = ops.pop()
-        if prefix:
-            x = operands.pop()
-            operands.append(_deeper(state, st.Unary(str(tok), x, _over(file, tok, x)), (x,)))
-            return
-        right = operands.pop()
-        left = operands.pop()
-        if power == _COMPARISON and any(isinstance(side, st.Binary) and side.op in _CMP
-                                        for side in (left, right)):
-            state.diagnostics.append(Diagnostic(
-                _token_span(file, tok), "comparisons do not chain",
-                hint="write `0 m < x and x < 10 m`"))
-        node = st.Binary(str(tok), left, right, _over(file, left, right), _token_span(file, tok))
-        operands.append(_deeper(state, node, (left, right)))
-
-    for i, part in enumerate(parts):
-        if i % 2:  # a binary operator
-            power = _BINARY[str(part)]
-            while ops and ops[-1][0] >= power:
-                apply()
-            ops.append((power, part, False))
-            continue
-        while isinstance(part, _Prefixed):
-            ops.append((_NOT if part.op == "not" else _SIGN, part.op, True))
-            part = part.operand
-        operands.append(part)
-    while ops:
-        apply()
-    (result,) = operands
-    return result
-
-
-_CMP = frozenset({"<", "<=", ">", ">=", "==", "!="})
-
-
 def _not_keyword(tok: Token) -> None:
     # The contextual lexer reads a keyword as a NAME where only a name can stand
     # (`atom run = ...`); keywords stay reserved everywhere.
@@ -362,18 +262,6 @@ def _not_keyword(tok: Token) -> None:
             _token_span(state.file, tok),
             f"`{word}` is a keyword of MDLe and cannot be used as a name",
             hint=f"pick another name, such as `{word}_1`"))
-
-
-def _unknown_unit(unit: str, span: Span) -> Diagnostic:
-    known = sorted(UNITS)
-    parts = unit.split("/")
-    bad = next((p for p in parts if p not in UNITS), unit)
-    close = difflib.get_close_matches(bad, known, n=1, cutoff=0.5)
-    hint = (f"did you mean `{close[0]}`? " if close else "") + \
-        f"units are {', '.join(known)} and quotients such as m/s, deg/s"
-    if bad in ("x", "y", "v", "t") or len(parts) == 1 and bad not in UNITS and not close:
-        hint += "; to multiply, write `*`"
-    return Diagnostic(span, f"unknown unit `{bad}`", hint=hint)
 
 
 # --------------------------------------------------------------------------------------
@@ -412,10 +300,81 @@ def parse_module(text: str, file: str = "<string>") -> st.Module:
         Every syntax error found (up to :data:`MAX_ERRORS`), and every unknown unit.
     """
     text = normalise_newlines(text)
+    valid = parse_valid(text, file, _fast_lexer())
+    if valid is not None:
+        return st.Module(file, tuple(valid[0]), tuple(valid[1]))
     statements, comments, diagnostics = _parse_with_recovery(text, file)
     if diagnostics:
         raise MdleSyntaxError(_sorted(diagnostics), {file: text})
     return st.Module(file, tuple(statements), tuple(comments))
+
+
+@dataclass(frozen=True)
+class Partial:
+    """What :func:`parse_partial` makes of a file: the good statements and the errors."""
+
+    module: st.Module
+    """The statements that parsed without an error (all of them for a valid file)."""
+    unparsed: frozenset[str]
+    """Names defined by statements left out for their errors."""
+    diagnostics: tuple[Diagnostic, ...]
+    """Every syntax error (as :func:`parse_module` raises them), in order."""
+    broken_import: bool = False
+    """An ``import`` is among the statements left out: any name may be missing."""
+
+
+def parse_partial(text: str, file: str = "<string>") -> Partial:
+    """Parse a file, keeping the statements that parse when others do not.
+
+    After a syntax error the parser resumes at the next statement, so every
+    independent error is found; the statements before and between the errors are kept,
+    so the checker can report their errors in the same pass. A statement holding an
+    error (a broken one, or one with an unknown unit) is left out, and the name it
+    defines is listed in ``unparsed`` so its uses are not reported as unknown.
+    """
+    text = normalise_newlines(text)
+    valid = parse_valid(text, file, _fast_lexer())
+    if valid is not None:
+        return Partial(st.Module(file, tuple(valid[0]), tuple(valid[1])), frozenset(), ())
+    statements, comments, diagnostics = _parse_with_recovery(text, file)
+    if not diagnostics:
+        return Partial(st.Module(file, tuple(statements), tuple(comments)), frozenset(), ())
+    places = [(d.span.line, d.span.column) for d in diagnostics if d.span is not None]
+    kept = [s for s in statements if not any(_inside(s.span, place) for place in places)]
+    names, imports = _defined_outside(text, kept, comments)
+    return Partial(st.Module(file, tuple(kept), tuple(comments)), names,
+                   tuple(_sorted(diagnostics)), imports)
+
+
+def _inside(span: Span, place: tuple[int, int]) -> bool:
+    return (span.line, span.column) <= place < (span.end_line, span.end_column)
+
+
+_DEFINITION_HEAD = re.compile(r"(?<![A-Za-z0-9_])(?:atom|behavior|plan|interrupt)[ \t\f\n]+"
+                              r"([A-Za-z_][A-Za-z0-9_]*)")
+_IMPORT_WORD = re.compile(r"(?<![A-Za-z0-9_])import(?![A-Za-z0-9_])")
+
+
+def _defined_outside(text: str, statements: list[st.Statement],
+                     comments: list[st.Comment]) -> tuple[frozenset[str], bool]:
+    """Return the names after a definition keyword outside the given statements and comments.
+
+    And whether the keyword ``import`` stands there too.
+    """
+    starts = [0] + [m.end() for m in re.finditer("\n", text)]
+
+    def offset(line: int, column: int) -> int:
+        return starts[line - 1] + column - 1 if 0 < line <= len(starts) else len(text)
+
+    taken = sorted((offset(x.span.line, x.span.column), offset(x.span.end_line, x.span.end_column))
+                   for x in [*statements, *comments])
+    rest, at = [], 0
+    for begin, end in taken:
+        rest.append(text[at:max(at, begin)])
+        at = max(at, end)
+    rest.append(text[at:])
+    names = {m.group(1) for piece in rest for m in _DEFINITION_HEAD.finditer(piece)}
+    return frozenset(names - KEYWORDS), any(_IMPORT_WORD.search(piece) for piece in rest)
 
 
 def parse_expression(text: str, file: str = "<repl>") -> st.Expr:
@@ -452,11 +411,6 @@ def _sorted(diags: list[Diagnostic]) -> list[Diagnostic]:
     return out
 
 
-def _too_deep(span: Span) -> Diagnostic:
-    return Diagnostic(span, f"this nests more than {MAX_DEPTH} levels deep",
-                      hint="split it into named definitions")
-
-
 def _parse_with_recovery(text: str, file: str
                          ) -> tuple[list[st.Statement], list[st.Comment], list[Diagnostic]]:
     """Parse, resuming after each syntax error.
@@ -475,7 +429,7 @@ def _parse_with_recovery(text: str, file: str
         token = _STATE.set(state)
         resume_at: int | None = None
         try:
-            statements = list(parser.parse(source, start="start"))  # type: ignore[call-overload]
+            parser.parse(source, start="start")
         except UnexpectedInput as err:
             diagnostics.append(_describe(err, text, file, "start", source))
             errors += 1
@@ -488,12 +442,11 @@ def _parse_with_recovery(text: str, file: str
             _STATE.reset(token)
         comments.extend(state.comments)
         diagnostics.extend(state.diagnostics)
+        statements.extend(state.statements)  # those completed before an error too
         if resume_at is None or errors >= MAX_ERRORS:
             break
         # Keep newlines so every later line and column is where it was.
         source = re.sub(r"[^\n]", " ", text[:resume_at]) + text[resume_at:]
-    if diagnostics:
-        statements = []
     comments.sort(key=lambda c: (c.span.line, c.span.column))
     unique = {(c.span.line, c.span.column): c for c in comments}
     return statements, list(unique.values()), diagnostics

@@ -17,7 +17,8 @@ from atoms.registry import LawSpec, Registry, SensorSpec
 from mdle import syntax as st
 from mdle.errors import Diagnostic, Severity
 
-__all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "find_cycles"]
+__all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "uses_of",
+           "find_cycles"]
 
 
 @dataclass(frozen=True)
@@ -112,11 +113,22 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
     return found
 
 
-def find_cycles(ns: Namespace) -> tuple[set[str], list[Diagnostic]]:
-    """Definitions defined in terms of themselves; one error per cycle, at each member."""
+def uses_of(ns: Namespace) -> dict[str, list[st.Name | st.Call]]:
+    """Return :func:`references` of every definition, by name (one walk of each body)."""
     defs = ns.definitions
-    edges = {name: [(r.name, r) for r in references(d, defs, ns.registry)]
-             for name, d in defs.items()}
+    return {name: references(d, defs, ns.registry) for name, d in defs.items()}
+
+
+def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | None = None
+                ) -> tuple[set[str], list[Diagnostic]]:
+    """Definitions defined in terms of themselves; one error per cycle, at each member.
+
+    ``uses`` is :func:`uses_of` ``(ns)``, if the caller has it already.
+    """
+    defs = ns.definitions
+    if uses is None:
+        uses = uses_of(ns)
+    edges = {name: [(r.name, r) for r in uses[name]] for name in defs}
     color: dict[str, int] = {}  # 1: on the current path, 2: done
     in_cycle: set[str] = set()
     errors: list[Diagnostic] = []

@@ -126,8 +126,8 @@ class Workspace:
         """
         expr = parse_expression(text, "<repl>")
         sources = {**self._sources, "<repl>": text}
-        checker, errors = _checker([st.Module("<workspace>", tuple(self._defs.values()))],
-                                   self.registry, False)
+        checker, errors, _ = _checker([st.Module("<workspace>", tuple(self._defs.values()))],
+                                      self.registry, False)
         element: Element | None = None
         try:
             element = checker.element(expr, {})

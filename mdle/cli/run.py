@@ -326,6 +326,9 @@ def _open_trace(path: str, header: dict[str, Any]) -> TraceWriter:
     from mdle.errors import Diagnostic, MdleError
     from mdle.trace import TraceWriter
 
+    if "\x00" in path:  # open() would raise ValueError, not OSError
+        raise MdleError(Diagnostic(None, f"cannot write the trace `{path!r}`: the name holds "
+                                         "a NUL character"))
     try:
         return TraceWriter(path, header)
     except OSError as exc:

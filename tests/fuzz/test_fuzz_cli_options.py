@@ -39,3 +39,15 @@ def test_run_options_end_in_a_documented_code(
     err = capsys.readouterr().err
     assert code in (0, 1, 2, 3), (argv, code, err)
     assert "internal error" not in err and "Traceback" not in err, (argv, err)
+
+
+@pytest.mark.parametrize("option", ["--trace", "--plot", "--world", "--plan", "--robot"])
+def test_a_nul_in_a_file_name_is_an_input_error(
+        option: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    monkeypatch.chdir(tmp_path)
+    plan = tmp_path / "p.mdle"
+    plan.write_text(PLAN)
+    code = main(["run", str(plan), "--world", "empty", "-q", "--until", "0.5", f"{option}=a\x00b"])
+    err = capsys.readouterr().err
+    assert code in (1, 2) and "internal error" not in err, err

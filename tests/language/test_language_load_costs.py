@@ -1,0 +1,53 @@
+"""What keeps a large check cheap: no collector walks, no code generated, shared code."""
+
+from __future__ import annotations
+
+import gc
+
+import pytest
+
+from mdle import conditions
+from mdle.errors import CheckError
+from mdle.loader import load_text
+from mdle.program import StringNode
+
+PLAN = """
+atom a(d = 1 m) = (go(1 m/s), range(0 deg) < d, 2 s)
+atom b = (go(1 m/s), range(90 deg) < 2 m and not stalled, 3 s)
+behavior main = ((a, a(2 m), b), never, inf)
+run main
+"""
+
+
+def test_collector_state_is_restored() -> None:
+    assert gc.isenabled()
+    load_text(PLAN)
+    assert gc.isenabled()
+    with pytest.raises(CheckError):
+        load_text("atom a = (go(1 m/s), nowhere, 1 s)")
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        load_text(PLAN)
+        assert not gc.isenabled()  # a caller's choice is kept
+    finally:
+        gc.enable()
+
+
+def test_checking_generates_no_interrupt_code() -> None:
+    program = load_text(PLAN)
+    xi = program.elements["a"].interrupt
+    assert "test" not in xi.__dict__ and "source" not in xi.__dict__
+    assert xi.source == "range(0 deg) < 1 m"
+    assert callable(xi.test) and xi.test is xi.test  # compiled once, on first read
+
+
+def test_interrupts_of_one_shape_share_their_code() -> None:
+    conditions._code.cache_clear()
+    program = load_text(PLAN)
+    main = program.elements["main"]
+    assert isinstance(main, StringNode)
+    tests = [e.interrupt.test for e in main.elements]
+    assert tests[0] is not tests[1]  # each has its own constants...
+    assert tests[0].__code__ is tests[1].__code__  # ...in one compiled shape
+    assert conditions._code.cache_info().misses == 2  # `< d` and `< 2 m and not stalled`
