@@ -13,6 +13,6 @@ __all__ = ["default_registry"]
 
 def default_registry() -> Registry:
     """Return the registry of the built-in control laws and sensor functions."""
-    from atoms import boundary, follow, laws, motion, sensors
+    from atoms import boundary, follow, laws, motion, sensors, team
 
-    return Registry.from_modules(laws, sensors, boundary, follow, motion)
+    return Registry.from_modules(laws, sensors, boundary, follow, motion, team)

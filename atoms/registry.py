@@ -97,11 +97,14 @@ class Param:
     high: float | None = None
     low_open: bool = False
     finite: bool = True
+    any_name: str = ""
+    """What an open name argument names (``channel``, ``robot``): any name is taken, and
+    the checker records it so that a team can check its channels and robots."""
 
     @property
     def is_symbol(self) -> bool:
         """True when the parameter takes a symbol such as ``right`` rather than a number."""
-        return bool(self.choices)
+        return bool(self.choices) or bool(self.any_name)
 
     def accepts(self, value: float) -> bool:
         """Whether ``value`` (SI) is within the declared range."""
@@ -178,12 +181,13 @@ class LawSpec:
 class SensorSpec:
     """A sensor function: the y that interrupts (and control laws) read.
 
-    ``result`` is the dimension of a numeric result, or :data:`BOOL`.
+    ``result`` is the dimension of a numeric result, :data:`BOOL`, or None for a number
+    whose dimension only its use tells (``message(channel)``: whatever was sent).
     """
 
     name: str
     params: tuple[Param, ...]
-    result: Dim | _Bool
+    result: Dim | _Bool | None
     fn: SensorFn
     doc: str = ""
 
@@ -215,7 +219,7 @@ def control_law(*params: Param, name: str | None = None,
     return wrap
 
 
-def sensor(*params: Param, result: Dim | _Bool, name: str | None = None
+def sensor(*params: Param, result: Dim | _Bool | None, name: str | None = None
            ) -> Callable[[SensorFn], SensorFn]:
     """Declare a function ``fn(args, ctx) -> float | bool`` as a sensor function."""
 

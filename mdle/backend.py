@@ -15,6 +15,8 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 if TYPE_CHECKING:  # numpy is only needed by those who build scans
     import numpy as np
 
+    from mdle.messages import Inbox
+
 __all__ = [
     "Pose",
     "Scan",
@@ -82,7 +84,8 @@ class Observation:
     speed (m/s) and turn rate (rad/s); ``scan`` the newest scan, which may be older than
     ``time`` (compare ``scan.stamp``), or None when the robot has no ladar or none has
     arrived yet. ``truth`` carries simulator ground truth (``clearance``, ``collided``,
-    true pose) for traces and tests; control laws must not read it.
+    true pose) for traces and tests; control laws must not read it. ``inbox`` holds the
+    messages a team member's radio has received (None for a robot alone).
     """
 
     time: float
@@ -94,6 +97,7 @@ class Observation:
     motors_enabled: bool = True
     battery: float | None = None
     truth: dict[str, Any] = field(default_factory=dict)
+    inbox: "Inbox | None" = None
 
 
 @dataclass(frozen=True)

@@ -44,7 +44,18 @@ from mdle.dimensions import (
 )
 from mdle.errors import CheckError, Diagnostic, Severity, Span
 from mdle.format import format_expr
-from mdle.program import INF, AtomNode, Element, Interrupt, Program, StringKind, StringNode
+from mdle.messages import POSE_CHANNEL
+from mdle.program import (
+    INF,
+    AtomNode,
+    Element,
+    Interrupt,
+    MessageUse,
+    Program,
+    Send,
+    StringKind,
+    StringNode,
+)
 from mdle.resolve import Namespace, build_namespace, find_cycles, uses_of
 from mdle.units import NONE, TIME, Dim
 
@@ -147,6 +158,25 @@ class Checker:
         #: True while a definition is checked with its required parameters unknown (NaN):
         #: a NaN is then no error (each use with arguments is checked again)
         self._partial = False
+        #: where the program sends, reads channels and names robots (for team checks)
+        self.uses: list[MessageUse] = []
+        #: id of each `message(channel)` reading's node: (node, channel, span)
+        self._messages: dict[int, tuple[Any, str, Span]] = {}
+        # the uses of the instance being checked (innermost last), and of each one checked
+        self._use_stack: list[list[MessageUse]] = []
+        self._key_uses: dict[tuple[Any, ...], list[MessageUse]] = {}
+        #: the uses of each runnable definition, as it runs with its defaults
+        self.element_uses: dict[str, tuple[MessageUse, ...]] = {}
+
+    def _use(self, use: MessageUse) -> None:
+        self.uses.append(use)
+        if self._use_stack:
+            self._use_stack[-1].append(use)
+
+    def _replay(self, key: tuple[Any, ...]) -> None:
+        """Count a cached instance's uses again, for the instance using it too."""
+        if self._use_stack:
+            self._use_stack[-1].extend(self._key_uses.get(key, ()))
 
     # ------------------------------------------------------------------ diagnostics
 
@@ -370,6 +400,9 @@ class Checker:
         if (isinstance(expr, st.Name) and expr.name in slot.choices
                 and expr.name not in env):
             return Symbol(expr.name)  # a declared symbol wins over a definition's name
+        if (slot.param is not None and slot.param.any_name and isinstance(expr, st.Name)
+                and expr.name not in env):
+            return Symbol(expr.name)  # a channel or robot: any name
         v = self.value(expr, env)
         if slot.choices:
             if not isinstance(v, Symbol) or v.name not in slot.choices:
@@ -387,7 +420,9 @@ class Checker:
             self._unknown(v.name, expr.span, "name", pool)
             raise _Abort
         if slot.symbol:
-            self.error(expr.span, f"`{slot.name}` of `{callee}` takes a symbol such as `right`, "
+            what = (f"a {slot.param.any_name} name" if slot.param and slot.param.any_name
+                    else "a symbol such as `right`")
+            self.error(expr.span, f"`{slot.name}` of `{callee}` takes {what}, "
                        f"found {dim_words(v.dim)}")
             raise _Abort
         if not fits(v, slot.dim):
@@ -411,11 +446,27 @@ class Checker:
         return v
 
     def _slots_of_spec(self, spec: LawSpec | SensorSpec) -> list[_Slot]:
-        return [_Slot(p.name, None if p.choices else p.dim,
+        return [_Slot(p.name, None if p.is_symbol else p.dim,
                       REQUIRED if p.default is REQUIRED else (
                           Symbol(p.default) if isinstance(p.default, str) else
                           Quantity(float(p.default), p.dim)),
-                      tuple(p.choices), bool(p.choices), p) for p in spec.params]
+                      tuple(p.choices), p.is_symbol, p) for p in spec.params]
+
+    def _note_names(self, spec: LawSpec | SensorSpec, bound: Mapping[str, Value],
+                    span: Span) -> None:
+        """Record the channels and robots a call names (see :class:`MessageUse`)."""
+        for p in spec.params:
+            v = bound.get(p.name)
+            if p.any_name and isinstance(v, Symbol):
+                kind = "read" if p.any_name == "channel" else "robot"
+                self._use(MessageUse(kind, v.name, None, span, spec.name))
+
+    def _note_message_dim(self, a: cond.Typed, b: cond.Typed) -> None:
+        """Record the dimension a `message(channel)` is used with (known from the other side)."""
+        for m, other in ((a, b), (b, a)):
+            hit = self._messages.get(id(m.node)) if m.node is not None else None
+            if hit is not None and other.dim is not None:
+                self._use(MessageUse("read", hit[1], other.dim, hit[2], "message"))
 
     def slots_of(self, d: st.Definition) -> list[_Slot]:
         """Return the parameters of a definition; a parameter's dimension is its default's."""
@@ -511,6 +562,7 @@ class Checker:
                 self.error(expr.op_span, f"cannot compare {dim_words(a.dim)} with "
                            f"{dim_words(b.dim)}", hint=_unit_hint(expr, a, b))
                 raise _Abort
+            self._note_message_dim(a, b)
             return cond.compare(op, a, b)
         if op in ("+", "-"):
             if not _same_dim(a, b):
@@ -518,6 +570,7 @@ class Checker:
                            f"{dim_words(b.dim)} and {dim_words(a.dim)}",
                            hint=_unit_hint(expr, a, b))
                 raise _Abort
+            self._note_message_dim(a, b)
             return cond.arith(op, a, b, a.dim if a.dim is not None else b.dim)
         kind = None if a.dim is None or b.dim is None else (
             a.dim * b.dim if op == "*" else a.dim / b.dim)
@@ -536,7 +589,13 @@ class Checker:
         target = self.ns.lookup(name)
         if isinstance(target, SensorSpec):
             bound = self.bind(name, self._slots_of_spec(target), args, env, expr.span)
-            return cond.sensor_reading(target, MappingProxyType(self._plain(bound)))
+            self._note_names(target, bound, expr.span)
+            t = cond.sensor_reading(target, MappingProxyType(self._plain(bound)))
+            if target.result is None and "channel" in bound:
+                channel = bound["channel"]
+                if isinstance(channel, Symbol):
+                    self._messages[id(t.node)] = (t.node, channel.name, expr.span)
+            return t
         if isinstance(target, st.Definition) and target.kind is st.DefKind.INTERRUPT:
             if name in self.broken:
                 raise _Abort
@@ -558,12 +617,16 @@ class Checker:
                         call: Span | None) -> cond.Typed:
         key = ("interrupt", d.name, _freeze(bound))
         if key in self._cache:
+            self._replay(key)
             return self._cache[key]
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
+        self._use_stack.append([])
         try:
             t = self.condition(d.body, MappingProxyType(dict(bound)))
         finally:
+            self._key_uses[key] = self._use_stack.pop()
+            self._replay(key)
             if call is not None:
                 self._notes.pop()
         if not t.is_bool:
@@ -657,6 +720,8 @@ class Checker:
         head = expr.items[0]
         n = len(expr.items)
         kind = self._head_kind(head, env)
+        if n > 3 and kind == "atom" and all(_is_send(i) for i in expr.items[3:]):
+            return self._atom(expr, env)
         if n != 3:
             what = {"atom": "an atom is (control law, interrupt, timer)",
                     "scaled": "a scaled atom is (alpha, beta, atom)",
@@ -696,7 +761,7 @@ class Checker:
         return "scaled"
 
     def _atom(self, expr: st.Group, env: Env) -> AtomNode:
-        u, xi, timer = expr.items
+        u, xi, timer = expr.items[:3]
         assert isinstance(u, (st.Name, st.Call))
         law = self.ns.lookup(u.name)
         assert isinstance(law, LawSpec)
@@ -704,11 +769,57 @@ class Checker:
         try:
             args = self.bind(u.name, self._slots_of_spec(law), u.args if isinstance(u, st.Call)
                              else (), env, u.span)
+            self._note_names(law, args, u.span)
         except _Abort:
             failed = True
+        sends: list[Send] = []
+        for item in expr.items[3:]:
+            assert isinstance(item, st.Call)
+            try:
+                sends.append(self._send(item, env))
+            except _Abort:
+                failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
         return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
-                        (1.0, 1.0), expr.span)
+                        (1.0, 1.0), expr.span, tuple(sends))
+
+    def _send(self, call: st.Call, env: Env) -> Send:
+        """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on."""
+        args = call.args
+        if not args or args[0].name is not None or not isinstance(args[0].value, st.Name) \
+                or any(a.name is not None for a in args):
+            self.error(call.span, "expected `send(channel, value)` or `send(pose)`: a channel "
+                       "name, then the number to send", hint="for example `send(gap, 1 m)`")
+            raise _Abort
+        channel = args[0].value.name
+        held = env.get(channel)
+        if isinstance(held, Symbol):
+            channel = held.name  # a parameter holding a channel name
+        if len(args) == 1:
+            if channel != POSE_CHANNEL:
+                self.error(call.span, f"`send({channel})` needs a value to send",
+                           hint=f"write `send({channel}, 1)`, or `send(pose)` to send the "
+                                "robot's pose")
+                raise _Abort
+            self._use(MessageUse("send", channel, "pose", call.span))
+            return Send(channel, None, None, "send(pose)", call.span)
+        if len(args) > 2:
+            self.error(args[2].span, f"`send` takes a channel and one value, found {len(args)} "
+                       "arguments")
+            raise _Abort
+        if channel == POSE_CHANNEL:
+            self.error(args[1].span, "the channel `pose` carries the robot's pose: write "
+                       "`send(pose)`", hint="send numbers on a channel of another name")
+            raise _Abort
+        t = self.condition(args[1].value, env)
+        if t.is_bool:
+            self.error(args[1].span, f"`send` sends a number, found a condition "
+                       f"(`{_short(args[1].value)}`)", hint="send 1 and test "
+                       f"`received({channel})`, or send a number such as `range(0 deg)`")
+            raise _Abort
+        self._use(MessageUse("send", channel, t.dim, call.span))
+        return Send(channel, t.call(), t.dim, f"send({channel}, {format_expr(args[1].value)})",
+                    call.span)
 
     def _ending(self, xi: st.Expr, timer: st.Expr, env: Env,
                 failed: bool) -> tuple[Interrupt, float]:
@@ -833,16 +944,20 @@ class Checker:
             cached = self._cache[key]
             if cached is None:  # failed before; its errors are already reported
                 raise _Abort
+            self._replay(key)
             return cached
         env = MappingProxyType(dict(bound))
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
+        self._use_stack.append([])
         try:
             self._enter(d.span)
             try:
                 result = self._definition_body(d, env)
             finally:
                 self._depth -= 1
+                self._key_uses[key] = self._use_stack.pop()
+                self._replay(key)
         except _Abort:
             self._cache[key] = None
             raise
@@ -898,12 +1013,19 @@ class Checker:
             return None
         finally:
             self._partial = False
+        if runnable:
+            key = ("element", d.name, _freeze(bound))
+            self.element_uses[d.name] = tuple(dict.fromkeys(self._key_uses.get(key, ())))
         return e if runnable else None
 
 
 def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
     return tuple(sorted((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare))
                         for k, v in bound.items()))
+
+
+def _is_send(expr: st.Expr) -> bool:
+    return isinstance(expr, st.Call) and expr.name == "send"
 
 
 def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
@@ -988,7 +1110,9 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     if errors:
         raise CheckError(_ordered(errors), srcs)
     return Program(MappingProxyType(elements), entry, MappingProxyType(srcs),
-                   tuple(_ordered(checker.warnings)))
+                   tuple(_ordered(checker.warnings)), tuple(dict.fromkeys(checker.uses)),
+                   MappingProxyType({n: u for n, u in checker.element_uses.items()
+                                     if n in elements}))
 
 
 def _dependency_order(ns: Namespace, broken: set[str],

@@ -20,9 +20,12 @@ from typing import Union
 
 from atoms.registry import Args, Context, LawSpec
 from mdle.errors import Diagnostic, Span
+from mdle.units import Dim
 
 __all__ = [
     "Interrupt",
+    "Send",
+    "MessageUse",
     "NEVER",
     "AtomNode",
     "StringNode",
@@ -55,6 +58,38 @@ def _never(ctx: Context) -> bool:
 NEVER = Interrupt(_never, "never", never=True)
 
 
+@dataclass(frozen=True)
+class Send:
+    """What an atom sends at every tick it runs: ``send(channel, value)`` or ``send(pose)``.
+
+    ``value(ctx)`` reads the number sent (SI); None sends the robot's pose. ``dim`` is the
+    number's dimension (None: not known, or a pose).
+    """
+
+    channel: str
+    value: Callable[[Context], float] | None
+    dim: Dim | None
+    source: str
+    span: Span | None = None
+
+
+@dataclass(frozen=True)
+class MessageUse:
+    """A place where a plan names a channel or another robot, for a team's checks.
+
+    ``kind`` is ``send`` (a channel sent on, ``dim`` its number's dimension, or the
+    string ``pose``), ``read`` (a channel read: ``received``, ``message``; ``dim`` the
+    dimension its use asks of ``message``, None if none) or ``robot`` (a robot named by
+    ``range_to``, ``bearing_to``, ``pursue``).
+    """
+
+    kind: str
+    name: str
+    dim: Dim | str | None
+    span: Span | None
+    what: str = ""
+
+
 class StringKind(enum.Enum):
     """What a string of elements was declared as (it runs the same way in each case)."""
 
@@ -81,6 +116,7 @@ class AtomNode:
     timer: float = INF
     scale: tuple[float, float] = (1.0, 1.0)
     span: Span | None = None
+    sends: tuple[Send, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -112,10 +148,19 @@ class Program:
     behaviors and plans whose parameters all have defaults), instantiated with those
     defaults. ``entry`` is the ``run`` target, else ``main`` if defined, else None.
     ``sources`` maps each file read (imports included) to its text, for diagnostics.
-    ``warnings`` are the checker's warnings (the program is valid).
+    ``warnings`` are the checker's warnings (the program is valid). ``uses`` lists where
+    it sends, reads channels and names other robots (:class:`MessageUse`), anywhere;
+    ``element_uses`` those of each runnable element as it runs, with its defaults.
     """
 
     elements: Mapping[str, Element]
     entry: str | None
     sources: Mapping[str, str] = field(default_factory=lambda: MappingProxyType({}))
     warnings: tuple[Diagnostic, ...] = ()
+    uses: tuple[MessageUse, ...] = ()
+    element_uses: Mapping[str, tuple[MessageUse, ...]] = field(
+        default_factory=lambda: MappingProxyType({}))
+
+    def uses_of(self, name: str) -> tuple[MessageUse, ...]:
+        """Return what element ``name`` names as it runs (every use for an unknown name)."""
+        return self.element_uses.get(name, self.uses)

@@ -86,7 +86,7 @@ def symbol_argument(spec: LawSpec | SensorSpec | None, index: int, arg: st.Argum
         param = spec.param(arg.name)
     else:
         param = spec.params[index] if index < len(spec.params) else None
-    return param is not None and arg.value.name in param.choices
+    return param is not None and (arg.value.name in param.choices or bool(param.any_name))
 
 
 def references(definition: st.Definition, names: Mapping[str, st.Definition],
@@ -104,6 +104,9 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
         e = stack.pop()
         if isinstance(e, (st.Name, st.Call)) and e.name in names and e.name not in shadow:
             found.append(e)
+        if isinstance(e, st.Call) and e.name == "send" and e.name not in names:
+            stack.extend(a.value for a in e.args[1:])  # the channel names no definition
+            continue
         if isinstance(e, st.Call) and registry is not None and e.name not in names:
             spec = registry.laws.get(e.name) or registry.sensors.get(e.name)
             stack.extend(a.value for i, a in enumerate(e.args)

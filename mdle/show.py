@@ -106,7 +106,8 @@ def _head(e: Element) -> str:
     ends = f"[{e.interrupt.source} | {format_time(e.timer)}]"
     if isinstance(e, AtomNode):
         name = "atom" if e.label == e.law.name else f"atom {e.label}:"
-        return f"{name} {_atom_text(e)}  {ends}"
+        sends = "".join(f", {x.source}" for x in e.sends)
+        return f"{name} {_atom_text(e)}  {ends}" + (f"  {sends[2:]}" if sends else "")
     kind = e.kind.value
     title = kind if e.label == "group" else f"{kind} {e.label}"
     return f"{title}{' (repeats)' if e.repeat else ''}  {ends}"

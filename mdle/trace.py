@@ -288,6 +288,11 @@ class TraceWriter:
         if self._clock() >= self._flush_at:
             self.flush()
 
+    def on_message(self, record: Mapping[str, Any]) -> None:
+        """Queue a ``message`` record (a team run: what the robot sent or received)."""
+        if self.error is None and not self.ended:
+            self._pending.append(_dumps(record))
+
     def on_end(self, result: RunResult) -> None:
         """Write the ``end`` record and close the file (never raises: see :attr:`error`).
 

@@ -38,6 +38,7 @@ import numpy as np
 
 from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.errors import BackendError, WorldError
+from mdle.messages import Inbox
 from sim.collision import CONTACT, Collider
 from sim.ladar import Ladar, LadarProfile, ladar_profile
 from sim.profiles import robot_profile
@@ -82,11 +83,13 @@ class SimBackend:
     robot : str or RobotProfile, optional
         A robot profile: a shipped name (``pioneer-p3dx``, ``pioneer2dx``, ``ideal``), a
         profile file, or a :class:`sim.robot.RobotProfile`; default the world's.
-    ladar : str, optional
-        A ladar profile name (``lms200``, ``lms200-ideal``); default the world's.
+    ladar : str or LadarProfile, optional
+        A ladar profile or its name (``lms200``, ``lms200-ideal``); default the world's.
     sensing : {"scan", "exact"}
         ``exact`` makes the ladar an oracle: noise-free ranges plus ``Scan.tangents``
         and ``Scan.curvatures``, and a fresh scan at every observation.
+    start : Pose, optional
+        Where :meth:`reset` puts the robot (world frame); default the world's start.
     clock : RunClock, optional
         For a profile with a ``control_cycle``: the run's motion-cycle phase and report
         instants (default: drawn from the seed). Replays of recorded runs set them.
@@ -100,10 +103,13 @@ class SimBackend:
     """
 
     clock: ClockMode = ClockMode.SIMULATED
+    #: What the robot's radio has received (a team member's; None: a robot alone).
+    inbox: Inbox | None = None
 
     def __init__(self, world: World, *, seed: int | None = None,
-                 robot: str | RobotProfile | None = None, ladar: str | None = None,
-                 sensing: str = "scan", clock: RunClock | None = None) -> None:
+                 robot: str | RobotProfile | None = None,
+                 ladar: str | LadarProfile | None = None, sensing: str = "scan",
+                 start: Pose | None = None, clock: RunClock | None = None) -> None:
         if sensing not in SENSING_MODES:
             raise BackendError(f"unknown sensing mode `{sensing}` (one of: "
                                f"{', '.join(SENSING_MODES)})")
@@ -112,12 +118,14 @@ class SimBackend:
         self.profile: RobotProfile = (world.robot if robot is None else robot
                                       if isinstance(robot, RobotProfile) else robot_profile(robot))
         self.ladar_profile: LadarProfile = (world.ladar if ladar is None
-                                            else ladar_profile(ladar))
+                                            else ladar_profile(ladar) if isinstance(ladar, str)
+                                            else ladar)
         self.sensing = sensing
-        self._collider = Collider(world.parts, self.profile.radius)
+        self._collider = self._make_collider()
         self._oracle = sensing == "exact"
         self._clock = clock or RunClock()
         self.events: list[SimEvent] = []
+        self._start = start
         self.reset()
 
     # ------------------------------------------------------------------ lifecycle
@@ -126,7 +134,8 @@ class SimBackend:
 
         Odometry restarts there at (0, 0, 0); ``pose`` is in world coordinates.
         """
-        pose = self.world.start_pose if pose is None else pose
+        if pose is None:
+            pose = self.world.start_pose if self._start is None else self._start
         clear, owner = self._collider.clearance(pose.x, pose.y)
         if clear < 0 or self.world.inside((pose.x, pose.y)):
             raise WorldError(f"world `{self.world.name}`: the robot ({self.profile.name}, "
@@ -234,8 +243,7 @@ class SimBackend:
         if len(self.events) > self._reported:
             e = self.events[self._reported]
             self._reported = len(self.events)
-            kind = (self.world.obstacles[e.obstacle].kind
-                    if 0 <= e.obstacle < len(self.world.obstacles) else "")
+            kind = self._obstacle(e.obstacle)[1]
             truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
                                 "t": e.time, "x": e.x, "y": e.y}
         return Observation(
@@ -247,6 +255,7 @@ class SimBackend:
             stalled=self._stalled,
             motors_enabled=True,
             truth=truth,
+            inbox=self.inbox,
         )
 
     def command(self, cmd: Command) -> None:
@@ -491,7 +500,7 @@ class SimBackend:
                 marked = (x, y, th)
         if safe:
             if final:
-                clear = self._collider.clearance(x, y)
+                clear = self._settled_clearance(x, y)
             else:
                 clear = (clear[0] - reach, clear[1])
                 self._clear_bound = True
@@ -499,11 +508,8 @@ class SimBackend:
             self._v = self._w = 0.0
             if not self._stalled:
                 obs_i = clear[1]
-                label = ""
-                if 0 <= obs_i < len(self.world.obstacles):
-                    o = self.world.obstacles[obs_i]
-                    label = o.name or o.kind
-                self.events.append(SimEvent("collision", t, x, y, obs_i, label))
+                self.events.append(SimEvent("collision", t, x, y, obs_i,
+                                            self._obstacle(obs_i)[0]))
             self._stalled = self._collided = True
             if not scanned:  # the robot rests at the contact point until the scan instant
                 self._scanned(self._take_scan(x, y, th, scan_at))
@@ -534,6 +540,21 @@ class SimBackend:
         return Pose(self._x, self._y, _wrap(self._th))
 
     # ------------------------------------------------------------------ internals
+    def _settled_clearance(self, x: float, y: float) -> tuple[float, int]:
+        """Return the exact clearance where a step that touched nothing ended."""
+        return self._collider.clearance(x, y)
+
+    def _make_collider(self) -> Collider:
+        """Return the collider of the robot's body in the world (made once)."""
+        return Collider(self.world.parts, self.profile.radius)
+
+    def _obstacle(self, index: int) -> tuple[str, str]:
+        """Return the label and kind of obstacle ``index`` ("", "" when none)."""
+        if 0 <= index < len(self.world.obstacles):
+            o = self.world.obstacles[index]
+            return o.name or o.kind, o.kind
+        return "", ""
+
     def _scanned(self, scan: Scan) -> None:
         """Make a new scan readable now, or after its seeded latency."""
         if self._scan_delay is None:

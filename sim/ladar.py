@@ -169,7 +169,7 @@ class Ladar:
         c, s = math.cos(th), math.sin(th)
         ranges, hit = fan.cast(x + c * mx - s * my, y + s * mx + c * my,
                                th + float(self.bearings[0]))
-        return self._finish(ranges, hit, stamp)
+        return self.finish(ranges, hit, stamp)
 
     def measure(self, hits: RayHits, heading: float, stamp: float) -> Scan:
         """Turn the ground truth of one fan of rays into a scan.
@@ -181,7 +181,7 @@ class Ladar:
         valid = hits.hit & (hits.ranges <= p.max_range * (1.0 + MAX_RANGE_SLACK))
         ranges = np.where(valid, hits.ranges, p.max_range)
         if not self.oracle:
-            return self._finish(ranges, valid, stamp)
+            return self.finish(ranges, valid, stamp)
         np.clip(ranges, 0.0, p.max_range, out=ranges)
         tangents = curvatures = None
         if hits.tangents is not None and hits.curvatures is not None:
@@ -195,11 +195,21 @@ class Ladar:
         return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
                     max_range=p.max_range, tangents=tangents, curvatures=curvatures)
 
-    def _finish(self, ranges: np.ndarray, valid: np.ndarray, stamp: float) -> Scan:
+    def finish(self, ranges: np.ndarray, valid: np.ndarray, stamp: float) -> Scan:
         """Add noise, quantise and clip, in place; return the scan.
 
         ``ranges`` (``max_range`` where not ``valid``) and ``valid`` are new arrays that
         the scan then owns.
+        """
+        self.settle(ranges, valid)
+        return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
+                    max_range=self.profile.max_range)
+
+    def settle(self, ranges: np.ndarray, valid: np.ndarray) -> None:
+        """Add noise, quantise and clip the ranges in place, then make both read-only.
+
+        For a scan made before its ranges were final (a team's robots occlude each
+        other's scans once all have moved): the same draws as :meth:`finish`.
         """
         p = self.profile
         if p.noise != "none" and p.sigma > 0:
@@ -217,5 +227,3 @@ class Ladar:
         np.minimum(ranges, p.max_range, out=ranges)
         ranges.setflags(write=False)
         valid.setflags(write=False)
-        return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
-                    max_range=p.max_range)

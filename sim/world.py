@@ -33,7 +33,7 @@ from sim.shapes import Parts, Shape
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
-__all__ = ["Nearest", "World"]
+__all__ = ["Nearest", "RobotPlace", "World"]
 
 
 def _default_robot() -> RobotProfile:
@@ -55,6 +55,16 @@ class Nearest:
     obstacle: int | np.ndarray
 
 
+@dataclass(frozen=True)
+class RobotPlace:
+    """One robot of a team: its name, profile, ladar and start pose (world frame)."""
+
+    name: str
+    profile: RobotProfile
+    ladar: LadarProfile
+    start: Pose
+
+
 @dataclass(frozen=True, eq=False)
 class World:
     """An immutable simulated world (SI units inside: metres, radians).
@@ -73,6 +83,9 @@ class World:
         The YAML file it came from.
     extent : (xmin, ymin, xmax, ymax) or None
         Plot extent given in the file; :attr:`bounds` falls back to the obstacles'.
+    robots : tuple of RobotPlace
+        The robots of a team world (``mdle run --team``), each with its name, profile,
+        ladar and start; empty for a one-robot world.
     """
 
     name: str
@@ -84,6 +97,7 @@ class World:
     description: str = ""
     source: str | None = None
     extent: tuple[float, float, float, float] | None = None
+    robots: tuple[RobotPlace, ...] = ()
 
     # ------------------------------------------------------------- derived data
     @cached_property
@@ -116,8 +130,8 @@ class World:
         """(xmin, ymin, xmax, ymax) in metres: the file's extent, else obstacles + start."""
         if self.extent is not None:
             return self.extent
-        xs = [self.start_pose.x]
-        ys = [self.start_pose.y]
+        xs = [self.start_pose.x, *(r.start.x for r in self.robots)]
+        ys = [self.start_pose.y, *(r.start.y for r in self.robots)]
         if self.obstacles:
             x0, y0, x1, y1 = self.geometry.bounds
             xs += [x0, x1]

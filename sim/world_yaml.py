@@ -22,6 +22,7 @@ bad.yaml:2:5: error: obstacles[0]: missing key `radius` (a circle needs center, 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import re
@@ -46,7 +47,10 @@ OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "arc": (("center", "radius", "start", "end"), ("thickness",)),
     "curve": (("points",), ("thickness", "closed", "spacing")),
 }
-_TOP_KEYS = ("name", "description", "seed", "start", "robot", "ladar", "extent", "obstacles")
+_TOP_KEYS = ("name", "description", "seed", "start", "robot", "ladar", "extent", "obstacles",
+             "robots")
+_TEAM_ROBOT_KEYS = ("name", "robot", "ladar", "start")
+_ROBOT_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _LADAR_KEYS = ("profile", "beams", "fov", "max_range", "noise", "sigma", "resolution", "rate")
 _DEFAULT_WALL_THICKNESS = 0.1
 _FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?")
@@ -591,7 +595,6 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     WorldError
         With the file, line, column, key path and problem of the first error found.
     """
-    from sim.collision import CONTACT
     from sim.ladar import LMS200
     from sim.profiles import DEFAULT_ROBOT, robot_profile
     from sim.world import World
@@ -626,14 +629,66 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     world = World(name=name, obstacles=obstacles, start_pose=start, seed=seed, robot=robot,
                   ladar=ladar, description=description,
                   source=None if file.startswith("<") else file, extent=extent)
-    clearance = world.clearance((start.x, start.y), robot.radius) if obstacles else math.inf
+    if "start" in top or "robots" not in top:  # a team's own start: only if given
+        _check_start(doc, "start", world, robot, start, "the robot")
+    if "robots" in top:
+        team = _team(doc, top["robots"], robot, ladar)
+        world = dataclasses.replace(world, robots=team)
+        for i, r in enumerate(team):
+            _check_start(doc, f"robots[{i}].start", world, r.profile, r.start,
+                         f"robot `{r.name}`")
+    return world
+
+
+def _check_start(doc: _Doc, path: str, world: Any, robot: Any, start: Pose, who: str) -> None:
+    """Refuse a start where the robot's body overlaps or touches an obstacle."""
+    from sim.collision import CONTACT
+
+    if not world.obstacles:
+        return
+    clearance = world.clearance((start.x, start.y), robot.radius)
     if clearance <= CONTACT:  # touching counts: the simulator would stall it at t = 0
         near = int(world.nearest_boundary((start.x, start.y)).obstacle)
-        what = _describe(obstacles[near], near)
+        what = _describe(world.obstacles[near], near)
         how = "overlaps" if clearance < 0 else "touches"
-        raise doc.fail("start", f"the robot ({robot.name}, radius {robot.radius} m) at "
+        raise doc.fail(path, f"{who} ({robot.name}, radius {robot.radius} m) at "
                        f"({start.x:g}, {start.y:g}) {how} {what}")
-    return world
+
+
+def _team(doc: _Doc, v: Any, robot: Any, ladar: Any) -> tuple[Any, ...]:
+    """Read ``robots:``, the robots of a team: names unique, starts apart."""
+    from sim.world import RobotPlace
+
+    if not isinstance(v, list) or not v:
+        raise doc.fail("robots", f"expected a list of robots (name, start, and optionally "
+                       f"robot and ladar), got {_show(v)}")
+    out: list[Any] = []
+    for i, raw in enumerate(v):
+        path = f"robots[{i}]"
+        m = _mapping(doc, path, raw, _TEAM_ROBOT_KEYS, "a robot: name, start, robot, ladar")
+        for key in ("name", "start"):
+            if key not in m:
+                raise doc.fail(path, f"missing key `{key}` (a robot needs a name and a start)")
+        name = _string(doc, f"{path}.name", m["name"])
+        if not _ROBOT_NAME.fullmatch(name):
+            raise doc.fail(f"{path}.name", f"a robot's name is a plan name (letters, digits, "
+                           f"`_`, not starting with a digit), got {name!r}")
+        if any(r.name == name for r in out):
+            raise doc.fail(f"{path}.name", f"robot `{name}` is listed twice")
+        place = RobotPlace(name,
+                           _robot(doc, f"{path}.robot", m["robot"]) if "robot" in m else robot,
+                           _ladar(doc, f"{path}.ladar", m["ladar"]) if "ladar" in m else ladar,
+                           _start(doc, f"{path}.start", m["start"]))
+        for other in out:
+            gap = math.hypot(place.start.x - other.start.x, place.start.y - other.start.y)
+            if gap < place.profile.radius + other.profile.radius:
+                raise doc.fail(f"{path}.start", f"robot `{name}` at ({place.start.x:g}, "
+                               f"{place.start.y:g}) overlaps robot `{other.name}` at "
+                               f"({other.start.x:g}, {other.start.y:g}): centres {gap:.3g} m "
+                               f"apart, radii {place.profile.radius:g} + "
+                               f"{other.profile.radius:g} m")
+        out.append(place)
+    return tuple(out)
 
 
 def _describe(shape: Any, index: int) -> str:

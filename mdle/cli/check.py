@@ -24,7 +24,9 @@ def add_parser(subparsers: Any) -> None:
                     "with file:line:col and the source line. Exit code: 0 clean, 1 errors, "
                     "2 usage errors.")
     p.add_argument("files", nargs="+", metavar="FILE",
-                   help="plan files; a folder means every .mdle file under it")
+                   help="plan files; a folder means every .mdle file under it; a team file "
+                        "(.yaml) is checked whole: its world, every robot's plan, and the "
+                        "messages and robot names across them")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="print errors only (no warnings, no summary)")
     p.add_argument("--strict", action="store_true", help="treat warnings as errors (exit 1)")
@@ -44,6 +46,20 @@ def expand_paths(paths: list[str]) -> list[str]:
     return out
 
 
+def _check_team(path: str, quiet: bool) -> int:
+    """Check a team file and its plans (MdleError on errors); returns the warnings."""
+    from mdle.cli.output import print_diagnostics
+    from mdle.teamfile import load_team, read_team
+
+    team = load_team(read_team(path))
+    found = list(team.warnings)
+    for program in team.programs.values():
+        found += program.warnings
+    if found and not quiet:
+        print_diagnostics(found, team.sources, stream=sys.stdout)
+    return len(found)
+
+
 def run(args: argparse.Namespace) -> int:
     """Check each file; returns the exit code."""
     from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
@@ -56,6 +72,10 @@ def run(args: argparse.Namespace) -> int:
     pose = False
     for path in files:
         try:
+            if path.endswith((".yaml", ".yml")):
+                found = _check_team(path, args.quiet)
+                warnings += found
+                continue
             program = load_program(path)
         except MdleError as err:
             failed += 1

@@ -1,10 +1,11 @@
 """``mdle plot``: draw a run from its trace (path, obstacles, events, boundary curvature).
 
 One trace: the run's figure (:mod:`mdle.plot`). Several: their paths and following errors
-overlaid (:mod:`mdle.plot_overlay`). ``--animate F.gif|F.mp4``: the run as an animation
-(:mod:`mdle.animate`). Without ``-o`` (and without ``--animate``) the figure opens in a
-window when there is a display, else it is written to ``NAME.png`` here, and the line
-printed says where (:mod:`mdle.figure_output`).
+overlaid (:mod:`mdle.plot_overlay`), or, for the robots of one team run, every path in one
+world with the messages marked (:mod:`mdle.team_plot`). ``--animate F.gif|F.mp4``: the
+run as an animation (:mod:`mdle.animate`). Without ``-o`` (and without ``--animate``) the
+figure opens in a window when there is a display, else it is written to ``NAME.png`` here,
+and the line printed says where (:mod:`mdle.figure_output`).
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ def add_parser(subparsers: Any) -> None:
         description="Draw the path of a run (coloured by the running atom, with the "
                     "obstacles or the detected boundary and the events marked) and the "
                     "measured boundary curvature against distance travelled. Several "
-                    "traces: their paths and following errors in one figure.",
+                    "traces: their paths and following errors in one figure (the robots "
+                    "of a team run: every path in one world, messages marked).",
         epilog="Examples: `mdle plot run.jsonl` (a window, or run.png here); "
                "`mdle plot run.jsonl -o run.png`; `mdle plot a.jsonl b.jsonl -o both.png`; "
                "`mdle plot run.jsonl --animate run.gif`.")
@@ -46,7 +48,10 @@ def run(args: argparse.Namespace) -> int:
     from mdle.errors import MdleError
     from mdle.figure_output import save_figure, show_or_write
     from mdle.plot import trace_and_world, trace_figure
+    from mdle.team_plot import is_team_trace, team_figure
 
+    if args.animate is not None and len(args.traces) > 1:
+        return _animate_team(args)
     if args.animate is not None:
         if len(args.traces) != 1:
             raise MdleError("--animate draws one run: give one trace")
@@ -64,6 +69,9 @@ def run(args: argparse.Namespace) -> int:
     if len(runs) == 1:
         fig = trace_figure(*runs[0])
         name = os.path.splitext(os.path.basename(args.traces[0]))[0] or "plot"
+    elif all(is_team_trace(trace) for trace, _ in runs):
+        fig = team_figure([trace for trace, _ in runs], runs[0][1])
+        name = "team"
     else:
         from mdle.plot_overlay import overlay_figure
 
@@ -74,4 +82,24 @@ def run(args: argparse.Namespace) -> int:
         return 0
     save_figure(fig, args.output)
     print(f"plot written to {args.output}")
+    return 0
+
+
+def _animate_team(args: argparse.Namespace) -> int:
+    """Animate the robots of one team run together (``--animate`` with several traces)."""
+    from mdle.cli.options import writable_output
+    from mdle.errors import MdleError
+    from mdle.plot import trace_and_world
+    from mdle.team_animate import animate_team
+    from mdle.team_plot import is_team_trace
+
+    if args.output is not None:
+        raise MdleError("--animate writes its own file: leave out -o")
+    runs = [trace_and_world(path, args.world) for path in args.traces]
+    if not all(is_team_trace(trace) for trace, _ in runs):
+        raise MdleError("--animate draws one run: give one trace, or the traces of the "
+                        "robots of one team run (mdle run --team --trace)")
+    writable_output(args.animate, "--animate", (".gif", ".mp4"))
+    out = animate_team([trace for trace, _ in runs], runs[0][1], args.animate)
+    print(f"animation written to {out}")
     return 0

@@ -44,7 +44,15 @@ def add_parser(subparsers: Any) -> None:
         epilog="Exit codes: 0 done, 1 errors in the plan or world (or a robot fault), "
                "3 collided or stalled, 74 the trace could not be written (disk full), "
                "130 Ctrl-C, 143 SIGTERM, 141 standard output closed.")
-    p.add_argument("plan", metavar="PLAN.mdle", help="the plan file")
+    p.add_argument("plan", metavar="PLAN.mdle", nargs="?",
+                   help="the plan file (none with --team or --robot-plan)")
+    p.add_argument("--team", metavar="TEAM.yaml",
+                   help="run a team: several robots of one world, each with its own plan "
+                        "(a team file maps robots to plans; docs/teams.md)")
+    p.add_argument("--robot-plan", dest="robot_plan", action="append", default=[],
+                   metavar="NAME=PLAN.mdle",
+                   help="run a team: robot NAME of the world (--world) runs PLAN.mdle; "
+                        "repeatable, and overrides the team file's plan for that robot")
     p.add_argument("--world", metavar="NAME|FILE",
                    help="simulated world: a reference world name or a YAML file (default: "
                         "PLAN.world.yaml or PLAN.yaml beside the plan, else the default world)")
@@ -185,6 +193,14 @@ def run(args: argparse.Namespace) -> int:
     from mdle.ros.recorder import RecordingError  # imports none of the mcap extra
     from mdle.trace import TraceWriteError
 
+    if args.team or args.robot_plan:
+        from mdle.cli.team import run_team
+
+        return run_team(args)
+    if args.plan is None:
+        _say("mdle run: give a PLAN.mdle, or a team with --team TEAM.yaml or --robot-plan "
+             "NAME=PLAN.mdle")
+        return output.EXIT_USAGE
     guard: SignalGuard = getattr(args, "signals", None) or SignalGuard()
     parts = _Parts(_header(args))
     try:

@@ -68,17 +68,14 @@ def world_figure(world: Any, scan: bool = True) -> Any:
     from matplotlib.figure import Figure
     from matplotlib.patches import Circle as DiscPatch
 
-    import sim
     from mdle.plot import draw_world
 
     fig = Figure(figsize=(8, 6), layout="constrained")
     ax = fig.subplots()
     draw_world(ax, world)
-    s = world.start_pose
-    if scan:
-        first = sim.SimBackend(world, ladar="lms200-ideal").observe().scan
+    for name, s, robot, first in _robots_at_start(world, scan):
         if first is not None:
-            mx, my, _ = world.robot.ladar_mount
+            mx, my, _ = robot.ladar_mount
             ox = s.x + math.cos(s.theta) * mx - math.sin(s.theta) * my
             oy = s.y + math.sin(s.theta) * mx + math.cos(s.theta) * my
             a = s.theta + first.bearings
@@ -87,10 +84,14 @@ def world_figure(world: Any, scan: bool = True) -> Any:
                     np.column_stack([np.full_like(ey, oy), ey]).T, color="tab:orange",
                     lw=0.3, alpha=0.5)
             ax.plot(ex[first.valid], ey[first.valid], ".", ms=2, color="tab:red")
-    r = max(world.robot.radius, 0.1)
-    ax.add_patch(DiscPatch((s.x, s.y), r, facecolor="tab:blue", alpha=0.5, edgecolor="tab:blue"))
-    ax.annotate("", xy=(s.x + 2 * r * math.cos(s.theta), s.y + 2 * r * math.sin(s.theta)),
-                xytext=(s.x, s.y), arrowprops={"arrowstyle": "->", "color": "tab:blue"})
+        r = max(robot.radius, 0.1)
+        ax.add_patch(DiscPatch((s.x, s.y), r, facecolor="tab:blue", alpha=0.5,
+                               edgecolor="tab:blue"))
+        ax.annotate("", xy=(s.x + 2 * r * math.cos(s.theta), s.y + 2 * r * math.sin(s.theta)),
+                    xytext=(s.x, s.y), arrowprops={"arrowstyle": "->", "color": "tab:blue"})
+        if name:
+            ax.annotate(name, (s.x, s.y), xytext=(0, -14), textcoords="offset points",
+                        ha="center", fontsize=8, color="tab:blue")
     x0, y0, x1, y1 = world.bounds
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
@@ -123,3 +124,21 @@ def _show(args: argparse.Namespace) -> int:
     save_figure(fig, args.output, dpi=120)
     print(f"world drawn to {args.output}")
     return 0
+
+
+def _robots_at_start(world: Any, scans: bool) -> list[tuple[str, Any, Any, Any]]:
+    """(name, start pose, profile, noise-free start scan or None) of each robot drawn.
+
+    A team world's robots (each seeing the others), else the one robot at the start.
+    """
+    import sim
+
+    if world.robots:
+        from sim.team import TeamSim
+
+        team = TeamSim(world, world.robots, sensing="exact") if scans else None
+        return [(r.name, r.start, r.profile,
+                 team.members[i].observe().scan if team is not None else None)
+                for i, r in enumerate(world.robots)]
+    scan = sim.SimBackend(world, ladar="lms200-ideal").observe().scan if scans else None
+    return [("", world.start_pose, world.robot, scan)]

@@ -23,7 +23,7 @@ from typing import Any
 from atoms.registry import Context
 from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose
 from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
-from mdle.program import AtomNode, Element, StringNode
+from mdle.program import AtomNode, Element, Send, StringNode
 from mdle.runtime.events import Cause, Collision, Event, EventKind, RunResult, Sample, Termination
 from mdle.runtime.observer import Observer
 from mdle.runtime.pacing import Pacer
@@ -69,7 +69,7 @@ class _Slot:
 
     __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "limit",
                  "test", "source", "_children", "repeat", "step", "start", "args", "alpha_v",
-                 "alpha_w", "law", "span", "tested")
+                 "alpha_w", "law", "span", "tested", "sends")
 
     def __init__(self, node: Element, path: str, label: str, level: int) -> None:
         self.node = node
@@ -94,7 +94,9 @@ class _Slot:
         self.alpha_v = 1.0
         self.alpha_w = 1.0
         self.law = ""
+        self.sends: tuple[Send, ...] = ()
         if isinstance(node, AtomNode):
+            self.sends = node.sends
             self.is_atom = True
             self.kind = "atom"
             self.step = node.law.step
@@ -212,6 +214,8 @@ class Scheduler:
         self._max_lateness = 0.0
         self._stall_since: float | None = None
         self._last_cmd = STOP
+        # where an atom's `send` goes: a team member's transmitter (alone: nowhere)
+        self._radio: Any = getattr(backend, "radio", None)
         self.result: RunResult | None = None
 
     # ------------------------------------------------------------------ lifecycle API
@@ -374,6 +378,8 @@ class Scheduler:
                                f"t = {ctx.t:.3f} s", slot.span, exc) from exc
             if slot.alpha_v != 1.0 or slot.alpha_w != 1.0:
                 cmd = Command(cmd.v * slot.alpha_v, cmd.omega * slot.alpha_w)
+            if slot.sends and self._radio is not None:
+                self._send(slot, ctx, now)
         else:
             cmd = STOP
         self.backend.command(cmd)
@@ -405,6 +411,18 @@ class Scheduler:
         if not running:
             self._finish(None, fault)
         return running
+
+    def _send(self, slot: _Slot, ctx: Context, now: float) -> None:
+        """Send what the running atom sends at each of its ticks (language.md, messages)."""
+        for s in slot.sends:
+            try:
+                value = None if s.value is None else float(s.value(ctx))
+            except MdleError:
+                raise
+            except Exception as exc:
+                raise _failure(f"`{s.source}` of `{slot.path}` failed at t = {ctx.t:.3f} s",
+                               s.span, exc) from exc
+            self._radio.send(s.channel, value, now)
 
     def _absorb(self, obs: Observation) -> Collision | None:
         """Make ``obs`` the latest observation: pose, distance, clearance, collision.

@@ -65,7 +65,8 @@ def test_completer_offers_laws_sensors_names_and_keywords(repl: Repl) -> None:
     assert completions(repl, "fol") == ["follow_wide", "follow_boundary"]
     assert completions(repl, "(go(1 m/s), bou") == ["boundary_range", "boundary_curvature",
                                                     "boundary_tangent"]
-    assert completions(repl, "be") == ["behavior"]  # a keyword, at the start only
+    # a keyword at the start only, then names (the team sensor `bearing_to`)
+    assert completions(repl, "be") == ["behavior", "bearing_to"]
     assert "behavior" not in completions(repl, "(go(1 m/s), be")
     assert completions(repl, "(go(1 m/s), stalled or nev") == ["never"]
 
@@ -80,7 +81,7 @@ def test_completer_offers_parameters_symbols_and_units(repl: Repl) -> None:
     assert completions(repl, "(follow_boundary(side = ") == ["right", "left"]
     assert completions(repl, "(go(v), boundary_range(side = l") == ["left"]
     assert completions(repl, "atom a(d = 1 m, speed) = (follow_boundary(rc = 1 m, s") == [
-        "side = ", "speed"]
+        "side = ", "scaled", "speed"]  # `scaled`: a symbol the law takes (damping)
     # units of the parameter's dimension: v of go is a speed, rate of turn a turn rate
     assert completions(repl, "(go(0.3 m") == ["m/s"]
     assert completions(repl, "(turn(30 deg") == ["deg/s"]
@@ -88,7 +89,7 @@ def test_completer_offers_parameters_symbols_and_units(repl: Repl) -> None:
     assert completions(repl, "(follow_boundary(v = 1 ") == ["m/s"]
     assert completions(repl, "(go(1 m/s), never, 2 m") == ["mm", "ms", "min", "m/s"]
     assert completions(repl, "(go(0") == []
-    assert completions(repl, "atom x2 m") == ["min_range"]  # `2` ends a name: no units
+    assert completions(repl, "atom x2 m") == ["min_range", "message"]  # `2` ends a name: no units
 
 
 def test_completer_offers_commands_worlds_and_files(repl: Repl, tmp_path: Path,

@@ -1,0 +1,199 @@
+"""The other robots of a team as seen by one robot: discs its ladar sees and its body meets.
+
+Each robot's body is a disc (its profile's radius about the rotation centre), so the
+others are a handful of circles that move from tick to tick. :class:`Discs` holds where
+they are for one robot's step; :func:`cast_discs` intersects a fan of rays with all of
+them at once (a (beams, discs) array: no loop over either); :class:`CrowdCollider` adds
+them to the static world's clearance, so the swept motion of
+:class:`sim.collision.Collider` stops at another robot exactly as at a wall.
+
+>>> import numpy as np
+>>> d = Discs(np.array([3.0]), np.array([0.0]), np.array([0.5]), np.array([7]))
+>>> t, who = cast_discs(0.0, 0.0, np.array([0.0, 1.5]), d, which=True)
+>>> t.tolist(), who.tolist()
+([2.5, inf], [0, -1])
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim.collision import Collider
+from sim.shapes import Parts
+
+__all__ = ["Discs", "NO_DISCS", "CrowdCollider", "cast_discs", "occlusions"]
+
+
+@dataclass(frozen=True, eq=False)
+class Discs:
+    """Circles of the robots: centres ``cx``, ``cy`` (m), radii ``r`` (m), owner ids.
+
+    A team keeps one for all its robots, its centres views of the positions it updates in
+    place as each robot moves; each robot skips its own disc (``skip``, -1: none).
+    """
+
+    cx: np.ndarray
+    cy: np.ndarray
+    r: np.ndarray
+    owner: np.ndarray
+    z: np.ndarray | None = None
+    """The centres as complex numbers ``x + iy`` (kept by the team beside cx, cy)."""
+
+    def __len__(self) -> int:
+        return int(self.cx.shape[0])
+
+
+NO_DISCS = Discs(np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0, dtype=np.intp))
+
+
+def cast_discs(ox: float, oy: float, angles: np.ndarray, discs: Discs, skip: int = -1,
+               which: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
+    """Intersect rays from ``(ox, oy)`` at world ``angles`` with the discs (but ``skip``).
+
+    Returns the distance to the nearest disc along each ray (``inf``: none ahead) and,
+    with ``which``, that disc's position in ``discs`` (-1: none). A ray starting inside a
+    disc does not see it.
+    """
+    n = angles.shape[0]
+    if not len(discs):
+        return np.full(n, math.inf), (np.full(n, -1, dtype=np.intp) if which else None)
+    w = np.empty((2, len(discs)))
+    np.subtract(discs.cx, ox, out=w[0])          # centres relative to the origin
+    np.subtract(discs.cy, oy, out=w[1])
+    c = np.einsum("ij,ij->j", w, w)
+    c -= discs.r * discs.r                       # > 0: the origin is outside the disc
+    if skip >= 0:
+        c[skip] = -1.0
+    u = np.empty((n, 2))
+    np.cos(angles, out=u[:, 0])
+    np.sin(angles, out=u[:, 1])
+    proj = u @ w                                 # (B, M): the centre's projection on each ray
+    disc = proj * proj
+    disc -= c                                    # discriminant of t^2 - 2 proj t + c = 0
+    miss = disc < 0.0
+    miss |= proj <= 0.0                          # behind the origin
+    miss |= c <= 0.0                             # around the origin
+    np.maximum(disc, 0.0, out=disc)
+    np.sqrt(disc, out=disc)
+    proj -= disc                                 # the nearer root
+    proj[miss] = math.inf
+    best = proj.min(axis=1)
+    if not which:
+        return best, None
+    j = proj.argmin(axis=1)
+    return best, np.where(np.isfinite(best), j, -1)
+
+
+def occlusions(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarray,
+               beams: np.ndarray, max_range: np.ndarray, skip: np.ndarray, discs: Discs
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Find where the discs cut the rays of several scans at once: one call per team tick.
+
+    Scan ``s`` has ``beams[s]`` rays from ``(ox[s], oy[s])``, ray ``b`` at the world
+    angle ``first[s] + b * step[s]`` (a ladar's even fan), and does not see disc
+    ``skip[s]`` (its own robot). Only the rays a disc can cut are computed: each disc's
+    angular window, found for every (scan, disc) pair together, gives a run of beams;
+    the runs are laid end to end and cast in one pass, so the work grows with the beams
+    the robots cover, not with scans times beams times robots.
+
+    Returns (scan, beam, distance) of every ray that meets a disc within the scan's
+    ``max_range``, grouped by scan in increasing order (a beam may appear more than
+    once: keep the nearest). The windows assume a fan narrower than a full turn.
+    """
+    dx = discs.cx[None, :] - ox[:, None]          # (S, N): each disc from each origin
+    dy = discs.cy[None, :] - oy[:, None]
+    d2 = dx * dx + dy * dy
+    reach = max_range[:, None] + discs.r[None, :]
+    near = (d2 > discs.r * discs.r) & (d2 < reach * reach)
+    near[np.arange(ox.shape[0]), skip] = False
+    si, ki = np.nonzero(near)                     # row-major: grouped by scan
+    if not si.size:
+        empty = np.zeros(0, dtype=np.intp)
+        return empty, empty, np.zeros(0)
+    wx, wy = dx[si, ki], dy[si, ki]
+    d = np.sqrt(d2[si, ki])
+    rp = discs.r[ki]
+    half = np.arcsin(rp / d)                      # the disc's half-width seen from there
+    phi = np.mod(np.arctan2(wy, wx) - first[si], 2.0 * math.pi)
+    st = step[si]
+    lo = np.maximum(np.ceil((phi - half) / st), 0.0).astype(np.intp)
+    hi = np.minimum(np.floor((phi + half) / st), beams[si] - 1).astype(np.intp)
+    count = np.maximum(hi - lo + 1, 0)
+    pair = np.repeat(np.arange(si.shape[0]), count)
+    start = np.cumsum(count) - count
+    beam = lo[pair] + (np.arange(pair.shape[0]) - start[pair])
+    scan = si[pair]
+    angle = first[scan] + beam * step[scan]
+    proj = wx[pair] * np.cos(angle) + wy[pair] * np.sin(angle)
+    disc = proj * proj - (d2[si, ki] - rp * rp)[pair]
+    t = proj - np.sqrt(np.maximum(disc, 0.0))
+    keep = (disc >= 0.0) & (proj > 0.0) & (t <= max_range[scan])
+    return scan[keep], beam[keep], t[keep]
+
+
+class CrowdCollider(Collider):
+    """A :class:`Collider` for the static world plus the discs of the other robots.
+
+    ``discs`` is set before each of the robot's steps (the others stand still while it
+    moves). A disc's obstacle index is ``robot_base + owner`` (after the world's
+    obstacles), so contacts name the robot touched; ``skip`` is the robot's own disc.
+    """
+
+    def __init__(self, parts: Parts, radius: float, robot_base: int) -> None:
+        super().__init__(parts, radius)
+        self.robot_base = robot_base
+        self.discs = NO_DISCS
+        #: the robot's own disc in ``discs`` (-1: not there)
+        self.skip = -1
+        self._others = False  # any disc but its own?
+        self._reach = np.zeros(0)  # radius of each disc plus the body's (-inf: its own)
+        self._static_at: tuple[float, float, float, int] | None = None
+
+    def join(self, discs: Discs, skip: int) -> None:
+        """Meet the robots at ``discs`` (a live view), except disc ``skip``, its own."""
+        self.discs = discs
+        self.skip = skip
+        self._others = len(discs) > (skip >= 0)
+        self._reach = discs.r + self.radius
+        if skip >= 0:
+            self._reach[skip] = -math.inf
+
+    def static_clearance(self, x: float, y: float) -> tuple[float, int]:
+        """Return the clearance to the nearest wall (kept: asked again at the same place)."""
+        at = self._static_at
+        if at is not None and at[0] == x and at[1] == y:
+            return at[2], at[3]
+        c, owner = super().clearance(x, y)
+        self._static_at = (x, y, c, owner)
+        return c, owner
+
+    def clearance(self, x: float, y: float) -> tuple[float, int]:
+        """Return the clearance to the nearest wall or robot, and its index."""
+        c, owner = self.static_clearance(x, y)
+        d = self.discs
+        if self._others:
+            gaps = np.abs(d.z - complex(x, y)) if d.z is not None else np.hypot(d.cx - x,
+                                                                                d.cy - y)
+            gaps -= self._reach                  # its own disc: +inf
+            j = int(gaps.argmin())
+            gap = float(gaps[j])
+            if gap < c:
+                return gap, self.robot_base + int(d.owner[j])
+        return c, owner
+
+    def _outward(self, x: float, y: float) -> tuple[float, float]:
+        """Return the unit vector away from the nearest wall or robot."""
+        d = self.discs
+        if self._others:
+            gaps = np.hypot(d.cx - x, d.cy - y) - d.r
+            if self.skip >= 0:
+                gaps[self.skip] = math.inf
+            j = int(gaps.argmin())
+            if gaps[j] < Collider.distance(self, x, y)[0]:
+                dx, dy = x - float(d.cx[j]), y - float(d.cy[j])
+                n = math.hypot(dx, dy)
+                return (dx / n, dy / n) if n > 0 else (0.0, 0.0)
+        return super()._outward(x, y)
