@@ -34,13 +34,14 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
+from atoms.memo import ByIdentity
 from atoms.registry import Args, Context, Param, sensor
+from atoms.steering import MISS, Ray
 from mdle.units import ANGLE, CURVATURE, LENGTH
 
 if TYPE_CHECKING:
     import numpy as np
 
-    from atoms.steering import Ray
     from mdle.backend import Scan
 
 __all__ = ["Side", "BoundaryView", "boundary_view", "cached_view", "parse_side",
@@ -98,8 +99,10 @@ class _Layout:
     Law-frame beam ``j`` is original beam ``j`` (right) or ``n-1-j`` (left). The view reads
     two runs of beams: the side run ``0 .. n_side-1`` and the front run ``f0 .. f1`` around
     the front beam ``c``. Both are gathered into one short array (``take``, original-frame
-    indices), with their unit directions, link limits per unit range and a mask of the pairs
-    that are neighbours in the scan (False at the join of the two runs).
+    indices), with their unit directions and link limits per unit range; the pair
+    ``join, join+1`` (the last side beam and the first front beam) are not neighbours in the
+    scan (``join`` is -1 without a side run). ``gap`` is the depth gap always accepted
+    between neighbours (m).
     """
 
     c: int
@@ -111,7 +114,8 @@ class _Layout:
     take: np.ndarray
     unit: np.ndarray
     spacing: np.ndarray
-    adjacent: np.ndarray
+    join: int
+    gap: float
 
 
 @lru_cache(maxsize=32)
@@ -122,7 +126,7 @@ def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
     """
     import numpy as np
 
-    from atoms.estimators import DEFAULT_GAP_FACTOR
+    from atoms.estimators import DEFAULT_GAP, DEFAULT_GAP_FACTOR
 
     b = np.frombuffer(key, dtype=np.float64)
     n = b.size
@@ -142,11 +146,24 @@ def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
     np.cos(bl, out=unit.real)
     np.sin(bl, out=unit.imag)
     spacing = DEFAULT_GAP_FACTOR * np.abs(bl[1:] - bl[:-1])
-    adjacent = law[1:] == law[:-1] + 1
-    adjacent[n_side - 1: n_side] = False  # the join of the two runs
-    for a in (take, unit, spacing, adjacent):
+    for a in (take, unit, spacing):
         a.setflags(write=False)
-    return _Layout(c, c_ok, s_ok, n_span, n_side, f0, take, unit, spacing, adjacent)
+    return _Layout(c, c_ok, s_ok, n_span, n_side, f0, take, unit, spacing, n_side - 1,
+                   DEFAULT_GAP)
+
+
+def _layout_of(bearings: Any, left: bool, side_span: float, windows: tuple[Any, ...]
+               ) -> tuple[_Layout, tuple[int, ...]]:
+    """Return the :class:`_Layout` of a bearing array and the windows as ints."""
+    import numpy as np
+
+    wins = tuple(int(w) for w in windows)
+    b = np.ascontiguousarray(bearings, dtype=float)
+    return _layout(b.tobytes(), left, float(side_span), max(wins)), wins
+
+
+#: :func:`_layout_of` by the bearing array itself (a sensor's fixed bearings).
+_layouts = ByIdentity(_layout_of, size=32)
 
 
 def _run(links: list[bool], first: int, last: int, backwards: bool) -> int:
@@ -177,23 +194,24 @@ def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
     """
     import numpy as np
 
-    from atoms.steering import MISS, Ray
-
     m = z.size
     if m < 5:
         return MISS
-    q = z - np.add.reduce(z) / m
+    total = complex(np.add.reduce(z))
+    inv = 1.0 / m  # the mean as numpy's complex division by m computes it
+    q = z - complex(total.real * inv, total.imag * inv)
     sq = complex(np.dot(q, q))  # unconjugated: sxx - syy + 2i sxy
     if not (math.isfinite(sq.real) and math.isfinite(sq.imag)):
         return MISS
     ang = 0.5 * math.atan2(sq.imag, sq.real)
-    d = complex(z[-1] - z[0])  # orient the line first -> last point
+    first, last = z[::m - 1].tolist()
+    d = last - first  # orient the line first -> last point
     if math.cos(ang) * d.real + math.sin(ang) * d.imag < 0:
         ang += math.pi
     ang = math.atan2(math.sin(ang), math.cos(ang))
     w = q * complex(math.cos(ang), -math.sin(ang))  # s + i h in the line's frame
     s, h = w.real, w.imag
-    scale = float(np.abs(s).max())
+    scale = float(np.maximum.reduce(np.abs(s)))
     if not scale > 0:
         return MISS
     x = np.empty((3, m))
@@ -233,8 +251,6 @@ def _front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
     ``exact``; None when no window gives an estimate and the one-sided chord needs the
     surface's true extent on both sides (only for degenerate, coincident points).
     """
-    from atoms.steering import Ray
-
     reach = min(right, left)
     ws = [w for w in windows if w <= reach] or ([reach] if reach >= 1 else [])
     if ws:
@@ -306,18 +322,14 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
     """
     import numpy as np
 
-    from atoms.estimators import DEFAULT_GAP
-    from atoms.steering import MISS, Ray
-
     side = parse_side(side)
     if scan is None or scan.ranges.size == 0:
         return BoundaryView(MISS, MISS, False, math.inf if scan is None else scan.max_range)
-    ranges = np.asarray(scan.ranges, dtype=float)
-    bearings = np.ascontiguousarray(scan.bearings, dtype=float)
-    valid = np.asarray(scan.valid, dtype=bool)
     left = side is Side.LEFT
-    wins = tuple(int(w) for w in windows)
-    lay = _layout(bearings.tobytes(), left, float(side_span), max(wins))
+    lay, wins = _layouts(scan.bearings, left, side_span,
+                         windows if type(windows) is tuple else tuple(windows))
+    ranges = np.asarray(scan.ranges, dtype=float)
+    valid = np.asarray(scan.valid, dtype=bool)
     n = ranges.size
     if scan.tangents is not None and scan.curvatures is not None:
         tangents, curvatures = scan.tangents, scan.curvatures
@@ -341,30 +353,36 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
         return BoundaryView(oracle(lay.c) if lay.c_ok else MISS, side_ray, True,
                             scan.max_range)
     r = ranges[lay.take]
-    ok = np.isfinite(r)
+    ok = valid[lay.take]
     ok &= r > 0
-    ok &= valid[lay.take]
+    # NaN where invalid; an infinite range stays, and neither is ever linked to a neighbour
+    # (NaN and inf compare False below) nor taken as a ray's own beam (checked there)
     r = np.where(ok, r, np.nan)
     z = r * lay.unit
     lim = lay.spacing * r[:-1]
-    np.maximum(lim, DEFAULT_GAP, out=lim)
-    link = np.abs(z[1:] - z[:-1]) < lim  # NaN (an invalid end) compares False
-    link &= lay.adjacent
-    links = link.tolist()
+    np.maximum(lim, lay.gap, out=lim)
+    links = (np.abs(z[1:] - z[:-1]) < lim).tolist()
     ns = lay.n_side
+    if 0 <= lay.join < len(links):
+        links[lay.join] = False  # the side run's last beam and the front run's first
     side_ray = MISS
-    if ns and ok[0]:
-        end0 = _run(links, 0, ns - 1, backwards=False)
-        side_ray = _side_ray(z[:min(end0, lay.n_span) + 1], float(r[0]))
+    if ns:
+        r0 = float(r[0])
+        if math.isfinite(r0):
+            end0 = _run(links, 0, ns - 1, backwards=False)
+            side_ray = _side_ray(z[:min(end0, lay.n_span) + 1], r0)
     front = MISS
     cl = ns + lay.c - lay.f0
-    if lay.c_ok and ok[cl]:
-        right = _run(links, ns, cl, backwards=True)
-        ahead = _run(links, cl, len(links), backwards=False)
-        ray = _front_ray(z[ns:], cl - ns, right, ahead, float(r[cl]), wins)
-        if ray is None:  # degenerate window (coincident points): read the whole scan
-            ray = _front_full(ranges, bearings, valid, left, lay.c, float(r[cl]), wins)
-        front = ray
+    if lay.c_ok:
+        rc = float(r[cl])
+        if math.isfinite(rc):
+            right = _run(links, ns, cl, backwards=True)
+            ahead = _run(links, cl, len(links), backwards=False)
+            ray = _front_ray(z[ns:], cl - ns, right, ahead, rc, wins)
+            if ray is None:  # degenerate window (coincident points): read the whole scan
+                bearings = np.asarray(scan.bearings, dtype=float)
+                ray = _front_full(ranges, bearings, valid, left, lay.c, rc, wins)
+            front = ray
     return BoundaryView(front, side_ray, False, scan.max_range)
 
 
@@ -384,15 +402,13 @@ def _turning_ahead(ranges: "np.ndarray", valid: "np.ndarray", tangents: "np.ndar
     """
     import numpy as np
 
-    from atoms.estimators import DEFAULT_GAP
-
     ns = lay.n_side
     idx = lay.take[:ns]
     r = ranges[idx]
     ok = valid[idx] & np.isfinite(r) & (r > 0)
     z = np.where(ok, r, np.nan) * lay.unit[:ns]
     step = np.abs(z[1:] - z[:-1])
-    link = step < np.maximum(lay.spacing[:ns - 1] * r[:-1], DEFAULT_GAP)
+    link = step < np.maximum(lay.spacing[:ns - 1] * r[:-1], lay.gap)
     end = int(np.argmin(link)) if not link.all() else ns - 1  # beams 0..end on one surface
     if end < 1:
         return None
@@ -428,7 +444,7 @@ def cached_view(ctx: Context, side: Side | str, windows: Sequence[int] = (7, 8, 
                 side_span: float = math.radians(30.0)) -> BoundaryView:
     """Return :func:`boundary_view` of this tick's scan, computed once per tick and side."""
     side = parse_side(side)
-    key = ("boundary", side, tuple(windows), side_span)
+    key = ("boundary", side is Side.LEFT, tuple(windows), side_span)  # no Enum.__hash__
     view = ctx.cache.get(key)
     if view is None:
         view = boundary_view(ctx.obs.scan, side, windows, side_span)

@@ -47,10 +47,13 @@ from functools import lru_cache
 
 import numpy as np
 
+from atoms.memo import ByIdentity
+
 __all__ = [
     "Surfaces",
     "Estimate",
     "scan_points",
+    "valid_points",
     "surfaces",
     "smooth_positions",
     "menger",
@@ -145,10 +148,18 @@ def _bearing_terms(key: bytes, gap_factor: float) -> tuple[np.ndarray, np.ndarra
     return unit, spacing
 
 
+def _terms_of(a: np.ndarray, gap_factor: float) -> tuple[np.ndarray, np.ndarray]:
+    return _bearing_terms(np.ascontiguousarray(a, dtype=float).tobytes(), float(gap_factor))
+
+
+#: :func:`_bearing_terms` by the bearing array itself (a sensor's fixed bearings).
+_terms_by_array = ByIdentity(_terms_of)
+
+
 def _unit_directions(a: np.ndarray, gap_factor: float = DEFAULT_GAP_FACTOR
                      ) -> tuple[np.ndarray, np.ndarray]:
-    """Return :func:`_bearing_terms` of a 1-D float64 bearing array."""
-    return _bearing_terms(np.ascontiguousarray(a).tobytes(), float(gap_factor))
+    """Return :func:`_bearing_terms` of a 1-D bearing array."""
+    return _terms_by_array(a, gap_factor)
 
 
 def _complex_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None,
@@ -165,8 +176,27 @@ def _complex_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray 
     if valid is not None:
         ok &= np.asarray(valid, dtype=bool)
     r = np.where(ok, r, np.nan)
-    unit, spacing = _unit_directions(np.asarray(bearings, dtype=float), gap_factor)
+    unit, spacing = _unit_directions(bearings, gap_factor)
     return r * unit, ok, r, spacing
+
+
+def valid_points(ranges: np.ndarray, bearings: np.ndarray,
+                 valid: np.ndarray | None = None) -> np.ndarray:
+    """Compute the robot-frame points (M, 2) of the beams of a 1-D scan that saw a surface.
+
+    The finite rows of :func:`scan_points`, in beam order.
+
+    >>> p = valid_points(np.array([1.0, np.inf, 2.0]), np.array([0.0, 0.1, np.pi / 2]))
+    >>> p.round(6).tolist()
+    [[1.0, 0.0], [0.0, 2.0]]
+    """
+    r = np.asarray(ranges, dtype=float)
+    ok = np.isfinite(r)
+    ok &= r > 0
+    if valid is not None:
+        ok &= np.asarray(valid, dtype=bool)
+    z = r[ok] * _unit_directions(bearings)[0][ok]
+    return z.view(np.float64).reshape(-1, 2)
 
 
 def scan_points(ranges: np.ndarray, bearings: np.ndarray,

@@ -20,7 +20,9 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from atoms import steering
 from atoms.boundary import SIDES, Side, cached_view, parse_side
+from atoms.latency import shift_front, shift_side
 from atoms.registry import Args, Context, Param, control_law, sensor
 from mdle.backend import Command
 from mdle.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
@@ -74,16 +76,15 @@ def scan_points_cached(ctx: Context) -> Any:
     """Return the robot-frame points (M, 2) of this tick's valid beams, once per tick."""
     pts = ctx.cache.get("scan_points")
     if pts is None:
-        import numpy as np
-
-        from atoms.estimators import scan_points
+        import atoms.estimators as est  # numpy, on first use (not `from`: no __path__ probe)
 
         scan = ctx.obs.scan
         if scan is None:
+            import numpy as np
+
             pts = np.zeros((0, 2))
         else:
-            p = scan_points(scan.ranges, scan.bearings, scan.valid)
-            pts = p[np.isfinite(p[:, 0])]
+            pts = est.valid_points(scan.ranges, scan.bearings, scan.valid)
         ctx.cache["scan_points"] = pts
     return pts
 
@@ -112,8 +113,6 @@ def scan_points_cached(ctx: Context) -> Any:
 )
 def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Command:
     """Follow a boundary at distance rc on one side at constant speed (the paper's atom)."""
-    from atoms import steering
-
     if state is None:  # run without start (a bare call): make the state now
         state = start_follow(args, ctx)
     g = state.gains
@@ -130,8 +129,6 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     pred = state.predictor
     if pred is not None and state.latency is not None:
         # answer the boundary as it will be when this command acts, not as it was scanned
-        from atoms.latency import shift_front, shift_side
-
         pred.record_pose(obs.time, law_pose)
         stamp = obs.scan.stamp if obs.scan is not None else obs.time
         moved, law_pose = pred.predict(obs.time, stamp, law_pose, obs.v, sgn * obs.omega,
@@ -177,23 +174,27 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
 
 def _nearest_on_side(points: Any, sgn: float) -> tuple[float, float] | None:
     """Return (distance, law-frame bearing) of the nearest scan point on the followed side."""
-    y = points[:, 1] * sgn
-    ok = y < 0.0
-    if not ok.any():
+    import numpy as np
+
+    if points.shape[0] == 0:
         return None
-    q = points[ok]
-    d2 = (q * q).sum(1)
-    k = int(d2.argmin())
-    return math.sqrt(float(d2[k])), math.atan2(float(y[ok][k]), float(q[k, 0]))
+    x, y = points[:, 0], points[:, 1] * sgn
+    d2 = x * x  # full-length operations only (a reduction over the short axis is slow)
+    d2 += y * y
+    d2[~(y < 0.0)] = math.inf  # the other side is never nearest (the points are finite)
+    k = int(np.argmin(d2))
+    if not d2[k] < math.inf:
+        return None
+    return math.sqrt(float(d2[k])), math.atan2(float(y[k]), float(x[k]))
 
 
 def _into(points: Any, dx: float, dy: float, dth: float) -> Any:
     """Return robot-frame points (M, 2) in the frame moved by ``(dx, dy, dth)``."""
     import numpy as np
 
-    c, s = math.cos(dth), math.sin(dth)
-    q = points - np.array([dx, dy])
-    return q @ np.array([[c, -s], [s, c]])
+    # as complex numbers: a shift and a rotation, two calls (no small arrays to build)
+    z = np.ascontiguousarray(points, dtype=float).view(np.complex128)
+    return ((z - complex(dx, dy)) * complex(math.cos(dth), -math.sin(dth))).view(np.float64)
 
 
 @sensor(result=TIME)

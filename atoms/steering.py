@@ -464,20 +464,25 @@ def _own_clearance(near: "np.ndarray", speed: float, rate: float, lookahead: flo
     """Return the clearance (m, before the body radius) of the one arc at ``(speed, rate)``.
 
     The common case of every tick (the law's own arc is admissible), without the candidate
-    bookkeeping of :func:`_arc_clearance`: the samples are computed in plain floats and one
-    (S, M) distance array is reduced.
+    bookkeeping of :func:`_arc_clearance`: the few samples are computed in plain floats, and
+    the points taken as complex numbers, so that one subtraction gives every sample-to-point
+    offset and three more calls their squared lengths (never a reduction over a short axis,
+    which numpy runs as one inner loop per row).
     """
     import numpy as np
 
     length = speed * lookahead
     c = rate / speed
-    ss = [length * (k + 1) / samples for k in range(samples)]
     if abs(c) < 1e-9:
-        arc = np.array([[si, 0.0] for si in ss])
+        arc = [complex(length * (k + 1) / samples, 0.0) for k in range(samples)]
     else:
-        arc = np.array([[math.sin(c * si) / c, (1.0 - math.cos(c * si)) / c] for si in ss])
-    d = arc[:, None, :] - near[None, :, :]
-    return float(math.sqrt(np.min(np.einsum("smk,smk->sm", d, d))))
+        arc = [complex(math.sin(c * si) / c, (1.0 - math.cos(c * si)) / c)
+               for si in [length * (k + 1) / samples for k in range(samples)]]
+    d = np.subtract(arc, np.ascontiguousarray(near, dtype=float).view(np.complex128))  # (M, S)
+    re, im = d.real, d.imag
+    d2 = re * re
+    d2 += im * im
+    return math.sqrt(np.minimum.reduce(d2, axis=None))
 
 
 def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius: float,
@@ -519,10 +524,11 @@ def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius:
     if points.shape[0] == 0 or v <= 0 or lookahead <= 0:
         return v, u, math.inf
     reach = v * lookahead + radius + margin + 0.05
-    near = points[(points * points).sum(1) < reach * reach]
+    dist = np.hypot(points[:, 0], points[:, 1])  # one call, not three
+    near = points[dist < reach]
     if near.shape[0] == 0:
         return v, u, math.inf
-    now = float(np.sqrt((near * near).sum(1).min())) - radius
+    now = float(np.fmin.reduce(dist)) - radius  # the nearest of all (NaN aside) is near
     need = min(margin, now - 1e-3)
     own = _own_clearance(near, v, u, lookahead, samples) - radius
     if own >= need:

@@ -7,7 +7,7 @@ import importlib
 
 import pytest
 
-MODULES = ["atoms.estimators", "atoms.boundary", "atoms.steering"]
+MODULES = ["atoms.estimators", "atoms.boundary", "atoms.steering", "atoms.memo"]
 
 
 @pytest.mark.parametrize("name", MODULES)
