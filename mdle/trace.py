@@ -40,7 +40,7 @@ if TYPE_CHECKING:
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
            "TraceWriteError", "SampleFormat", "LaserRecords", "read_trace", "versions",
            "decode_ranges", "dumps", "start_record", "event_record", "end_record", "scan_ranges",
-           "encode_ranges", "laser_mount"]
+           "encode_ranges", "laser_mount", "laser_timing"]
 
 TRACE_FORMAT = "mdle-trace"
 TRACE_VERSION = 1
@@ -268,6 +268,7 @@ class TraceWriter:
     def on_start(self, scheduler: "Scheduler") -> None:
         """Record the element and rate the run uses."""
         self._laser.mount = laser_mount(scheduler.backend)
+        self._laser.timing = laser_timing(scheduler.backend, scheduler.rate)
         self._write(_dumps(start_record(scheduler)))
 
     def on_event(self, event: Event) -> None:
@@ -347,8 +348,8 @@ class TraceWriter:
         self.close()
 
 
-_HEAD = ('{"type":"sample","t":%r,"x":%s,"y":%s,"theta":%s,"v":%s,"omega":%s,"cmd_v":%s,'
-         '"cmd_omega":%s,"path":%s,"lateness":%.9g,"stalled":%s')
+_LINE_HEAD = ('{"type":"sample","t":%r,"x":%s,"y":%s,"theta":%s,"v":%s,"omega":%s,"cmd_v":%s,'
+              '"cmd_omega":%s,"path":')
 _SEVEN = ",".join(["%.9g"] * 7)
 _TEN = ",".join(["%.9g"] * 10)
 
@@ -364,6 +365,7 @@ class SampleFormat:
     def __init__(self) -> None:
         self._paths: dict[str, str] = {}
         self._diag: dict[tuple[str, ...], str] = {}
+        self._lines: dict[tuple[Any, ...], str] = {}
 
     def quoted(self, path: str) -> str:
         """Return ``path`` as a JSON string (cached)."""
@@ -412,32 +414,64 @@ class SampleFormat:
         true_theta) exactly as a reader of the line gets them (the true pose left out
         when the sample has none), or None when a number is not finite (then the caller
         rounds for itself). Formatting each number once serves the line and its reader.
+
+        The line is one ``%`` format of a template made once per shape of line (path,
+        flags, which optional fields, diagnostic names): the same text as :meth:`__call__`.
         """
         (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
          diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
+        has_truth = False
         try:
+            total = t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
             if true_x is not None and true_y is not None and true_theta is not None:
-                if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
-                                + true_x + true_y + true_theta):
-                    return self(s), None
+                has_truth = True
+                total += true_x + true_y + true_theta
+            if scan_age is not None:
+                total += scan_age
+            if clearance is not None:
+                total += clearance
+            dvalues = tuple(diag.values()) if diag else ()
+            if not isfinite(total + sum(dvalues)):
+                return self(s), None
+            if has_truth:
                 digits = (_TEN % (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
                                   true_theta)).split(",")
-                truth: tuple[str, str, str] | None = (digits[7], digits[8], digits[9])
             else:
-                if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
-                    return self(s), None
                 digits = (_SEVEN % (x, y, theta, v, omega, cmd_v, cmd_omega)).split(",")
-                truth = None
-            quoted = self._paths.get(path)
-            if quoted is None:
-                quoted = self.quoted(path)
-            line = _HEAD % (float(t), digits[0], digits[1], digits[2], digits[3], digits[4],
-                            digits[5], digits[6], quoted, lateness,
-                            "true" if stalled else "false")
-            line = self._tail(line, scan_age, clearance, collided, truth, diag)
+            key = (path, not stalled, scan_age is None, clearance is None,
+                   None if collided is None else not collided, has_truth,
+                   tuple(diag) if diag else ())
+            template = self._lines.get(key)
+            if template is None:
+                template = self._template(key)
+            args: tuple[Any, ...] = (float(t), *digits[:7], lateness)
+            if scan_age is not None:
+                args += (scan_age,)
+            if clearance is not None:
+                args += (clearance,)
+            line = template % (*args, *digits[7:], *dvalues)
         except (TypeError, ValueError):  # a diagnostic that is not a number
             return self(s), None
         return line, tuple(map(float, digits))
+
+    def _template(self, key: tuple[Any, ...]) -> str:
+        """Make (and keep) the ``%`` template of one shape of sample line."""
+        path, running, no_age, no_clearance, not_collided, has_truth, names = key
+        parts = [_LINE_HEAD, self.quoted(path).replace("%", "%%"), ',"lateness":%.9g,"stalled":',
+                 "false" if running else "true"]
+        if not no_age:
+            parts.append(',"scan_age":%.9g')
+        if not no_clearance:
+            parts.append(',"clearance":%.9g')
+        if not_collided is not None:
+            parts.append(',"collided":false' if not_collided else ',"collided":true')
+        if has_truth:
+            parts.append(',"true_x":%s,"true_y":%s,"true_theta":%s')
+        if names:
+            parts.append(',"diag":{%s}' % ",".join(
+                [self.quoted(k).replace("%", "%%") + ":%.9g" for k in names]))
+        template = self._lines[key] = "".join(parts) + "}"
+        return template
 
     def _tail(self, line: str, scan_age: Any, clearance: Any, collided: Any,
               truth: tuple[str, str, str] | None, diag: Mapping[str, Any]) -> str:
@@ -476,6 +510,27 @@ def laser_mount(backend: object) -> tuple[float, float, float]:
     return (x, y, th)
 
 
+def laser_timing(backend: object, rate: float) -> tuple[float, float]:
+    """Return (scan_time, time_increment) in seconds for a backend's scans, 0 when unknown.
+
+    ``scan_time`` is the time between scans: the backend's ``laser_timing`` period, or
+    the tick (``1 / rate``) for a backend that takes a scan at every tick (period 0);
+    ``time_increment`` the time between two beams of a scan (0 for a simulated scan,
+    taken at one instant).
+    """
+    timing = getattr(backend, "laser_timing", None)
+    try:
+        period, increment = (float(v) for v in timing)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        return (0.0, 0.0)
+    if not (math.isfinite(period) and period >= 0 and math.isfinite(increment)
+            and increment >= 0):
+        return (0.0, 0.0)
+    if period == 0.0 and rate > 0:
+        period = 1.0 / rate
+    return (period, increment)
+
+
 def scan_ranges(scan: "Scan") -> "np.ndarray":
     """Return a scan's ranges as little-endian float32, +inf on invalid beams (REP-117)."""
     import numpy as np
@@ -511,8 +566,11 @@ class LaserRecords:
     new scan. ``mount`` is the ladar's pose in the robot frame.
     """
 
-    def __init__(self, mount: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> None:
+    def __init__(self, mount: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                 timing: tuple[float, float] = (0.0, 0.0)) -> None:
         self.mount = mount
+        #: (scan_time, time_increment), s: between scans and between beams (0: unknown).
+        self.timing = timing
         self.last: Scan | None = None
         self._geometry: tuple[Any, ...] | None = None
         self._bearings: Any = None
@@ -527,7 +585,8 @@ class LaserRecords:
         return {"type": "laser", "frame": "laser", "mount": list(self.mount),
                 "angle_min": a0, "angle_max": a1,
                 "angle_increment": (a1 - a0) / (n - 1) if n > 1 else 0.0, "count": n,
-                "range_min": 0.0, "range_max": float(scan.max_range)}
+                "range_min": 0.0, "range_max": float(scan.max_range),
+                "scan_time": self.timing[0], "time_increment": self.timing[1]}
 
     def changed(self, scan: "Scan") -> dict[str, Any] | None:
         """Return the ``laser`` record when ``scan``'s geometry is new, else None.
@@ -540,7 +599,7 @@ class LaserRecords:
             return None  # the same beams as the last scan (the usual case: shared arrays)
         self._bearings, self._max_range = b, scan.max_range
         geometry = (len(b), float(b[0]) if len(b) else 0.0, float(b[-1]) if len(b) else 0.0,
-                    float(scan.max_range), self.mount)
+                    float(scan.max_range), self.mount, self.timing)
         if geometry == self._geometry:
             return None
         self._geometry = geometry
@@ -680,6 +739,8 @@ _NUMBERS: dict[str, tuple[str, ...]] = {
     "event": ("t", "x", "y", "theta"),
     "end": ("t", "duration", "distance", "min_clearance", "max_lateness"),
     "scan": ("t", "stamp"),
+    "laser": ("angle_min", "angle_max", "angle_increment", "range_min", "range_max",
+              "scan_time", "time_increment"),
     "header": ("rate", "until"),
 }
 _STRINGS: dict[str, tuple[str, ...]] = {

@@ -221,6 +221,15 @@ class SimBackend:
         x, y, th = self.profile.ladar_mount
         return float(x), float(y), float(th)
 
+    @property
+    def laser_timing(self) -> tuple[float, float]:
+        """(period, time_increment) of the ladar's scans, s, for recorders.
+
+        The period is 0 when a scan is taken at every tick; the beams of a simulated
+        scan are all taken at one instant (time increment 0).
+        """
+        return self._period, 0.0
+
     # ------------------------------------------------------------------ protocol
     def observe(self) -> Observation:
         """Report odometry pose, measured velocities, newest scan, flags and ground truth."""

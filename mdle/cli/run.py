@@ -85,6 +85,9 @@ def add_parser(subparsers: Any) -> None:
                         "PlotJuggler, ros2 bag); needs pip install 'mdle[mcap]'")
     p.add_argument("--rosbag", metavar="DIR",
                    help="record the run as a rosbag2 folder (DIR_0.mcap and metadata.yaml)")
+    p.add_argument("--record-compression", choices=("none", "lz4"), default="none",
+                   help="compression of the recording's chunks (default: none, the "
+                        "cheapest to write; lz4: about a third smaller)")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
     p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
@@ -417,10 +420,12 @@ def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> 
     from mdle.ros.recorder import McapRecorder
 
     out = []
+    compression = "" if args.record_compression == "none" else args.record_compression
     if args.record:
-        out.append(McapRecorder(args.record, header, world))
+        out.append(McapRecorder(args.record, header, world, compression=compression))
     if args.rosbag:
-        out.append(McapRecorder(args.rosbag, header, world, rosbag=True))
+        out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
+                                compression=compression))
     return out
 
 
@@ -444,13 +449,28 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         from mdle.drivers import open_backend
 
         header.update(connect=args.connect, laser=args.laser)
+        profile = None
+        if args.robot:  # read before connecting: a bad profile touches no robot
+            from sim.profiles import robot_profile
+
+            profile = robot_profile(args.robot)
+            header["robot"] = args.robot
         try:
-            return open_backend("pioneer", args.connect, args.laser, rate=args.rate), None
+            backend = open_backend("pioneer", args.connect, args.laser, rate=args.rate)
         except (KeyboardInterrupt, SystemExit):  # a signal while connecting: the backend
             # stopped and closed the robot
             print("interrupted while connecting: robot stopped, session closed",
                   file=sys.stderr)
             raise
+        from mdle.drivers.pioneer import PioneerBackend
+
+        if profile is not None and isinstance(backend, PioneerBackend):
+            # the recording's base_link -> laser and scan period
+            x, y, th = profile.ladar_mount
+            backend.laser_mount = (float(x), float(y), float(th))
+            if profile.scan_period is not None:
+                backend.laser_timing = (profile.scan_period, 0.0)
+        return backend, None
     import sim
 
     spec: str | os.PathLike[str] | None = args.world

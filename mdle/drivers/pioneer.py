@@ -187,6 +187,11 @@ class PioneerBackend:
             transport.close()
             raise BackendError(problem)
         self.rate = rate
+        #: The ladar's pose on the robot (x, y, theta: m, m, rad) and the (period,
+        #: time_increment) of its scans (s), for recordings' frames and LaserScan
+        #: timing: None (unknown) unless a robot profile says (``mdle run --robot``).
+        self.laser_mount: tuple[float, float, float] | None = None
+        self.laser_timing: tuple[float, float] | None = None
         self._command_timeout = max(opt.command_timeout, 3.0 / rate)
         self._max_scan_age = max(opt.max_scan_age, 2.0 / rate)
         self._sim_laser = laser == "sim"

@@ -5,31 +5,24 @@ each aligned to its own size (counted from after the header), strings as a uint3
 (with the terminating NUL) and the bytes, sequences as a uint32 count and the elements.
 
 The messages written every tick (odometry, transforms, twist, pose, scan, string) have
-constant frame names, so all their offsets are known in advance: each is packed by one
-precompiled :class:`struct.Struct` (a :class:`Layout`), the scan's ranges as one float32
-array. Rare messages (the obstacle markers, the static transform) use the general
-:class:`CdrWriter`. Tests check every encoder against the mcap-ros2-support decoder and
-against rosbags' Humble and Jazzy type stores.
+constant frame names, so all their offsets are known in advance: a :class:`Layout` gives
+their :mod:`struct` formats, from which :mod:`mdle.ros.tick` packs a whole tick's
+records at once. Rare messages (the obstacle markers, the static transform) use the
+general :class:`CdrWriter`. Tests check every message against the mcap-ros2-support
+decoder and against rosbags' Humble and Jazzy type stores.
 """
 
 from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    import numpy as np
-
-__all__ = ["ENCAPSULATION", "CdrWriter", "Layout", "OdometryEncoder", "PoseStampedEncoder",
-           "ScanEncoder", "TransformsEncoder", "encode_string", "encode_twist", "quaternion",
+__all__ = ["ENCAPSULATION", "CdrWriter", "Layout", "encode_string", "quaternion", "string_blob",
            "time_parts"]
 
 #: CDR encapsulation header: plain CDR, little endian, no options.
 ENCAPSULATION = b"\x00\x01\x00\x00"
 _NS = 1_000_000_000
-_COVARIANCE = bytes(36 * 8)  # 36 float64 zeros: no covariance known
 
 
 def time_parts(ns: int) -> tuple[int, int]:
@@ -76,6 +69,17 @@ class Layout:
         self._offset += size * count
         return self
 
+    def zeros(self, code: str, count: int = 1) -> Layout:
+        """Add ``count`` primitives of struct code ``code`` that are always 0 (no argument).
+
+        Zero of every CDR number type is all zero bytes, which pad bytes are.
+        """
+        size = struct.calcsize("<" + code)
+        self._align(size)
+        self._fmt.append(f"{size * count}x")
+        self._offset += size * count
+        return self
+
     def blob(self, data: bytes, align: int = 1) -> bytes:
         """Add constant bytes (one ``s`` argument) aligned to ``align``; returns them."""
         self._align(align)
@@ -91,6 +95,11 @@ class Layout:
     def offset(self) -> int:
         """Bytes so far after the encapsulation header."""
         return self._offset
+
+    @property
+    def format(self) -> str:
+        """The struct format without its byte order mark (to splice into a longer one)."""
+        return "".join(self._fmt)[1:]
 
     def compile(self) -> struct.Struct:
         """Return the struct."""
@@ -147,109 +156,3 @@ def encode_string(text: str) -> bytes:
     """Return a ``std_msgs/String``."""
     data = text.encode("utf-8")
     return ENCAPSULATION + struct.pack("<I", len(data) + 1) + data + b"\x00"
-
-
-_TWIST = struct.Struct("<4s6d")
-
-
-def encode_twist(v: float, omega: float) -> bytes:
-    """Return a ``geometry_msgs/Twist``: forward speed (m/s), turn rate (rad/s)."""
-    return _TWIST.pack(ENCAPSULATION, v, 0.0, 0.0, 0.0, 0.0, omega)
-
-
-class OdometryEncoder:
-    """``nav_msgs/Odometry`` in ``frame`` of ``child`` (twist in the child frame)."""
-
-    def __init__(self, frame: str = "odom", child: str = "base_link") -> None:
-        lay = Layout().add("i").add("I")
-        self._frame = lay.string(frame)
-        self._child = lay.string(child)
-        lay.add("d", 7)
-        lay.blob(_COVARIANCE, 8)
-        lay.add("d", 6)
-        lay.blob(_COVARIANCE, 8)
-        self._pack = lay.compile().pack
-
-    def __call__(self, ns: int, x: float, y: float, yaw: float, v: float, omega: float
-                 ) -> bytes:
-        """Encode the pose (m, rad) and velocities (m/s, rad/s) at time ``ns``."""
-        sec, nanosec = divmod(ns, _NS)
-        half = 0.5 * yaw
-        return self._pack(ENCAPSULATION, sec, nanosec, self._frame, self._child,
-                          x, y, 0.0, 0.0, 0.0, math.sin(half), math.cos(half), _COVARIANCE,
-                          v, 0.0, 0.0, 0.0, 0.0, omega, _COVARIANCE)
-
-
-class PoseStampedEncoder:
-    """``geometry_msgs/PoseStamped`` of a planar pose in ``frame``."""
-
-    def __init__(self, frame: str = "map") -> None:
-        lay = Layout().add("i").add("I")
-        self._frame = lay.string(frame)
-        lay.add("d", 7)
-        self._pack = lay.compile().pack
-
-    def __call__(self, ns: int, x: float, y: float, yaw: float) -> bytes:
-        """Encode the pose (m, rad) at time ``ns``."""
-        sec, nanosec = divmod(ns, _NS)
-        half = 0.5 * yaw
-        return self._pack(ENCAPSULATION, sec, nanosec, self._frame, x, y, 0.0, 0.0, 0.0,
-                          math.sin(half), math.cos(half))
-
-
-class TransformsEncoder:
-    """``tf2_msgs/TFMessage`` of planar transforms between fixed frames, all at one time.
-
-    ``pairs`` are (parent, child) frame names; :meth:`__call__` takes one (x, y, yaw) per
-    pair, the child's pose in the parent frame.
-    """
-
-    def __init__(self, pairs: Sequence[tuple[str, str]]) -> None:
-        lay = Layout().add("I")
-        self._names: list[tuple[bytes, bytes]] = []
-        for parent, child in pairs:
-            lay.add("i").add("I")
-            p = lay.string(parent)
-            c = lay.string(child)
-            lay.add("d", 7)
-            self._names.append((p, c))
-        self._n = len(pairs)
-        self._pack = lay.compile().pack
-
-    def __call__(self, ns: int, *poses: tuple[float, float, float]) -> bytes:
-        """Encode the transforms at time ``ns``."""
-        sec, nanosec = divmod(ns, _NS)
-        args: list[object] = [ENCAPSULATION, self._n]
-        for (p, c), (x, y, yaw) in zip(self._names, poses, strict=True):
-            half = 0.5 * yaw
-            args += (sec, nanosec, p, c, x, y, 0.0, 0.0, 0.0, math.sin(half), math.cos(half))
-        return self._pack(*args)
-
-
-class ScanEncoder:
-    """``sensor_msgs/LaserScan`` with a fixed beam geometry; ranges as float32.
-
-    Angles in radians in the scan's frame, ranges in metres; ``scan_time`` and
-    ``time_increment`` are 0 (a simulated scan is taken at one instant; a real one's
-    sweep timing is not known here) and there are no intensities.
-    """
-
-    def __init__(self, frame: str, angle_min: float, angle_max: float, angle_increment: float,
-                 range_min: float, range_max: float, count: int) -> None:
-        self.count = count
-        lay = Layout().add("i").add("I")
-        frame_blob = lay.string(frame)
-        lay.add("f", 7).add("I")
-        self._head = lay.compile()
-        mid = self._head.pack(ENCAPSULATION, 0, 0, frame_blob, angle_min, angle_max,
-                              angle_increment, 0.0, 0.0, range_min, range_max, count)
-        self._stamp = struct.Struct("<4siI")
-        self._mid = mid[self._stamp.size:]
-
-    def __call__(self, ns: int, ranges: np.ndarray) -> bytes:
-        """Encode a scan taken at ``ns``; ``ranges`` (float32, little endian) its beams."""
-        sec, nanosec = divmod(ns, _NS)
-        if len(ranges) != self.count:
-            raise ValueError(f"a scan of {len(ranges)} beams, the laser has {self.count}")
-        return b"".join((self._stamp.pack(ENCAPSULATION, sec, nanosec), self._mid,
-                         ranges.tobytes(), b"\x00\x00\x00\x00"))

@@ -12,9 +12,11 @@ too slow for a 30 us tick budget, so the records written as a run goes (messages
 chunks, message indexes) are packed here with :mod:`struct` and numpy, and checked
 against the library's reader in the tests.
 
-Durability: a chunk is closed once it holds ``chunk_size`` bytes or has been open for
-``max_age`` seconds of wall time, and goes to the operating system at once (with its
-indexes) with an unbuffered write. A process killed outright leaves a file whose closed
+Records are packed straight into the open chunk's buffer (allocated once, reused for
+every chunk). Durability: a chunk is closed once it holds ``chunk_size`` bytes (at the
+next record or :meth:`McapFile.tick`) or has been open for ``max_age`` seconds of wall
+time, and goes to the operating system at once (with its indexes) with an unbuffered
+write. A process killed outright leaves a file whose closed
 chunks a recovering reader (one that reads records until the file ends) reads back in
 full; everything else ends the file properly with :meth:`finish`.
 """
@@ -26,11 +28,12 @@ import struct
 import time
 import zlib
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import IO
 
 import numpy as np
 
-__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile"]
+__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile", "RecordGroup"]
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -47,7 +50,24 @@ _MESSAGE_OP = 0x05
 _INDEX_OP = 0x07
 _INDEX_HEAD = struct.Struct("<BQHI")  # opcode, length, channel, entries' byte length
 _CHUNK_OP = 0x06
+_SLACK = 16 * 1024  # room past chunk_size for the records that fill a chunk
 _CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc, name length
+
+
+@dataclass(eq=False)
+class RecordGroup:
+    """Channels whose messages are added together, as ready records (:meth:`McapFile.group`).
+
+    ``channels`` and the byte ``offsets`` of their records in the bytes of one
+    :meth:`McapFile.reserve`; ``count`` the calls so far (after the call, its sequence
+    number plus one); ``starts`` the (log time, chunk offset) of each call in the open
+    chunk.
+    """
+
+    channels: tuple[int, ...]
+    offsets: tuple[int, ...]
+    count: int = 0
+    starts: list[tuple[int, int]] = field(default_factory=list)
 
 
 class McapFile:
@@ -84,7 +104,7 @@ class McapFile:
         if compression == "lz4":
             import lz4.frame
 
-            self._compress: Callable[[bytes], bytes] | None = lz4.frame.compress
+            self._compress: Callable[[memoryview], bytes] | None = lz4.frame.compress
         else:
             self._compress = None
         self.path = os.fspath(path)
@@ -100,8 +120,11 @@ class McapFile:
         self._metadata_index: list[object] = []
         self._chunk_index: list[object] = []
         self._counts: list[int] = [0]         # messages per channel id (index 0 unused)
-        self._buf = bytearray()
+        # the open chunk's records: one buffer, filled in place and reused for every chunk
+        self._buf = bytearray(self._chunk_size + _SLACK)
+        self._used = 0
         self._entries: list[list[tuple[int, int]]] = [[]]  # per channel: (time, offset)
+        self._groups: list[RecordGroup] = []
         self._chunk_start = 2**64 - 1
         self._chunk_end = 0
         self._start = 2**64 - 1
@@ -126,6 +149,15 @@ class McapFile:
                 raise OSError(f"cannot write the recording `{self.path}`")
             view = view[n:]
             self._pos += n
+
+    def _out_all(self, pieces: Sequence[bytes | bytearray | memoryview]) -> None:
+        """Write ``pieces`` one after the other, in one system call when it takes them all."""
+        if self._file is None:
+            raise OSError(f"the recording `{self.path}` is closed")
+        n = os.writev(self._file.fileno(), pieces)
+        self._pos += n
+        if n < sum(len(p) for p in pieces):  # a short write: the rest as it comes
+            self._out(memoryview(b"".join(pieces))[n:])
 
     def _emit(self) -> None:
         """Write what the record builder holds."""
@@ -172,52 +204,67 @@ class McapFile:
     # ------------------------------------------------------------------ messages
 
     def add(self, channel: int, ns: int, data: bytes) -> None:
-        """Add a message on ``channel`` logged at ``ns`` (nanoseconds)."""
-        buf = self._buf
+        """Add a message on ``channel`` (not a group's) logged at ``ns`` (nanoseconds)."""
+        pos = self._reserve(31 + len(data), ns)
         seq = self._counts[channel]
         self._counts[channel] = seq + 1
-        self._entries[channel].append((ns, len(buf)))
-        buf += _MESSAGE.pack(_MESSAGE_OP, 22 + len(data), channel, seq, ns, ns)
-        buf += data
-        if ns < self._chunk_start:
-            self._chunk_start = ns
-        if ns > self._chunk_end:
-            self._chunk_end = ns
+        self._entries[channel].append((ns, pos))
+        _MESSAGE.pack_into(self._buf, pos, _MESSAGE_OP, 22 + len(data), channel, seq, ns, ns)
+        self._buf[pos + 31:pos + 31 + len(data)] = data
         self._messages += 1
-        if len(buf) >= self._chunk_size:
-            self.close_chunk()
 
-    def add_group(self, ns: int, items: Sequence[tuple[int, bytes]]) -> None:
-        """Add several messages logged at the same time ``ns``: (channel, data) each.
+    def _reserve(self, size: int, ns: int) -> int:
+        """Make room for ``size`` bytes of records logged at ``ns``; return their offset.
 
-        The same as :meth:`add` for each, in one call (a tick's messages).
+        A chunk already full is closed first; the buffer grows for a large record.
         """
-        buf = self._buf
-        counts = self._counts
-        entries = self._entries
-        pack = _MESSAGE.pack
-        offset = len(buf)
-        parts = []
-        for channel, data in items:
-            seq = counts[channel]
-            counts[channel] = seq + 1
-            entries[channel].append((ns, offset))
-            n = len(data)
-            parts.append(pack(_MESSAGE_OP, 22 + n, channel, seq, ns, ns))
-            parts.append(data)
-            offset += 31 + n
-        buf += b"".join(parts)
+        pos = self._used
+        if pos >= self._chunk_size:
+            self.close_chunk()
+            pos = 0
+        end = pos + size
+        if end > len(self._buf):
+            self._buf.extend(bytes(end - len(self._buf)))
+        self._used = end
         if ns < self._chunk_start:
             self._chunk_start = ns
         if ns > self._chunk_end:
             self._chunk_end = ns
-        self._messages += len(items)
-        if offset >= self._chunk_size:
-            self.close_chunk()
+        return pos
+
+    def group(self, channels: Sequence[int], offsets: Sequence[int]) -> RecordGroup:
+        """Register a group of channels written together as ready Message records.
+
+        Each :meth:`reserve` for the group adds one message on each of ``channels``,
+        their records starting ``offsets`` bytes into the room reserved (the caller packs
+        the records: opcode, length, channel, sequence, times, data). The channels are
+        the group's alone (no :meth:`add` on them).
+        """
+        taken = {ch for g in self._groups for ch in g.channels}
+        if len(channels) != len(offsets) or not channels or taken & set(channels) \
+                or any(self._counts[ch] for ch in channels):
+            raise ValueError("a group needs channels of its own, each with an offset")
+        g = RecordGroup(tuple(channels), tuple(int(o) for o in offsets))
+        self._groups.append(g)
+        return g
+
+    def reserve(self, group: RecordGroup, ns: int, size: int) -> tuple[bytearray, int]:
+        """Make room for one message on each of ``group``'s channels, logged at ``ns``.
+
+        Returns the open chunk's buffer and the offset of ``size`` bytes there, which the
+        caller fills at once (before anything else is added) with the records, sequence
+        number ``group.count - 1``: the records go into the chunk where they will be
+        written, copied once.
+        """
+        pos = self._reserve(size, ns)
+        group.starts.append((ns, pos))
+        group.count += 1
+        self._messages += len(group.channels)
+        return self._buf, pos
 
     def tick(self) -> None:
-        """Close the open chunk if it has been open for ``max_age`` of wall time."""
-        if self._clock() >= self._close_at:
+        """Close the open chunk if it is full or has been open for ``max_age`` of wall time."""
+        if self._used >= self._chunk_size or self._clock() >= self._close_at:
             self.close_chunk()
 
     def close_chunk(self) -> None:
@@ -225,42 +272,65 @@ class McapFile:
         from mcap.records import ChunkIndex
 
         self._close_at = self._clock() + self._max_age
-        if not self._buf:
+        used = self._used
+        if not used:
             return
-        raw = bytes(self._buf)
-        data = self._compress(raw) if self._compress is not None else raw
-        start, end = self._chunk_start, self._chunk_end
-        chunk_offset = self._pos
-        # the Chunk record packed directly (the library's writer copies it through a
-        # seekable buffer twice): start, end, uncompressed size and CRC, compression, data
-        comp = self._compression.encode()
-        head = _CHUNK_HEAD.pack(_CHUNK_OP, 8 + 8 + 8 + 4 + 4 + len(comp) + 8 + len(data),
-                                start, end, len(raw), zlib.crc32(raw), len(comp))
-        pieces = [head, comp, struct.pack("<Q", len(data)), data]
-        chunk_length = len(head) + len(comp) + 8 + len(data)
-        index_offsets: dict[int, int] = {}
-        at = chunk_offset + chunk_length
-        for ch, entries in enumerate(self._entries):
-            if not entries:
-                continue
-            body = np.asarray(entries, dtype="<u8").tobytes()
-            piece = _INDEX_HEAD.pack(_INDEX_OP, 6 + len(body), ch, len(body)) + body
-            index_offsets[ch] = at
-            at += len(piece)
-            pieces.append(piece)
-            entries.clear()
-        self._buf = bytearray()
-        self._chunk_start, self._chunk_end = 2**64 - 1, 0
-        self._start = min(self._start, start)
-        self._end = max(self._end, end)
-        # one write: the chunk and its indexes reach the OS together
-        self._out(b"".join(pieces))
+        with memoryview(self._buf) as whole, whole[:used] as raw:
+            # compressed, checked and written from the buffer itself: no copy
+            data = self._compress(raw) if self._compress is not None else raw
+            start, end = self._chunk_start, self._chunk_end
+            chunk_offset = self._pos
+            # the Chunk record packed directly (the library's writer copies it through a
+            # seekable buffer twice): start, end, uncompressed size and CRC, compression,
+            # data
+            comp = self._compression.encode()
+            head = _CHUNK_HEAD.pack(_CHUNK_OP, 8 + 8 + 8 + 4 + 4 + len(comp) + 8 + len(data),
+                                    start, end, used, zlib.crc32(raw), len(comp))
+            pieces = [head, comp, struct.pack("<Q", len(data)), data]
+            chunk_length = len(head) + len(comp) + 8 + len(data)
+            index_offsets: dict[int, int] = {}
+            at = chunk_offset + chunk_length
+            for ch, body in self._index_bodies():
+                piece = _INDEX_HEAD.pack(_INDEX_OP, 6 + len(body), ch, len(body)) + body
+                index_offsets[ch] = at
+                at += len(piece)
+                pieces.append(piece)
+            self._used = 0
+            self._chunk_start, self._chunk_end = 2**64 - 1, 0
+            self._start = min(self._start, start)
+            self._end = max(self._end, end)
+            # one write: the chunk and its indexes reach the OS together
+            self._out_all(pieces)
+            size = len(data)
+            del data, pieces  # no view of the buffer outlives the write
         self._chunk_index.append(ChunkIndex(
             message_start_time=start, message_end_time=end, chunk_start_offset=chunk_offset,
             chunk_length=chunk_length, message_index_offsets=index_offsets,
             message_index_length=at - chunk_offset - chunk_length,
-            compression=self._compression, compressed_size=len(data),
-            uncompressed_size=len(raw)))
+            compression=self._compression, compressed_size=size, uncompressed_size=used))
+
+    def _index_bodies(self) -> list[tuple[int, bytes]]:
+        """Return the open chunk's message index entries per channel (and forget them).
+
+        A group's entries are its calls' (time, offset) with each channel's record
+        offset added, made for all its channels at once.
+        """
+        out = []
+        for ch, entries in enumerate(self._entries):
+            if entries:
+                out.append((ch, np.asarray(entries, dtype="<u8").tobytes()))
+                entries.clear()
+        for g in self._groups:
+            if not g.starts:
+                continue
+            starts = np.asarray(g.starts, dtype="<u8")
+            g.starts.clear()
+            for ch, offset in zip(g.channels, g.offsets, strict=True):
+                table = starts.copy()
+                table[:, 1] += offset
+                out.append((ch, table.tobytes()))
+        out.sort(key=lambda item: item[0])
+        return out
 
     # ------------------------------------------------------------------ the end
 
@@ -271,7 +341,11 @@ class McapFile:
 
     def channel_counts(self) -> dict[int, int]:
         """Messages per channel id so far."""
-        return {i: n for i, n in enumerate(self._counts) if i}
+        counts = {i: n for i, n in enumerate(self._counts) if i}
+        for g in self._groups:
+            for ch in g.channels:
+                counts[ch] = g.count
+        return counts
 
     @property
     def time_range(self) -> tuple[int, int] | None:
@@ -309,7 +383,7 @@ class McapFile:
             channel_count=len(self._channels), attachment_count=0,
             metadata_count=len(self._metadata_index), chunk_count=len(self._chunk_index),
             message_start_time=span[0], message_end_time=span[1],
-            channel_message_counts={i: n for i, n in enumerate(self._counts) if i and n})
+            channel_message_counts={i: n for i, n in self.channel_counts().items() if n})
         group(Opcode.SCHEMA, self._schemas)
         group(Opcode.CHANNEL, self._channels)
         group(Opcode.STATISTICS, [stats])

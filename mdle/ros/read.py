@@ -128,7 +128,8 @@ def _read(path: str, f: Any) -> Trace:
                                      2.0 * math.atan2(q.z, q.w)]
                 else:
                     g = (msg.angle_min, msg.angle_max, msg.angle_increment, len(msg.ranges),
-                         msg.range_min, msg.range_max, tuple(mount))
+                         msg.range_min, msg.range_max, msg.scan_time, msg.time_increment,
+                         tuple(mount))
                     if g != geometry:
                         geometry = g
                         lasers.append({"type": "laser", "frame": msg.header.frame_id,
@@ -136,7 +137,8 @@ def _read(path: str, f: Any) -> Trace:
                                        "angle_max": msg.angle_max,
                                        "angle_increment": msg.angle_increment,
                                        "count": len(msg.ranges), "range_min": msg.range_min,
-                                       "range_max": msg.range_max})
+                                       "range_max": msg.range_max, "scan_time": msg.scan_time,
+                                       "time_increment": msg.time_increment})
                     stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
                     ranges = struct.pack(f"<{len(msg.ranges)}f", *msg.ranges)
                     scans.append({"type": "scan", "t": record.log_time / 1e9, "stamp": stamp,

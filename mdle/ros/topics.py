@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from mdle.ros import cdr
 from mdle.ros.mcap_file import McapFile
 from mdle.ros.msgdefs import schema_text
+from mdle.ros.tick import ScanRecords, TickRecords
 
 if TYPE_CHECKING:
     import numpy as np
@@ -94,6 +95,14 @@ def library_name() -> str:
     return " ".join(parts)
 
 
+def _seconds(record: Mapping[str, Any], key: str) -> float:
+    """Return a ``laser`` record's optional timing (s): 0 when absent (unknown), else >= 0."""
+    value = float(record.get(key) or 0.0)
+    if not (math.isfinite(value) and value >= 0.0):
+        raise ValueError(f"`{key}` must be a finite number of seconds, not below 0")
+    return value
+
+
 def _r9(value: float) -> float:
     """Round as the trace writes numbers (9 significant digits; non-finite: NaN)."""
     return float("%.9g" % value) if math.isfinite(value) else math.nan
@@ -147,16 +156,13 @@ class RosRecording:
                 metadata={"offered_qos_profiles": qos_yaml(topic.latched)})
         self.out.metadata("mdle", {"header": dumps(header)})
         ch = self.channels
-        self._scan_ch, self._odom_ch, self._tf_ch = ch["/scan"], ch["/odom"], ch["/tf"]
-        self._static_ch, self._cmd_ch = ch["/tf_static"], ch["/cmd_vel"]
-        self._events_ch, self._state_ch = ch["/mdle/events"], ch["/mdle/state"]
-        self._truth_ch = ch.get("/ground_truth", 0)
-        self._odom = cdr.OdometryEncoder(FRAMES["odom"], FRAMES["base"])
-        self._tf_odom = cdr.TransformsEncoder([(FRAMES["odom"], FRAMES["base"])])
-        self._tf_both = cdr.TransformsEncoder([(FRAMES["odom"], FRAMES["base"]),
-                                               (FRAMES["map"], FRAMES["odom"])])
-        self._truth = cdr.PoseStampedEncoder(FRAMES["map"])
-        self._scan: cdr.ScanEncoder | None = None
+        self._scan_ch = ch["/scan"]
+        self._static_ch, self._events_ch = ch["/tf_static"], ch["/mdle/events"]
+        self._tick = TickRecords(self.out, ch["/odom"], ch["/tf"], ch["/cmd_vel"],
+                                 ch["/mdle/state"], ch.get("/ground_truth", 0),
+                                 (FRAMES["map"], FRAMES["odom"], FRAMES["base"]))
+        self._scan_group = self.out.group([self._scan_ch], [0])
+        self._scan: ScanRecords | None = None
         self._mount: tuple[float, float, float] | None = None
         self._world = world
         self._pending: list[str] = []  # start records waiting for a time
@@ -195,10 +201,12 @@ class RosRecording:
             raise ValueError("`mount` must be three finite numbers")
         mount = (values[0], values[1], values[2])
         count = int(record["count"])
-        self._scan = cdr.ScanEncoder(
-            str(record.get("frame") or FRAMES["laser"]), float(record["angle_min"]),
-            float(record["angle_max"]), float(record["angle_increment"]),
-            float(record.get("range_min", 0.0)), float(record["range_max"]), count)
+        self._scan = ScanRecords(
+            self.out, self._scan_group, str(record.get("frame") or FRAMES["laser"]),
+            float(record["angle_min"]), float(record["angle_max"]),
+            float(record["angle_increment"]), float(record.get("range_min", 0.0)),
+            float(record["range_max"]), count, _seconds(record, "scan_time"),
+            _seconds(record, "time_increment"))
         if mount != self._mount:
             self._mount = mount
             ns = to_ns(t)
@@ -215,8 +223,9 @@ class RosRecording:
         if self._scan is None:
             raise ValueError("a scan before any `laser` record (the beam geometry)")
         ns = to_ns(t)
-        self._timed(ns)
-        self.out.add(self._scan_ch, ns, self._scan(to_ns(stamp), ranges))
+        if not self._started or self._pending:
+            self._timed(ns)
+        self._scan(ns, to_ns(stamp), ranges)
 
     def sample(self, line: str, t: float, x: float, y: float, theta: float, v: float,
                omega: float, cmd_v: float, cmd_omega: float,
@@ -228,22 +237,7 @@ class RosRecording:
         ns = to_ns(t)
         if not self._started or self._pending:
             self._timed(ns)
-        odom = self._odom(ns, x, y, theta, v, omega)
-        if truth is not None and self._truth_ch:
-            tx, ty, tth = truth
-            # map -> odom: the true pose composed with the inverse of the odometry pose
-            phi = tth - theta
-            c, s = math.cos(phi), math.sin(phi)
-            tf = self._tf_both(ns, (x, y, theta), (tx - c * x + s * y, ty - s * x - c * y, phi))
-            self.out.add_group(ns, ((self._odom_ch, odom), (self._tf_ch, tf),
-                                    (self._cmd_ch, cdr.encode_twist(cmd_v, cmd_omega)),
-                                    (self._truth_ch, self._truth(ns, tx, ty, tth)),
-                                    (self._state_ch, cdr.encode_string(line))))
-        else:
-            self.out.add_group(ns, ((self._odom_ch, odom),
-                                    (self._tf_ch, self._tf_odom(ns, (x, y, theta))),
-                                    (self._cmd_ch, cdr.encode_twist(cmd_v, cmd_omega)),
-                                    (self._state_ch, cdr.encode_string(line))))
+        self._tick(ns, x, y, theta, v, omega, cmd_v, cmd_omega, truth, line)
         self.out.tick()
 
     def live_sample(self, line: str, s: Any, values: tuple[float, ...] | None = None) -> None:

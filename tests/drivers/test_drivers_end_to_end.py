@@ -8,7 +8,7 @@ import subprocess
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
@@ -86,17 +86,23 @@ def test_dropped_robot_ends_the_run_with_the_robot_stopped(fake_robot: FakeRobot
         backend.close()
 
 
-def test_mdle_run_cli_on_the_fake_robot(fake_robot: FakeRobot, tmp_path: Path) -> None:
+def _run_on_fake(fake_robot: FakeRobot, tmp_path: Path, *options: str) -> FakeArcos:
+    """``mdle run`` the wall plan on a fake robot with its laser; return the robot."""
     from mdle.cli import main
 
     fake = fake_robot()
     fake.scan_mm = _wall_ahead(fake)
     plan = tmp_path / "wall.mdle"
     plan.write_text(PLAN)
-    trace = tmp_path / "run.jsonl"
     code = main(["run", str(plan), "--backend", "pioneer", "--connect", fake.url,
-                 "--laser", "sim", "--quiet", "--trace", str(trace)])
+                 "--laser", "sim", "--quiet", *options])
     assert code == 0
+    return fake
+
+
+def test_mdle_run_cli_on_the_fake_robot(fake_robot: FakeRobot, tmp_path: Path) -> None:
+    trace = tmp_path / "run.jsonl"
+    fake = _run_on_fake(fake_robot, tmp_path, "--trace", str(trace))
     lines = [json.loads(line) for line in trace.read_text().splitlines()]
     assert lines[0]["backend"] == "pioneer" and lines[0]["laser"] == "sim"
     samples = [x for x in lines if x["type"] == "sample"]
@@ -107,6 +113,39 @@ def test_mdle_run_cli_on_the_fake_robot(fake_robot: FakeRobot, tmp_path: Path) -
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
     assert fake.v_mm == 0 and fake.w_deg == 0
     assert 400 in fake.args(Cmd.VEL)
+
+
+@pytest.mark.parametrize("robot", [None, "pioneer-p3dx"])
+def test_a_recording_on_the_robot_takes_the_ladar_from_the_robot_profile(
+        fake_robot: FakeRobot, tmp_path: Path, robot: str | None) -> None:
+    """--robot names the profile whose ladar mount (base_link -> laser) and scan period
+    (LaserScan.scan_time) a recording made on hardware uses; without it both are unknown."""
+    pytest.importorskip("rosbags")
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    from tests.ros.conftest import mcap_doctor
+
+    record = tmp_path / "r.mcap"
+    _run_on_fake(fake_robot, tmp_path, "--record", str(record),
+                 *(["--robot", robot] if robot else []))
+    mcap_doctor(record)
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    msgs: dict[str, list[Any]] = {}
+    with Reader(record) as reader:
+        for conn, _, raw in reader.messages():
+            msgs.setdefault(conn.topic, []).append(ts.deserialize_cdr(raw, conn.msgtype))
+    assert "/ground_truth" not in msgs and "/map" not in msgs  # no simulation topics
+    (static,) = msgs["/tf_static"]
+    mount = static.transforms[0].transform.translation
+    scans = msgs["/scan"]
+    assert scans
+    if robot is None:
+        assert (mount.x, mount.y) == (0.0, 0.0)
+        assert all(s.scan_time == 0.0 and s.time_increment == 0.0 for s in scans)
+    else:  # the profile's mount, 17 mm ahead and 8 mm left, and its 10 Hz scans
+        assert (mount.x, mount.y) == (0.017, 0.008)
+        assert all(s.scan_time == np.float32(0.1) and s.time_increment == 0.0 for s in scans)
 
 
 def test_mdle_run_cli_reports_a_lost_robot(fake_robot: FakeRobot, tmp_path: Path,

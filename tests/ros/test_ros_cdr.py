@@ -1,4 +1,4 @@
-"""The hand-written CDR encoders and schema texts against two independent implementations.
+"""The hand-packed CDR messages and schema texts against two independent implementations.
 
 mcap-ros2-support decodes with the schema text mdle writes into the file; rosbags decodes
 with its own Humble and Jazzy definitions. Both must read back exactly what was encoded,
@@ -8,12 +8,12 @@ and the schema texts must declare the same fields as rosbags' type stores.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from mdle.ros import cdr
 from mdle.ros.markers import obstacle_markers, outlines
 from mdle.ros.msgdefs import DEFINITIONS, schema_text
 
@@ -45,57 +45,141 @@ def test_schema_texts_declare_the_type_stores_fields(store: str) -> None:
         assert {c[0] for c in consts} <= {c[0] for c in theirs_consts}
 
 
+def _records(tmp_path: Path, write: Any) -> dict[str, list[tuple[int, int, bytes]]]:
+    """Write records with ``write(McapFile, channels)``; return (log time, sequence, data)
+    of each message by topic, read back with the mcap library's strict reader."""
+    from mcap.reader import make_reader
+
+    from mdle.ros.mcap_file import McapFile
+    from tests.ros.conftest import mcap_doctor
+
+    path = tmp_path / "m.mcap"
+    out = McapFile(path, chunk_size=300)  # several chunks: indexes across chunks
+    types = {"/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
+             "/cmd_vel": "geometry_msgs/msg/Twist",
+             "/ground_truth": "geometry_msgs/msg/PoseStamped",
+             "/mdle/state": "std_msgs/msg/String", "/scan": "sensor_msgs/msg/LaserScan"}
+    channels = {t: out.channel(t, out.schema(name, "ros2msg", schema_text(name).encode()))
+                for t, name in types.items()}
+    write(out, channels)
+    out.finish()
+    mcap_doctor(path)  # the strict validation, every message decoded
+    found: dict[str, list[tuple[int, int, bytes]]] = {}
+    with open(path, "rb") as f:
+        for _, channel, m in make_reader(f, validate_crcs=True).iter_messages(
+                log_time_order=True):
+            found.setdefault(channel.topic, []).append((m.log_time, m.sequence, m.data))
+    return found
+
+
+def _tick_records(simulation: bool) -> Any:
+    from mdle.ros.tick import TickRecords
+
+    def make(out: Any, ch: dict[str, int]) -> Any:
+        return TickRecords(out, ch["/odom"], ch["/tf"], ch["/cmd_vel"], ch["/mdle/state"],
+                           ch["/ground_truth"] if simulation else 0,
+                           ("map", "odom", "base_link"))
+    return make
+
+
 @pytest.mark.parametrize("t, yaw", [(0.0, 0.0), (12.5, 0.7), (3.25, -3.1), (1e6, math.pi)])
-def test_odometry(t: float, yaw: float, store: str) -> None:
+def test_a_simulated_tick(tmp_path: Path, t: float, yaw: float, store: str) -> None:
     ns = round(t * 1e9)
-    data = cdr.OdometryEncoder()(ns, 1.5, -2.25, yaw, 0.3, -0.1)
-    mine, theirs = _decode("nav_msgs/msg/Odometry", data, store)
-    for m in (mine, theirs):
-        assert (m.header.stamp.sec, m.header.stamp.nanosec) == divmod(ns, 10**9)
+    truth = (3.0, -4.0, yaw + 0.25)
+    line = '{"path":"main/é","t":1}'
+
+    def write(out: Any, ch: dict[str, int]) -> None:
+        tick = _tick_records(True)(out, ch)
+        for k in range(3):  # the third tick is the one checked; sequences count
+            tick(ns + k, 1.5, -2.25, yaw, 0.3, -0.1, 0.5, -0.25, truth, line * k)
+    found = _records(tmp_path, write)
+    assert sorted(found) == ["/cmd_vel", "/ground_truth", "/mdle/state", "/odom", "/tf"]
+    for topic, msgs in found.items():
+        assert [(m[0], m[1]) for m in msgs] == [(ns + k, k) for k in range(3)], topic
+    at = ns + 2
+    for m in (_decode("nav_msgs/msg/Odometry", found["/odom"][2][2], store)):
+        assert (m.header.stamp.sec, m.header.stamp.nanosec) == divmod(at, 10**9)
         assert (m.header.frame_id, m.child_frame_id) == ("odom", "base_link")
         p = m.pose.pose
         assert (p.position.x, p.position.y, p.position.z) == (1.5, -2.25, 0.0)
         q = p.orientation
         assert (q.x, q.y, q.z, q.w) == (0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2))
         assert (m.twist.twist.linear.x, m.twist.twist.angular.z) == (0.3, -0.1)
-        assert list(m.pose.covariance) == [0.0] * 36
-
-
-def test_transforms_pose_twist_string(store: str) -> None:
-    data = cdr.TransformsEncoder([("odom", "base_link"), ("map", "odom")])(
-        2_000_000_001, (1.0, 2.0, 0.5), (3.0, -4.0, -1.0))
-    mine, theirs = _decode("tf2_msgs/msg/TFMessage", data, store)
-    for m in (mine, theirs):
+        tw = m.twist.twist
+        assert (tw.linear.y, tw.linear.z, tw.angular.x, tw.angular.y) == (0.0,) * 4
+        assert list(m.pose.covariance) == [0.0] * 36 == list(m.twist.covariance)
+    for m in _decode("tf2_msgs/msg/TFMessage", found["/tf"][2][2], store):
         a, b = m.transforms
         assert (a.header.frame_id, a.child_frame_id, b.header.frame_id, b.child_frame_id) == (
             "odom", "base_link", "map", "odom")
-        assert (b.header.stamp.sec, b.header.stamp.nanosec) == (2, 1)
-        assert (b.transform.translation.x, b.transform.translation.y) == (3.0, -4.0)
-        assert b.transform.rotation.z == math.sin(-0.5)
-    mine, theirs = _decode("geometry_msgs/msg/PoseStamped",
-                           cdr.PoseStampedEncoder()(7, 1.0, 2.0, 3.0), store)
-    assert theirs.header.frame_id == "map" and theirs.pose.orientation.w == math.cos(1.5)
-    mine, theirs = _decode("geometry_msgs/msg/Twist", cdr.encode_twist(0.5, -0.25), store)
-    assert (theirs.linear.x, theirs.angular.z, mine.linear.x) == (0.5, -0.25, 0.5)
-    text = '{"path":"main/é","t":1}'
-    mine, theirs = _decode("std_msgs/msg/String", cdr.encode_string(text), store)
-    assert mine.data == theirs.data == text
+        assert (b.header.stamp.sec, b.header.stamp.nanosec) == divmod(at, 10**9)
+        assert (a.transform.translation.x, a.transform.translation.y) == (1.5, -2.25)
+        assert a.transform.rotation.z == math.sin(yaw / 2)
+        # map -> odom composed with odom -> base_link is the true pose
+        phi = 2 * math.atan2(b.transform.rotation.z, b.transform.rotation.w)
+        tr = b.transform.translation
+        assert math.isclose(tr.x + math.cos(phi) * 1.5 + math.sin(phi) * 2.25, 3.0)
+        assert math.isclose(tr.y + math.sin(phi) * 1.5 - math.cos(phi) * 2.25, -4.0)
+        assert math.isclose(math.remainder(phi + yaw - truth[2], math.tau), 0.0,
+                            abs_tol=1e-12)
+    for m in _decode("geometry_msgs/msg/PoseStamped", found["/ground_truth"][2][2], store):
+        assert m.header.frame_id == "map" and m.pose.orientation.w == math.cos(truth[2] / 2)
+        assert (m.pose.position.x, m.pose.position.y) == (3.0, -4.0)
+    for m in _decode("geometry_msgs/msg/Twist", found["/cmd_vel"][2][2], store):
+        assert (m.linear.x, m.linear.y, m.angular.z) == (0.5, 0.0, -0.25)
+    for m in _decode("std_msgs/msg/String", found["/mdle/state"][2][2], store):
+        assert m.data == line * 2
+
+
+def test_a_robot_tick(tmp_path: Path, store: str) -> None:
+    found = _records(tmp_path, lambda out, ch: _tick_records(False)(out, ch)(
+        7, 1.0, 2.0, 3.0, 0.1, 0.2, 0.3, 0.4, (9.0, 9.0, 9.0), ""))
+    assert sorted(found) == ["/cmd_vel", "/mdle/state", "/odom", "/tf"]  # no ground truth
+    for m in _decode("tf2_msgs/msg/TFMessage", found["/tf"][0][2], store):
+        (only,) = m.transforms  # odom -> base_link alone: no map on a robot
+        assert (only.header.frame_id, only.child_frame_id) == ("odom", "base_link")
+        assert only.transform.rotation.w == math.cos(1.5)
+    for m in _decode("std_msgs/msg/String", found["/mdle/state"][0][2], store):
+        assert m.data == ""
+
+
+def test_a_simulated_sample_without_its_true_pose(tmp_path: Path, store: str) -> None:
+    found = _records(tmp_path, lambda out, ch: _tick_records(True)(out, ch)(
+        8, 1.0, 2.0, 3.0, 0.1, 0.2, 0.3, 0.4, None, "x"))
+    # NaN (unknown, as the trace's nulls say), not a made-up pose
+    for m in _decode("geometry_msgs/msg/PoseStamped", found["/ground_truth"][0][2], store):
+        assert all(math.isnan(v) for v in (m.pose.position.x, m.pose.position.y,
+                                           m.pose.orientation.z, m.pose.orientation.w))
+    for m in _decode("tf2_msgs/msg/TFMessage", found["/tf"][0][2], store):
+        assert m.transforms[0].transform.translation.x == 1.0
+        assert math.isnan(m.transforms[1].transform.translation.x)
 
 
 @pytest.mark.parametrize("n", [0, 1, 2, 181, 361])
-def test_scan(n: int, store: str) -> None:
+def test_scan(tmp_path: Path, n: int, store: str) -> None:
+    from mdle.ros.tick import ScanRecords
+
     rng = np.random.default_rng(n)
     ranges = rng.uniform(0, 10, n).astype("<f4")
     ranges[::7] = np.inf
-    enc = cdr.ScanEncoder("laser", -1.5, 1.5, 0.01, 0.0, 10.0, n)
-    mine, theirs = _decode("sensor_msgs/msg/LaserScan", enc(5_500_000_000, ranges), store)
-    for m in (mine, theirs):
+
+    def write(out: Any, ch: dict[str, int]) -> None:
+        enc = ScanRecords(out, out.group([ch["/scan"]], [0]), "laser", -1.5, 1.5, 0.01, 0.0,
+                          10.0, n, 0.1, 1e-4)
+        enc(6_000_000_000, 5_500_000_000, ranges)
+        with pytest.raises(ValueError):
+            enc(0, 0, ranges[:-1] if n else np.zeros(1, "<f4"))
+        with pytest.raises(ValueError):
+            enc(0, 0, ranges.astype(">f4"))
+    ((log_time, seq, data),) = _records(tmp_path, write)["/scan"]
+    assert (log_time, seq) == (6_000_000_000, 0)
+    for m in _decode("sensor_msgs/msg/LaserScan", data, store):
         assert m.header.frame_id == "laser" and m.header.stamp.sec == 5
+        assert m.header.stamp.nanosec == 500_000_000
         assert (m.angle_min, m.angle_max, m.range_max) == (-1.5, 1.5, 10.0)
+        assert m.scan_time == np.float32(0.1) and m.time_increment == np.float32(1e-4)
         np.testing.assert_array_equal(np.asarray(m.ranges, dtype=np.float32), ranges)
         assert len(m.intensities) == 0
-    with pytest.raises(ValueError):
-        enc(0, ranges[:-1] if n else np.zeros(1, "<f4"))
 
 
 def test_markers_of_every_reference_world(store: str) -> None:

@@ -81,11 +81,24 @@ def _same_angle(a: float, b: float) -> bool:
     return abs(math.remainder(a - b, math.tau)) < 1e-9
 
 
+def _compressions(path: Path) -> set[str]:
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None and summary.chunk_indexes
+    return {c.compression for c in summary.chunk_indexes}
+
+
 def test_files_pass_strict_validation(run: dict[str, Any], doctor: Any) -> None:
     d = run["dir"]
     counts = doctor(d / "r.mcap")
     assert doctor(d / "e.mcap") == counts
     assert doctor(d / "bag" / "bag_0.mcap") == counts
+    # a live recording's chunks are not compressed by default (the cheapest to write),
+    # an export's are (lz4)
+    assert _compressions(d / "r.mcap") == {""} == _compressions(d / "bag" / "bag_0.mcap")
+    assert _compressions(d / "e.mcap") == {"lz4"}
 
 
 def test_topic_counts_match_the_trace(run: dict[str, Any], rosbags_read: Any) -> None:
@@ -117,7 +130,9 @@ def test_scan_messages(run: dict[str, Any], rosbags_read: Any, store: str) -> No
         assert s.angle_min == np.float32(-math.pi / 2) and s.angle_max == np.float32(math.pi / 2)
         assert s.angle_increment == np.float32(math.radians(1.0))
         assert s.range_min == 0.0 and s.range_max == 10.0
-        assert s.time_increment == 0.0 and s.scan_time == 0.0 and len(s.intensities) == 0
+        # scans every 0.1 s (the 10 Hz LMS-200), each taken at one instant (simulated)
+        assert s.scan_time == np.float32(laser["scan_time"]) == np.float32(0.1)
+        assert s.time_increment == 0.0 == laser["time_increment"] and len(s.intensities) == 0
         ranges = np.asarray(s.ranges)
         assert ranges.dtype == np.float32 and len(ranges) == 181
         np.testing.assert_array_equal(ranges, decode_ranges(rec["ranges"]))

@@ -63,6 +63,9 @@ def test_a_robot_run_has_no_simulation_topics(tmp_path: Path, doctor: Any,
                for t in tfs)
     (static,) = [m.msg.transforms[0] for m in msgs if m.topic == "/tf_static"]
     assert static.transform.translation.x == 0.0  # no mount known: at the robot's origin
+    # nor the scans' timing: 0, as LaserScan says for unknown
+    assert all(m.msg.scan_time == 0.0 == m.msg.time_increment for m in msgs
+               if m.topic == "/scan")
     # the exported trace gives the same messages
     from mdle.ros.export import export_trace
 
@@ -82,7 +85,7 @@ def test_a_disk_that_fills_up_ends_the_run_cleanly(
 
     def close_chunk(self: mcap_file.McapFile) -> None:
         # mid-run: the first chunk; at the end: the last one, when the file is finished
-        if self._buf and (when == "mid-run" or finishing):
+        if self._used and (when == "mid-run" or finishing):
             raise OSError(errno.ENOSPC, "No space left on device")
         real(self)
 
@@ -120,3 +123,71 @@ def test_a_recording_that_cannot_be_created(tmp_path: Path,
     err = capsys.readouterr().err
     assert code == 1 and "cannot write the recording" in err
     assert "No such file or directory" in err
+
+
+@pytest.mark.parametrize("rate", [10.0, 20.0])
+def test_scans_taken_at_every_tick_are_a_tick_apart(tmp_path: Path, rate: float,
+                                                    doctor: Any) -> None:
+    """The reference world's ladar scans at every tick: scan_time is the tick."""
+    import sim
+
+    element = load_text(PLAN, "<test>").elements["hug"]
+    header = {"program": {"element": "hug"}, "world": {"name": "ellipse"}, "backend": "sim"}
+    rec = McapRecorder(tmp_path / "r.mcap", header)
+    trace = TraceWriter(tmp_path / "t.jsonl", header)
+    sch = Scheduler(element, sim.SimBackend(sim.load_world("ellipse")), rate, [trace, rec],
+                    until=1.0)
+    while sch.tick():
+        pass
+    assert doctor(tmp_path / "r.mcap")["/scan"] == int(rate) + 1
+    (laser,) = read_trace(tmp_path / "t.jsonl").lasers
+    assert (laser["scan_time"], laser["time_increment"]) == (1.0 / rate, 0.0)
+    back = read_trace(tmp_path / "r.mcap")
+    assert back.lasers[0]["scan_time"] == pytest.approx(1.0 / rate, rel=1e-7)  # float32
+
+
+def test_record_compression_lz4(tmp_path: Path, doctor: Any) -> None:
+    from mcap.reader import make_reader
+
+    from mdle.cli import main
+
+    (tmp_path / "p.mdle").write_text(PLAN + "run hug\n")
+    code = main(["run", str(tmp_path / "p.mdle"), "--world", "ellipse", "--until", "3",
+                 "--record", str(tmp_path / "r.mcap"), "--record-compression", "lz4", "-q"])
+    assert code == 0
+    counts = doctor(tmp_path / "r.mcap")
+    assert counts["/odom"] == 31
+    with open(tmp_path / "r.mcap", "rb") as f:
+        summary = make_reader(f).get_summary()
+    assert summary is not None
+    assert {c.compression for c in summary.chunk_indexes} == {"lz4"}
+
+
+def test_ticks_are_encoded_in_batches_and_an_event_flushes_them(tmp_path: Path,
+                                                                doctor: Any) -> None:
+    """Ticks wait until the batch is full or old; an event publishes them first."""
+    import sim
+
+    now = [0.0]
+    element = load_text(PLAN, "<test>").elements["hug"]
+    header = {"program": {"element": "hug"}, "world": {"name": "ellipse"}, "backend": "sim"}
+    rec = McapRecorder(tmp_path / "r.mcap", header, batch_ticks=4, batch_age=0.5,
+                       clock=lambda: now[0])
+    sch = Scheduler(element, sim.SimBackend(sim.load_world("ellipse")), 10.0, [rec],
+                    until=2.0)
+    sch.start()
+    odom = rec.recording.channels["/odom"]
+    published = []
+    for _ in range(7):
+        sch.tick()
+        published.append(rec.recording.out.channel_counts()[odom])
+    # the element's start event (first tick) flushed nothing; then 4 by 4
+    assert published == [0, 0, 0, 4, 4, 4, 4]
+    now[0] = 0.6  # older than batch_age: the next tick publishes what waits
+    sch.tick()
+    assert rec.recording.out.channel_counts()[odom] == 8
+    while sch.tick():  # the end event publishes the last ticks before the end record
+        pass
+    assert doctor(tmp_path / "r.mcap")["/odom"] == 21
+    back = read_trace(tmp_path / "r.mcap")
+    assert len(back.samples) == 21 and back.end is not None

@@ -283,3 +283,45 @@ def test_a_header_that_cannot_be_written_is_an_error_naming_the_file(tmp_path: P
         pytest.skip("no /dev/full on this system")
     with pytest.raises(TraceWriteError, match="cannot write the trace `/dev/full`"):
         TraceWriter("/dev/full")
+
+
+def _sample(**changes: Any) -> Any:
+    from types import MappingProxyType
+
+    from mdle.runtime.events import Sample
+
+    base: dict[str, Any] = dict(time=12.340000000000002, x=1.25, y=-2.000000001, theta=0.1234567891,
+                v=0.6, omega=-0.01, cmd_v=0.6, cmd_omega=0.0, path='main/"a"%s',
+                lateness=0.0, scan_age=0.02, stalled=False,
+                diag=MappingProxyType({"side_range": 1.0000000004, "mo%de": 2.0}),
+                clearance=0.81234, collided=False, true_x=3.0, true_y=4.0, true_theta=-3.1,
+                scan=None)
+    base.update(changes)
+    return Sample(**base)
+
+
+@pytest.mark.parametrize("changes, finite", [
+    ({}, True), ({"stalled": True, "collided": True}, True),
+    ({"scan_age": None, "clearance": None}, True),
+    ({"collided": None, "true_x": None, "true_y": None, "true_theta": None}, True),
+    ({"diag": {}}, True), ({"true_theta": None}, True), ({"path": ""}, True),
+    ({"diag": {"a": math.inf}}, False), ({"x": math.nan}, False),
+    ({"scan_age": math.inf}, False), ({"diag": {"label": "not a number"}}, False),
+])
+def test_the_fast_sample_line_is_the_trace_line(changes: dict[str, Any], finite: bool) -> None:
+    """line_and_values (one template per shape of line) gives the line the trace writer
+    writes, and the numbers a reader of that line gets."""
+    from mdle.trace import SampleFormat
+
+    fmt = SampleFormat()
+    s = _sample(**changes)
+    for _ in range(2):  # the template made, then the template kept
+        line, values = fmt.line_and_values(s)
+        assert line == SampleFormat()(s)
+        rec = json.loads(line)
+        assert (values is not None) == finite
+        if values is not None:
+            keys = ["x", "y", "theta", "v", "omega", "cmd_v", "cmd_omega"]
+            if "true_x" in rec:
+                keys += ["true_x", "true_y", "true_theta"]
+            assert values == tuple(rec[k] for k in keys)
