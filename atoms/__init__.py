@@ -6,13 +6,13 @@ The modules it reads declare specs only; numpy is imported on first use.
 
 from __future__ import annotations
 
-from atoms.registry import Registry
+from mdle.atoms.registry import Registry
 
 __all__ = ["default_registry"]
 
 
 def default_registry() -> Registry:
     """Return the registry of the built-in control laws and sensor functions."""
-    from atoms import boundary, follow, laws, motion, sensors, team
+    from mdle.atoms import boundary, follow, laws, motion, sensors, team
 
     return Registry.from_modules(laws, sensors, boundary, follow, motion, team)

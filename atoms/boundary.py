@@ -34,9 +34,9 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
-from atoms.memo import ByIdentity
-from atoms.registry import Args, Context, Param, sensor
-from atoms.steering import MISS, Ray
+from mdle.atoms.memo import ByIdentity
+from mdle.atoms.registry import Args, Context, Param, sensor
+from mdle.atoms.steering import MISS, Ray
 from mdle.units import ANGLE, CURVATURE, LENGTH
 
 if TYPE_CHECKING:
@@ -126,7 +126,7 @@ def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
     """
     import numpy as np
 
-    from atoms.estimators import DEFAULT_GAP, DEFAULT_GAP_FACTOR
+    from mdle.atoms.estimators import DEFAULT_GAP, DEFAULT_GAP_FACTOR
 
     b = np.frombuffer(key, dtype=np.float64)
     n = b.size
@@ -429,7 +429,7 @@ def _front_full(ranges: "np.ndarray", bearings: "np.ndarray", valid: "np.ndarray
     """Run :func:`_front_ray` with the true extent of the front beam's surface (whole scan)."""
     import numpy as np
 
-    from atoms.estimators import surfaces
+    from mdle.atoms.estimators import surfaces
 
     if left:
         ranges, bearings, valid = ranges[::-1], -bearings[::-1], valid[::-1]

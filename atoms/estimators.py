@@ -47,7 +47,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from atoms.memo import ByIdentity
+from mdle.atoms.memo import ByIdentity
 
 __all__ = [
     "Surfaces",

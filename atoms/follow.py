@@ -20,16 +20,16 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from atoms import steering
-from atoms.boundary import SIDES, Side, cached_view, parse_side
-from atoms.latency import shift_front, shift_side
-from atoms.registry import Args, Context, Param, Report, control_law, sensor
+from mdle.atoms import steering
+from mdle.atoms.boundary import SIDES, Side, cached_view, parse_side
+from mdle.atoms.latency import shift_front, shift_side
+from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.backend import Command
 from mdle.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 if TYPE_CHECKING:
-    from atoms.latency import Predictor
-    from atoms.steering import Gains, Memory
+    from mdle.atoms.latency import Predictor
+    from mdle.atoms.steering import Gains, Memory
 
 __all__ = ["follow_boundary", "lost", "FollowState", "start_follow", "scan_points_cached"]
 
@@ -54,8 +54,8 @@ class FollowState:
 
 def start_follow(args: Args, ctx: Context) -> FollowState:
     """Make the per-atom state when a ``follow_boundary`` atom starts."""
-    from atoms.latency import Predictor
-    from atoms.steering import Gains, Memory
+    from mdle.atoms.latency import Predictor
+    from mdle.atoms.steering import Gains, Memory
 
     umax = min(float(args["umax"]), ctx.limits.max_turn_rate)
     kf = float(args["kf"])
@@ -76,7 +76,7 @@ def scan_points_cached(ctx: Context) -> Any:
     """Return the robot-frame points (M, 2) of this tick's valid beams, once per tick."""
     pts = ctx.cache.get("scan_points")
     if pts is None:
-        import atoms.estimators as est  # numpy, on first use (not `from`: no __path__ probe)
+        import mdle.atoms.estimators as est  # numpy, on first use (not `from`: no __path__ probe)
 
         scan = ctx.obs.scan
         if scan is None:

@@ -27,7 +27,7 @@ import math
 from collections import deque
 from dataclasses import dataclass, field
 
-from atoms.steering import MISS, Ray, wrap
+from mdle.atoms.steering import MISS, Ray, wrap
 
 __all__ = ["Predictor", "shift_front", "shift_side", "compose"]
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from atoms.registry import Args, Context, Param, control_law
+from mdle.atoms.registry import Args, Context, Param, control_law
 from mdle.backend import Command
 from mdle.units import SPEED, TURN_RATE
 

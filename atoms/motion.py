@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from atoms.registry import Args, Context, Param, control_law
+from mdle.atoms.registry import Args, Context, Param, control_law
 from mdle.backend import Command
 from mdle.units import ANGLE, LENGTH, SPEED, TURN_RATE
 

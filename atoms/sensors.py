@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from atoms.registry import BOOL, Args, Context, Param, sensor
+from mdle.atoms.registry import BOOL, Args, Context, Param, sensor
 from mdle.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
 
 __all__ = ["range_", "min_range", "x", "y", "theta", "speed", "turn_rate", "t", "stalled",

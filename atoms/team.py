@@ -13,7 +13,7 @@ import math
 from collections import deque
 from typing import Any
 
-from atoms.registry import BOOL, Args, Context, Param, control_law, sensor
+from mdle.atoms.registry import BOOL, Args, Context, Param, control_law, sensor
 from mdle.backend import Command, Pose
 from mdle.messages import relative
 from mdle.units import ANGLE, LENGTH, SPEED

@@ -23,8 +23,8 @@ import numpy as np
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
 
 # The project's imports must come after the sys.path fix above, hence the E402 waivers.
-from atoms import estimators as E  # noqa: E402 (after the sys.path fix)
-from atoms.boundary import boundary_view  # noqa: E402 (after the sys.path fix)
+from mdle.atoms import estimators as E  # noqa: E402 (after the sys.path fix)
+from mdle.atoms.boundary import boundary_view  # noqa: E402 (after the sys.path fix)
 from mdle.backend import Scan  # noqa: E402 (after the sys.path fix)
 
 

@@ -28,7 +28,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from atoms.registry import Args, Context, Param, Registry, sensor  # noqa: E402 (after the path fix)
+from mdle.atoms.registry import Args, Context, Param, Registry, sensor  # noqa: E402 (after the path fix)
 from mdle.units import LENGTH  # noqa: E402
 
 _READS = [0]
@@ -73,8 +73,8 @@ def main() -> int:
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
 
-    import sim
-    from atoms import default_registry
+    from mdle import sim
+    from mdle.atoms import default_registry
     from mdle.backend import Observation, Pose, RobotLimits
     from mdle.loader import load_text
     from mdle.runtime import Scheduler

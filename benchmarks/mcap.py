@@ -124,7 +124,7 @@ def per_tick(ticks: list[Sample], make: Any) -> tuple[float, float]:
 
 def whole_run(record: bool, seconds: float, compression: str = "") -> tuple[float, float]:
     """Wall and CPU seconds of the Figure 1 run (50 Hz), recorded or not."""
-    import sim
+    from mdle import sim
 
     program = load_program(REPO / "plans" / "paper" / "fig1-ellipse.mdle")
     world = sim.load_world(REPO / "plans" / "paper" / "fig1-ellipse.world.yaml")

@@ -28,7 +28,7 @@ import statistics
 import tempfile
 import time
 
-from atoms.registry import Context, LawSpec
+from mdle.atoms.registry import Context, LawSpec
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits
 from mdle.loader import load_text
 from mdle.program import AtomNode, Element, Interrupt, StringNode

@@ -43,12 +43,12 @@ sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 import numpy as np  # noqa: E402 (after the path fix above)
 
 from mdle.backend import Command, Pose  # noqa: E402 (after the path fix above)
-from sim.backend import SimBackend  # noqa: E402 (after the path fix above)
-from sim.catalog import load_world  # noqa: E402 (after the path fix above)
-from sim.ladar import LMS200, Ladar  # noqa: E402 (after the path fix above)
-from sim.profiles import robot_profile  # noqa: E402 (after the path fix above)
-from sim.shapes import Curve, Rectangle, Wall  # noqa: E402 (after the path fix above)
-from sim.world import World  # noqa: E402 (after the path fix above)
+from mdle.sim.backend import SimBackend  # noqa: E402 (after the path fix above)
+from mdle.sim.catalog import load_world  # noqa: E402 (after the path fix above)
+from mdle.sim.ladar import LMS200, Ladar  # noqa: E402 (after the path fix above)
+from mdle.sim.profiles import robot_profile  # noqa: E402 (after the path fix above)
+from mdle.sim.shapes import Curve, Rectangle, Wall  # noqa: E402 (after the path fix above)
+from mdle.sim.world import World  # noqa: E402 (after the path fix above)
 
 
 def scattered_world(n_segments: int, seed: int = 0) -> World:

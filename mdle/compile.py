@@ -28,9 +28,9 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from atoms.registry import BOOL, REQUIRED, LawSpec, Param, Registry, SensorSpec
 from mdle import conditions as cond
 from mdle import syntax as st
+from mdle.atoms.registry import BOOL, REQUIRED, LawSpec, Param, Registry, SensorSpec
 from mdle.dimensions import (
     Quantity,
     Symbol,

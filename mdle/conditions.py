@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from types import CodeType
 from typing import Any
 
-from atoms.registry import BOOL, Context, SensorSpec
+from mdle.atoms.registry import BOOL, Context, SensorSpec
 from mdle.program import NEVER, Interrupt
 from mdle.units import Dim
 

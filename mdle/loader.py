@@ -15,8 +15,8 @@ import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
-from atoms.registry import Registry
 from mdle import syntax as st
+from mdle.atoms.registry import Registry
 from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
 from mdle.hints import refine_hints
@@ -260,7 +260,7 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         MdleSyntaxError or CheckError, with ``.sources`` filled.
     """
     if registry is None:
-        from atoms import default_registry
+        from mdle.atoms import default_registry
 
         registry = default_registry()
     with _collector_paused():

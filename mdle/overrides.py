@@ -35,8 +35,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from atoms.registry import Registry
 from mdle import syntax as st
+from mdle.atoms.registry import Registry
 from mdle.errors import CheckError, Diagnostic, MdleError, Severity, Span
 from mdle.resolve import Namespace, build_namespace
 
@@ -318,7 +318,7 @@ def override_defaults(loaded: "Loaded", settings: Mapping[str, str] | Sequence[s
     from mdle.loader import Loaded
 
     if registry is None:
-        from atoms import default_registry
+        from mdle.atoms import default_registry
 
         registry = default_registry()
     texts = ([f"{k}={v}" for k, v in settings.items()] if isinstance(settings, Mapping)

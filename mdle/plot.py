@@ -83,7 +83,7 @@ def robot_radius(trace: Trace, world: Any = None) -> float:
     name = trace.header.get("robot")
     if isinstance(name, str) and name:
         try:
-            from sim.profiles import robot_profile
+            from mdle.sim.profiles import robot_profile
 
             return float(robot_profile(name).radius)
         except (MdleError, OSError, ValueError):
@@ -391,7 +391,7 @@ def world_of(trace: Trace) -> Any:
     if not spec or not isinstance(spec, str):
         return None
     try:
-        import sim
+        from mdle import sim
 
         return sim.load_world(spec)
     except MdleError:
@@ -402,7 +402,7 @@ def trace_and_world(trace_path: str | os.PathLike[str], world: Any = None) -> tu
     """Read a trace and the world to draw it in (``world`` as :func:`plot_trace` takes it)."""
     trace = read_trace(trace_path)
     if isinstance(world, (str, os.PathLike)):
-        import sim
+        from mdle import sim
 
         world = sim.load_world(world)
     elif world is None:

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Union
 
-from atoms.registry import Args, Context, LawSpec
+from mdle.atoms.registry import Args, Context, LawSpec
 from mdle.errors import Diagnostic, Span
 from mdle.units import Dim
 

@@ -13,8 +13,8 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from atoms.registry import LawSpec, Registry, SensorSpec
 from mdle import syntax as st
+from mdle.atoms.registry import LawSpec, Registry, SensorSpec
 from mdle.errors import Diagnostic, Severity
 
 __all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "uses_of",

@@ -100,7 +100,7 @@ def parse_team(text: str, file: str = "<string>") -> TeamSpec:
 
 
 def _parse(text: str, file: str) -> TeamSpec:
-    from sim.world_yaml import _Doc, _integer, _mapping, _number, _start, _string, _yaml_value
+    from mdle.sim.world_yaml import _Doc, _integer, _mapping, _number, _start, _string, _yaml_value
 
     doc = _Doc(file, text)
     top = _mapping(doc, "", _yaml_value(doc) or {}, _TOP_KEYS, "a team")
@@ -187,7 +187,7 @@ def load_team(spec: TeamSpec, *, world: str | None = None, overrides: Sequence[s
     """
     import dataclasses
 
-    import sim
+    from mdle import sim
     from mdle.loader import load_program
     from mdle.runtime import element_of
     from mdle.teamcheck import check_team

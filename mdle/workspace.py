@@ -11,8 +11,8 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from atoms.registry import Registry
 from mdle import syntax as st
+from mdle.atoms.registry import Registry
 from mdle.compile import _Abort, _checker, check_program
 from mdle.errors import CheckError, Diagnostic, MdleError
 from mdle.format import format_statement
@@ -56,7 +56,7 @@ class Workspace:
 
     def __init__(self, registry: Registry | None = None) -> None:
         if registry is None:
-            from atoms import default_registry
+            from mdle.atoms import default_registry
 
             registry = default_registry()
         self.registry = registry

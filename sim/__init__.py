@@ -1,6 +1,6 @@
 """The embedded simulator: worlds from YAML, a Pioneer II with a SICK LMS-200 ladar.
 
->>> import sim
+>>> from mdle import sim
 >>> world = sim.load_world("ellipse")
 >>> backend = sim.SimBackend(world, seed=1)
 >>> obs = backend.observe()
@@ -17,20 +17,20 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from sim.backend import SimBackend
-    from sim.catalog import DEFAULT_WORLD, list_worlds, load_world
-    from sim.world import World
+    from mdle.sim.backend import SimBackend
+    from mdle.sim.catalog import DEFAULT_WORLD, list_worlds, load_world
+    from mdle.sim.world import World
 
 __all__ = ["DEFAULT_WORLD", "SimBackend", "World", "list_worlds", "load_world"]
 
-_HOME = {"SimBackend": "sim.backend", "DEFAULT_WORLD": "sim.catalog",
-         "list_worlds": "sim.catalog", "load_world": "sim.catalog", "World": "sim.world"}
+_HOME = {"SimBackend": ".backend", "DEFAULT_WORLD": ".catalog",
+         "list_worlds": ".catalog", "load_world": ".catalog", "World": ".world"}
 
 
 def __getattr__(name: str) -> Any:
     home = _HOME.get(name)
     if home is None:
-        raise AttributeError(f"module 'sim' has no attribute {name!r}")
-    value = getattr(importlib.import_module(home), name)
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(home, __name__), name)
     globals()[name] = value
     return value

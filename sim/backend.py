@@ -12,8 +12,8 @@ to where the robot was at :meth:`SimBackend.reset` (the run's start), which is
 :attr:`SimBackend.true_pose`.
 
 >>> import math
->>> from sim.world import World
->>> from sim.shapes import Rectangle
+>>> from mdle.sim.world import World
+>>> from mdle.sim.shapes import Rectangle
 >>> from mdle.backend import Command, Pose
 >>> world = World("wall", obstacles=(Rectangle((3.0, 0.0), (0.1, 4.0)),))
 >>> sim = SimBackend(world, robot="ideal", ladar="lms200-ideal")
@@ -39,11 +39,11 @@ import numpy as np
 from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.errors import BackendError, WorldError
 from mdle.messages import Inbox
-from sim.collision import CONTACT, Collider
-from sim.ladar import Ladar, LadarProfile, ladar_profile
-from sim.profiles import robot_profile
-from sim.robot import Phase, RobotProfile, RunClock, integrate, plan_phases, ramp_step
-from sim.world import World
+from mdle.sim.collision import CONTACT, Collider
+from mdle.sim.ladar import Ladar, LadarProfile, ladar_profile
+from mdle.sim.profiles import robot_profile
+from mdle.sim.robot import Phase, RobotProfile, RunClock, integrate, plan_phases, ramp_step
+from mdle.sim.world import World
 
 __all__ = ["SENSING_MODES", "SimBackend", "SimEvent"]
 

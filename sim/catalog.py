@@ -15,11 +15,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mdle.errors import WorldError
-from sim.world_yaml import parse_world, parse_world_robot, read_world, read_world_robot
+from mdle.sim.world_yaml import parse_world, parse_world_robot, read_world, read_world_robot
 
 if TYPE_CHECKING:
-    from sim.robot import RobotProfile
-    from sim.world import World
+    from mdle.sim.robot import RobotProfile
+    from mdle.sim.world import World
 
 __all__ = ["DEFAULT_WORLD", "list_worlds", "load_world", "world_descriptions", "world_robot"]
 
@@ -28,7 +28,7 @@ DEFAULT_WORLD = "default"
 
 
 def _folder() -> resources.abc.Traversable:
-    return resources.files("sim").joinpath("worlds")
+    return resources.files("mdle.sim").joinpath("worlds")
 
 
 def list_worlds() -> list[str]:

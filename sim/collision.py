@@ -13,8 +13,8 @@ The distance query is exact and cheap: per-world constants in complex form (abou
 numpy calls for all segments), nearest points on ellipses in plain floats, and in large
 worlds a list of the segments that can be nearest within 0.5 m of where it was made.
 
->>> from sim.shapes import Rectangle, Parts
->>> from sim.robot import Phase
+>>> from mdle.sim.shapes import Rectangle, Parts
+>>> from mdle.sim.robot import Phase
 >>> thin = Parts.concat([Rectangle((5.0, 0.0), (0.01, 4.0)).parts()])
 >>> c = Collider(thin, radius=0.25)
 >>> r = c.sweep(0.0, 0.0, 0.0, Phase(1.0, 100.0, 0.0, 0.0, 0.0))  # 100 m/s for 1 s
@@ -29,9 +29,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.distance import ellipse_nearest, ellipse_nearest_point, nearest_boundary
-from sim.robot import Phase, integrate
-from sim.shapes import Parts
+from mdle.sim.distance import ellipse_nearest, ellipse_nearest_point, nearest_boundary
+from mdle.sim.robot import Phase, integrate
+from mdle.sim.shapes import Parts
 
 __all__ = ["CONTACT", "Collider", "SweepResult"]
 

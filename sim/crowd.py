@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.collision import Collider
-from sim.shapes import Parts
+from mdle.sim.collision import Collider
+from mdle.sim.shapes import Parts
 
 __all__ = ["Discs", "NO_DISCS", "CrowdCollider", "cast_discs", "occlusions"]
 

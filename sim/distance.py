@@ -5,7 +5,7 @@ iteration on the distance equation (converges from below, so a fixed number of s
 gives a bound that only tightens). Vectorised over query points and primitives.
 
 >>> import numpy as np
->>> from sim.shapes import Circle, Rectangle, Parts
+>>> from mdle.sim.shapes import Circle, Rectangle, Parts
 >>> shapes = [Circle((0.0, 0.0), 1.0), Rectangle((5.0, 0.0), (2.0, 2.0))]
 >>> parts = Parts.concat([s.parts() for s in shapes])
 >>> d, p, owner = nearest_boundary(parts, np.array([[2.5, 0.0]]))
@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from sim.shapes import Parts
+from mdle.sim.shapes import Parts
 
 __all__ = ["ellipse_nearest", "ellipse_nearest_point", "nearest_boundary"]
 

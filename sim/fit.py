@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.recording import Recording
-from sim.robot import RAMPS, Latency, RobotProfile, RunClock
+from mdle.sim.recording import Recording
+from mdle.sim.robot import RAMPS, Latency, RobotProfile, RunClock
 
 __all__ = ["OMEGA_SCALE", "V_SCALE", "AxisFit", "CycleFit", "Fit", "fit_cycled", "fit_profile",
            "replay_axis", "report_times", "run_clock"]

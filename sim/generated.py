@@ -37,9 +37,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mdle.backend import Pose
-from sim.robot import RobotProfile
-from sim.shapes import Arc, Circle, Curve, Polygon, Rectangle, Shape
-from sim.world import World
+from mdle.sim.robot import RobotProfile
+from mdle.sim.shapes import Arc, Circle, Curve, Polygon, Rectangle, Shape
+from mdle.sim.world import World
 
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
@@ -96,7 +96,7 @@ class GeneratedShape:
         ``robot`` to the ideal unicycle.
         """
         if robot is None:
-            from sim.profiles import robot_profile
+            from mdle.sim.profiles import robot_profile
 
             robot = robot_profile("ideal")
         if start is None:

@@ -33,7 +33,7 @@ import numpy as np
 
 from mdle.backend import Scan
 from mdle.errors import WorldError
-from sim.raycast import MAX_RANGE_SLACK, FanCaster, RayCaster, RayHits
+from mdle.sim.raycast import MAX_RANGE_SLACK, FanCaster, RayCaster, RayHits
 
 __all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_profile"]
 

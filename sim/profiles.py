@@ -14,8 +14,8 @@ from importlib import resources
 from pathlib import Path
 
 from mdle.errors import WorldError
-from sim.robot import RobotProfile
-from sim.robot_yaml import parse_robot, read_robot
+from mdle.sim.robot import RobotProfile
+from mdle.sim.robot_yaml import parse_robot, read_robot
 
 __all__ = ["DEFAULT_ROBOT", "list_robots", "robot_descriptions", "robot_profile",
            "robot_source_text"]
@@ -25,7 +25,7 @@ DEFAULT_ROBOT = "pioneer2dx"
 
 
 def _folder() -> resources.abc.Traversable:
-    return resources.files("sim").joinpath("robots")
+    return resources.files("mdle.sim").joinpath("robots")
 
 
 def list_robots() -> list[str]:

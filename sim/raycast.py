@@ -15,7 +15,7 @@ scan of a small world costs).
 All angles are in the world frame (radians, counter-clockwise); ranges in metres.
 
 >>> import numpy as np
->>> from sim.shapes import Circle, Parts
+>>> from mdle.sim.shapes import Circle, Parts
 >>> caster = RayCaster(Parts.concat([Circle((5.0, 0.0), 1.0).parts()]))
 >>> hits = caster.cast(np.array([0.0, 0.0]), np.array([0.0, np.pi / 2]))
 >>> hits.ranges.tolist(), hits.hit.tolist()
@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.shapes import Parts
+from mdle.sim.shapes import Parts
 
 __all__ = ["MAX_RANGE_SLACK", "FanCaster", "RayCaster", "RayHits"]
 

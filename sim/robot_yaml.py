@@ -33,8 +33,8 @@ from pathlib import Path
 from typing import Any
 
 from mdle.errors import WorldError
-from sim.robot import RAMPS, Latency, OdometryNoise, RobotProfile
-from sim.world_yaml import _Doc, _mapping, _number, _show, _string, _yaml_value
+from mdle.sim.robot import RAMPS, Latency, OdometryNoise, RobotProfile
+from mdle.sim.world_yaml import _Doc, _mapping, _number, _show, _string, _yaml_value
 
 __all__ = ["ROBOT_KEYS", "check_mount", "dump_robot", "parse_robot", "read_robot",
            "robot_overrides"]
@@ -161,7 +161,7 @@ def parse_robot(text: str, file: str = "<string>", default_name: str = "robot",
             ch[key] = " ".join(_string(doc, key, top[key]).split())
     if "profile" in top:
         if lookup is None:
-            from sim.profiles import robot_profile
+            from mdle.sim.profiles import robot_profile
 
             lookup = robot_profile
         base_name = _string(doc, "profile", top["profile"])

@@ -15,8 +15,8 @@ the heading already leans the way the robot will follow the boundary (the bounda
 direction with the obstacle on the followed side), so a start at incidence -60 deg needs a
 150 deg turn to put the obstacle on the followed side, one at +60 deg only a 30 deg turn.
 
->>> from sim.shapes import Circle
->>> from sim.world import World
+>>> from mdle.sim.shapes import Circle
+>>> from mdle.sim.world import World
 >>> w = World("disc", obstacles=(Circle((0.0, 0.0), 2.0),))
 >>> s = collision_starts(w, 3, seed=1)
 >>> all(3.0 <= x.distance <= 8.0 and not x.blind for x in s)
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.world import World
+from mdle.sim.world import World
 
 __all__ = ["DISTANCE", "GAP", "INCIDENCE", "Start", "blind_side_starts", "collision_starts"]
 

@@ -27,9 +27,9 @@ import numpy as np
 from mdle.backend import Pose, Scan
 from mdle.errors import BackendError, WorldError
 from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
-from sim.backend import SimBackend, SimEvent
-from sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlusions
-from sim.world import RobotPlace, World
+from mdle.sim.backend import SimBackend, SimEvent
+from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlusions
+from mdle.sim.world import RobotPlace, World
 
 __all__ = ["RobotPlace", "Member", "Radio", "TeamSim"]
 
@@ -234,7 +234,7 @@ def _same_contact(a: SimEvent, b: SimEvent, label: str | None = None) -> bool:
 def _occluded(hits: Any, ox: float, oy: float, angles: np.ndarray, t: np.ndarray,
               which: np.ndarray | None, discs: Discs) -> Any:
     """Return ray hits with the discs in front of the walls (tangents, curvature too)."""
-    from sim.raycast import RayHits
+    from mdle.sim.raycast import RayHits
 
     closer = t < hits.ranges
     if not closer.any():

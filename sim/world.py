@@ -5,7 +5,7 @@ geometry) is built on first use and cached. Ground-truth queries: :meth:`World.c
 (exact ranges, tangents and curvatures of rays), :meth:`World.nearest_boundary` and
 :meth:`World.clearance`.
 
->>> from sim.shapes import Circle
+>>> from mdle.sim.shapes import Circle
 >>> w = World("demo", obstacles=(Circle((3.0, 0.0), 1.0),))
 >>> float(w.clearance((0.0, 0.0), radius=0.25))
 1.75
@@ -24,11 +24,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mdle.backend import Pose
-from sim.distance import nearest_boundary
-from sim.ladar import LMS200, LadarProfile
-from sim.raycast import RayCaster, RayHits
-from sim.robot import RobotProfile
-from sim.shapes import Parts, Shape
+from mdle.sim.distance import nearest_boundary
+from mdle.sim.ladar import LMS200, LadarProfile
+from mdle.sim.raycast import RayCaster, RayHits
+from mdle.sim.robot import RobotProfile
+from mdle.sim.shapes import Parts, Shape
 
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
@@ -37,7 +37,7 @@ __all__ = ["Nearest", "RobotPlace", "World"]
 
 
 def _default_robot() -> RobotProfile:
-    from sim.profiles import DEFAULT_ROBOT, robot_profile
+    from mdle.sim.profiles import DEFAULT_ROBOT, robot_profile
 
     return robot_profile(DEFAULT_ROBOT)
 

@@ -5,8 +5,8 @@ Metres and degrees, as the files are written by hand; every number is written ex
 the degree conversion. The robot and the ladar
 are written by profile name (a profile changed in code keeps its name only).
 
->>> from sim.shapes import Circle
->>> from sim.world import World
+>>> from mdle.sim.shapes import Circle
+>>> from mdle.sim.world import World
 >>> print(world_to_yaml(World("disc", obstacles=(Circle((3.0, 0.0), 1.0),))), end="")
 name: disc
 seed: 0
@@ -23,8 +23,8 @@ import json
 import math
 from collections.abc import Iterable
 
-from sim.shapes import Arc, Circle, Curve, Ellipse, Polygon, Rectangle, Shape, Wall
-from sim.world import World
+from mdle.sim.shapes import Arc, Circle, Curve, Ellipse, Polygon, Rectangle, Shape, Wall
+from mdle.sim.world import World
 
 __all__ = ["world_to_yaml"]
 

@@ -423,7 +423,7 @@ def _closest(word: str, options: tuple[str, ...]) -> str | None:
 
 # ---------------------------------------------------------------- sections
 def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
-    from sim import shapes
+    from mdle.sim import shapes
 
     if not isinstance(v, dict):
         raise doc.fail(path, f"expected a mapping with a `type`, got {_show(v)}")
@@ -524,8 +524,8 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
 
 
 def _robot(doc: _Doc, path: str, v: Any) -> Any:
-    from sim.profiles import DEFAULT_ROBOT, robot_profile
-    from sim.robot_yaml import ROBOT_KEYS, check_mount, robot_overrides
+    from mdle.sim.profiles import DEFAULT_ROBOT, robot_profile
+    from mdle.sim.robot_yaml import ROBOT_KEYS, check_mount, robot_overrides
 
     def lookup(name: str) -> Any:
         # A profile file named in a world file is found next to the world file.
@@ -546,7 +546,7 @@ def _robot(doc: _Doc, path: str, v: Any) -> Any:
 
 
 def _ladar(doc: _Doc, path: str, v: Any) -> Any:
-    from sim.ladar import NOISE_MODELS, ladar_profile
+    from mdle.sim.ladar import NOISE_MODELS, ladar_profile
 
     if isinstance(v, str):
         return _named(doc, path, v, ladar_profile)
@@ -641,9 +641,9 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     WorldError
         With the file, line, column, key path and problem of the first error found.
     """
-    from sim.ladar import LMS200
-    from sim.profiles import DEFAULT_ROBOT, robot_profile
-    from sim.world import World
+    from mdle.sim.ladar import LMS200
+    from mdle.sim.profiles import DEFAULT_ROBOT, robot_profile
+    from mdle.sim.world import World
 
     doc = _Doc(file, text)
     data = _yaml_value(doc)
@@ -695,7 +695,7 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
 
 def _check_start(doc: _Doc, path: str, world: Any, robot: Any, start: Pose, who: str) -> None:
     """Refuse a start where the robot's body overlaps or touches an obstacle."""
-    from sim.collision import CONTACT
+    from mdle.sim.collision import CONTACT
 
     if not world.obstacles:
         return
@@ -710,7 +710,7 @@ def _check_start(doc: _Doc, path: str, world: Any, robot: Any, start: Pose, who:
 
 def _team(doc: _Doc, v: Any, robot: Any, ladar: Any) -> tuple[Any, ...]:
     """Read ``robots:``, the robots of a team: names unique, starts apart."""
-    from sim.world import RobotPlace
+    from mdle.sim.world import RobotPlace
 
     if not isinstance(v, list) or not v:
         raise doc.fail("robots", f"expected a list of robots (name, start, and optionally "
@@ -773,7 +773,7 @@ def parse_world_robot(text: str, file: str = "<string>") -> Any:
     WorldError
         Not YAML, an unknown top-level key, or a bad ``robot`` entry.
     """
-    from sim.profiles import DEFAULT_ROBOT, robot_profile
+    from mdle.sim.profiles import DEFAULT_ROBOT, robot_profile
 
     doc = _Doc(file, text)
     data = _yaml_value(doc)

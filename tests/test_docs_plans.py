@@ -58,7 +58,7 @@ def test_the_readme_and_docs_show_plans() -> None:
 
 @pytest.mark.parametrize("block", PLANS, ids=[b.where for b in PLANS])
 def test_shown_plan_runs_to_its_end_without_a_collision(block: Block) -> None:
-    import sim
+    from mdle import sim
     from mdle.loader import load_text
     from mdle.runtime import Cause, run_named
 
@@ -87,7 +87,7 @@ def test_no_plan_hides_in_an_untagged_block() -> None:
 
 def test_the_language_patrol_example_actually_turns() -> None:
     # plans/language/patrol.mdle once ended its patrol before the first turn
-    import sim
+    from mdle import sim
     from mdle.loader import load_program
     from mdle.runtime import run_named
 

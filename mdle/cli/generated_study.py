@@ -57,7 +57,7 @@ def config_from(args: argparse.Namespace) -> "StudyConfig | str":
     """Build the study's configuration from the options, or return what is wrong with them."""
     from mdle.errors import WorldError
     from mdle.experiments.generated import StudyConfig
-    from sim.profiles import robot_profile
+    from mdle.sim.profiles import robot_profile
 
     c = StudyConfig()
     cfg = StudyConfig(

@@ -54,8 +54,8 @@ def known_robot(plan: str | os.PathLike[str] | None, world: str | None = None,
         The profile or the world cannot be read, or its ``robot`` is bad.
     """
     from mdle.motion_limits import KnownRobot
-    from sim.catalog import DEFAULT_WORLD, world_robot
-    from sim.profiles import robot_profile
+    from mdle.sim.catalog import DEFAULT_WORLD, world_robot
+    from mdle.sim.profiles import robot_profile
 
     beside = world_beside(plan) if plan is not None and not (robot or world) else None
     key = ("robot", robot) if robot else ("world", world) if world else (

@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
         return _show(args)
     if action == "fit":
         return _fit(args)
-    from sim.profiles import DEFAULT_ROBOT, robot_descriptions
+    from mdle.sim.profiles import DEFAULT_ROBOT, robot_descriptions
 
     rows = robot_descriptions()
     width = max(len(n) for n, _ in rows)
@@ -84,8 +84,8 @@ def _timing(robot: Any) -> str:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from sim.profiles import robot_profile
-    from sim.robot_yaml import dump_robot
+    from mdle.sim.profiles import robot_profile
+    from mdle.sim.robot_yaml import dump_robot
 
     robot = robot_profile(args.robot)
     print(dump_robot(robot, _timing(robot)), end="")
@@ -94,10 +94,10 @@ def _show(args: argparse.Namespace) -> int:
 
 def _fit(args: argparse.Namespace) -> int:
     from mdle.errors import MdleError
-    from sim.fit import fit_profile
-    from sim.profiles import robot_profile
-    from sim.recording import read_recording
-    from sim.robot_yaml import dump_robot
+    from mdle.sim.fit import fit_profile
+    from mdle.sim.profiles import robot_profile
+    from mdle.sim.recording import read_recording
+    from mdle.sim.robot_yaml import dump_robot
 
     for key in ("sip_cycle", "scan_period"):
         value = getattr(args, key)

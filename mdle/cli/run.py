@@ -451,7 +451,7 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         header.update(connect=args.connect, laser=args.laser)
         profile = None
         if args.robot:  # read before connecting: a bad profile touches no robot
-            from sim.profiles import robot_profile
+            from mdle.sim.profiles import robot_profile
 
             profile = robot_profile(args.robot)
             header["robot"] = args.robot
@@ -471,7 +471,7 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
             if profile.scan_period is not None:
                 backend.laser_timing = (profile.scan_period, 0.0)
         return backend, None
-    import sim
+    from mdle import sim
 
     spec: str | os.PathLike[str] | None = args.world
     if spec is None:

@@ -34,9 +34,9 @@ def trace_paths(trace: str, names: list[str]) -> dict[str, str]:
 
 def run_team(args: argparse.Namespace) -> int:
     """Run a team; returns the exit code."""
+    from mdle.sim.team import TeamSim
     from mdle.teamrun import TeamRun
     from mdle.trace import TraceWriter
-    from sim.team import TeamSim
 
     guard: SignalGuard = getattr(args, "signals", None) or SignalGuard()
     if args.start is not None or args.robot or args.backend != "sim" or args.record \

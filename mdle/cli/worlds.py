@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     """List or draw worlds; return the exit code."""
     if getattr(args, "action", None) == "show":
         return _show(args)
-    from sim.catalog import DEFAULT_WORLD, world_descriptions
+    from mdle.sim.catalog import DEFAULT_WORLD, world_descriptions
 
     rows = world_descriptions()
     width = max(len(n) for n, _ in rows)
@@ -105,7 +105,7 @@ def world_figure(world: Any, scan: bool = True) -> Any:
 def _show(args: argparse.Namespace) -> int:
     import os
 
-    import sim
+    from mdle import sim
     from mdle.figure_output import save_figure, show_or_write
 
     if args.output is not None:
@@ -131,10 +131,10 @@ def _robots_at_start(world: Any, scans: bool) -> list[tuple[str, Any, Any, Any]]
 
     A team world's robots (each seeing the others), else the one robot at the start.
     """
-    import sim
+    from mdle import sim
 
     if world.robots:
-        from sim.team import TeamSim
+        from mdle.sim.team import TeamSim
 
         team = TeamSim(world, world.robots, sensing="exact") if scans else None
         return [(r.name, r.start, r.profile,

@@ -66,7 +66,7 @@ class Result:
 
 
 def _estimate(row: Row, scan: Any) -> Any:
-    from atoms import estimators as E
+    from mdle.atoms import estimators as E
 
     s = E.surfaces(scan.ranges, scan.bearings, scan.valid)
     if row.filtered:
@@ -77,7 +77,7 @@ def _estimate(row: Row, scan: Any) -> Any:
 
 def object_scans(world: str, draws: int, seed: int) -> tuple[list[Any], Any]:
     """Scan a reference world from its start pose: ``draws`` noisy scans and the exact one."""
-    from sim import SimBackend, load_world
+    from mdle.sim import SimBackend, load_world
 
     w = load_world(world)
     noisy = SimBackend(w, seed=seed, ladar="lms200")
@@ -139,7 +139,7 @@ def plot_figures(out: Path, seed: int = 0, draws: int = 5, dpi: int = 120) -> li
     import numpy as np
     from matplotlib.figure import Figure
 
-    from atoms import estimators as E
+    from mdle.atoms import estimators as E
 
     out.mkdir(parents=True, exist_ok=True)
     files = []

@@ -76,7 +76,7 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
     from mdle.loader import load_text
     from mdle.runtime import run
     from mdle.runtime.observer import Recorder
-    from sim import SimBackend, load_world
+    from mdle.sim import SimBackend, load_world
 
     rc = SHAPES.get(world, 0.5) if rc is None else rc
     rate = (100.0 if sensing == "exact" else 50.0) if rate is None else rate
@@ -113,7 +113,7 @@ def _start_poses(world: str, n: int, seed: int, distance: float = 8.0
     """
     import numpy as np
 
-    from sim import load_world
+    from mdle.sim import load_world
 
     rng = np.random.default_rng(seed)
     w = load_world(world)
@@ -150,7 +150,7 @@ def follow_task(world: str, *, side: str = "right", rc: float | None = None, v: 
 
     rc = SHAPES.get(world, 0.5) if rc is None else rc
     rate = (100.0 if sensing == "exact" else 50.0) if rate is None else rate
-    text = resources.files("sim").joinpath("worlds", f"{world}.yaml").read_text("utf-8")
+    text = resources.files("mdle.sim").joinpath("worlds", f"{world}.yaml").read_text("utf-8")
     return RunTask(follow_plan(side, rc, v, duration), (), "main", (), text, robot, sensing,
                    rate, seed, pose, None, _FIELDS, False, index,
                    {"plan": f"follow-{side}", "world": world, "robot": robot or "world",

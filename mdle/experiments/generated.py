@@ -131,8 +131,8 @@ def study_specs(config: StudyConfig) -> list[RunSpec]:
     Starts of shape ``i`` are drawn from ``(seed, i, 1)`` (collision courses) and
     ``(seed, i, 2)`` (blind side): the same shapes and starts whatever the law.
     """
-    from sim.generated import generate_shape
-    from sim.starts import blind_side_starts, collision_starts
+    from mdle.sim.generated import generate_shape
+    from mdle.sim.starts import blind_side_starts, collision_starts
 
     specs: list[RunSpec] = []
     for index in range(config.shapes):
@@ -165,9 +165,9 @@ def run_spec(spec: RunSpec) -> Row:
     from mdle.experiments.engagement import follow_metrics
     from mdle.loader import load_text
     from mdle.runtime import Recorder, run_named
-    from sim import SimBackend
-    from sim.generated import generate_shape
-    from sim.profiles import robot_profile
+    from mdle.sim import SimBackend
+    from mdle.sim.generated import generate_shape
+    from mdle.sim.profiles import robot_profile
 
     shape = generate_shape(spec.shape_seed, spec.shape_index)
     world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
@@ -219,9 +219,9 @@ def replay_files(spec: RunSpec) -> tuple[str, str]:
     from dataclasses import replace
 
     from mdle.backend import Pose
-    from sim.generated import generate_shape
-    from sim.profiles import robot_profile
-    from sim.world_dump import world_to_yaml
+    from mdle.sim.generated import generate_shape
+    from mdle.sim.profiles import robot_profile
+    from mdle.sim.world_dump import world_to_yaml
 
     shape = generate_shape(spec.shape_seed, spec.shape_index)
     world = replace(shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot)),
@@ -419,6 +419,6 @@ def _nanmin(values: list[float]) -> float:
 
 
 def _family_order(family: str) -> int:
-    from sim.generated import FAMILIES
+    from mdle.sim.generated import FAMILIES
 
     return FAMILIES.index(family) if family in FAMILIES else len(FAMILIES)

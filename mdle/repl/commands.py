@@ -349,7 +349,7 @@ class Repl:
         _simulated(self.session, ":world", "the session drives a real robot; a simulated "
                    "world needs another session (`mdle repl --world NAME`)")
         if not args:
-            import sim
+            from mdle import sim
 
             self.say(f"world `{self.session.world.name}`; reference worlds: "
                      + ", ".join(sim.list_worlds()))

@@ -246,7 +246,7 @@ class MdleCompleter(Completer):
             yield from _starting(arg, (("seed", "random seed"), ("until", "run limit, s"),
                                        ("realtime", "on or off")))
         elif cmd.completes == "world":
-            import sim
+            from mdle import sim
 
             yield from _starting(arg, ((n, "reference world") for n in sim.list_worlds()))
             if arg:

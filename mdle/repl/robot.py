@@ -25,7 +25,7 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
-from atoms.registry import Registry
+from mdle.atoms.registry import Registry
 from mdle.backend import Backend, Pose
 from mdle.errors import Diagnostic, MdleError
 from mdle.repl.session import (

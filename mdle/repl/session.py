@@ -22,7 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
-from atoms.registry import Registry
+from mdle.atoms.registry import Registry
 from mdle.backend import Backend, Observation, Pose, RobotLimits
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
@@ -41,8 +41,8 @@ from mdle.workspace import Workspace
 if TYPE_CHECKING:
     import numpy as np
 
-    from sim import SimBackend, World
-    from sim.backend import SimEvent
+    from mdle.sim import SimBackend, World
+    from mdle.sim.backend import SimEvent
 
 __all__ = ["DEFAULT_UNTIL", "SETTLED_WINDOW", "LoadedRun", "ReplError", "RunReport", "Session",
            "SideStats", "StepOutcome", "StepRow"]
@@ -297,7 +297,7 @@ class Session:
 
     def _open_world(self, spec: str | os.PathLike[str] | None,
                     pose: Pose | None = None) -> None:
-        import sim
+        from mdle import sim
 
         text = sim.DEFAULT_WORLD if spec is None else os.fspath(spec)
         world = sim.load_world(text)

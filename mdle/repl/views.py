@@ -16,10 +16,10 @@ from mdle.runtime.events import ended_how
 if TYPE_CHECKING:
     import numpy as np
 
-    from atoms.registry import Registry, Report
+    from mdle.atoms.registry import Registry, Report
     from mdle.backend import RobotLimits
     from mdle.repl.session import RunReport, StepRow
-    from sim import World
+    from mdle.sim import World
 
 __all__ = ["format_pose", "format_report", "format_scan", "format_step_rows", "law_reports",
            "render_map"]
@@ -87,8 +87,8 @@ def format_scan(obs: Observation, registry: Registry, limits: RobotLimits,
     """
     import numpy as np
 
-    from atoms.boundary import boundary_view
-    from atoms.registry import Context
+    from mdle.atoms.boundary import boundary_view
+    from mdle.atoms.registry import Context
 
     scan = obs.scan
     if scan is None or len(scan.ranges) == 0:

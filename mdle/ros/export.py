@@ -92,7 +92,7 @@ def _header(path: str, first: bytes) -> dict[str, Any]:
 
 def _world(header: Mapping[str, Any], world: Any) -> tuple[Any, list[str]]:
     """Return the world to draw on ``/map`` and warnings."""
-    import sim
+    from mdle import sim
 
     if world is not None and not isinstance(world, (str, os.PathLike)):
         return world, []

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from atoms.registry import Context
+from mdle.atoms.registry import Context
 from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose
 from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
 from mdle.program import AtomNode, Element, Send, StringNode

@@ -131,7 +131,7 @@ class LocalExecutor:
         from concurrent.futures import ProcessPoolExecutor
 
         ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["mdle.sweep.worker", "mdle.runtime", "sim", "atoms"])
+        ctx.set_forkserver_preload(["mdle.sweep.worker", "mdle.runtime", "mdle.sim", "mdle.atoms"])
         return ProcessPoolExecutor(self.jobs, mp_context=ctx, initializer=_worker_setup,
                                    initargs=(os.getpid(),))
 

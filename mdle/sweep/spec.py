@@ -35,7 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.errors import MdleError, WorldError
-from sim.world_yaml import (
+from mdle.sim.world_yaml import (
     _closest,
     _Doc,
     _integer,
@@ -318,8 +318,8 @@ def _worlds(doc: _Doc, path: str, base: Path, v: Any) -> list[WorldChoice]:
     if not isinstance(v, dict):
         return [_world(doc, path, base, v)]
     _mapping(doc, path, v, ("generated",), "a world name, a file, or {generated: ..}")
+    from mdle.sim.generated import FAMILIES
     from mdle.sweep.worlds import generated_text
-    from sim.generated import FAMILIES
 
     gpath = f"{path}.generated"
     g = _mapping(doc, gpath, v["generated"], _GENERATED,
@@ -344,14 +344,14 @@ def _worlds(doc: _Doc, path: str, base: Path, v: Any) -> list[WorldChoice]:
 
 
 def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
-    from sim.catalog import list_worlds
-    from sim.world_yaml import parse_world
+    from mdle.sim.catalog import list_worlds
+    from mdle.sim.world_yaml import parse_world
 
     name = _string(doc, path, v)
     if name in list_worlds():
         from importlib import resources
 
-        text = resources.files("sim").joinpath("worlds", f"{name}.yaml").read_text("utf-8")
+        text = resources.files("mdle.sim").joinpath("worlds", f"{name}.yaml").read_text("utf-8")
         return WorldChoice(name, text)
     p = base / name
     if not p.is_file():
@@ -374,7 +374,7 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
 def _robot(doc: _Doc, path: str, base: Path, v: Any) -> RobotChoice:
     import yaml
 
-    from sim.world_yaml import _robot as robot_section
+    from mdle.sim.world_yaml import _robot as robot_section
 
     if isinstance(v, str) and (v.endswith((".yaml", ".yml")) or "/" in v):
         from mdle.userfile import UserFileError

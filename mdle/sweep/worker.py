@@ -90,9 +90,9 @@ def _run(task: RunTask) -> tuple[dict[str, Any], bytes | None]:
     from mdle.runtime import run
     from mdle.runtime.api import element_of
     from mdle.runtime.observer import Recorder
+    from mdle.sim import SimBackend
     from mdle.sweep.metrics import field_summary, follow_atoms, follow_metrics
     from mdle.sweep.spec import SAMPLE_FIELDS
-    from sim import SimBackend
 
     program = load_text(task.plan_text, task.labels.get("plan", "<plan>"),
                         settings=dict(task.settings), files=dict(task.plan_files),

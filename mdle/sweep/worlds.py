@@ -37,11 +37,11 @@ def build_world(text: str, label: str, robot: str | dict[str, Any] | None = None
     WorldError
         Invalid world text or robot profile.
     """
-    from sim.world_yaml import parse_world
+    from mdle.sim.world_yaml import parse_world
 
     if text.startswith(_PREFIX):
-        from sim.generated import generate_shape
-        from sim.profiles import robot_profile
+        from mdle.sim.generated import generate_shape
+        from mdle.sim.profiles import robot_profile
 
         g = json.loads(text)["generated"]
         shape = generate_shape(int(g["seed"]), int(g["index"]), g.get("family"))
@@ -58,7 +58,7 @@ def build_world(text: str, label: str, robot: str | dict[str, Any] | None = None
 
 def robot_from(value: str | dict[str, Any], label: str) -> Any:
     """Return the robot profile a name or a profile mapping describes."""
-    from sim.world_yaml import _Doc
-    from sim.world_yaml import _robot as robot_section
+    from mdle.sim.world_yaml import _Doc
+    from mdle.sim.world_yaml import _robot as robot_section
 
     return robot_section(_Doc(f"<robot {label}>", ""), "robot", value)

@@ -197,8 +197,8 @@ def closed_loop(shape: Shape, args: dict[str, Any], pose: tuple[float, float, fl
                 duration: float, dt: float, exact: bool = True, noise: float = 0.0,
                 seed: int = 0, umax: float = 3.0, radius: float = 0.0) -> LoopResult:
     """Run the real ``follow_boundary`` atom against ``shape`` with exact unicycle arcs."""
-    from atoms.follow import follow_boundary, start_follow
-    from atoms.registry import Context
+    from mdle.atoms.follow import follow_boundary, start_follow
+    from mdle.atoms.registry import Context
     from mdle.backend import Observation, Pose, RobotLimits
 
     limits = RobotLimits(1.0, 0.0, umax, radius=radius)

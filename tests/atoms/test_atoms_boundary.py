@@ -8,9 +8,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from atoms import default_registry
-from atoms.boundary import Side, boundary_view, cached_view, parse_side
-from atoms.registry import Context
+from mdle.atoms import default_registry
+from mdle.atoms.boundary import Side, boundary_view, cached_view, parse_side
+from mdle.atoms.registry import Context
 from mdle.backend import Observation, Pose, RobotLimits, Scan
 
 if TYPE_CHECKING:

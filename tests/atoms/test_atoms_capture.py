@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from atoms import steering as S
-from atoms.follow import FollowState, lost
-from atoms.registry import Context
+from mdle.atoms import steering as S
+from mdle.atoms.follow import FollowState, lost
+from mdle.atoms.registry import Context
 from mdle.backend import Observation, Pose
 from mdle.loader import load_text
 from mdle.runtime import run

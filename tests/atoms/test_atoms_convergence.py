@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
-import sim
-from atoms import steering as S
+from mdle import sim
+from mdle.atoms import steering as S
 from mdle.backend import Pose
 from mdle.loader import load_text
 from mdle.runtime import Recorder, run
-from sim.profiles import robot_profile
-from sim.shapes import Circle, Rectangle
+from mdle.sim.profiles import robot_profile
+from mdle.sim.shapes import Circle, Rectangle
 
 IDEAL = robot_profile("ideal")  # a point robot: clearance is the distance to the boundary
 

@@ -7,7 +7,8 @@ import importlib
 
 import pytest
 
-MODULES = ["atoms.estimators", "atoms.boundary", "atoms.steering", "atoms.memo"]
+MODULES = ["mdle.atoms.estimators", "mdle.atoms.boundary", "mdle.atoms.steering",
+           "mdle.atoms.memo"]
 
 
 @pytest.mark.parametrize("name", MODULES)

@@ -40,7 +40,7 @@ def test_figures_1_to_3_avoid_then_follow(name: str, rc: float, sensing: str,
 
 def _run_pioneer(name: str) -> tuple[RunResult, list[Sample]]:
     from mdle.loader import load_program
-    from sim import SimBackend, load_world
+    from mdle.sim import SimBackend, load_world
 
     program = load_program(PLANS / f"{name}.mdle")
     backend = SimBackend(load_world(PLANS / f"{name}.world.yaml"))

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from atoms import estimators as E
+from mdle.atoms import estimators as E
 from mdle.backend import Scan
 
 if TYPE_CHECKING:

@@ -7,8 +7,8 @@ import math
 
 import pytest
 
-from atoms.latency import Predictor, compose, shift_front, shift_side
-from atoms.steering import MISS, Ray
+from mdle.atoms.latency import Predictor, compose, shift_front, shift_side
+from mdle.atoms.steering import MISS, Ray
 
 
 def test_motion_since_the_scan_comes_from_the_odometry_history() -> None:

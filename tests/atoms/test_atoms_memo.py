@@ -7,9 +7,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from atoms.boundary import boundary_view
-from atoms.estimators import scan_points, valid_points
-from atoms.memo import ByIdentity
+from mdle.atoms.boundary import boundary_view
+from mdle.atoms.estimators import scan_points, valid_points
+from mdle.atoms.memo import ByIdentity
 from mdle.backend import Scan
 
 if TYPE_CHECKING:

@@ -8,8 +8,8 @@ import sys
 
 import pytest
 
-from atoms import default_registry
-from atoms.registry import Context
+from mdle.atoms import default_registry
+from mdle.atoms.registry import Context
 from mdle.backend import Observation, Pose, RobotLimits
 
 LIMITS = RobotLimits(1.0, 1.0, 2.0)

@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from atoms import estimators as E
-from atoms.boundary import boundary_view
+from mdle.atoms import estimators as E
+from mdle.atoms.boundary import boundary_view
 from mdle.backend import Scan
 
 if TYPE_CHECKING:

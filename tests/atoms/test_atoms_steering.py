@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from atoms import steering as S
+from mdle.atoms import steering as S
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import LoopResult, World2D

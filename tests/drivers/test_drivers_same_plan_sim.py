@@ -12,7 +12,7 @@ from mdle.drivers.pioneer import PioneerOptions
 from mdle.loader import load_text
 from mdle.runtime import element_of, run
 from mdle.runtime.events import RunResult
-from sim import SimBackend, load_world
+from mdle.sim import SimBackend, load_world
 
 if TYPE_CHECKING:
     from tests.drivers.conftest import FakeArcos

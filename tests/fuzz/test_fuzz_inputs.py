@@ -18,8 +18,8 @@ from hypothesis import strategies as hs
 
 from mdle.errors import MdleError, render_diagnostic
 from mdle.loader import load_program, read_source
+from mdle.sim.world_yaml import parse_world, read_world
 from mdle.trace import read_trace
-from sim.world_yaml import parse_world, read_world
 
 CORPUS = Path(__file__).resolve().parent / "corpus"
 FILES = sorted(CORPUS.iterdir())

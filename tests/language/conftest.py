@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from atoms.registry import BOOL, Args, Context, Param, Registry, control_law, sensor
+from mdle.atoms.registry import BOOL, Args, Context, Param, Registry, control_law, sensor
 from mdle.backend import Command, Observation, Pose, RobotLimits
 from mdle.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
 

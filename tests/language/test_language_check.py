@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from atoms.registry import Context, Registry
+from mdle.atoms.registry import Context, Registry
 from mdle.errors import CheckError, Diagnostic, Span, render_diagnostic
 from mdle.loader import load_text
 from mdle.program import AtomNode, Program, StringKind, StringNode

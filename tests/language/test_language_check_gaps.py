@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import pytest
 
-from atoms import default_registry
-from atoms.registry import Param
 from mdle import compile as compile_module
+from mdle.atoms import default_registry
+from mdle.atoms.registry import Param
 from mdle.errors import CheckError, MdleError, MdleSyntaxError, render_diagnostic
 from mdle.loader import load_text
 from mdle.units import LENGTH

@@ -12,7 +12,7 @@ from __future__ import annotations
 import tracemalloc
 import types
 
-from atoms.registry import Args, Context, Param, Registry, sensor
+from mdle.atoms.registry import Args, Context, Param, Registry, sensor
 from mdle.backend import Observation, Pose, RobotLimits
 from mdle.compile import never_ends
 from mdle.loader import load_text
@@ -31,7 +31,7 @@ def probe(args: Args, ctx: Context) -> float:
 
 
 def _registry() -> Registry:
-    from atoms import default_registry
+    from mdle.atoms import default_registry
 
     return default_registry().merged(Registry.from_modules(types.SimpleNamespace(probe=probe)))
 
@@ -93,7 +93,7 @@ def test_show_prints_a_shared_definition_once() -> None:
 
 
 def test_scheduler_builds_slots_lazily() -> None:
-    import sim
+    from mdle import sim
     from mdle.runtime import Scheduler
 
     program = load_text(behavior_chain(30), "beh.mdle", _registry())

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from atoms import default_registry
+from mdle.atoms import default_registry
 from mdle.errors import Diagnostic, MdleError
 from mdle.hints import chained_hint
 from mdle.loader import load_text

@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from atoms import default_registry
+from mdle.atoms import default_registry
 from mdle.errors import Diagnostic
 from mdle.loader import load_text
 from mdle.motion_limits import KnownRobot
@@ -83,17 +83,17 @@ def test_the_robot_is_named_by_how_it_was_chosen() -> None:
 
 def test_check_reads_each_world_once_across_plans(tmp_path: Path,
                                                   monkeypatch: pytest.MonkeyPatch) -> None:
-    import sim.catalog
+    import mdle.sim.catalog as catalog
     from mdle.cli.options import known_robot
 
     reads: list[str] = []
-    real = sim.catalog.world_robot
+    real = catalog.world_robot
 
     def counting(spec: Any) -> Any:
         reads.append(str(spec))
         return real(spec)
 
-    monkeypatch.setattr(sim.catalog, "world_robot", counting)
+    monkeypatch.setattr(catalog, "world_robot", counting)
     (tmp_path / "b.world.yaml").write_text("robot: ideal\n")
     memo: dict[tuple[str, ...], KnownRobot] = {}
     found = [known_robot(tmp_path / name, memo=memo) for name in ("a.mdle", "c.mdle", "b.mdle",

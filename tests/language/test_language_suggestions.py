@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from atoms import default_registry
 from mdle import compile as compile_module
+from mdle.atoms import default_registry
 from mdle.errors import CheckError
 from mdle.loader import load_text
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from atoms.registry import Registry
+from mdle.atoms.registry import Registry
 from mdle.errors import CheckError, MdleSyntaxError
 from mdle.program import AtomNode, StringNode
 from mdle.workspace import Workspace

@@ -308,8 +308,8 @@ def test_exact_sensing_scan_and_a_world_file(tmp_path: Path) -> None:
 def test_a_failing_control_law_is_reported_and_the_session_goes_on() -> None:
     import types
 
-    from atoms import default_registry
-    from atoms.registry import Registry, control_law
+    from mdle.atoms import default_registry
+    from mdle.atoms.registry import Registry, control_law
     from mdle.backend import Command
 
     @control_law()

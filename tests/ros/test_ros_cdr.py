@@ -183,7 +183,7 @@ def test_scan(tmp_path: Path, n: int, store: str) -> None:
 
 
 def test_markers_of_every_reference_world(store: str) -> None:
-    import sim
+    from mdle import sim
 
     for name in sim.list_worlds():
         world = sim.load_world(name)

@@ -22,7 +22,7 @@ class _Robot:
     """The simulator seen as a robot: no ground truth, no mount attribute."""
 
     def __init__(self) -> None:
-        import sim
+        from mdle import sim
 
         self._sim = sim.SimBackend(sim.load_world("ellipse"))
         self.clock = self._sim.clock
@@ -129,7 +129,7 @@ def test_a_recording_that_cannot_be_created(tmp_path: Path,
 def test_scans_taken_at_every_tick_are_a_tick_apart(tmp_path: Path, rate: float,
                                                     doctor: Any) -> None:
     """The reference world's ladar scans at every tick: scan_time is the tick."""
-    import sim
+    from mdle import sim
 
     element = load_text(PLAN, "<test>").elements["hug"]
     header = {"program": {"element": "hug"}, "world": {"name": "ellipse"}, "backend": "sim"}
@@ -166,7 +166,7 @@ def test_record_compression_lz4(tmp_path: Path, doctor: Any) -> None:
 def test_ticks_are_encoded_in_batches_and_an_event_flushes_them(tmp_path: Path,
                                                                 doctor: Any) -> None:
     """Ticks wait until the batch is full or old; an event publishes them first."""
-    import sim
+    from mdle import sim
 
     now = [0.0]
     element = load_text(PLAN, "<test>").elements["hug"]

@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from atoms.registry import Context, LawSpec
+from mdle.atoms.registry import Context, LawSpec
 from mdle.backend import Command
 from mdle.program import INF, NEVER, AtomNode, Element, Interrupt, StringKind, StringNode
 from mdle.runtime import Event, EventKind

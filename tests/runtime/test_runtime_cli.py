@@ -85,7 +85,7 @@ def test_run_writes_trace_and_plot_and_summary(
 
 
 def test_world_beside_the_plan_is_used(plan: WritePlan, tmp_path: Path, run_mdle: RunMdle) -> None:
-    import sim
+    from mdle import sim
 
     world_file = Path(sim.__file__).parent / "worlds" / "ellipse.yaml"
     shutil.copy(world_file, tmp_path / "plan.world.yaml")

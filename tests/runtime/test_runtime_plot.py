@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from matplotlib.collections import LineCollection
 
-from atoms.registry import Context
+from mdle.atoms.registry import Context
 from mdle.backend import Command
 from mdle.plot import PlotError, boundary_points, plot_trace, trace_figure
 from mdle.program import AtomNode, Element
@@ -131,7 +131,7 @@ def test_detected_boundary_is_drawn_where_the_obstacle_is(tmp_path: Path) -> Non
     # on the hexagon, not beside the odometry origin.
     import shapely
 
-    import sim
+    from mdle import sim
     from mdle.loader import load_text
 
     world = sim.load_world("hexagon")

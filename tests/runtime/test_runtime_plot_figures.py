@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from atoms.registry import Context
+from mdle.atoms.registry import Context
 from mdle.backend import Command
 from mdle.cli import main
 from mdle.plot import CAUSE_WORDS, boundary_points, run_pose, trace_figure
@@ -31,7 +31,7 @@ run main
 @pytest.fixture(scope="module")
 def left_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Trace, Any]:
     """A real run following the ellipse with the boundary on the robot's left."""
-    import sim
+    from mdle import sim
 
     d = tmp_path_factory.mktemp("left")
     plan = d / "left.mdle"
@@ -123,7 +123,7 @@ def test_legend_sits_beside_the_path_and_robot_marks_are_drawn(ir: SimpleNamespa
 
 def test_doors_are_drawn_and_a_long_scene_is_stretched(ir: SimpleNamespace,
                                                        tmp_path: Path) -> None:
-    import sim
+    from mdle import sim
 
     world = sim.load_world("corridor")
     def script(t: float, k: int) -> dict[str, Any]:

@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from atoms.registry import Context
+from mdle.atoms.registry import Context
 from mdle.backend import ClockMode, Command, Pose, Scan
 from mdle.errors import BackendError, MdleRuntimeError
 from mdle.program import Program

@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from atoms.registry import Context
+from mdle.atoms.registry import Context
 from mdle.backend import Command
 from mdle.program import StringKind
 from mdle.runtime import Cause, Recorder, Scheduler, run

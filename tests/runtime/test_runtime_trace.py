@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from atoms.registry import Context
+from mdle.atoms.registry import Context
 from mdle.backend import Command
 from mdle.errors import MdleRuntimeError
 from mdle.runtime import Cause, Scheduler, run

@@ -7,15 +7,15 @@ import math
 import numpy as np
 import pytest
 
-import sim
+from mdle import sim
 from mdle.backend import Backend, ClockMode, Command, Pose
 from mdle.errors import BackendError, WorldError
-from sim.backend import SimBackend
-from sim.ladar import Ladar, LadarProfile
-from sim.profiles import robot_profile
-from sim.robot import OdometryNoise, Phase, RobotProfile, integrate, plan_phases
-from sim.shapes import Circle, Rectangle, Wall
-from sim.world import World
+from mdle.sim.backend import SimBackend
+from mdle.sim.ladar import Ladar, LadarProfile
+from mdle.sim.profiles import robot_profile
+from mdle.sim.robot import OdometryNoise, Phase, RobotProfile, integrate, plan_phases
+from mdle.sim.shapes import Circle, Rectangle, Wall
+from mdle.sim.world import World
 
 IDEAL = robot_profile("ideal")
 PIONEER2DX = robot_profile("pioneer2dx")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-import sim
+from mdle import sim
 from mdle.cli import main
 
 

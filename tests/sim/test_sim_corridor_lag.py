@@ -11,11 +11,11 @@ from mdle.loader import load_text
 from mdle.runtime import run
 from mdle.runtime.events import Sample
 from mdle.runtime.observer import Recorder
-from sim import SimBackend, load_world
-from sim.fit import run_clock
-from sim.profiles import robot_profile
-from sim.recording import read_recording
-from sim.robot import RunClock
+from mdle.sim import SimBackend, load_world
+from mdle.sim.fit import run_clock
+from mdle.sim.profiles import robot_profile
+from mdle.sim.recording import read_recording
+from mdle.sim.robot import RunClock
 
 ROOT = Path(__file__).resolve().parents[2]
 RECORDING = ROOT / "tests" / "data" / "recordings" / "amrisim-p3dx-corridor.csv"

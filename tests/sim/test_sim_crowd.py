@@ -9,12 +9,12 @@ import pytest
 
 from mdle.backend import Command, Pose
 from mdle.errors import WorldError
-from sim.crowd import CrowdCollider, Discs, cast_discs
-from sim.ladar import ladar_profile
-from sim.profiles import robot_profile
-from sim.shapes import Parts, Rectangle
-from sim.team import TeamSim
-from sim.world import RobotPlace, World
+from mdle.sim.crowd import CrowdCollider, Discs, cast_discs
+from mdle.sim.ladar import ladar_profile
+from mdle.sim.profiles import robot_profile
+from mdle.sim.shapes import Parts, Rectangle
+from mdle.sim.team import TeamSim
+from mdle.sim.world import RobotPlace, World
 
 
 def _place(name: str, x: float, y: float, th: float = 0.0, robot: str = "pioneer2dx",
@@ -49,7 +49,7 @@ def test_a_ray_from_inside_a_disc_does_not_see_it() -> None:
 
 
 def test_the_collider_stops_at_another_robot_and_names_it() -> None:
-    from sim.robot import Phase
+    from mdle.sim.robot import Phase
 
     c = CrowdCollider(Parts.concat([Rectangle((20.0, 0.0), (0.1, 4.0)).parts()]), 0.25, 1)
     c.join(Discs(np.array([3.0]), np.array([0.0]), np.array([0.25]), np.array([4])), -1)
@@ -102,7 +102,7 @@ def test_robots_starting_overlapped_are_refused_with_both_names() -> None:
 
 
 def test_the_world_file_lists_robots_and_refuses_overlaps() -> None:
-    from sim.world_yaml import parse_world
+    from mdle.sim.world_yaml import parse_world
 
     w = parse_world("robots:\n  - {name: a, start: [0, 0, 90]}\n"
                     "  - {name: b, start: [2, 0, 0], robot: ideal}\n")

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from sim.collision import Collider
-from sim.distance import ellipse_nearest
-from sim.shapes import Arc, Circle, Ellipse, Rectangle, Wall
-from sim.world import World
+from mdle.sim.collision import Collider
+from mdle.sim.distance import ellipse_nearest
+from mdle.sim.shapes import Arc, Circle, Ellipse, Rectangle, Wall
+from mdle.sim.world import World
 
 
 def _sampled_ellipse_distance(a: float, b: float, pts: np.ndarray) -> np.ndarray:

@@ -7,9 +7,10 @@ import importlib
 
 import pytest
 
-MODULES = ["sim", "sim.shapes", "sim.raycast", "sim.distance", "sim.world", "sim.world_yaml",
-           "sim.catalog", "sim.robot", "sim.ladar", "sim.collision", "sim.backend",
-           "sim.generated", "sim.starts", "sim.world_dump"]
+MODULES = ["mdle.sim", "mdle.sim.shapes", "mdle.sim.raycast", "mdle.sim.distance",
+           "mdle.sim.world", "mdle.sim.world_yaml", "mdle.sim.catalog", "mdle.sim.robot",
+           "mdle.sim.ladar", "mdle.sim.collision", "mdle.sim.backend", "mdle.sim.generated",
+           "mdle.sim.starts", "mdle.sim.world_dump"]
 
 
 @pytest.mark.parametrize("name", MODULES)

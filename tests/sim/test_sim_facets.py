@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from sim.shapes import Polygon, polygon_parts
+from mdle.sim.shapes import Polygon, polygon_parts
 
 
 def _rounded_rectangle(radius: float, step_deg: float) -> Polygon:

@@ -13,12 +13,12 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 
-from sim.collision import Collider
-from sim.distance import ellipse_nearest, ellipse_nearest_point
-from sim.ladar import LMS200, Ladar
-from sim.raycast import FanCaster
-from sim.shapes import Arc, Circle, Curve, Ellipse, Rectangle, Wall
-from sim.world import World
+from mdle.sim.collision import Collider
+from mdle.sim.distance import ellipse_nearest, ellipse_nearest_point
+from mdle.sim.ladar import LMS200, Ladar
+from mdle.sim.raycast import FanCaster
+from mdle.sim.shapes import Arc, Circle, Curve, Ellipse, Rectangle, Wall
+from mdle.sim.world import World
 
 
 def _mixed_world() -> World:

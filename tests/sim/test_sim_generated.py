@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import shapely
 
-from sim.generated import FACET_TURN, FAMILIES, GeneratedShape, generate_shape
-from sim.shapes import Circle, Curve, Polygon, Rectangle
-from sim.starts import DISTANCE, GAP, blind_side_starts, collision_starts
+from mdle.sim.generated import FACET_TURN, FAMILIES, GeneratedShape, generate_shape
+from mdle.sim.shapes import Circle, Curve, Polygon, Rectangle
+from mdle.sim.starts import DISTANCE, GAP, blind_side_starts, collision_starts
 
 SEEDS = range(6)
 INDICES = range(2 * len(FAMILIES))
@@ -170,7 +170,7 @@ def test_blind_side_starts_pass_the_obstacle_on_the_non_followed_side(
 
 
 def test_starts_refuse_an_empty_world_and_a_bad_side() -> None:
-    from sim.world import World
+    from mdle.sim.world import World
 
     with pytest.raises(ValueError, match="no obstacles"):
         collision_starts(World("empty"), 1)

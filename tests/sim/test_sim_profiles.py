@@ -12,14 +12,14 @@ import pytest
 
 from mdle.backend import Command
 from mdle.errors import WorldError
-from sim.backend import SimBackend
-from sim.fit import fit_profile, run_clock
-from sim.profiles import list_robots, robot_profile
-from sim.recording import read_recording
-from sim.robot import RunClock
-from sim.robot_yaml import dump_robot, parse_robot
-from sim.world import World
-from sim.world_yaml import parse_world
+from mdle.sim.backend import SimBackend
+from mdle.sim.fit import fit_profile, run_clock
+from mdle.sim.profiles import list_robots, robot_profile
+from mdle.sim.recording import read_recording
+from mdle.sim.robot import RunClock
+from mdle.sim.robot_yaml import dump_robot, parse_robot
+from mdle.sim.world import World
+from mdle.sim.world_yaml import parse_world
 
 RECORDINGS = Path(__file__).resolve().parents[1] / "data" / "recordings"
 DRIVE = RECORDINGS / "amrisim-p3dx-drive.csv"
@@ -74,7 +74,7 @@ def test_world_names_a_profile_file_next_to_it(tmp_path: Path) -> None:
                                         "command_latency: 0.3\n")
     world_file = tmp_path / "w.yaml"
     world_file.write_text("robot: slow.yaml\n")
-    from sim.world_yaml import read_world
+    from mdle.sim.world_yaml import read_world
 
     w = read_world(world_file)
     assert w.robot.name == "slow" and w.robot.command_latency == 0.3

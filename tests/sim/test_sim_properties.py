@@ -8,9 +8,9 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import sim
+from mdle import sim
 from mdle.backend import Command
-from sim.backend import SimBackend
+from mdle.sim.backend import SimBackend
 
 commands = st.lists(st.tuples(st.floats(-3.0, 3.0), st.floats(-6.0, 6.0),
                               st.sampled_from([0.01, 0.05, 0.1, 0.25, 1.0])),

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from sim.raycast import RayCaster
-from sim.shapes import Arc, Circle, Curve, Ellipse, Parts, Polygon, Rectangle, Shape, Wall
-from sim.world import World
+from mdle.sim.raycast import RayCaster
+from mdle.sim.shapes import Arc, Circle, Curve, Ellipse, Parts, Polygon, Rectangle, Shape, Wall
+from mdle.sim.world import World
 
 TOL = 1e-9
 

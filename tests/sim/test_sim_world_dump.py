@@ -7,11 +7,11 @@ import math
 import numpy as np
 
 from mdle.backend import Pose
-from sim.catalog import list_worlds, load_world
-from sim.generated import FAMILIES, generate_shape
-from sim.world import World
-from sim.world_dump import world_to_yaml
-from sim.world_yaml import parse_world
+from mdle.sim.catalog import list_worlds, load_world
+from mdle.sim.generated import FAMILIES, generate_shape
+from mdle.sim.world import World
+from mdle.sim.world_dump import world_to_yaml
+from mdle.sim.world_yaml import parse_world
 
 
 def _same_parts(a: World, b: World) -> None:

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mdle.errors import WorldError
-from sim.world_yaml import OBSTACLE_TYPES, parse_world
+from mdle.sim.world_yaml import OBSTACLE_TYPES, parse_world
 
 KEYS = ["name", "description", "seed", "start", "robot", "ladar", "extent", "obstacles", "type",
         "points", "center", "size", "radius", "axes", "angle", "thickness", "closed", "start",

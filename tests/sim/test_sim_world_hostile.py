@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 
 from mdle.errors import WorldError
-from sim import load_world
-from sim.world_yaml import MAX_YAML_DEPTH, parse_world
+from mdle.sim import load_world
+from mdle.sim.world_yaml import MAX_YAML_DEPTH, parse_world
 
 
 def refused(text: str) -> str:

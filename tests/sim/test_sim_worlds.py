@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-import sim
+from mdle import sim
 from mdle.errors import WorldError
-from sim.shapes import Circle, Ellipse
-from sim.world_yaml import parse_world
+from mdle.sim.shapes import Circle, Ellipse
+from mdle.sim.world_yaml import parse_world
 
 REFERENCE = {"arrow", "cabinet", "corridor", "default", "ellipse", "empty", "garden", "hexagon",
              "office", "square", "trashcan", "u-shape", "wall"}

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from mdle.sim import load_world
 from mdle.sweep import SpecError, expand, parse_study, read_study
 from mdle.sweep.tasks import start_poses
-from sim import load_world
 
 PLAN = ("atom follow(rc = 1 m, kf = 0.5) = (follow_boundary(rc = rc, v = 1 m/s, kf = kf), "
         "never, 4 s)\\n")
@@ -140,8 +140,8 @@ def test_generated_worlds_expand_and_travel_as_parameters() -> None:
     assert [w.label for w in s.worlds] == ["ellipse", "rounded-rect-3-2",
                                            "rounded-rect-facets-3-3", "superellipse-3-4",
                                            "plate-1-0"]
+    from mdle.sim.generated import generate_shape
     from mdle.sweep.worlds import build_world
-    from sim.generated import generate_shape
 
     w = build_world(s.worlds[1].text, s.worlds[1].label)
     assert w.obstacles == generate_shape(3, 2).obstacles

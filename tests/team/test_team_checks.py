@@ -168,7 +168,7 @@ def test_send_and_receive_errors_in_a_plan(atom: str, message: str) -> None:
 
 
 def test_a_plan_that_talks_runs_alone_too() -> None:
-    import sim
+    from mdle import sim
     from mdle.loader import load_text
     from mdle.runtime import run_named
 

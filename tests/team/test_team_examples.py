@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from mdle.runtime import Recorder
+from mdle.sim.team import TeamSim
 from mdle.teamfile import load_team, read_team
 from mdle.teamrun import TeamRun
-from sim.team import TeamSim
 
 TEAM = Path(__file__).resolve().parents[2] / "plans" / "team"
 

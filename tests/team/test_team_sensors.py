@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from atoms.registry import Context
-from atoms.team import bearing_to, message, pursue, range_to, received
+from mdle.atoms.registry import Context
+from mdle.atoms.team import bearing_to, message, pursue, range_to, received
 from mdle.backend import Observation, Pose, RobotLimits
 from mdle.messages import Inbox, Message, compose, relative
 
