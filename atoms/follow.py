@@ -157,9 +157,9 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     points = scan_points_cached(ctx)
     if moved is not None and moved != (0.0, 0.0, 0.0):
         points = _into(points, moved[0], sgn * moved[1], sgn * moved[2])
-    near = _nearest_on_side(points, sgn)
     u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
-                      g.umax, filter_kappa=not view.exact, near=near)
+                      g.umax, filter_kappa=not view.exact,
+                      near=lambda: _nearest_on_side(points, sgn))
     u *= sgn
     u_law, v_law = u, v
     clearance = math.inf

@@ -37,6 +37,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     import numpy as np
 
 __all__ = [
@@ -318,7 +320,9 @@ def corner_law(d: float, e: float, v: float, rc: float, g: Gains, umax: float) -
 
 def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: float,
          mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
-         filter_kappa: bool = True, near: tuple[float, float] | None = None) -> float:
+         filter_kappa: bool = True,
+         near: "tuple[float, float] | Callable[[], tuple[float, float] | None] | None" = None,
+         ) -> float:
     """Run one tick of right-hand following with the corner mode and the curvature filter.
 
     Parameters
@@ -337,9 +341,10 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
     umax : float, rad/s, optional
     filter_kappa : bool
         Low-pass the side curvature (for estimates from a noisy scan).
-    near : (distance, bearing) or None
+    near : (distance, bearing), a function returning it, or None
         The nearest scan point on the followed side (m, rad in this frame), for bridging
-        notches in corner mode (see :class:`Gains` ``bridge``); None: not known.
+        notches in corner mode (see :class:`Gains` ``bridge``); None: not known. A function
+        is called only in corner mode (the search costs a pass over the scan).
 
     Returns
     -------
@@ -377,7 +382,9 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
         # boundary again. (While it is ahead, driving straight on closes in on it.)
         mem.mode = SEARCH
         mem.corner = mem.seen
-    if mem.mode == CORNER and near is not None:
+    if mem.mode == CORNER and callable(near):
+        near = near()
+    if mem.mode == CORNER and near is not None and not callable(near):
         # The point circled is a vertex seen earlier; a scan point on the followed side that
         # is nearer (the far face of a notch narrower than 2 rc) is what the rc level set
         # turns around now: circle it instead, so the robot bridges the notch rather than
