@@ -321,7 +321,7 @@ def corner_law(d: float, e: float, v: float, rc: float, g: Gains, umax: float) -
 def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: float,
          mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
          filter_kappa: bool = True,
-         near: "tuple[float, float] | Callable[[], tuple[float, float] | None] | None" = None,
+         near: "Callable[[], tuple[float, float] | None] | None" = None,
          ) -> float:
     """Run one tick of right-hand following with the corner mode and the curvature filter.
 
@@ -341,10 +341,10 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
     umax : float, rad/s, optional
     filter_kappa : bool
         Low-pass the side curvature (for estimates from a noisy scan).
-    near : (distance, bearing), a function returning it, or None
-        The nearest scan point on the followed side (m, rad in this frame), for bridging
-        notches in corner mode (see :class:`Gains` ``bridge``); None: not known. A function
-        is called only in corner mode (the search costs a pass over the scan).
+    near : function or None
+        Returns the nearest scan point on the followed side as (distance, bearing) (m, rad
+        in this frame) or None, for bridging notches in corner mode (see :class:`Gains`
+        ``bridge``). Called only in corner mode: the search costs a pass over the scan.
 
     Returns
     -------
@@ -382,17 +382,16 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
         # boundary again. (While it is ahead, driving straight on closes in on it.)
         mem.mode = SEARCH
         mem.corner = mem.seen
-    if mem.mode == CORNER and callable(near):
-        near = near()
-    if mem.mode == CORNER and near is not None and not callable(near):
+    nearest = near() if mem.mode == CORNER and near is not None else None
+    if nearest is not None:
         # The point circled is a vertex seen earlier; a scan point on the followed side that
         # is nearer (the far face of a notch narrower than 2 rc) is what the rc level set
         # turns around now: circle it instead, so the robot bridges the notch rather than
         # following into it until the safety layer stops it.
         dc = math.hypot(mem.corner[0] - x, mem.corner[1] - y)
-        if near[0] < min(dc, rc) - g.bridge:
-            a = theta + near[1]
-            mem.corner = (x + near[0] * math.cos(a), y + near[0] * math.sin(a))
+        if nearest[0] < min(dc, rc) - g.bridge:
+            a = theta + nearest[1]
+            mem.corner = (x + nearest[0] * math.cos(a), y + nearest[0] * math.sin(a))
     if mem.mode == CORNER:
         back = side.hit and abs(side.beta) < g.corner_exit_angle \
             and abs(side.r - math.hypot(mem.corner[0] - x, mem.corner[1] - y)) \

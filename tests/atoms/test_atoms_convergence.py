@@ -81,12 +81,13 @@ def test_corner_mode_circles_a_nearer_point_across_a_narrow_notch() -> None:
                    seen_at=0.0)
     pose = (0.0, 0.0, 0.0)
     near = (0.35, -math.pi / 2.0 + 0.3)
-    S.step(S.MISS, S.MISS, pose, 1.0, 0.02, mem, 1.0, 0.5, S.Gains(), near=near)
+    S.step(S.MISS, S.MISS, pose, 1.0, 0.02, mem, 1.0, 0.5, S.Gains(), near=lambda: near)
     a = near[1]
     assert mem.mode == S.CORNER
     assert mem.corner == pytest.approx((near[0] * math.cos(a), near[0] * math.sin(a)))
     # a farther point leaves the vertex circled as it was
     mem2 = S.Memory(mode=S.CORNER, corner=(-0.3, -0.53), turned=0.5, seen=(-0.3, -0.53),
                     seen_at=0.0)
-    S.step(S.MISS, S.MISS, pose, 1.0, 0.02, mem2, 1.0, 0.5, S.Gains(), near=(0.58, -1.2))
+    S.step(S.MISS, S.MISS, pose, 1.0, 0.02, mem2, 1.0, 0.5, S.Gains(),
+           near=lambda: (0.58, -1.2))
     assert mem2.corner == (-0.3, -0.53)
