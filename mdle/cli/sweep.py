@@ -154,14 +154,9 @@ class _RichProgress:
         import time
 
         from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
+        from rich.progress import TextColumn
+
+        from mdle.cli.progress import bar
 
         self.total, self.done, self._skipped = total, skipped, skipped
         self._t0 = self._last = time.monotonic()
@@ -170,10 +165,7 @@ class _RichProgress:
                       f"{self.where}", highlight=False)
         if not console.is_terminal:
             return
-        self._bar = Progress(TextColumn("sweep"), BarColumn(), MofNCompleteColumn(),
-                             TextColumn("[red]{task.fields[failed]} failed"),
-                             TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
-                             console=console, transient=False)
+        self._bar = bar(console, "sweep", TextColumn("[red]{task.fields[failed]} failed"))
         self._bar.start()
         self._task = self._bar.add_task("sweep", total=total, completed=skipped, failed=0)
 
