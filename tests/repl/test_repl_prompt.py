@@ -6,11 +6,8 @@ from __future__ import annotations
 import io
 import os
 import signal
-import threading
-import time
-from collections.abc import Iterator
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 import pytest
 from prompt_toolkit.completion import CompleteEvent
@@ -154,34 +151,25 @@ def test_ctrl_d_leaves_and_quit_too(repl: Repl) -> None:
     assert r2.quit_requested and r2.session.samples == []  # nothing ran after :quit
 
 
-@pytest.fixture
-def sigint_after() -> Iterator[object]:
-    """Sends SIGINT to this process once the condition holds (from a helper thread)."""
-    threads = []
-
-    def arm(condition: object, timeout: float = 60.0) -> None:
-        def wait() -> None:
-            end = time.monotonic() + timeout
-            while time.monotonic() < end:
-                if condition():  # type: ignore[operator]
-                    os.kill(os.getpid(), signal.SIGINT)
-                    return
-                time.sleep(0.01)
-
-        t = threading.Thread(target=wait, daemon=True)
-        threads.append(t)
-        t.start()
-
-    yield arm
-    for t in threads:
-        t.join(5)
-
-
 def test_ctrl_c_during_a_run_stops_the_robot_and_gives_the_prompt_back(
-        repl: Repl, sigint_after: object) -> None:
+        repl: Repl, monkeypatch: pytest.MonkeyPatch) -> None:
     session = repl.session
     session.until = None  # the element never ends by itself
-    sigint_after(lambda: session.backend.time > 2.0)  # type: ignore[operator]
+    # Ctrl-C once the run is 2 s (simulated) in, sent from the run's own thread as the
+    # backend reports that time: a watching thread raced the simulation, which covers a
+    # minute of simulated time in half a second of wall time on a busy machine.
+    backend = session.backend
+    observe = backend.observe
+    sent: list[float] = []
+
+    def observe_then_interrupt() -> Any:
+        obs = observe()
+        if obs.time > 2.0 and not sent:
+            sent.append(obs.time)
+            os.kill(os.getpid(), signal.SIGINT)
+        return obs
+
+    monkeypatch.setattr(backend, "observe", observe_then_interrupt)
     drive(repl, "(turn(30 deg/s), never, inf)\r", ":pose\r")
     out = _text(repl.out)
     assert "turn (level 0) was stopped from outside at" in out
