@@ -95,3 +95,19 @@ def test_other_unraisable_errors_still_reach_the_previous_hook(capsys: Any) -> N
         guard.restore()
         sys.unraisablehook = old
     assert sys.unraisablehook is old
+
+
+def test_a_signal_raised_and_swallowed_on_the_way_still_stops_the_run() -> None:
+    # A library that catches BaseException (not Python's "Exception ignored": no hook
+    # sees it) swallows the Interrupted; the run that follows must stop at once all the same.
+    guard = SignalGuard()
+    guard.arm()
+    try:
+        guard._handle(15, None)
+    except Interrupted:
+        pass  # swallowed on the way
+    assert guard.received == 15 and not guard.pending
+    target = _Target()
+    with guard.stopping(target):
+        pass
+    assert target.asked == ["SIGTERM"]

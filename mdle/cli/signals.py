@@ -175,10 +175,17 @@ class SignalGuard:
 
     @contextmanager
     def stopping(self, target: Stoppable) -> Iterator[None]:
-        """Inside the block, a signal asks ``target`` to stop (one that already came, too)."""
+        """Inside the block, a signal asks ``target`` to stop; so does one that already came.
+
+        That one may have been deferred, or raised and lost on the way.
+        """
         mode, self._mode, self._target, self._asked = self._mode, "stop", target, False
         try:
-            if self._pending and self.received is not None:
+            # Any signal that came before stops the run at once, not only a deferred one:
+            # one raised as Interrupted ends the command before it gets here, unless
+            # something on the way swallowed it (Python's "Exception ignored", a
+            # library's `except BaseException`); a run must never start after a signal.
+            if self.received is not None:
                 self._pending = False
                 self._asked = True
                 target.request_stop(signal_name(self.received))
