@@ -348,10 +348,8 @@ class TraceWriter:
         self.close()
 
 
-_LINE_HEAD = ('{"type":"sample","t":%r,"x":%s,"y":%s,"theta":%s,"v":%s,"omega":%s,"cmd_v":%s,'
-              '"cmd_omega":%s,"path":')
-_SEVEN = ",".join(["%.9g"] * 7)
-_TEN = ",".join(["%.9g"] * 10)
+_LINE_HEAD = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,"omega":%.9g,'
+              '"cmd_v":%.9g,"cmd_omega":%.9g,"path":')
 
 
 class SampleFormat:
@@ -407,13 +405,13 @@ class SampleFormat:
             truth = (_number(true_x), _number(true_y), _number(true_theta))
         return self._tail(line, scan_age, clearance, collided, truth, diag)
 
-    def line_and_values(self, s: Sample) -> tuple[str, tuple[float, ...] | None]:
-        """Return the sample line and the numbers in it, parsed back from their digits.
+    def line_and_numbers(self, s: Sample) -> tuple[str, tuple[float, ...] | None]:
+        """Return the sample line and the numbers it writes with 9 significant digits.
 
         The numbers are (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
-        true_theta) exactly as a reader of the line gets them (the true pose left out
-        when the sample has none), or None when a number is not finite (then the caller
-        rounds for itself). Formatting each number once serves the line and its reader.
+        true_theta) as the sample has them (the true pose left out when the sample has
+        none; a reader of the line gets each rounded to 9 significant digits), or None
+        when a number is not finite.
 
         The line is one ``%`` format of a template made once per shape of line (path,
         flags, which optional fields, diagnostic names): the same text as :meth:`__call__`.
@@ -433,26 +431,28 @@ class SampleFormat:
             dvalues = tuple(diag.values()) if diag else ()
             if not isfinite(total + sum(dvalues)):
                 return self(s), None
-            if has_truth:
-                digits = (_TEN % (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
-                                  true_theta)).split(",")
-            else:
-                digits = (_SEVEN % (x, y, theta, v, omega, cmd_v, cmd_omega)).split(",")
             key = (path, not stalled, scan_age is None, clearance is None,
                    None if collided is None else not collided, has_truth,
                    tuple(diag) if diag else ())
             template = self._lines.get(key)
             if template is None:
                 template = self._template(key)
-            args: tuple[Any, ...] = (float(t), *digits[:7], lateness)
+            args: tuple[Any, ...] = (float(t), x, y, theta, v, omega, cmd_v, cmd_omega,
+                                     lateness)
             if scan_age is not None:
                 args += (scan_age,)
             if clearance is not None:
                 args += (clearance,)
-            line = template % (*args, *digits[7:], *dvalues)
+            numbers: tuple[float, ...] = (x, y, theta, v, omega, cmd_v, cmd_omega)
+            if has_truth:
+                truth = (true_x, true_y, true_theta)
+                numbers += truth  # type: ignore[operator]  # not None: has_truth
+                line = template % (*args, *truth, *dvalues)
+            else:
+                line = template % (*args, *dvalues)
         except (TypeError, ValueError):  # a diagnostic that is not a number
             return self(s), None
-        return line, tuple(map(float, digits))
+        return line, numbers
 
     def _template(self, key: tuple[Any, ...]) -> str:
         """Make (and keep) the ``%`` template of one shape of sample line."""
@@ -466,7 +466,7 @@ class SampleFormat:
         if not_collided is not None:
             parts.append(',"collided":false' if not_collided else ',"collided":true')
         if has_truth:
-            parts.append(',"true_x":%s,"true_y":%s,"true_theta":%s')
+            parts.append(',"true_x":%.9g,"true_y":%.9g,"true_theta":%.9g')
         if names:
             parts.append(',"diag":{%s}' % ",".join(
                 [self.quoted(k).replace("%", "%%") + ":%.9g" for k in names]))

@@ -5,17 +5,19 @@ each aligned to its own size (counted from after the header), strings as a uint3
 (with the terminating NUL) and the bytes, sequences as a uint32 count and the elements.
 
 The messages written every tick (odometry, transforms, twist, pose, scan, string) have
-constant frame names, so all their offsets are known in advance: a :class:`Layout` gives
-their :mod:`struct` formats, from which :mod:`mdle.ros.tick` packs a whole tick's
-records at once. Rare messages (the obstacle markers, the static transform) use the
-general :class:`CdrWriter`. Tests check every message against the mcap-ros2-support
-decoder and against rosbags' Humble and Jazzy type stores.
+constant frame names, so all their offsets are known in advance: a :class:`Layout`
+gives their constant bytes and where their variable fields lie, from which
+:mod:`mdle.ros.tick` fills a whole batch of ticks with numpy. Rare messages (the
+obstacle markers, the static transform) use the general :class:`CdrWriter`. Tests
+check every message against the mcap-ros2-support decoder and against rosbags' Humble
+and Jazzy type stores.
 """
 
 from __future__ import annotations
 
 import math
 import struct
+from typing import Any
 
 __all__ = ["ENCAPSULATION", "CdrWriter", "Layout", "encode_string", "quaternion", "string_blob",
            "time_parts"]
@@ -44,66 +46,60 @@ def string_blob(text: str) -> bytes:
 
 
 class Layout:
-    """Build a :class:`struct.Struct` format for a message whose offsets are all fixed.
+    """Lay out a message whose offsets are all fixed: constant bytes and named fields.
 
-    Fields are added in order; each is aligned as CDR aligns it (padding ``x`` bytes
-    inserted), counted from after the encapsulation header, which the format starts
-    with (one ``4s`` argument: :data:`ENCAPSULATION`).
+    Fields are added in order, each aligned as CDR aligns it (counted from after the
+    encapsulation header the message starts with). The result is a :attr:`template`
+    (the constant bytes, zeros where the named fields go) and the named fields' numpy
+    types and offsets (:attr:`fields`): a batch of such messages is the template
+    repeated, its named fields filled a column at a time (:mod:`mdle.ros.tick`).
     """
 
+    _NUMPY = {"d": "<f8", "f": "<f4", "i": "<i4", "I": "<u4"}
+
     def __init__(self) -> None:
-        self._fmt = ["<4s"]
-        self._offset = 0
+        self._data = bytearray(ENCAPSULATION)
+        #: name -> (numpy type, offset from the start of the message)
+        self.fields: dict[str, tuple[Any, int]] = {}
 
     def _align(self, size: int) -> None:
-        pad = (-self._offset) % size
-        if pad:
-            self._fmt.append(f"{pad}x")
-            self._offset += pad
+        self._data += bytes((-(len(self._data) - 4)) % size)
 
-    def add(self, code: str, count: int = 1) -> Layout:
-        """Add ``count`` primitives of struct code ``code`` (one argument each)."""
+    def field(self, name: str, code: str, count: int = 1) -> Layout:
+        """Add a named field of ``count`` primitives of struct code ``code`` (d, f, i, I)."""
         size = struct.calcsize("<" + code)
         self._align(size)
-        self._fmt.append(f"{count}{code}" if count != 1 else code)
-        self._offset += size * count
+        kind = self._NUMPY[code]
+        self.fields[name] = ((kind, count) if count != 1 else kind, len(self._data))
+        self._data += bytes(size * count)
         return self
 
     def zeros(self, code: str, count: int = 1) -> Layout:
-        """Add ``count`` primitives of struct code ``code`` that are always 0 (no argument).
+        """Add ``count`` primitives of struct code ``code`` that are always 0.
 
-        Zero of every CDR number type is all zero bytes, which pad bytes are.
+        Zero of every CDR number type is all zero bytes.
         """
         size = struct.calcsize("<" + code)
         self._align(size)
-        self._fmt.append(f"{size * count}x")
-        self._offset += size * count
+        self._data += bytes(size * count)
         return self
 
-    def blob(self, data: bytes, align: int = 1) -> bytes:
-        """Add constant bytes (one ``s`` argument) aligned to ``align``; returns them."""
-        self._align(align)
-        self._fmt.append(f"{len(data)}s")
-        self._offset += len(data)
-        return data
+    def const(self, code: str, *values: float | int) -> Layout:
+        """Add constant primitives of struct code ``code``."""
+        self._align(struct.calcsize("<" + code))
+        self._data += struct.pack(f"<{len(values)}{code}", *values)
+        return self
 
-    def string(self, text: str) -> bytes:
-        """Add a constant string; returns the bytes to pass for it."""
-        return self.blob(string_blob(text), 4)
-
-    @property
-    def offset(self) -> int:
-        """Bytes so far after the encapsulation header."""
-        return self._offset
+    def string(self, text: str) -> Layout:
+        """Add a constant string."""
+        self._align(4)
+        self._data += string_blob(text)
+        return self
 
     @property
-    def format(self) -> str:
-        """The struct format without its byte order mark (to splice into a longer one)."""
-        return "".join(self._fmt)[1:]
-
-    def compile(self) -> struct.Struct:
-        """Return the struct."""
-        return struct.Struct("".join(self._fmt))
+    def template(self) -> bytes:
+        """The message's bytes, zeros in the named fields."""
+        return bytes(self._data)
 
 
 class CdrWriter:

@@ -28,12 +28,11 @@ import struct
 import time
 import zlib
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import IO
 
 import numpy as np
 
-__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile", "RecordGroup"]
+__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile"]
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -52,22 +51,6 @@ _INDEX_HEAD = struct.Struct("<BQHI")  # opcode, length, channel, entries' byte l
 _CHUNK_OP = 0x06
 _SLACK = 16 * 1024  # room past chunk_size for the records that fill a chunk
 _CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc, name length
-
-
-@dataclass(eq=False)
-class RecordGroup:
-    """Channels whose messages are added together, as ready records (:meth:`McapFile.group`).
-
-    ``channels`` and the byte ``offsets`` of their records in the bytes of one
-    :meth:`McapFile.reserve`; ``count`` the calls so far (after the call, its sequence
-    number plus one); ``starts`` the (log time, chunk offset) of each call in the open
-    chunk.
-    """
-
-    channels: tuple[int, ...]
-    offsets: tuple[int, ...]
-    count: int = 0
-    starts: list[tuple[int, int]] = field(default_factory=list)
 
 
 class McapFile:
@@ -124,7 +107,7 @@ class McapFile:
         self._buf = bytearray(self._chunk_size + _SLACK)
         self._used = 0
         self._entries: list[list[tuple[int, int]]] = [[]]  # per channel: (time, offset)
-        self._groups: list[RecordGroup] = []
+        self._blocks: list[list[np.ndarray]] = [[]]  # per channel: add_block's entries
         self._chunk_start = 2**64 - 1
         self._chunk_end = 0
         self._start = 2**64 - 1
@@ -186,6 +169,7 @@ class McapFile:
         self._channels.append(record)
         self._counts.append(0)
         self._entries.append([])
+        self._blocks.append([])
         record.write(self._builder)
         self._emit()
         return record.id
@@ -204,7 +188,7 @@ class McapFile:
     # ------------------------------------------------------------------ messages
 
     def add(self, channel: int, ns: int, data: bytes) -> None:
-        """Add a message on ``channel`` (not a group's) logged at ``ns`` (nanoseconds)."""
+        """Add a message on ``channel`` logged at ``ns`` (nanoseconds)."""
         pos = self._reserve(31 + len(data), ns)
         seq = self._counts[channel]
         self._counts[channel] = seq + 1
@@ -232,35 +216,33 @@ class McapFile:
             self._chunk_end = ns
         return pos
 
-    def group(self, channels: Sequence[int], offsets: Sequence[int]) -> RecordGroup:
-        """Register a group of channels written together as ready Message records.
+    def count(self, channel: int) -> int:
+        """Messages on ``channel`` so far (the next one's sequence number)."""
+        return self._counts[channel]
 
-        Each :meth:`reserve` for the group adds one message on each of ``channels``,
-        their records starting ``offsets`` bytes into the room reserved (the caller packs
-        the records: opcode, length, channel, sequence, times, data). The channels are
-        the group's alone (no :meth:`add` on them).
+    def add_block(self, data: bytes, index: Sequence[tuple[int, np.ndarray, np.ndarray]]
+                  ) -> None:
+        """Add ready Message records, sequence numbers counted on from :meth:`count`.
+
+        ``index`` gives, per channel, each record's log time (ns) and offset in ``data``
+        (arrays); the records go into the open chunk as they are, copied once.
         """
-        taken = {ch for g in self._groups for ch in g.channels}
-        if len(channels) != len(offsets) or not channels or taken & set(channels) \
-                or any(self._counts[ch] for ch in channels):
-            raise ValueError("a group needs channels of its own, each with an offset")
-        g = RecordGroup(tuple(channels), tuple(int(o) for o in offsets))
-        self._groups.append(g)
-        return g
-
-    def reserve(self, group: RecordGroup, ns: int, size: int) -> tuple[bytearray, int]:
-        """Make room for one message on each of ``group``'s channels, logged at ``ns``.
-
-        Returns the open chunk's buffer and the offset of ``size`` bytes there, which the
-        caller fills at once (before anything else is added) with the records, sequence
-        number ``group.count - 1``: the records go into the chunk where they will be
-        written, copied once.
-        """
-        pos = self._reserve(size, ns)
-        group.starts.append((ns, pos))
-        group.count += 1
-        self._messages += len(group.channels)
-        return self._buf, pos
+        if not index:
+            return
+        first = min(int(times.min()) for _, times, _ in index)
+        last = max(int(times.max()) for _, times, _ in index)
+        pos = self._reserve(len(data), first)
+        if last > self._chunk_end:
+            self._chunk_end = last
+        self._buf[pos:pos + len(data)] = data
+        for channel, times, offsets in index:
+            table = np.empty((len(times), 2), "<u8")
+            table[:, 0] = times
+            table[:, 1] = offsets
+            table[:, 1] += pos
+            self._blocks[channel].append(table)
+            self._counts[channel] += len(times)
+            self._messages += len(times)
 
     def tick(self) -> None:
         """Close the open chunk if it is full or has been open for ``max_age`` of wall time."""
@@ -310,26 +292,18 @@ class McapFile:
             compression=self._compression, compressed_size=size, uncompressed_size=used))
 
     def _index_bodies(self) -> list[tuple[int, bytes]]:
-        """Return the open chunk's message index entries per channel (and forget them).
-
-        A group's entries are its calls' (time, offset) with each channel's record
-        offset added, made for all its channels at once.
-        """
+        """Return the open chunk's message index entries per channel (and forget them)."""
         out = []
-        for ch, entries in enumerate(self._entries):
-            if entries:
-                out.append((ch, np.asarray(entries, dtype="<u8").tobytes()))
-                entries.clear()
-        for g in self._groups:
-            if not g.starts:
+        for ch, (entries, blocks) in enumerate(zip(self._entries, self._blocks, strict=True)):
+            if not (entries or blocks):
                 continue
-            starts = np.asarray(g.starts, dtype="<u8")
-            g.starts.clear()
-            for ch, offset in zip(g.channels, g.offsets, strict=True):
-                table = starts.copy()
-                table[:, 1] += offset
-                out.append((ch, table.tobytes()))
-        out.sort(key=lambda item: item[0])
+            tables = ([np.asarray(entries, dtype="<u8")] if entries else []) + blocks
+            table = tables[0] if len(tables) == 1 else np.concatenate(tables)
+            if entries and blocks:  # both ways on one channel: in the chunk's order
+                table = table[np.argsort(table[:, 1], kind="stable")]
+            out.append((ch, table.tobytes()))
+            entries.clear()
+            blocks.clear()
         return out
 
     # ------------------------------------------------------------------ the end
@@ -341,11 +315,7 @@ class McapFile:
 
     def channel_counts(self) -> dict[int, int]:
         """Messages per channel id so far."""
-        counts = {i: n for i, n in enumerate(self._counts) if i}
-        for g in self._groups:
-            for ch in g.channels:
-                counts[ch] = g.count
-        return counts
+        return {i: n for i, n in enumerate(self._counts) if i}
 
     @property
     def time_range(self) -> tuple[int, int] | None:

@@ -22,8 +22,12 @@ import time
 from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from mdle.errors import Diagnostic, MdleError
-from mdle.ros.topics import RosRecording
+from mdle.ros.rounding import round9
+from mdle.ros.tick import Ticks, times_ns
+from mdle.ros.topics import RosRecording, sample_values
 from mdle.runtime.events import Event, RunResult, Sample
 from mdle.trace import (
     LaserRecords,
@@ -33,7 +37,6 @@ from mdle.trace import (
     event_record,
     laser_mount,
     laser_timing,
-    scan_ranges,
     start_record,
 )
 
@@ -140,6 +143,9 @@ class McapRecorder:
     def _flush(self) -> None:
         """Publish the ticks waiting: new scans, odometry, transforms, command, state.
 
+        The batch goes to the file as one :class:`~mdle.ros.tick.Ticks`: its scans'
+        ranges turned to float32 (+inf without a return) in one numpy operation, its
+        numbers in one array. A new beam geometry publishes the ticks before it first.
         Raises OSError when the file cannot be written.
         """
         batch = self._batch
@@ -147,17 +153,27 @@ class McapRecorder:
         if not batch:
             return
         self._batch = []
-        laser, recording, line_and_values = self._laser, self.recording, \
-            self._format.line_and_values
+        laser, recording = self._laser, self.recording
+        line_and_numbers = self._format.line_and_numbers
+        times: list[float] = []
+        lines: list[str] = []
+        values: list[tuple[float, ...]] = []
+        scans: list[tuple[int, Any]] = []  # (the tick it comes before, the scan)
         for sample in batch:
             scan = sample.scan
             if scan is not None and scan is not laser.last:
                 record = laser.changed(scan)
                 if record is not None:
+                    _publish(recording, times, lines, values, scans)
+                    times, lines, values, scans = [], [], [], []
                     recording.laser(sample.time, record)
-                recording.scan(sample.time, scan.stamp, scan_ranges(scan))
-            line, values = line_and_values(sample)
-            recording.live_sample(line, sample, values)
+                scans.append((len(times), scan))
+            line, numbers = line_and_numbers(sample)
+            times.append(sample.time)
+            lines.append(line)
+            values.append(numbers if numbers is not None and len(numbers) == 10
+                          else sample_values(sample, numbers))
+        _publish(recording, times, lines, values, scans)
 
     def on_end(self, result: RunResult) -> None:
         """Publish the ``end`` record and finish the file (never raises: the run is over)."""
@@ -179,3 +195,21 @@ class McapRecorder:
             self.recording.finish()
         except OSError as exc:
             self._fail(exc)
+
+
+def _publish(recording: RosRecording, times: list[float], lines: list[str],
+             values: list[tuple[float, ...]], scans: list[tuple[int, Any]]) -> None:
+    """Publish ticks and scans taken from samples (nothing when there are none)."""
+    if not (times or scans):
+        return
+    # the numbers as the trace's lines give them to a reader
+    ticks = Ticks(times_ns(times), round9(np.array(values, np.float64).reshape(-1, 10)),
+                  lines)
+    if scans:
+        ticks.scan_at = [at for at, _ in scans]
+        ticks.scan_ns = ticks.ns[ticks.scan_at]  # a scan is seen at the tick it comes with
+        ticks.stamps = times_ns([s.stamp for _, s in scans])
+        # REP-117: a beam without a return is +inf
+        ticks.ranges = np.where(np.array([s.valid for _, s in scans]),
+                                np.array([s.ranges for _, s in scans]), np.inf).astype("<f4")
+    recording.publish(ticks)

@@ -1,211 +1,292 @@
-"""A tick's ROS 2 messages as ready MCAP Message records, packed at once.
+"""A batch of ticks' ROS 2 messages as ready MCAP Message records, filled with numpy.
 
 Every tick a run publishes its odometry (``/odom``), transforms (``/tf``), command
-(``/cmd_vel``), in simulation the true pose (``/ground_truth``), and the trace's sample
-line (``/mdle/state``). Their frame names are constant, so every byte of the five
-Message records (the MCAP record header and the CDR message each) is at an offset known
-in advance, except the state line's text, which comes last: :class:`TickRecords` packs
-them with one precompiled :class:`struct.Struct` straight into the open chunk's buffer,
-and the MCAP file indexes them as one :class:`~mdle.ros.mcap_file.RecordGroup`. A new
-scan is one more record (:class:`ScanRecords`): header packed, the float32 ranges
-copied in as they are.
+(``/cmd_vel``), in simulation the true pose (``/ground_truth``), the trace's sample line
+(``/mdle/state``) and, when the ladar has a new one, a scan (``/scan``). Frame names and
+beam geometry are constant, so every byte of these Message records (the MCAP record
+header and the CDR message each) is at an offset known in advance, except the state
+line's text, which comes last in a tick. :class:`TickEncoder` therefore lays a tick's
+fixed records out once as a row (:class:`Rows`: a template of the constant bytes and the
+numpy fields of the variable ones), fills a whole batch of rows a column at a time, and
+joins each tick's scan, row and text into one block that the MCAP file adds with its
+index entries at once (:meth:`~mdle.ros.mcap_file.McapFile.add_block`). Records keep the
+order a tick at a time writer gives them: a tick's scan, then its other messages.
 
 Fields that are always zero (z, the quaternion's x and y, the covariances, a planar
-twist's other axes) are struct pad bytes: nothing to pass or convert. The records'
-bytes are exactly what a field-by-field CDR writer makes (tests decode them with
-mcap-ros2-support and rosbags).
+twist's other axes) are zeros of the template. The records' bytes are exactly what a
+field-by-field CDR writer makes (tests decode them with mcap-ros2-support and rosbags);
+sines and cosines come from :mod:`math`, as that writer's would.
 """
 
 from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from itertools import chain
+from typing import Any
 
 import numpy as np
 
-from mdle.ros.cdr import ENCAPSULATION, Layout
-from mdle.ros.mcap_file import McapFile, RecordGroup
+from mdle.ros.cdr import Layout
+from mdle.ros.mcap_file import McapFile
 
-__all__ = ["TickRecords", "ScanRecords"]
+__all__ = ["Rows", "TickEncoder", "Ticks"]
 
-_MESSAGE = "BQHIQQ"  # MCAP Message record: opcode, length, channel, sequence, log, publish
-_OP = 0x05
+_HEAD = struct.Struct("<BQHIQQ")  # MCAP Message record: opcode, length, channel, sequence,
+_OP = 0x05                        # log time, publish time (31 bytes)
 _NS = 1_000_000_000
-_NO_INTENSITIES = b"\x00\x00\x00\x00"
 _FLOAT32 = np.dtype("<f4")
-_UNKNOWN = (math.nan, math.nan, math.nan)  # a simulated sample without its true pose
 
 
-def _stamp(lay: Layout) -> Layout:
-    """Add a ``builtin_interfaces/Time`` (sec, nanosec: two arguments)."""
-    return lay.add("i").add("I")
+def _stamp(lay: Layout, name: str) -> Layout:
+    """Add a ``builtin_interfaces/Time`` (fields ``sec`` and ``nsec``)."""
+    return lay.field("sec", "i").field("nsec", "I") if not name else \
+        lay.field(name + ".sec", "i").field(name + ".nsec", "I")
 
 
-def _planar_pose(lay: Layout) -> Layout:
-    """Add a Pose or Transform of a planar pose: x, y, qz, qw (four arguments)."""
-    return lay.add("d", 2).zeros("d", 3).add("d", 2)
+def _planar_pose(lay: Layout, name: str) -> Layout:
+    """Add a Pose or Transform of a planar pose: fields ``NAME.xy`` and ``NAME.q`` (z, w)."""
+    return lay.field(name + ".xy", "d", 2).zeros("d", 3).field(name + ".q", "d", 2)
 
 
 def _planar_twist(lay: Layout) -> Layout:
-    """Add a Twist: linear.x and angular.z (two arguments)."""
-    return lay.add("d").zeros("d", 4).add("d")
+    """Add a Twist: fields ``v`` (linear.x) and ``omega`` (angular.z)."""
+    return lay.field("v", "d").zeros("d", 4).field("omega", "d")
 
 
-class TickRecords:
-    """Pack a tick's ``/odom``, ``/tf``, ``/cmd_vel``, ``/ground_truth`` and ``/mdle/state``.
+class Rows:
+    """Message records of fixed size side by side, one row of them per tick.
+
+    :meth:`message` appends a record: the MCAP header (its ``seq``, ``log`` and ``pub``
+    fields, and with ``open_end`` its ``length``) and the message laid out by a
+    :class:`~mdle.ros.cdr.Layout`, its fields named ``PREFIX.NAME``.
+    """
+
+    def __init__(self) -> None:
+        self.template = bytearray()
+        self.fields: dict[str, tuple[Any, int]] = {}
+        #: (channel, offset of its record in the row), in order
+        self.records: list[tuple[int, int]] = []
+        self._dtype: np.dtype[Any] | None = None
+        self._row = np.zeros(0, np.uint8)
+
+    def message(self, prefix: str, channel: int, body: Layout, open_end: bool = False) -> None:
+        """Append a record on ``channel``.
+
+        With ``open_end`` the row's bytes end inside it (a string's text follows the
+        row) and its record ``length`` is a field.
+        """
+        at = len(self.template)
+        data = body.template
+        self.template += _HEAD.pack(_OP, 22 + len(data), channel, 0, 0, 0)
+        self.fields[f"{prefix}.seq"] = ("<u4", at + 11)
+        self.fields[f"{prefix}.log"] = ("<u8", at + 15)
+        self.fields[f"{prefix}.pub"] = ("<u8", at + 23)
+        if open_end:
+            self.fields[f"{prefix}.length"] = ("<u8", at + 1)
+        for name, (kind, offset) in body.fields.items():
+            self.fields[f"{prefix}.{name}"] = (kind, at + 31 + offset)
+        self.template += data
+        self.records.append((channel, at))
+
+    def batch(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Return ``k`` rows of the template: as one structured array, and as bytes."""
+        if self._dtype is None or self._dtype.itemsize != len(self.template):
+            names = list(self.fields)
+            self._dtype = np.dtype({"names": names,
+                                    "formats": [self.fields[n][0] for n in names],
+                                    "offsets": [self.fields[n][1] for n in names],
+                                    "itemsize": len(self.template)})
+            self._row = np.frombuffer(bytes(self.template), np.uint8)
+        raw = np.tile(self._row, k)
+        return raw.view(self._dtype), raw
+
+
+@dataclass
+class Ticks:
+    """A batch of ticks to publish, in order.
+
+    ``ns`` the ticks' times (ns); ``values`` their numbers (k x 10: x, y, theta, v,
+    omega, cmd_v, cmd_omega and the true x, y, theta, NaN when unknown); ``lines`` their
+    trace sample lines; and the new scans: ``scan_at`` the tick each comes before
+    (``len(ns)``: after the last), ``scan_ns`` when it was seen, ``stamps`` when it was
+    taken (ns), ``ranges`` (m x beams, little-endian float32, +inf without a return).
+    """
+
+    ns: np.ndarray
+    values: np.ndarray
+    lines: list[str]
+    scan_at: list[int] = field(default_factory=list)
+    scan_ns: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    stamps: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), _FLOAT32))
+
+
+def times_ns(seconds: Iterable[float]) -> np.ndarray:
+    """Return times (s) as integer nanoseconds, never below 0 (as :func:`to_ns` rounds)."""
+    t = np.asarray(seconds, dtype=np.float64) * 1e9
+    if not np.isfinite(t).all():
+        raise ValueError("a time that is not a finite number")
+    return np.maximum(np.rint(t), 0.0).astype(np.int64)
+
+
+def _trig(f: Any, x: np.ndarray) -> np.ndarray:
+    """``f`` (math.sin or math.cos) of each element, exactly as :mod:`math` gives it."""
+    return np.fromiter(map(f, x.tolist()), np.float64, len(x))
+
+
+class TickEncoder:
+    """Write batches of ticks (:class:`Ticks`) into an MCAP file.
 
     Parameters
     ----------
     out : McapFile
-        The file; the channels become one record group in it.
-    odom, tf, cmd, state, truth : int
+        The file.
+    odom, tf, cmd, state, truth, scan : int
         Channel ids (``truth`` 0 on a robot: no ``/ground_truth`` and no ``map -> odom``).
     frames : (map, odom, base)
         Frame names.
     """
 
     def __init__(self, out: McapFile, odom: int, tf: int, cmd: int, state: int, truth: int,
-                 frames: tuple[str, str, str]) -> None:
+                 scan: int, frames: tuple[str, str, str]) -> None:
         self._out = out
         map_, odom_f, base = frames
         self.simulation = bool(truth)
-        fmt = "<"
-        offsets = []
-        size = 0
-        lengths = []
-        bodies = []
+        self.scan_channel = scan
+        rows = Rows()
         # nav_msgs/Odometry: header, child frame, pose + covariance, twist + covariance
-        lay = _stamp(Layout())
-        self._f_odom = lay.string(odom_f)
-        self._f_base = lay.string(base)
-        _planar_twist(_planar_pose(lay).zeros("d", 36)).zeros("d", 36)
-        bodies.append(lay)
+        lay = _stamp(Layout(), "").string(odom_f).string(base)
+        _planar_twist(_planar_pose(lay, "pose").zeros("d", 36)).zeros("d", 36)
+        rows.message("odom", odom, lay)
         # tf2_msgs/TFMessage: odom -> base_link, in simulation map -> odom after it
-        lay = Layout().add("I")
-        _stamp(lay)
-        lay.string(odom_f)
-        lay.string(base)
-        _planar_pose(lay)
+        lay = _stamp(Layout().const("I", 2 if truth else 1), "").string(odom_f).string(base)
+        _planar_pose(lay, "pose")
         if truth:
-            _stamp(lay)
-            self._f_map = lay.string(map_)
-            lay.string(odom_f)
-            _planar_pose(lay)
-        bodies.append(lay)
-        bodies.append(_planar_twist(Layout()))  # geometry_msgs/Twist
-        channels = [odom, tf, cmd]
+            _planar_pose(_stamp(lay, "map").string(map_).string(odom_f), "map")
+        rows.message("tf", tf, lay)
+        rows.message("cmd", cmd, _planar_twist(Layout()))  # geometry_msgs/Twist
         if truth:  # geometry_msgs/PoseStamped in map
-            lay = _stamp(Layout())
-            lay.string(map_)
-            bodies.append(_planar_pose(lay))
-            channels.append(truth)
-        bodies.append(Layout().add("I"))  # std_msgs/String: its length; the text follows
-        channels.append(state)
-        for lay in bodies:
-            body = lay.format
-            n = struct.calcsize("<" + body)
-            offsets.append(size)
-            lengths.append(22 + n)  # a Message record's length counts from the channel id
-            size += 31 + n
-            fmt += _MESSAGE + body
-        self._lengths = tuple(lengths)
-        self._size = size  # the records' bytes before the state line's text
-        self._pack_into = struct.Struct(fmt).pack_into
-        self.group: RecordGroup = out.group(channels, offsets)
-        self._channels = tuple(channels)
+            rows.message("truth", truth, _planar_pose(_stamp(Layout(), "").string(map_),
+                                                      "pose"))
+        # std_msgs/String: its length, the text after the row
+        rows.message("state", state, Layout().field("n", "I"), open_end=True)
+        self._rows = rows
+        self._scan: Rows | None = None
+        self.count = 0  # beams of a scan
 
-    def __call__(self, ns: int, x: float, y: float, theta: float, v: float, omega: float,
-                 cmd_v: float, cmd_omega: float, truth: tuple[float, float, float] | None,
-                 line: str) -> None:
-        """Add the tick at ``ns``: odometry pose and speeds, command, true pose, state line.
+    def geometry(self, frame: str, angle_min: float, angle_max: float, angle_increment: float,
+                 range_min: float, range_max: float, count: int, scan_time: float = 0.0,
+                 time_increment: float = 0.0) -> None:
+        """Set the beam geometry of the scans that follow (``sensor_msgs/LaserScan``).
 
-        In simulation a sample without its true pose (none in a trace's record) gets NaN
-        for it, in ``/ground_truth`` and in ``map -> odom``: unknown, as the trace says.
+        Angles in radians in the scan's frame, ranges in metres, times in seconds; no
+        intensities.
         """
-        text = line.encode("utf-8")
-        n = len(text) + 1
-        sec, nsec = divmod(ns, _NS)
+        lay = _stamp(Layout(), "").string(frame).const(
+            "f", angle_min, angle_max, angle_increment, time_increment, scan_time,
+            range_min, range_max).const("I", count)
+        if count:
+            lay.field("ranges", "f", count)
+        lay.zeros("I")  # no intensities
+        rows = Rows()
+        rows.message("scan", self.scan_channel, lay)
+        self._scan = rows
+        self.count = count
+
+    def check(self, ranges: np.ndarray) -> None:
+        """Raise ValueError unless ``ranges`` fit the geometry (little-endian float32)."""
+        if self._scan is None:
+            raise ValueError("a scan before any `laser` record (the beam geometry)")
+        if ranges.shape[-1:] != (self.count,):
+            raise ValueError(f"a scan of {ranges.shape[-1] if ranges.ndim else 0} beams, "
+                             f"the laser has {self.count}")
+        if ranges.dtype != _FLOAT32:
+            raise ValueError("scan ranges must be little-endian float32")
+
+    def write(self, ticks: Ticks) -> None:
+        """Add the batch to the file: each tick's scans, then its other records."""
+        k, m = len(ticks.ns), len(ticks.scan_at)
+        out = self._out
+        # the strings with their NUL
+        texts = [f"{line}\x00".encode() for line in ticks.lines]
+        scan_size = len(self._scan.template) if self._scan is not None else 0
+        scan_parts: list[bytes] = [b""] * (k + 1)  # the scans that come before each tick
+        if m:
+            self.check(ticks.ranges)
+            assert self._scan is not None
+            scans, raw = self._scan.batch(m)
+            first = out.count(self.scan_channel)
+            scans["scan.seq"] = np.arange(first, first + m)
+            scans["scan.log"] = scans["scan.pub"] = ticks.scan_ns
+            scans["scan.sec"], scans["scan.nsec"] = np.divmod(ticks.stamps, _NS)
+            if self.count:
+                scans["scan.ranges"] = ticks.ranges
+            records = raw.view(f"V{scan_size}").tolist()
+            if ticks.scan_at == list(range(k)):  # a new scan every tick
+                scan_parts[:k] = records
+            else:
+                for at, data in zip(ticks.scan_at, records, strict=True):
+                    scan_parts[at] += data
+        size = len(self._rows.template)
+        rows, raw = self._rows.batch(k)
+        text_n = np.fromiter(map(len, texts), np.int64, k)
+        self._fill(rows, ticks, text_n)
+        # where each tick's records begin in the block, and its row
+        scan_bytes = np.bincount(np.asarray(ticks.scan_at, np.int64), minlength=k + 1) \
+            * scan_size
+        starts = np.zeros(k + 1, np.int64)
+        np.cumsum(scan_bytes[:k] + size + text_n, out=starts[1:])
+        row_at = starts[:k] + scan_bytes[:k]
+        index = [(channel, ticks.ns, row_at + offset) for channel, offset in self._rows.records
+                 if k]
+        if m:
+            tick = np.asarray(ticks.scan_at, np.int64)
+            nth = np.arange(m) - np.searchsorted(tick, tick)  # of the scans before its tick
+            index.append((self.scan_channel, ticks.scan_ns, starts[tick] + nth * scan_size))
+        data = b"".join(chain.from_iterable(zip(scan_parts, raw.view(f"V{size}").tolist(),
+                                                texts, strict=False)))
+        out.add_block(data + scan_parts[k], index)
+
+    def _fill(self, rows: np.ndarray, ticks: Ticks, lengths: np.ndarray) -> None:
+        """Fill the variable fields of a batch's rows."""
+        ns = ticks.ns
+        k = len(ns)
+        v = ticks.values
+        x, y, theta = v[:, 0], v[:, 1], v[:, 2]
+        seq = np.arange(self._out.count(self._rows.records[0][0]),
+                        self._out.count(self._rows.records[0][0]) + k)
+        sec, nsec = np.divmod(ns, _NS)
         half = 0.5 * theta
-        qz, qw = math.sin(half), math.cos(half)
-        group = self.group
-        at = self._size
-        buf, pos = self._out.reserve(group, ns, at + n)
-        seq = group.count - 1
-        lo, lt, lc = self._lengths[:3]
-        co, ct, cc = self._channels[:3]
-        enc, fo, fb = ENCAPSULATION, self._f_odom, self._f_base
+        xy = v[:, 0:2]
+        q = np.column_stack((_trig(math.sin, half), _trig(math.cos, half)))
+        names = ["odom", "tf", "cmd", "state"]
         if self.simulation:
-            tx, ty, tth = truth if truth is not None else _UNKNOWN
+            names.append("truth")
+        for name in names:
+            rows[name + ".seq"] = seq
+            rows[name + ".log"] = ns
+            rows[name + ".pub"] = ns
+        for name in ("odom", "tf"):
+            rows[name + ".sec"], rows[name + ".nsec"] = sec, nsec
+            rows[name + ".pose.xy"], rows[name + ".pose.q"] = xy, q
+        rows["odom.v"], rows["odom.omega"] = v[:, 3], v[:, 4]
+        rows["cmd.v"], rows["cmd.omega"] = v[:, 5], v[:, 6]
+        rows["state.n"] = lengths
+        rows["state.length"] = 30 + lengths
+        if self.simulation:
+            tx, ty, tth = v[:, 7], v[:, 8], v[:, 9]
             # map -> odom: the true pose composed with the inverse of the odometry pose
             phi = tth - theta
-            c, s = math.cos(phi), math.sin(phi)
-            self._pack_into(
-                buf, pos,
-                _OP, lo, co, seq, ns, ns, enc, sec, nsec, fo, fb, x, y, qz, qw, v, omega,
-                _OP, lt, ct, seq, ns, ns, enc, 2, sec, nsec, fo, fb, x, y, qz, qw,
-                sec, nsec, self._f_map, fo, tx - c * x + s * y, ty - s * x - c * y,
-                math.sin(0.5 * phi), math.cos(0.5 * phi),
-                _OP, lc, cc, seq, ns, ns, enc, cmd_v, cmd_omega,
-                _OP, self._lengths[3], self._channels[3], seq, ns, ns, enc, sec, nsec,
-                self._f_map, tx, ty, math.sin(0.5 * tth), math.cos(0.5 * tth),
-                _OP, 30 + n, self._channels[4], seq, ns, ns, enc, n)
-        else:
-            self._pack_into(
-                buf, pos,
-                _OP, lo, co, seq, ns, ns, enc, sec, nsec, fo, fb, x, y, qz, qw, v, omega,
-                _OP, lt, ct, seq, ns, ns, enc, 1, sec, nsec, fo, fb, x, y, qz, qw,
-                _OP, lc, cc, seq, ns, ns, enc, cmd_v, cmd_omega,
-                _OP, 30 + n, self._channels[3], seq, ns, ns, enc, n)
-        at += pos
-        buf[at:at + n - 1] = text
-        buf[at + n - 1] = 0
-
-
-class ScanRecords:
-    """Pack ``sensor_msgs/LaserScan`` records of one beam geometry; ranges as float32.
-
-    Angles in radians in the scan's frame, ranges in metres, times in seconds; no
-    intensities. ``group`` is the ``/scan`` channel's record group.
-    """
-
-    def __init__(self, out: McapFile, group: RecordGroup, frame: str, angle_min: float,
-                 angle_max: float, angle_increment: float, range_min: float,
-                 range_max: float, count: int, scan_time: float = 0.0,
-                 time_increment: float = 0.0) -> None:
-        self._out = out
-        self.group = group
-        self.count = count
-        self._nbytes = 4 * count
-        lay = _stamp(Layout())
-        frame_blob = lay.string(frame)
-        lay.add("f", 7).add("I")
-        at_stamp = struct.calcsize("<4siI")
-        # everything after the stamp is constant for this geometry: one blob
-        self._mid = lay.compile().pack(
-            ENCAPSULATION, 0, 0, frame_blob, angle_min, angle_max, angle_increment,
-            time_increment, scan_time, range_min, range_max, count)[at_stamp:]
-        body = len(self._mid) + at_stamp + 4 * count + 4
-        self._length = 22 + body
-        self._channel = group.channels[0]
-        packer = struct.Struct(f"<{_MESSAGE}4siI{len(self._mid)}s")
-        self._pack_into = packer.pack_into
-        self._head = packer.size
-
-    def __call__(self, ns: int, stamp: int, ranges: np.ndarray) -> None:
-        """Add a scan seen at ``ns``, taken at ``stamp``; ``ranges`` little-endian float32.
-
-        The ranges are appended as they lie in memory: a C-contiguous array (as
-        :func:`mdle.trace.scan_ranges` and :func:`mdle.trace.decode_ranges` make them).
-        """
-        if ranges.dtype is not _FLOAT32 or ranges.nbytes != self._nbytes:
-            if len(ranges) != self.count:
-                raise ValueError(f"a scan of {len(ranges)} beams, the laser has {self.count}")
-            raise ValueError("scan ranges must be little-endian float32")
-        sec, nsec = divmod(stamp, _NS)
-        head = self._head
-        buf, pos = self._out.reserve(self.group, ns, head + self._nbytes + 4)
-        self._pack_into(buf, pos, _OP, self._length, self._channel, self.group.count - 1, ns,
-                        ns, ENCAPSULATION, sec, nsec, self._mid)
-        at = pos + head + self._nbytes
-        buf[pos + head:at] = ranges.data
-        buf[at:at + 4] = _NO_INTENSITIES
+            c, s = _trig(math.cos, phi), _trig(math.sin, phi)
+            half_phi, half_t = 0.5 * phi, 0.5 * tth
+            rows["tf.map.sec"], rows["tf.map.nsec"] = sec, nsec
+            rows["tf.map.xy"] = np.column_stack((tx - c * x + s * y, ty - s * x - c * y))
+            rows["tf.map.q"] = np.column_stack((_trig(math.sin, half_phi),
+                                                _trig(math.cos, half_phi)))
+            rows["truth.sec"], rows["truth.nsec"] = sec, nsec
+            rows["truth.pose.xy"] = v[:, 7:9]
+            rows["truth.pose.q"] = np.column_stack((_trig(math.sin, half_t),
+                                                    _trig(math.cos, half_t)))

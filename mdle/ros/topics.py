@@ -18,17 +18,17 @@ import math
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
+
+import numpy as np
 
 from mdle.ros import cdr
 from mdle.ros.mcap_file import McapFile
 from mdle.ros.msgdefs import schema_text
-from mdle.ros.tick import ScanRecords, TickRecords
+from mdle.ros.tick import TickEncoder, Ticks, times_ns
 
-if TYPE_CHECKING:
-    import numpy as np
-
-__all__ = ["FRAMES", "TOPICS", "Topic", "RosRecording", "library_name", "to_ns"]
+__all__ = ["BATCH", "FRAMES", "TOPICS", "Topic", "RosRecording", "library_name",
+           "sample_values", "to_ns"]
 
 #: Frame names (REP-105).
 FRAMES = {"map": "map", "odom": "odom", "base": "base_link", "laser": "laser"}
@@ -103,9 +103,25 @@ def _seconds(record: Mapping[str, Any], key: str) -> float:
     return value
 
 
-def _r9(value: float) -> float:
-    """Round as the trace writes numbers (9 significant digits; non-finite: NaN)."""
-    return float("%.9g" % value) if math.isfinite(value) else math.nan
+_UNKNOWN = (math.nan, math.nan, math.nan)  # a simulated sample without its true pose
+
+#: Ticks handed over one at a time (an export) published together.
+BATCH = 64
+
+
+def sample_values(s: Any, numbers: tuple[float, ...] | None) -> tuple[float, ...]:
+    """Return a sample's ten numbers for :class:`~mdle.ros.tick.Ticks`, not yet rounded.
+
+    ``numbers`` are the line's as :meth:`mdle.trace.SampleFormat.line_and_numbers` gives
+    them (seven without a true pose), or None (a number not finite: they are taken from
+    the sample). An unknown true pose is NaN.
+    """
+    if numbers is None:
+        truth = _UNKNOWN
+        if s.true_x is not None and s.true_y is not None and s.true_theta is not None:
+            truth = (s.true_x, s.true_y, s.true_theta)
+        return (s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega, *truth)
+    return numbers if len(numbers) == 10 else numbers[:7] + _UNKNOWN
 
 
 class RosRecording:
@@ -158,11 +174,12 @@ class RosRecording:
         ch = self.channels
         self._scan_ch = ch["/scan"]
         self._static_ch, self._events_ch = ch["/tf_static"], ch["/mdle/events"]
-        self._tick = TickRecords(self.out, ch["/odom"], ch["/tf"], ch["/cmd_vel"],
-                                 ch["/mdle/state"], ch.get("/ground_truth", 0),
-                                 (FRAMES["map"], FRAMES["odom"], FRAMES["base"]))
-        self._scan_group = self.out.group([self._scan_ch], [0])
-        self._scan: ScanRecords | None = None
+        self._ticks = TickEncoder(self.out, ch["/odom"], ch["/tf"], ch["/cmd_vel"],
+                                  ch["/mdle/state"], ch.get("/ground_truth", 0), self._scan_ch,
+                                  (FRAMES["map"], FRAMES["odom"], FRAMES["base"]))
+        # ticks and scans handed over one at a time (an export), published in batches
+        self._waiting: list[tuple[float, str, tuple[float, ...]]] = []
+        self._waiting_scans: list[tuple[int, float, float, np.ndarray]] = []
         self._mount: tuple[float, float, float] | None = None
         self._world = world
         self._pending: list[str] = []  # start records waiting for a time
@@ -190,6 +207,7 @@ class RosRecording:
 
     def event(self, t: float, line: str) -> None:
         """Publish an ``event`` (or ``end``, or other timed) record on ``/mdle/events``."""
+        self.flush()
         ns = to_ns(t)
         self._timed(ns)
         self.out.add(self._events_ch, ns, cdr.encode_string(line))
@@ -200,13 +218,13 @@ class RosRecording:
         if len(values) != 3 or not all(math.isfinite(m) for m in values):
             raise ValueError("`mount` must be three finite numbers")
         mount = (values[0], values[1], values[2])
-        count = int(record["count"])
-        self._scan = ScanRecords(
-            self.out, self._scan_group, str(record.get("frame") or FRAMES["laser"]),
-            float(record["angle_min"]), float(record["angle_max"]),
-            float(record["angle_increment"]), float(record.get("range_min", 0.0)),
-            float(record["range_max"]), count, _seconds(record, "scan_time"),
-            _seconds(record, "time_increment"))
+        geometry = (str(record.get("frame") or FRAMES["laser"]),
+                    float(record["angle_min"]), float(record["angle_max"]),
+                    float(record["angle_increment"]), float(record.get("range_min", 0.0)),
+                    float(record["range_max"]), int(record["count"]),
+                    _seconds(record, "scan_time"), _seconds(record, "time_increment"))
+        self.flush()  # the scans so far have the geometry they came with
+        self._ticks.geometry(*geometry)
         if mount != self._mount:
             self._mount = mount
             ns = to_ns(t)
@@ -216,46 +234,53 @@ class RosRecording:
             self.out.add(self._static_ch, ns, msg)
 
     def scan(self, t: float, stamp: float, ranges: np.ndarray) -> None:
-        """Publish a scan seen at tick ``t``, taken at ``stamp``.
+        """Take a scan seen at tick ``t``, taken at ``stamp`` (published with the ticks).
 
-        ``ranges`` are float32, +inf where a beam had no return.
+        ``ranges`` are little-endian float32, +inf where a beam had no return.
         """
-        if self._scan is None:
-            raise ValueError("a scan before any `laser` record (the beam geometry)")
-        ns = to_ns(t)
-        if not self._started or self._pending:
-            self._timed(ns)
-        self._scan(ns, to_ns(stamp), ranges)
+        self._ticks.check(ranges)
+        self._waiting_scans.append((len(self._waiting), t, stamp, ranges))
 
     def sample(self, line: str, t: float, x: float, y: float, theta: float, v: float,
                omega: float, cmd_v: float, cmd_omega: float,
                truth: tuple[float, float, float] | None) -> None:
-        """Publish one tick: odometry, transforms, command, true pose and the state line.
+        """Take one tick: odometry, transforms, command, true pose and the state line.
 
         Numbers as the trace holds them (the live recorder rounds them the same way).
+        Ticks are published in batches of :data:`BATCH`, and before any other record.
         """
-        ns = to_ns(t)
-        if not self._started or self._pending:
-            self._timed(ns)
-        self._tick(ns, x, y, theta, v, omega, cmd_v, cmd_omega, truth, line)
-        self.out.tick()
+        self._waiting.append((t, line, (x, y, theta, v, omega, cmd_v, cmd_omega,
+                                        *(truth if truth is not None else _UNKNOWN))))
+        if len(self._waiting) >= BATCH:
+            self.flush()
 
-    def live_sample(self, line: str, s: Any, values: tuple[float, ...] | None = None) -> None:
-        """Publish a :class:`~mdle.runtime.events.Sample` with its trace line ``line``.
-
-        ``values`` are the line's numbers as :meth:`mdle.trace.SampleFormat.line_and_values`
-        gives them; without them the sample's numbers are rounded here the same way.
-        """
-        if values is None:
-            truth = None
-            if s.true_x is not None and s.true_y is not None and s.true_theta is not None:
-                truth = (_r9(s.true_x), _r9(s.true_y), _r9(s.true_theta))
-            self.sample(line, float(s.time), _r9(s.x), _r9(s.y), _r9(s.theta), _r9(s.v),
-                        _r9(s.omega), _r9(s.cmd_v), _r9(s.cmd_omega), truth)
+    def flush(self) -> None:
+        """Publish the ticks and scans waiting."""
+        ticks, scans = self._waiting, self._waiting_scans
+        if not (ticks or scans):
             return
-        x, y, theta, v, omega, cmd_v, cmd_omega = values[:7]
-        self.sample(line, float(s.time), x, y, theta, v, omega, cmd_v, cmd_omega,
-                    (values[7], values[8], values[9]) if len(values) == 10 else None)
+        self._waiting, self._waiting_scans = [], []
+        batch = Ticks(times_ns([t for t, _, _ in ticks]),
+                      np.array([v for _, _, v in ticks], np.float64).reshape(-1, 10),
+                      [line for _, line, _ in ticks])
+        if scans:
+            batch.scan_at = [at for at, _, _, _ in scans]
+            batch.scan_ns = times_ns([t for _, t, _, _ in scans])
+            batch.stamps = times_ns([s for _, _, s, _ in scans])
+            batch.ranges = np.stack([r for _, _, _, r in scans])
+        self.publish(batch)
+
+    def publish(self, ticks: Ticks) -> None:
+        """Publish a batch of ticks (a :class:`~mdle.ros.tick.Ticks`), after those waiting."""
+        self.flush()
+        if not (len(ticks.ns) or ticks.scan_at):
+            return
+        if not self._started or self._pending:
+            first = ticks.scan_ns[0] if ticks.scan_at and ticks.scan_at[0] == 0 \
+                else ticks.ns[0]
+            self._timed(int(first))
+        self._ticks.write(ticks)
+        self.out.tick()
 
     def end(self, t: float, line: str) -> None:
         """Publish the ``end`` record."""
@@ -272,6 +297,7 @@ class RosRecording:
         """End the file (summary, index, footer); a rosbag2 folder gets ``metadata.yaml``."""
         if self.finished:
             return
+        self.flush()
         self.finished = True
         self.out.finish()
         if self.rosbag:

@@ -72,14 +72,29 @@ def _records(tmp_path: Path, write: Any) -> dict[str, list[tuple[int, int, bytes
     return found
 
 
-def _tick_records(simulation: bool) -> Any:
-    from mdle.ros.tick import TickRecords
+def _encoder(out: Any, ch: dict[str, int], simulation: bool = True) -> Any:
+    from mdle.ros.tick import TickEncoder
 
-    def make(out: Any, ch: dict[str, int]) -> Any:
-        return TickRecords(out, ch["/odom"], ch["/tf"], ch["/cmd_vel"], ch["/mdle/state"],
-                           ch["/ground_truth"] if simulation else 0,
-                           ("map", "odom", "base_link"))
-    return make
+    return TickEncoder(out, ch["/odom"], ch["/tf"], ch["/cmd_vel"], ch["/mdle/state"],
+                       ch["/ground_truth"] if simulation else 0, ch["/scan"],
+                       ("map", "odom", "base_link"))
+
+
+def _ticks(*ticks: tuple[Any, ...], scans: tuple[Any, ...] = ()) -> Any:
+    """A batch of ticks (ns, x, y, theta, v, omega, cmd_v, cmd_omega, truth, line) and
+    scans (the tick each comes before, ns, stamp, float32 ranges)."""
+    from mdle.ros.tick import Ticks
+
+    batch = Ticks(np.array([t[0] for t in ticks], np.int64),
+                  np.array([(*t[1:8], *(t[8] or (math.nan,) * 3)) for t in ticks],
+                           np.float64).reshape(-1, 10),
+                  [t[9] for t in ticks])
+    if scans:
+        batch.scan_at = [s[0] for s in scans]
+        batch.scan_ns = np.array([s[1] for s in scans], np.int64)
+        batch.stamps = np.array([s[2] for s in scans], np.int64)
+        batch.ranges = np.stack([s[3] for s in scans])
+    return batch
 
 
 @pytest.mark.parametrize("t, yaw", [(0.0, 0.0), (12.5, 0.7), (3.25, -3.1), (1e6, math.pi)])
@@ -89,9 +104,12 @@ def test_a_simulated_tick(tmp_path: Path, t: float, yaw: float, store: str) -> N
     line = '{"path":"main/é","t":1}'
 
     def write(out: Any, ch: dict[str, int]) -> None:
-        tick = _tick_records(True)(out, ch)
-        for k in range(3):  # the third tick is the one checked; sequences count
-            tick(ns + k, 1.5, -2.25, yaw, 0.3, -0.1, 0.5, -0.25, truth, line * k)
+        enc = _encoder(out, ch)
+        # the third tick is the one checked; sequences count on across batches and chunks
+        rows = [(ns + k, 1.5, -2.25, yaw, 0.3, -0.1, 0.5, -0.25, truth, line * k)
+                for k in range(3)]
+        enc.write(_ticks(*rows[:2]))
+        enc.write(_ticks(rows[2]))
     found = _records(tmp_path, write)
     assert sorted(found) == ["/cmd_vel", "/ground_truth", "/mdle/state", "/odom", "/tf"]
     for topic, msgs in found.items():
@@ -132,8 +150,8 @@ def test_a_simulated_tick(tmp_path: Path, t: float, yaw: float, store: str) -> N
 
 
 def test_a_robot_tick(tmp_path: Path, store: str) -> None:
-    found = _records(tmp_path, lambda out, ch: _tick_records(False)(out, ch)(
-        7, 1.0, 2.0, 3.0, 0.1, 0.2, 0.3, 0.4, (9.0, 9.0, 9.0), ""))
+    found = _records(tmp_path, lambda out, ch: _encoder(out, ch, False).write(_ticks(
+        (7, 1.0, 2.0, 3.0, 0.1, 0.2, 0.3, 0.4, (9.0, 9.0, 9.0), ""))))
     assert sorted(found) == ["/cmd_vel", "/mdle/state", "/odom", "/tf"]  # no ground truth
     for m in _decode("tf2_msgs/msg/TFMessage", found["/tf"][0][2], store):
         (only,) = m.transforms  # odom -> base_link alone: no map on a robot
@@ -144,8 +162,8 @@ def test_a_robot_tick(tmp_path: Path, store: str) -> None:
 
 
 def test_a_simulated_sample_without_its_true_pose(tmp_path: Path, store: str) -> None:
-    found = _records(tmp_path, lambda out, ch: _tick_records(True)(out, ch)(
-        8, 1.0, 2.0, 3.0, 0.1, 0.2, 0.3, 0.4, None, "x"))
+    found = _records(tmp_path, lambda out, ch: _encoder(out, ch).write(_ticks(
+        (8, 1.0, 2.0, 3.0, 0.1, 0.2, 0.3, 0.4, None, "x"))))
     # NaN (unknown, as the trace's nulls say), not a made-up pose
     for m in _decode("geometry_msgs/msg/PoseStamped", found["/ground_truth"][0][2], store):
         assert all(math.isnan(v) for v in (m.pose.position.x, m.pose.position.y,
@@ -157,20 +175,20 @@ def test_a_simulated_sample_without_its_true_pose(tmp_path: Path, store: str) ->
 
 @pytest.mark.parametrize("n", [0, 1, 2, 181, 361])
 def test_scan(tmp_path: Path, n: int, store: str) -> None:
-    from mdle.ros.tick import ScanRecords
-
     rng = np.random.default_rng(n)
     ranges = rng.uniform(0, 10, n).astype("<f4")
     ranges[::7] = np.inf
 
     def write(out: Any, ch: dict[str, int]) -> None:
-        enc = ScanRecords(out, out.group([ch["/scan"]], [0]), "laser", -1.5, 1.5, 0.01, 0.0,
-                          10.0, n, 0.1, 1e-4)
-        enc(6_000_000_000, 5_500_000_000, ranges)
+        enc = _encoder(out, ch)
+        with pytest.raises(ValueError, match="before any `laser`"):
+            enc.check(ranges)
+        enc.geometry("laser", -1.5, 1.5, 0.01, 0.0, 10.0, n, 0.1, 1e-4)
+        enc.write(_ticks(scans=((0, 6_000_000_000, 5_500_000_000, ranges),)))
         with pytest.raises(ValueError):
-            enc(0, 0, ranges[:-1] if n else np.zeros(1, "<f4"))
+            enc.check(ranges[:-1] if n else np.zeros(1, "<f4"))
         with pytest.raises(ValueError):
-            enc(0, 0, ranges.astype(">f4"))
+            enc.check(ranges.astype(">f4"))
     ((log_time, seq, data),) = _records(tmp_path, write)["/scan"]
     assert (log_time, seq) == (6_000_000_000, 0)
     for m in _decode("sensor_msgs/msg/LaserScan", data, store):
@@ -180,6 +198,42 @@ def test_scan(tmp_path: Path, n: int, store: str) -> None:
         assert m.scan_time == np.float32(0.1) and m.time_increment == np.float32(1e-4)
         np.testing.assert_array_equal(np.asarray(m.ranges, dtype=np.float32), ranges)
         assert len(m.intensities) == 0
+
+
+def test_scans_not_at_every_tick(tmp_path: Path, store: str) -> None:
+    """Two scans before one tick, none before others, one after the last: each in its
+    place in the stream, indexed there, its sequence and times its own."""
+    from mcap.records import Channel, Message
+    from mcap.stream_reader import StreamReader
+
+    scans = [np.full(3, v, "<f4") for v in (1.0, 2.0, 3.0, 4.0)]
+
+    def write(out: Any, ch: dict[str, int]) -> None:
+        enc = _encoder(out, ch)
+        enc.geometry("laser", -1.0, 1.0, 1.0, 0.0, 5.0, 3)
+        ticks = [(10 * k, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, None, "é" * k) for k in range(3)]
+        enc.write(_ticks(*ticks, scans=((1, 5, 4, scans[0]), (1, 9, 8, scans[1]),
+                                        (3, 25, 24, scans[2]))))
+        enc.write(_ticks(scans=((0, 30, 29, scans[3]),)))
+    found = _records(tmp_path, write)
+    assert [(t, q) for t, q, _ in found["/scan"]] == [(5, 0), (9, 1), (25, 2), (30, 3)]
+    for (_, _, data), want in zip(found["/scan"], scans, strict=True):
+        for m in _decode("sensor_msgs/msg/LaserScan", data, store):
+            np.testing.assert_array_equal(np.asarray(m.ranges, np.float32), want)
+    for k, (_, _, data) in enumerate(found["/mdle/state"]):
+        for m in _decode("std_msgs/msg/String", data, store):
+            assert m.data == "é" * k
+    order = []
+    with open(tmp_path / "m.mcap", "rb") as f:
+        topics = {}
+        for r in StreamReader(f).records:
+            if isinstance(r, Channel):
+                topics[r.id] = r.topic
+            elif isinstance(r, Message) and topics[r.channel_id] in ("/scan", "/odom"):
+                order.append((topics[r.channel_id], r.log_time))
+    # the stream as a tick-at-a-time writer makes it: a tick's scans, then its records
+    assert order == [("/odom", 0), ("/scan", 5), ("/scan", 9), ("/odom", 10), ("/odom", 20),
+                     ("/scan", 25), ("/scan", 30)]
 
 
 def test_markers_of_every_reference_world(store: str) -> None:

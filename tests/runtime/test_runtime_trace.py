@@ -309,14 +309,14 @@ def _sample(**changes: Any) -> Any:
     ({"scan_age": math.inf}, False), ({"diag": {"label": "not a number"}}, False),
 ])
 def test_the_fast_sample_line_is_the_trace_line(changes: dict[str, Any], finite: bool) -> None:
-    """line_and_values (one template per shape of line) gives the line the trace writer
-    writes, and the numbers a reader of that line gets."""
+    """line_and_numbers (one template per shape of line) gives the line the trace writer
+    writes, and the sample's numbers that line writes with 9 significant digits."""
     from mdle.trace import SampleFormat
 
     fmt = SampleFormat()
     s = _sample(**changes)
     for _ in range(2):  # the template made, then the template kept
-        line, values = fmt.line_and_values(s)
+        line, values = fmt.line_and_numbers(s)
         assert line == SampleFormat()(s)
         rec = json.loads(line)
         assert (values is not None) == finite
@@ -324,4 +324,5 @@ def test_the_fast_sample_line_is_the_trace_line(changes: dict[str, Any], finite:
             keys = ["x", "y", "theta", "v", "omega", "cmd_v", "cmd_omega"]
             if "true_x" in rec:
                 keys += ["true_x", "true_y", "true_theta"]
-            assert values == tuple(rec[k] for k in keys)
+            assert values == tuple(getattr(s, k) for k in keys)
+            assert tuple(float("%.9g" % v) for v in values) == tuple(rec[k] for k in keys)
