@@ -16,8 +16,10 @@
 Timings are noisy on a shared machine (the load average is printed); a ratio measured
 within one round is much steadier than two separate timings. Instruction counts do not
 depend on the load: ``--part NAME`` runs one part once (for ``valgrind
---tool=callgrind``; run it with two ``--ticks`` or ``--seconds`` values and take the
-difference per tick).
+--tool=callgrind``, with ``OPENBLAS_NUM_THREADS=1`` so that idle BLAS workers do not
+count; run it with two ``--ticks`` or ``--seconds`` values and take the difference per
+tick). There batches and chunks close by size alone, as in a run at full speed
+(:data:`NO_AGE`).
 
 Run: ``python benchmarks/mcap.py [--ticks N] [--repeat R] [--seconds S]``.
 """
@@ -45,12 +47,19 @@ sys.path.insert(0, str(_HERE.parent))
 
 from mdle.backend import Pose, Scan  # noqa: E402
 from mdle.loader import load_program  # noqa: E402
-from mdle.ros.recorder import McapRecorder  # noqa: E402
+from mdle.ros.mcap_file import MAX_CHUNK_AGE  # noqa: E402
+from mdle.ros.recorder import BATCH_AGE, McapRecorder  # noqa: E402
 from mdle.runtime import Scheduler  # noqa: E402
 from mdle.runtime.events import Event, EventKind, Sample  # noqa: E402
 from mdle.trace import TraceWriter  # noqa: E402
 
 BEAMS = 181
+
+#: For an instruction counter: batches and chunks closed by size alone. Under valgrind a
+#: run goes some fifty times slower, so the wall-clock limits (0.5 s for a batch, 1 s
+#: for a chunk) would close them after a few ticks, which a run at full speed (32 ticks
+#: in a few milliseconds) never does.
+NO_AGE = math.inf
 REPO = Path(__file__).resolve().parent.parent
 HEADER: dict[str, Any] = {"program": {"file": "bench", "element": "main"},
                           "world": {"name": "ellipse", "spec": "ellipse"}, "backend": "sim"}
@@ -122,8 +131,12 @@ def per_tick(ticks: list[Sample], make: Any) -> tuple[float, float]:
     return elapsed / len(ticks) * 1e6, cpu / len(ticks) * 1e6
 
 
-def whole_run(record: bool, seconds: float, compression: str = "") -> tuple[float, float]:
-    """Wall and CPU seconds of the Figure 1 run (50 Hz), recorded or not."""
+def whole_run(record: bool, seconds: float, compression: str = "",
+              age: float = 1.0) -> tuple[float, float]:
+    """Wall and CPU seconds of the Figure 1 run (50 Hz), recorded or not.
+
+    ``age`` scales the recorder's wall-clock limits (``inf``: see :data:`NO_AGE`).
+    """
     from mdle import sim
 
     program = load_program(REPO / "plans" / "paper" / "fig1-ellipse.mdle")
@@ -131,7 +144,8 @@ def whole_run(record: bool, seconds: float, compression: str = "") -> tuple[floa
     backend = sim.SimBackend(world)
     with tempfile.TemporaryDirectory() as tmp:
         observers = ([McapRecorder(os.path.join(tmp, "r.mcap"), HEADER, world,
-                                   compression=compression)] if record else [])
+                                   compression=compression, batch_age=BATCH_AGE * age,
+                                   max_age=MAX_CHUNK_AGE * age)] if record else [])
         sch = Scheduler(program.elements["main"], backend, 50.0, observers, until=seconds)
         t0, c0 = time.perf_counter(), time.process_time()
         while sch.tick():
@@ -186,11 +200,12 @@ def main() -> None:
             if args.part == "tick-none":  # preparing the ticks alone, to subtract
                 per_tick(ticks[:1], lambda d: TraceWriter(os.path.join(d, "t.jsonl"), HEADER))
             elif args.part == "tick-record":
-                per_tick(ticks, lambda d: McapRecorder(os.path.join(d, "r.mcap"), HEADER))
+                per_tick(ticks, lambda d: McapRecorder(os.path.join(d, "r.mcap"), HEADER,
+                                                       batch_age=NO_AGE, max_age=NO_AGE))
             else:
                 per_tick(ticks, lambda d: TraceWriter(os.path.join(d, "t.jsonl"), HEADER))
         else:
-            whole_run(args.part == "run-record", args.seconds, args.compression[0])
+            whole_run(args.part == "run-record", args.seconds, args.compression[0], NO_AGE)
         return
     print(f"load average {os.getloadavg()[0]:.2f}; {BEAMS} beams, {args.ticks} ticks, "
           f"{args.repeat} repeats")

@@ -107,7 +107,8 @@ class McapFile:
         self._buf = bytearray(self._chunk_size + _SLACK)
         self._used = 0
         self._entries: list[list[tuple[int, int]]] = [[]]  # per channel: (time, offset)
-        self._blocks: list[list[np.ndarray]] = [[]]  # per channel: add_block's entries
+        # per channel: add_block's (log times, offsets in the chunk)
+        self._blocks: list[list[tuple[np.ndarray, np.ndarray]]] = [[]]
         self._chunk_start = 2**64 - 1
         self._chunk_end = 0
         self._start = 2**64 - 1
@@ -220,27 +221,20 @@ class McapFile:
         """Messages on ``channel`` so far (the next one's sequence number)."""
         return self._counts[channel]
 
-    def add_block(self, data: bytes, index: Sequence[tuple[int, np.ndarray, np.ndarray]]
-                  ) -> None:
+    def add_block(self, data: bytes, index: Sequence[tuple[int, np.ndarray, np.ndarray]],
+                  first: int, last: int) -> None:
         """Add ready Message records, sequence numbers counted on from :meth:`count`.
 
         ``index`` gives, per channel, each record's log time (ns) and offset in ``data``
-        (arrays); the records go into the open chunk as they are, copied once.
+        (arrays); ``first`` and ``last`` are the earliest and latest log times. The
+        records go into the open chunk as they are, copied once.
         """
-        if not index:
-            return
-        first = min(int(times.min()) for _, times, _ in index)
-        last = max(int(times.max()) for _, times, _ in index)
         pos = self._reserve(len(data), first)
         if last > self._chunk_end:
             self._chunk_end = last
         self._buf[pos:pos + len(data)] = data
         for channel, times, offsets in index:
-            table = np.empty((len(times), 2), "<u8")
-            table[:, 0] = times
-            table[:, 1] = offsets
-            table[:, 1] += pos
-            self._blocks[channel].append(table)
+            self._blocks[channel].append((times, offsets + pos))
             self._counts[channel] += len(times)
             self._messages += len(times)
 
@@ -297,7 +291,13 @@ class McapFile:
         for ch, (entries, blocks) in enumerate(zip(self._entries, self._blocks, strict=True)):
             if not (entries or blocks):
                 continue
-            tables = ([np.asarray(entries, dtype="<u8")] if entries else []) + blocks
+            tables = [np.asarray(entries, dtype="<u8")] if entries else []
+            if blocks:
+                times = np.concatenate([t for t, _ in blocks])
+                table = np.empty((len(times), 2), "<u8")
+                table[:, 0] = times
+                table[:, 1] = np.concatenate([o for _, o in blocks])
+                tables.append(table)
             table = tables[0] if len(tables) == 1 else np.concatenate(tables)
             if entries and blocks:  # both ways on one channel: in the chunk's order
                 table = table[np.argsort(table[:, 1], kind="stable")]

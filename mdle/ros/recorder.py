@@ -20,6 +20,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Mapping
+from itertools import chain
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -203,13 +204,18 @@ def _publish(recording: RosRecording, times: list[float], lines: list[str],
     if not (times or scans):
         return
     # the numbers as the trace's lines give them to a reader
-    ticks = Ticks(times_ns(times), round9(np.array(values, np.float64).reshape(-1, 10)),
-                  lines)
+    k = len(times)
+    numbers = np.fromiter(chain.from_iterable(values), np.float64, 10 * k).reshape(k, 10)
+    ticks = Ticks(times_ns(times), round9(numbers), lines)
     if scans:
+        m = len(scans)
         ticks.scan_at = [at for at, _ in scans]
         ticks.scan_ns = ticks.ns[ticks.scan_at]  # a scan is seen at the tick it comes with
         ticks.stamps = times_ns([s.stamp for _, s in scans])
+        if len({len(s.ranges) for _, s in scans}) != 1:
+            raise ValueError("scans of one beam geometry with different numbers of beams")
         # REP-117: a beam without a return is +inf
-        ticks.ranges = np.where(np.array([s.valid for _, s in scans]),
-                                np.array([s.ranges for _, s in scans]), np.inf).astype("<f4")
+        valid = np.concatenate([s.valid for _, s in scans]).reshape(m, -1)
+        ranges = np.concatenate([s.ranges for _, s in scans]).reshape(m, -1)
+        ticks.ranges = np.where(valid, ranges, np.inf).astype("<f4")
     recording.publish(ticks)

@@ -59,8 +59,8 @@ def _planar_twist(lay: Layout) -> Layout:
 class Rows:
     """Message records of fixed size side by side, one row of them per tick.
 
-    :meth:`message` appends a record: the MCAP header (its ``seq``, ``log`` and ``pub``
-    fields, and with ``open_end`` its ``length``) and the message laid out by a
+    :meth:`message` appends a record: the MCAP header (its ``seq`` and ``times`` (log and
+    publish time) fields, and with ``open_end`` its ``length``) and the message laid out by a
     :class:`~mdle.ros.cdr.Layout`, its fields named ``PREFIX.NAME``.
     """
 
@@ -82,8 +82,7 @@ class Rows:
         data = body.template
         self.template += _HEAD.pack(_OP, 22 + len(data), channel, 0, 0, 0)
         self.fields[f"{prefix}.seq"] = ("<u4", at + 11)
-        self.fields[f"{prefix}.log"] = ("<u8", at + 15)
-        self.fields[f"{prefix}.pub"] = ("<u8", at + 23)
+        self.fields[f"{prefix}.times"] = (("<u8", 2), at + 15)  # log and publish time
         if open_end:
             self.fields[f"{prefix}.length"] = ("<u8", at + 1)
         for name, (kind, offset) in body.fields.items():
@@ -220,7 +219,7 @@ class TickEncoder:
             scans, raw = self._scan.batch(m)
             first = out.count(self.scan_channel)
             scans["scan.seq"] = np.arange(first, first + m)
-            scans["scan.log"] = scans["scan.pub"] = ticks.scan_ns
+            scans["scan.times"] = ticks.scan_ns[:, None]
             scans["scan.sec"], scans["scan.nsec"] = np.divmod(ticks.stamps, _NS)
             if self.count:
                 scans["scan.ranges"] = ticks.ranges
@@ -248,7 +247,10 @@ class TickEncoder:
             index.append((self.scan_channel, ticks.scan_ns, starts[tick] + nth * scan_size))
         data = b"".join(chain.from_iterable(zip(scan_parts, raw.view(f"V{size}").tolist(),
                                                 texts, strict=False)))
-        out.add_block(data + scan_parts[k], index)
+        times = [t for t in (ticks.ns, ticks.scan_ns) if len(t)]
+        if times:
+            out.add_block(data + scan_parts[k], index, min(int(t.min()) for t in times),
+                          max(int(t.max()) for t in times))
 
     def _fill(self, rows: np.ndarray, ticks: Ticks, lengths: np.ndarray) -> None:
         """Fill the variable fields of a batch's rows."""
@@ -265,10 +267,10 @@ class TickEncoder:
         names = ["odom", "tf", "cmd", "state"]
         if self.simulation:
             names.append("truth")
+        times = ns[:, None]
         for name in names:
             rows[name + ".seq"] = seq
-            rows[name + ".log"] = ns
-            rows[name + ".pub"] = ns
+            rows[name + ".times"] = times
         for name in ("odom", "tf"):
             rows[name + ".sec"], rows[name + ".nsec"] = sec, nsec
             rows[name + ".pose.xy"], rows[name + ".pose.q"] = xy, q
