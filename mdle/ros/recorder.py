@@ -1,11 +1,11 @@
 """``mdle run --record``: an observer that writes the run as ROS 2 messages into MCAP.
 
 Ticks are encoded in batches (:data:`BATCH_TICKS`, or :data:`BATCH_AGE` of wall time):
-a tick's messages cost the same instructions either way, but a batch runs with the
-formatting and packing code and data warm in the CPU's caches, where one tick at a time
-would find them evicted by the simulation every tick; within a whole run that makes
-recording about a third cheaper. An event flushes the batch first, so the file holds
-the messages in the trace's order.
+a batch's numbers, scans and records are converted and filled with numpy a column at a
+time (:mod:`mdle.ros.tick`), and the batch runs with its code and data warm in the CPU's
+caches, where one tick at a time would find them evicted by the simulation every tick.
+An event flushes the batch first, so the file holds the messages in the trace's order.
+A kill loses at most the batch waiting and the open chunk (``docs/trace.md``).
 
 It makes the same records the trace writer makes (:mod:`mdle.trace`: the same sample
 line, event and end records, ``laser`` and ``scan`` records) and hands them to a
