@@ -188,7 +188,7 @@ def load_team(spec: TeamSpec, *, world: str | None = None, overrides: Sequence[s
     import dataclasses
 
     from mdle import sim
-    from mdle.loader import load_program
+    from mdle.lang import load_program
     from mdle.runtime import element_of
     from mdle.teamcheck import check_team
 

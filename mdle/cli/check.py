@@ -19,8 +19,8 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from mdle.errors import Diagnostic, MdleError
+    from mdle.lang import Program
     from mdle.motion_limits import KnownRobot
-    from mdle.program import Program
 
 __all__ = ["add_parser", "run", "expand_paths"]
 
@@ -67,7 +67,7 @@ def _load(path: str, args: argparse.Namespace,
           robots: dict[tuple[str, ...], KnownRobot]) -> Program | MdleError:
     from mdle.cli.options import known_robot
     from mdle.errors import MdleError
-    from mdle.loader import load_program
+    from mdle.lang import load_program
 
     try:
         robot = known_robot(path, args.world, args.robot, robots)
@@ -93,9 +93,9 @@ def _check_team(path: str, quiet: bool) -> int:
 def run(args: argparse.Namespace) -> int:
     """Check each file; returns the exit code."""
     from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
-    from mdle.compile import missing_entry
     from mdle.errors import MdleError
     from mdle.frames import FRAME_NOTE, reads_pose
+    from mdle.lang import missing_entry
 
     files = expand_paths(args.files)
     robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once

@@ -227,7 +227,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     from mdle.errors import Diagnostic, MdleError
-    from mdle.loader import load_program
+    from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
 
     if args.plot:
@@ -246,7 +246,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     try:
         program = load_program(args.plan, settings=args.overrides, robot=robot)
     except MdleError as err:
-        from mdle.hints import yaml_as_plan
+        from mdle.lang import yaml_as_plan
 
         raise yaml_as_plan(args.plan, err, "to run a plan in this world: "
                           f"`mdle run PLAN.mdle --world {args.plan}`") from None

@@ -161,7 +161,7 @@ def test_robot_plan_options_with_a_world(tmp_path: Path,
 ])
 def test_send_and_receive_errors_in_a_plan(atom: str, message: str) -> None:
     from mdle.errors import MdleError
-    from mdle.loader import load_text
+    from mdle.lang import load_text
 
     with pytest.raises(MdleError, match=message.replace("(", r"\(").replace(")", r"\)")):
         load_text(f"atom a = {atom}\n")
@@ -169,7 +169,7 @@ def test_send_and_receive_errors_in_a_plan(atom: str, message: str) -> None:
 
 def test_a_plan_that_talks_runs_alone_too() -> None:
     from mdle import sim
-    from mdle.loader import load_text
+    from mdle.lang import load_text
     from mdle.runtime import run_named
 
     program = load_text("atom tell = (go(0.2 m/s), received(go), 2 s, send(pose), send(go, 1))\n"
@@ -180,8 +180,7 @@ def test_a_plan_that_talks_runs_alone_too() -> None:
 
 
 def test_show_lists_what_an_atom_sends(capsys: pytest.CaptureFixture[str]) -> None:
-    from mdle.loader import load_text
-    from mdle.show import show_program
+    from mdle.lang import load_text, show_program
 
     program = load_text("atom tell(ch = leg) = (stop, never, 1 s, send(ch, 2 * x), send(pose))\n"
                         "plan main = ((tell(leg2)), never, 5 s)\n")

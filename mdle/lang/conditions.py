@@ -24,7 +24,7 @@ from types import CodeType
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
-from mdle.program import NEVER, Interrupt
+from mdle.lang.program import NEVER, Interrupt
 from mdle.units import Dim
 
 __all__ = ["Typed", "constant", "sensor_reading", "negate", "logic", "compare", "arith",

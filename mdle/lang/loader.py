@@ -15,14 +15,14 @@ import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
-from mdle import syntax as st
 from mdle.atoms.registry import Registry
-from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
-from mdle.hints import refine_hints
+from mdle.lang import syntax as st
+from mdle.lang.check import check_program
+from mdle.lang.hints import refine_hints
+from mdle.lang.parser import normalise_newlines, parse_partial
+from mdle.lang.program import Program
 from mdle.motion_limits import KnownRobot
-from mdle.parser import normalise_newlines, parse_partial
-from mdle.program import Program
 from mdle.userfile import UserFileError, read_user_file
 
 __all__ = ["load_program", "load_text", "load_modules", "read_source", "plan_bundle", "Loaded"]
@@ -270,7 +270,7 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
             raise _error(found.diagnostics + _check_errors(found, registry), loaded.sources,
                          found.syntax_failed)
         if settings:
-            from mdle.overrides import override_defaults
+            from mdle.lang.overrides import override_defaults
 
             loaded = override_defaults(loaded, settings, registry)
         return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main,

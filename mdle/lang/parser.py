@@ -30,10 +30,10 @@ from typing import Any
 from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from mdle import syntax as st
-from mdle.descent import Lexer, parse_valid
 from mdle.errors import Diagnostic, MdleSyntaxError, Severity, Span
-from mdle.syntax_errors import (
+from mdle.lang import syntax as st
+from mdle.lang.descent import Lexer, parse_valid
+from mdle.lang.syntax_errors import (
     EXAMPLES,
     KEYWORDS,
     Label,
@@ -41,7 +41,7 @@ from mdle.syntax_errors import (
     describe_expected,
     describe_token,
 )
-from mdle.treebuild import (
+from mdle.lang.treebuild import (
     MAX_DEPTH,
     BuildState,
     Prefixed,

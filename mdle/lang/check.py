@@ -28,10 +28,11 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any
 
-from mdle import conditions as cond
-from mdle import syntax as st
 from mdle.atoms.registry import BOOL, REQUIRED, LawSpec, Param, Registry, SensorSpec
-from mdle.dimensions import (
+from mdle.errors import CheckError, Diagnostic, Severity, Span
+from mdle.lang import conditions as cond
+from mdle.lang import syntax as st
+from mdle.lang.dimensions import (
     Quantity,
     Symbol,
     Value,
@@ -42,11 +43,8 @@ from mdle.dimensions import (
     show_value,
     unit_for,
 )
-from mdle.errors import CheckError, Diagnostic, Severity, Span
-from mdle.format import format_expr
-from mdle.messages import POSE_CHANNEL
-from mdle.motion_limits import KnownRobot, excess
-from mdle.program import (
+from mdle.lang.format import format_expr
+from mdle.lang.program import (
     INF,
     AtomNode,
     Element,
@@ -57,7 +55,9 @@ from mdle.program import (
     StringKind,
     StringNode,
 )
-from mdle.resolve import Namespace, build_namespace, find_cycles, uses_of
+from mdle.lang.resolve import Namespace, build_namespace, find_cycles, uses_of
+from mdle.messages import POSE_CHANNEL
+from mdle.motion_limits import KnownRobot, excess
 from mdle.units import NONE, TIME, TURN_RATE, Dim
 
 __all__ = ["Checker", "check_program", "MAX_NESTING", "missing_entry", "never_ends"]
