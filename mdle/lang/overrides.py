@@ -154,7 +154,8 @@ def apply_overrides(modules: Sequence[st.Module], overrides: Sequence[Override],
 
 def _misfit(o: Override, target: st.Definition, ns: Namespace) -> Diagnostic | None:
     """Return why ``o``'s value cannot replace the default of ``target``'s parameter."""
-    from mdle.lang.check import Checker, _Abort
+    from mdle.lang.check import Checker
+    from mdle.lang.check_state import _Abort
     from mdle.lang.dimensions import Symbol, dim_example, dim_words, fits, unit_for
 
     param = next(p for p in target.param_list if p.name == o.param)

@@ -1,5 +1,8 @@
 """Text to syntax tree: the lark LALR parser of ``grammar/mdle.lark``.
 
+Over 500 lines: besides building trees, it recovers from syntax errors and words them,
+and both work on lark's error objects and parser state, which no other module sees.
+
 The grammar is read once through :mod:`importlib.resources` (it ships inside the
 package as ``mdle.grammar``), and the analysed parser is cached in a per-user file
 (``$XDG_CACHE_HOME/mdle``, else ``~/.cache/mdle``), so ``mdle check`` does not rebuild

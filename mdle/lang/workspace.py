@@ -14,7 +14,8 @@ from typing import Any
 from mdle.atoms.registry import Registry
 from mdle.errors import CheckError, Diagnostic, MdleError
 from mdle.lang import syntax as st
-from mdle.lang.check import _Abort, _checker, check_program
+from mdle.lang.check import _checker, check_program
+from mdle.lang.check_state import _Abort
 from mdle.lang.format import format_statement
 from mdle.lang.hints import refine_error
 from mdle.lang.loader import load_modules, read_source

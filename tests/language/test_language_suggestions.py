@@ -14,7 +14,7 @@ import pytest
 
 from mdle.atoms import default_registry
 from mdle.errors import CheckError
-from mdle.lang import check as compile_module
+from mdle.lang import check_names as compile_module
 from mdle.lang import load_text
 
 
