@@ -18,7 +18,7 @@ from mdle.backend import Pose
 from mdle.lang import Element
 from mdle.messages import Message
 from mdle.runtime import RunResult, Scheduler
-from mdle.runtime.observer import Observer
+from mdle.runtime.events import Observer
 
 __all__ = ["TeamRun", "message_record"]
 
