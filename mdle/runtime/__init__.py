@@ -14,13 +14,12 @@ from mdle.runtime.events import (
     Collision,
     Event,
     EventKind,
-    Observer,
     RunResult,
     Sample,
     Termination,
     ended_how,
 )
-from mdle.runtime.observer import BaseObserver, Recorder
+from mdle.runtime.observer import BaseObserver, Observer, Recorder
 from mdle.runtime.scheduler import ActiveElement, Scheduler
 
 __all__ = [
