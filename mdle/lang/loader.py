@@ -246,7 +246,7 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         Control laws and sensor functions; ``atoms.default_registry()`` when None.
     settings : mapping, optional
         Parameter defaults to override: ``NAME -> value text``, or ``NAME=VALUE`` texts
-        (``mdle run --set``); see :func:`mdle.overrides.override_defaults`.
+        (``mdle run --set``); see :func:`mdle.lang.overrides.override_defaults`.
     files : mapping, optional
         Imported files' texts by relative path, instead of the disk (see
         :func:`load_modules`); ``base_dir`` is the folder they are relative to.

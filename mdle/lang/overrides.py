@@ -304,7 +304,7 @@ def override_defaults(loaded: "Loaded", settings: Mapping[str, str] | Sequence[s
     Parameters
     ----------
     loaded : Loaded
-        The parsed files (:func:`mdle.loader.load_modules`).
+        The parsed files (:func:`mdle.lang.loader.load_modules`).
     settings : mapping or sequence
         ``NAME -> value text``, or ``NAME=VALUE`` texts as typed after ``--set``.
     registry : Registry, optional

@@ -160,7 +160,7 @@ def _on_close(token: Token) -> Token:
 
 @v_args(inline=True)
 class _Build(Transformer):
-    """Builds :mod:`mdle.syntax` nodes as the LALR parser reduces each rule."""
+    """Builds :mod:`mdle.lang.syntax` nodes as the LALR parser reduces each rule."""
 
     def start(self, *statements: st.Statement) -> tuple[st.Statement, ...]:
         return statements
