@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
 from mdle.cli.options import (
+    DEFAULT_RATE,
     add_simulation_options,
     known_robot,
     seconds,
@@ -77,8 +78,10 @@ def add_parser(subparsers: Any) -> None:
                    help="stop after this many seconds of (simulated) time")
     p.add_argument("--realtime", action="store_true",
                    help="pace the simulation to the wall clock")
-    p.add_argument("--rate", type=_hertz, default=10.0, metavar="HZ",
-                   help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle)")
+    # default None: a team file's `rate:` applies unless --rate is given (even --rate 10)
+    p.add_argument("--rate", type=_hertz, default=None, metavar="HZ",
+                   help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle; with a "
+                        "team, the team file's rate:)")
     p.add_argument("--trace", metavar="FILE.jsonl", help="write the run's trace (JSON lines)")
     p.add_argument("--record", metavar="FILE.mcap",
                    help="record the run as ROS 2 messages in an MCAP file (Foxglove, "
@@ -193,6 +196,8 @@ def run(args: argparse.Namespace) -> int:
         from mdle.cli.team import run_team
 
         return run_team(args)
+    if args.rate is None:
+        args.rate = DEFAULT_RATE
     if args.plan is None:
         _say("mdle run: give a PLAN.mdle, or a team with --team TEAM.yaml or --robot-plan "
              "NAME=PLAN.mdle")

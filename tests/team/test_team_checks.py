@@ -215,3 +215,18 @@ def test_worlds_show_draws_a_team_world_s_robots(tmp_path: Path) -> None:
     # the world has no `start:`; its robots are drawn where they start, each with its scan
     assert main(["worlds", "show", str(tmp_path / "duel.world.yaml"), "-o", str(out)]) == 0
     assert out.stat().st_size > 0
+
+
+def test_a_point_robot_in_a_team_is_a_warning_naming_it(tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]
+                                                        ) -> None:
+    team = _files(tmp_path, {"red": STILL, "blue": STILL})
+    world = tmp_path / "duel.world.yaml"
+    world.write_text(WORLD.replace("robot: pioneer2dx", "robot: ideal"))
+    assert main(["check", str(team)]) == 0
+    out = capsys.readouterr().out
+    assert "warning: robot `red` of world `duel` is a point (profile `ideal`, radius 0 m)" in out
+    assert "robot `blue`" in out and "1 file: 0 errors, 2 warnings" in out
+    world.write_text(WORLD)
+    assert main(["check", str(team)]) == 0
+    assert "is a point" not in capsys.readouterr().out
