@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 import struct
-from typing import Any
+from typing import Any, Self
 
 __all__ = ["ENCAPSULATION", "CdrWriter", "Layout", "encode_string", "quaternion", "string_blob",
            "time_parts"]
@@ -45,63 +45,6 @@ def string_blob(text: str) -> bytes:
     return struct.pack("<I", len(data) + 1) + data + b"\x00"
 
 
-class Layout:
-    """Lay out a message whose offsets are all fixed: constant bytes and named fields.
-
-    Fields are added in order, each aligned as CDR aligns it (counted from after the
-    encapsulation header the message starts with). The result is a :attr:`template`
-    (the constant bytes, zeros where the named fields go) and the named fields' numpy
-    types and offsets (:attr:`fields`): a batch of such messages is the template
-    repeated, its named fields filled a column at a time (:mod:`mdle.ros.tick`).
-    """
-
-    _NUMPY = {"d": "<f8", "f": "<f4", "i": "<i4", "I": "<u4"}
-
-    def __init__(self) -> None:
-        self._data = bytearray(ENCAPSULATION)
-        #: name -> (numpy type, offset from the start of the message)
-        self.fields: dict[str, tuple[Any, int]] = {}
-
-    def _align(self, size: int) -> None:
-        self._data += bytes((-(len(self._data) - 4)) % size)
-
-    def field(self, name: str, code: str, count: int = 1) -> Layout:
-        """Add a named field of ``count`` primitives of struct code ``code`` (d, f, i, I)."""
-        size = struct.calcsize("<" + code)
-        self._align(size)
-        kind = self._NUMPY[code]
-        self.fields[name] = ((kind, count) if count != 1 else kind, len(self._data))
-        self._data += bytes(size * count)
-        return self
-
-    def zeros(self, code: str, count: int = 1) -> Layout:
-        """Add ``count`` primitives of struct code ``code`` that are always 0.
-
-        Zero of every CDR number type is all zero bytes.
-        """
-        size = struct.calcsize("<" + code)
-        self._align(size)
-        self._data += bytes(size * count)
-        return self
-
-    def const(self, code: str, *values: float | int) -> Layout:
-        """Add constant primitives of struct code ``code``."""
-        self._align(struct.calcsize("<" + code))
-        self._data += struct.pack(f"<{len(values)}{code}", *values)
-        return self
-
-    def string(self, text: str) -> Layout:
-        """Add a constant string."""
-        self._align(4)
-        self._data += string_blob(text)
-        return self
-
-    @property
-    def template(self) -> bytes:
-        """The message's bytes, zeros in the named fields."""
-        return bytes(self._data)
-
-
 class CdrWriter:
     """Write any message field by field (for rare messages; the tick's use :class:`Layout`)."""
 
@@ -113,38 +56,78 @@ class CdrWriter:
         if pad:
             self.buf += bytes(pad)
 
-    def prim(self, code: str, *values: float | int | bool) -> CdrWriter:
+    def prim(self, code: str, *values: float | int | bool) -> Self:
         """Write primitives of struct code ``code`` (``i``, ``I``, ``f``, ``d``, ``?``...)."""
         size = struct.calcsize("<" + code)
         self._align(size)
         self.buf += struct.pack(f"<{len(values)}{code}", *values)
         return self
 
-    def string(self, text: str) -> CdrWriter:
+    def string(self, text: str) -> Self:
         """Write a string."""
         self._align(4)
         self.buf += string_blob(text)
         return self
 
-    def count(self, n: int) -> CdrWriter:
+    def count(self, n: int) -> Self:
         """Write a sequence length."""
         return self.prim("I", n)
 
-    def time(self, ns: int) -> CdrWriter:
+    def time(self, ns: int) -> Self:
         """Write a ``builtin_interfaces/Time`` (or Duration)."""
         sec, nanosec = time_parts(ns)
         return self.prim("i", sec).prim("I", nanosec)
 
-    def header(self, ns: int, frame: str) -> CdrWriter:
+    def header(self, ns: int, frame: str) -> Self:
         """Write a ``std_msgs/Header``."""
         return self.time(ns).string(frame)
 
-    def pose(self, x: float, y: float, yaw: float, z: float = 0.0) -> CdrWriter:
+    def pose(self, x: float, y: float, yaw: float, z: float = 0.0) -> Self:
         """Write a ``geometry_msgs/Pose`` (or Transform) of a planar pose."""
         return self.prim("d", x, y, z, *quaternion(yaw))
 
     def bytes(self) -> bytes:
         """Return the message."""
+        return bytes(self.buf)
+
+
+class Layout(CdrWriter):
+    """Lay out a message whose offsets are all fixed: constant bytes and named fields.
+
+    Fields are added in order, each aligned as CDR aligns it (counted from after the
+    encapsulation header the message starts with); constants are written as
+    :class:`CdrWriter` writes them (:meth:`prim`, :meth:`string`). The result is a
+    :attr:`template` (the constant bytes, zeros where the named fields go) and the named
+    fields' numpy types and offsets (:attr:`fields`): a batch of such messages is the
+    template repeated, its named fields filled a column at a time (:mod:`mdle.ros.tick`).
+    """
+
+    _NUMPY = {"d": "<f8", "f": "<f4", "i": "<i4", "I": "<u4"}
+
+    def __init__(self) -> None:
+        super().__init__()
+        #: name -> (numpy type, offset from the start of the message)
+        self.fields: dict[str, tuple[Any, int]] = {}
+
+    def field(self, name: str, code: str, count: int = 1) -> Self:
+        """Add a named field of ``count`` primitives of struct code ``code`` (d, f, i, I)."""
+        size = struct.calcsize("<" + code)
+        self._align(size)
+        kind = self._NUMPY[code]
+        self.fields[name] = ((kind, count) if count != 1 else kind, len(self.buf))
+        self.buf += bytes(size * count)
+        return self
+
+    def zeros(self, code: str, count: int = 1) -> Self:
+        """Add ``count`` primitives of struct code ``code`` that are always 0.
+
+        Zero of every CDR number type is all zero bytes.
+        """
+        return self.prim(code, *([0] * count))
+
+    @property
+    def template(self) -> bytes:
+        """The message's bytes, zeros in the named fields."""
         return bytes(self.buf)
 
 

@@ -161,7 +161,7 @@ class TickEncoder:
         _planar_twist(_planar_pose(lay, "pose").zeros("d", 36)).zeros("d", 36)
         rows.message("odom", odom, lay)
         # tf2_msgs/TFMessage: odom -> base_link, in simulation map -> odom after it
-        lay = _stamp(Layout().const("I", 2 if truth else 1), "").string(odom_f).string(base)
+        lay = _stamp(Layout().prim("I", 2 if truth else 1), "").string(odom_f).string(base)
         _planar_pose(lay, "pose")
         if truth:
             _planar_pose(_stamp(lay, "map").string(map_).string(odom_f), "map")
@@ -184,9 +184,9 @@ class TickEncoder:
         Angles in radians in the scan's frame, ranges in metres, times in seconds; no
         intensities.
         """
-        lay = _stamp(Layout(), "").string(frame).const(
+        lay = _stamp(Layout(), "").string(frame).prim(
             "f", angle_min, angle_max, angle_increment, time_increment, scan_time,
-            range_min, range_max).const("I", count)
+            range_min, range_max).prim("I", count)
         if count:
             lay.field("ranges", "f", count)
         lay.zeros("I")  # no intensities
