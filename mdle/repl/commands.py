@@ -33,7 +33,8 @@ from mdle.cli.output import print_diagnostics
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
 from mdle.repl import views
-from mdle.repl.session import ReplError, RunReport, Session
+from mdle.repl.reports import RunReport
+from mdle.repl.session import ReplError, Session
 from mdle.runtime import Observer
 from mdle.runtime.events import ended_how
 

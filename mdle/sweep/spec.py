@@ -35,16 +35,8 @@ from pathlib import Path
 from typing import Any
 
 from mdle.errors import MdleError, WorldError
-from mdle.sim.world_yaml import (
-    _closest,
-    _Doc,
-    _integer,
-    _mapping,
-    _number,
-    _show,
-    _string,
-    _yaml_value,
-)
+from mdle.sim.yaml_doc import _Doc, _yaml_value
+from mdle.sim.yaml_values import _closest, _integer, _mapping, _number, _show, _string
 
 __all__ = ["SpecError", "Study", "WorldChoice", "RobotChoice", "StartRule", "parse_study",
            "read_study", "SENSING"]
@@ -374,7 +366,7 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
 def _robot(doc: _Doc, path: str, base: Path, v: Any) -> RobotChoice:
     import yaml
 
-    from mdle.sim.world_yaml import _robot as robot_section
+    from mdle.sim.world_robots import _robot as robot_section
 
     if isinstance(v, str) and (v.endswith((".yaml", ".yml")) or "/" in v):
         from mdle.userfile import UserFileError
