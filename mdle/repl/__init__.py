@@ -5,7 +5,8 @@
 * :mod:`mdle.repl.runs`: each run's recorder, and the runs since a reset written as one trace;
 * :mod:`mdle.repl.commands`: the interpreter of one input (definition, element, ``:`` command);
 * :mod:`mdle.repl.views`: the text it prints (run reports, scan, map, ticks);
-* :mod:`mdle.repl.prompt`: the prompt_toolkit front end (history, completion, highlighting);
+* :mod:`mdle.repl.prompt`: the prompt_toolkit front end (history, completion, highlighting),
+  with :mod:`mdle.repl.completion` and :mod:`mdle.repl.highlight`;
 * :mod:`mdle.repl.plain`: the front end for piped input (scripts, tests).
 """
 
