@@ -1,5 +1,8 @@
 r"""Study specs: YAML to a validated :class:`Study` whose files travel as text.
 
+Over 500 lines: one schema, every section of which is read against the same document
+(its key paths and error positions), and the plan is checked with each parameter value.
+
 A study names a plan, the worlds, robots, sensing modes, control rates, seeds, start
 poses and plan parameters to combine; :func:`mdle.sweep.tasks.expand` turns it into one
 :class:`~mdle.sweep.tasks.RunTask` per combination. Every file a spec names (plan and
