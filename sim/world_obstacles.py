@@ -64,27 +64,16 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
         if not g.is_valid or g.area <= 0:
             raise doc.fail(P("points"), "the polygon crosses itself or has no area")
         return shape
-    if kind == "rectangle":
+    if kind in ("rectangle", "ellipse"):   # a centre, two sizes and a turn
         c = _point(doc, P("center"), v["center"])
-        size = v["size"]
-        if not isinstance(size, list) or len(size) != 2:
-            raise doc.fail(P("size"), f"expected [width, height] in metres, got {_show(size)}")
-        w = _number(doc, P("size") + "[0]", size[0], size=True)
-        h = _number(doc, P("size") + "[1]", size[1], size=True)
+        key, pair = ("size", "[width, height]") if kind == "rectangle" else ("axes",
+                                                                            "semi-axes [a, b]")
+        sizes = _sizes(doc, P(key), v[key], pair)
         ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0), unit="deg"))
-        return shapes.Rectangle(c, (w, h), ang, name)
+        return (shapes.Rectangle if kind == "rectangle" else shapes.Ellipse)(c, sizes, ang, name)
     if kind == "circle":
         return shapes.Circle(_point(doc, P("center"), v["center"]),
                              _number(doc, P("radius"), v["radius"], size=True), name)
-    if kind == "ellipse":
-        c = _point(doc, P("center"), v["center"])
-        ax = v["axes"]
-        if not isinstance(ax, list) or len(ax) != 2:
-            raise doc.fail(P("axes"), f"expected semi-axes [a, b] in metres, got {_show(ax)}")
-        a = _number(doc, P("axes") + "[0]", ax[0], size=True)
-        b = _number(doc, P("axes") + "[1]", ax[1], size=True)
-        ang = math.radians(_number(doc, P("angle"), v.get("angle", 0.0), unit="deg"))
-        return shapes.Ellipse(c, (a, b), ang, name)
     if kind == "wall":
         closed = _boolean(doc, P("closed"), v.get("closed", False))
         pts = _points(doc, P("points"), v["points"], 3 if closed else 2,
@@ -132,3 +121,11 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
     if not g.is_valid or g.area <= 0:
         raise doc.fail(P("points"), "the curve crosses itself (or its thickness folds it)")
     return shape
+
+
+def _sizes(doc: _Doc, path: str, v: Any, pair: str) -> tuple[float, float]:
+    """Read two sizes in metres (a rectangle's ``[width, height]``, an ellipse's semi-axes)."""
+    if not isinstance(v, list) or len(v) != 2:
+        raise doc.fail(path, f"expected {pair} in metres, got {_show(v)}")
+    return (_number(doc, path + "[0]", v[0], size=True),
+            _number(doc, path + "[1]", v[1], size=True))
