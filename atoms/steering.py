@@ -393,8 +393,8 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
             a = theta + nearest[1]
             mem.corner = (x + nearest[0] * math.cos(a), y + nearest[0] * math.sin(a))
     if mem.mode == CORNER:
-        back = side.hit and abs(side.beta) < g.corner_exit_angle \
-            and abs(side.r - math.hypot(mem.corner[0] - x, mem.corner[1] - y)) \
+        back = side.hit and side.beta > -g.corner_exit_angle \
+            and side.r - math.hypot(mem.corner[0] - x, mem.corner[1] - y) \
             < g.corner_exit_range * rc
         if front.hit or back:
             mem.mode = FOLLOW
