@@ -223,6 +223,8 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
         ks = min(side.kappa, (1.0 - g.conc_margin) * cb / rs)
         as_ = 1.0 - ks * rs / cb
         f = f_gain(rs, rc, g)
+        if g.scaled_damping and not front.hit and ks < 0.0:
+            f *= min(1.0 - ks * rc, 2.0) ** 2
     else:
         bs, rs, cb, ks, as_, f = 0.0, rc, 1.0, 0.0, 0.0, 0.0
     tb = math.sin(bs) / cb
