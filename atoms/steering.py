@@ -230,7 +230,8 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
             # return to rc on a convex curve (2.25x on radius 1 at rc 0.5): restore the wall's
             # stiffness with a gain that is constant along a constant-curvature boundary (so
             # this is still the CLF law, of a V with distance gain kf c)
-            f *= min(1.0 - ks * rc, 2.0) ** 2
+            c = 1.0 - ks * rc if ks * rc > -1.0 else 2.0
+            f *= c * c
     else:
         bs, rs, cb, ks, as_, f = 0.0, rc, 1.0, 0.0, 0.0, 0.0
     tb = math.sin(bs) / cb
