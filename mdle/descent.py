@@ -24,22 +24,26 @@ from typing import Any
 from mdle import syntax as st
 from mdle.errors import Span, make_span
 from mdle.treebuild import (
+    COMPARISON_POWER,
+    COMPARISONS,
     MAX_DEPTH,
+    NOT_POWER,
+    POWERS,
+    SIGN_POWER,
     BuildState,
-    Op,
-    Prefixed,
     TooDeep,
     deeper,
     new_argument,
+    new_binary,
     new_call,
     new_definition,
     new_group,
     new_name,
+    new_number,
     new_param,
+    new_unary,
     new_vector,
     number,
-    over,
-    precedence,
 )
 
 __all__ = ["Lexer", "parse_valid"]
@@ -47,8 +51,6 @@ __all__ = ["Lexer", "parse_valid"]
 # (type, text, line, column, end column): no token spans a line break.
 _Token = tuple[str, str, int, int, int]
 
-_BINARY = frozenset({"OR", "XOR", "AND", "COMPARE", "ADD_OP", "MUL_OP"})
-_PREFIX = frozenset({"NOT", "ADD_OP"})
 _KINDS = {"ATOM": st.DefKind.ATOM, "BEHAVIOR": st.DefKind.BEHAVIOR, "PLAN": st.DefKind.PLAN,
           "INTERRUPT": st.DefKind.INTERRUPT}
 
@@ -84,67 +86,73 @@ class Lexer:
         Raises _GiveUp at a character no token starts with, and when more than
         :data:`MAX_DEPTH` brackets are open.
         """
-        match = self.pattern.match
-        keywords = self.keywords
+        keywords = self.keywords.get
         count = text.count
-        pos, line, line_start, size, opened = 0, 1, 0, len(text), 0
-        while pos < size:
-            m = match(text, pos)
-            if m is None:
-                raise _GiveUp
-            kind: str = m.lastgroup  # type: ignore[assignment]  # a group always matched
-            end = m.end()
-            if kind == "WHITESPACE":
-                lines = count("\n", pos, end)
-                if lines:
-                    line += lines
-                    line_start = text.rindex("\n", pos, end) + 1
-                pos = end
-                continue
-            value = m.group(kind)
-            column = end - len(value) - line_start + 1
-            end_column = end - line_start + 1
-            pos = end
+        line, line_start, opened, end = 1, 0, 0, 0
+        # The scanner matches where the previous match ended, and stops (None) at the end
+        # of the text or at a character no token starts with.
+        scanner = self.pattern.scanner(text)  # type: ignore[attr-defined]  # undocumented
+        for m in iter(scanner.match, None):
+            kind: str = m.lastgroup  # a group always matched
+            start, end = m.span(kind)
             if kind == "NAME":
-                kind = keywords.get(value, "NAME")
-            elif kind == "COMMENT":
-                comments.append(st.Comment(value, make_span(file, line, column, line, end_column)))
+                value = text[start:end]
+                yield (keywords(value, "NAME"), value, line, start - line_start + 1,
+                       end - line_start + 1)
                 continue
-            elif kind == "LPAR" or kind == "LSQB":
-                opened += 1
-                if opened > MAX_DEPTH:
-                    raise _GiveUp
-            elif (kind == "RPAR" or kind == "RSQB") and opened:
-                opened -= 1
-            yield kind, value, line, column, end_column
-        column = pos - line_start + 1
+            if kind in _QUIET:
+                if kind == "WHITESPACE":
+                    lines = count("\n", start, end)
+                    if lines:
+                        line += lines
+                        line_start = text.rindex("\n", start, end) + 1
+                    continue
+                if kind == "COMMENT":
+                    comments.append(st.Comment(text[start:end], make_span(
+                        file, line, start - line_start + 1, line, end - line_start + 1)))
+                    continue
+                if kind == "LPAR" or kind == "LSQB":
+                    opened += 1
+                    if opened > MAX_DEPTH:
+                        raise _GiveUp
+                elif opened:  # RPAR, RSQB
+                    opened -= 1
+            yield kind, text[start:end], line, start - line_start + 1, end - line_start + 1
+        if end != len(text):
+            raise _GiveUp
+        column = end - line_start + 1
         while True:  # a parser looking past the end keeps finding it
             yield "$END", "", line, column, column
 
 
+#: Tokens the lexer does more than pass on: skipped ones, and brackets (counted).
+_QUIET = frozenset({"WHITESPACE", "COMMENT", "LPAR", "LSQB", "RPAR", "RSQB"})
+_Binary = st.Binary
+_power = POWERS.get  # by the token's text: no other token's text is an operator's
+
+
 class _Descent:
-    """Recursive descent over the token stream; every method starts at its first token."""
+    """Recursive descent over the token stream; every method starts at its first token.
+
+    Hot paths move to the next token inline (``self.tok = self.pull()``) and make spans
+    with :func:`~mdle.errors.make_span` of the tokens' places.
+    """
 
     def __init__(self, tokens: Iterator[_Token], state: BuildState) -> None:
         self.state = state
         self.file = state.file
+        self.depth = state.depth
         self.pull = tokens.__next__
         self.tok: _Token = self.pull()
-        self.ahead: _Token | None = None
-
-    def advance(self) -> _Token:
-        """Move to the next token; return the one left."""
-        tok = self.tok
-        if self.ahead is not None:
-            self.tok, self.ahead = self.ahead, None
-        else:
-            self.tok = self.pull()
-        return tok
+        #: NUMBER tokens read so far: (value in SI, dimension, digits, unit)
+        self.numbers: dict[str, tuple[float, Any, str, str]] = {}
 
     def expect(self, kind: str) -> _Token:
-        if self.tok[0] != kind:
+        tok = self.tok
+        if tok[0] != kind:
             raise _GiveUp
-        return self.advance()
+        self.tok = self.pull()
+        return tok
 
     def span(self, tok: _Token) -> Span:
         return make_span(self.file, tok[2], tok[3], tok[2], tok[4])
@@ -153,102 +161,135 @@ class _Descent:
 
     def module(self) -> list[st.Statement]:
         out: list[st.Statement] = []
+        file = self.file
         while True:
-            kind = self.tok[0]
+            kw = self.tok
+            kind = kw[0]
             if kind in _KINDS:
                 out.append(self.definition())
-            elif kind == "IMPORT":
-                kw = self.advance()
-                path = self.expect("STRING")
-                out.append(st.Import(path[1][1:-1], make_span(self.file, kw[2], kw[3], path[2],
-                                                         path[4])))
-            elif kind == "RUN":
-                kw = self.advance()
-                name = self.expect("NAME")
-                out.append(st.Run(name[1], make_span(self.file, kw[2], kw[3], name[2], name[4]),
-                                  self.span(name)))
-            elif kind == "$END":
+                continue
+            if kind == "$END":
                 return out
+            self.tok = self.pull()
+            if kind == "IMPORT":
+                path = self.expect("STRING")
+                out.append(st.Import(path[1][1:-1], make_span(file, kw[2], kw[3], path[2],
+                                                              path[4])))
+            elif kind == "RUN":
+                name = self.expect("NAME")
+                out.append(st.Run(name[1], make_span(file, kw[2], kw[3], name[2], name[4]),
+                                  self.span(name)))
             else:
                 raise _GiveUp
 
     def definition(self) -> st.Definition:
-        kw = self.advance()
+        kw = self.tok
+        self.tok = self.pull()
         name = self.expect("NAME")
         params = self.params() if self.tok[0] == "LPAR" else None
         self.expect("_EQUALS")
-        body = self.expr()
+        body = self.binary(0)
         end = body.span
         return new_definition(_KINDS[kw[0]], name[1], params, body,
-                             make_span(self.file, kw[2], kw[3], end.end_line, end.end_column),
-                             self.span(name))
+                              make_span(self.file, kw[2], kw[3], end[3], end[4]),
+                              self.span(name))
 
     def params(self) -> tuple[st.Param, ...]:
-        self.advance()
+        self.tok = self.pull()
         out: list[st.Param] = []
         if self.tok[0] == "RPAR":
-            self.advance()
+            self.tok = self.pull()
             return ()
         while True:
             name = self.expect("NAME")
             default = None
             if self.tok[0] == "_EQUALS":
-                self.advance()
-                default = self.expr()
-            last = default.span if default is not None else self.span(name)
+                self.tok = self.pull()
+                default = self.binary(0)
+                last = default.span
+                end_line, end_column = last[3], last[4]
+            else:
+                end_line, end_column = name[2], name[4]
             out.append(new_param(name[1], default, make_span(self.file, name[2], name[3],
-                                                       last.end_line, last.end_column)))
+                                                             end_line, end_column)))
             kind = self.tok[0]
             if kind == "_COMMA":
-                self.advance()
+                self.tok = self.pull()
                 if self.tok[0] == "RPAR":
-                    self.advance()
+                    self.tok = self.pull()
                     return tuple(out)
             elif kind == "RPAR":
-                self.advance()
+                self.tok = self.pull()
                 return tuple(out)
             else:
                 raise _GiveUp
 
     # ------------------------------------------------------------------ expressions
 
-    def expr(self) -> st.Expr:
-        first = self.unit()
-        if self.tok[0] not in _BINARY:
-            return first if not isinstance(first, Prefixed) else precedence(self.state, (first,))
-        parts: list[Any] = [first]
-        while self.tok[0] in _BINARY:
-            op = self.advance()
-            parts.append(Op(op[1], op[2], op[3], op[4]))
-            parts.append(self.unit())
-        return precedence(self.state, parts)
+    def binary(self, limit: int, first: st.Expr | None = None) -> st.Expr:
+        """Parse ``unit (op unit)*`` with every operator binding tighter than ``limit``.
 
-    def unit(self) -> Any:
-        if self.tok[0] not in _PREFIX:
+        Precedence climbing, left associative: the tree :func:`~mdle.treebuild.precedence`
+        builds from the same tokens (a prefix operator takes the operators that bind
+        tighter than itself, as there). ``first`` is the first unit, when already read.
+        """
+        left = self.unit() if first is None else first
+        file = self.file
+        depth = self.depth
+        while True:
+            op = self.tok
+            power = _power(op[1])
+            if power is None or power <= limit:
+                return left
+            self.tok = self.pull()
+            right = self.binary(power)
+            if power == COMPARISON_POWER and (
+                    type(left) is _Binary and left.op in COMPARISONS
+                    or type(right) is _Binary and right.op in COMPARISONS):
+                raise _GiveUp  # "comparisons do not chain": the reference says so
+            a, b = left.span, right.span
+            node = new_binary(op[1], left, right, make_span(file, a[1], a[2], b[3], b[4]),
+                              make_span(file, op[2], op[3], op[2], op[4]))
+            d = depth.get(id(left), 1)
+            e = depth.get(id(right), 1)
+            d = (d if d > e else e) + 1
+            if d > MAX_DEPTH:
+                raise TooDeep(node.span)
+            depth[id(node)] = d
+            left = node
+
+    def unit(self) -> st.Expr:
+        op = self.tok
+        kind = op[0]
+        if kind != "NOT" and kind != "ADD_OP":
             return self.primary()
-        ops = []
-        while self.tok[0] in _PREFIX:
-            op = self.advance()
-            ops.append(Op(op[1], op[2], op[3], op[4]))
-        node: Any = self.primary()
-        for op_ in reversed(ops):
-            node = Prefixed(op_, node)
+        self.tok = self.pull()
+        x = self.binary(NOT_POWER if kind == "NOT" else SIGN_POWER)
+        b = x.span
+        node = new_unary(op[1], x, make_span(self.file, op[2], op[3], b[3], b[4]))
+        d = self.depth.get(id(x), 1) + 1
+        if d > MAX_DEPTH:
+            raise TooDeep(node.span)
+        self.depth[id(node)] = d
         return node
 
     def primary(self) -> st.Expr:
-        tok = self.advance()
+        tok = self.tok
+        self.tok = self.pull()
         kind = tok[0]
         if kind == "NAME":
             if self.tok[0] == "LPAR":
                 return self.call(tok)
-            return new_name(tok[1], self.span(tok))
+            return new_name(tok[1], make_span(self.file, tok[2], tok[3], tok[2], tok[4]))
         if kind == "NUMBER":
-            return number(self.state, tok[1], self.span(tok))
+            return self.number(tok)
         if kind == "LPAR":
             items = self.items("RPAR")
-            close = self.advance()
+            close = self.tok
+            self.tok = self.pull()
             if self.tok[0] == "ELLIPSIS":
-                close = self.advance()
+                close = self.tok
+                self.tok = self.pull()
                 repeat = True
             else:
                 repeat = False
@@ -256,7 +297,8 @@ class _Descent:
                 self.file, tok[2], tok[3], close[2], close[4])), items)
         if kind == "LSQB":
             items = self.items("RSQB")
-            close = self.advance()
+            close = self.tok
+            self.tok = self.pull()
             return deeper(self.state, new_vector(tuple(items), make_span(
                 self.file, tok[2], tok[3], close[2], close[4])), items)
         if kind == "NEVER":
@@ -265,64 +307,74 @@ class _Descent:
             return st.Inf(self.span(tok))
         raise _GiveUp
 
+    def number(self, tok: _Token) -> st.Number:
+        span = make_span(self.file, tok[2], tok[3], tok[2], tok[4])
+        known = self.numbers.get(tok[1])
+        if known is not None:
+            return new_number(known[0], known[1], known[2], known[3], span)
+        errors = len(self.state.diagnostics)
+        node = number(self.state, tok[1], span)
+        if len(self.state.diagnostics) > errors:
+            raise _GiveUp  # an unknown unit or a number too large: the reference says so
+        self.numbers[tok[1]] = (node.value, node.dim, node.text, node.unit)
+        return node
+
     def items(self, close: str) -> list[st.Expr]:
         """``expr (, expr)* ,?`` up to ``close``, which is left as the current token."""
-        out = [self.expr()]
+        out = [self.binary(0)]
         while True:
             kind = self.tok[0]
             if kind == "_COMMA":
-                self.advance()
+                self.tok = self.pull()
                 if self.tok[0] == close:
                     return out
-                out.append(self.expr())
+                out.append(self.binary(0))
             elif kind == close:
                 return out
             else:
                 raise _GiveUp
 
     def call(self, name: _Token) -> st.Call:
-        self.advance()
+        self.tok = self.pull()
         args: list[st.Argument] = []
         if self.tok[0] != "RPAR":
             while True:
                 args.append(self.argument())
                 kind = self.tok[0]
                 if kind == "_COMMA":
-                    self.advance()
+                    self.tok = self.pull()
                     if self.tok[0] == "RPAR":
                         break
                 elif kind == "RPAR":
                     break
                 else:
                     raise _GiveUp
-        close = self.advance()
+        close = self.tok
+        self.tok = self.pull()
         node = new_call(name[1], tuple(args),
-                       make_span(self.file, name[2], name[3], close[2], close[4]),
-                       self.span(name))
+                        make_span(self.file, name[2], name[3], close[2], close[4]),
+                        self.span(name))
         return deeper(self.state, node, [a.value for a in args])
 
     def argument(self) -> st.Argument:
-        if self.tok[0] == "NAME":
-            if self.ahead is None:
-                self.ahead = self.pull()
-            if self.ahead[0] == "_EQUALS":
-                name = self.advance()
-                self.advance()
-                value = self.expr()
-                return new_argument(name[1], value, over(self.file, _At(name), value))
-        value = self.expr()
+        tok = self.tok
+        if tok[0] != "NAME":
+            value = self.binary(0)
+            return new_argument(None, value, value.span)
+        # A name: a keyword argument's, or the first of an expression.
+        self.tok = self.pull()
+        if self.tok[0] == "_EQUALS":
+            self.tok = self.pull()
+            value = self.binary(0)
+            end = value.span
+            return new_argument(tok[1], value, make_span(self.file, tok[2], tok[3], end[3],
+                                                         end[4]))
+        if self.tok[0] == "LPAR":
+            first: st.Expr = self.call(tok)
+        else:
+            first = new_name(tok[1], self.span(tok))
+        value = self.binary(0, first)
         return new_argument(None, value, value.span)
-
-
-class _At:
-    """A token's place, as :func:`mdle.treebuild.over` reads it."""
-
-    __slots__ = ("line", "column", "end_line", "end_column")
-
-    def __init__(self, tok: _Token) -> None:
-        self.line = self.end_line = tok[2]
-        self.column = tok[3]
-        self.end_column = tok[4]
 
 
 def parse_valid(text: str, file: str, lexer: Lexer
