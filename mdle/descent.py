@@ -55,6 +55,13 @@ _KINDS = {"ATOM": st.DefKind.ATOM, "BEHAVIOR": st.DefKind.BEHAVIOR, "PLAN": st.D
           "INTERRUPT": st.DefKind.INTERRUPT}
 
 
+#: What the lexer does with a token besides passing it on: skip it, keep it as a
+#: comment, count an opening or a closing bracket.
+_SKIP_SPACE, _SKIP_COMMENT, _OPEN, _CLOSE = 1, 2, 3, 4
+_ACTIONS = {"WHITESPACE": _SKIP_SPACE, "COMMENT": _SKIP_COMMENT, "LPAR": _OPEN, "LSQB": _OPEN,
+            "RPAR": _CLOSE, "RSQB": _CLOSE}
+
+
 class _GiveUp(Exception):
     """The text is not plainly valid: let the reference parser read it."""
 
@@ -79,6 +86,14 @@ class Lexer:
             groups.append(f"(?P<{t.name}>{regexp})")
         # Spaces before a token are matched with it: one match per token, not two.
         self.pattern = re.compile("[ \t\f\r]*(?:" + "|".join(groups) + ")")
+        #: Token kinds by group number (the lexer dispatches on numbers, not names)
+        self.kinds = [""] * (self.pattern.groups + 1)
+        #: What the lexer does with each group besides passing it on (see _ACTIONS)
+        self.actions = [0] * (self.pattern.groups + 1)
+        for kind, i in self.pattern.groupindex.items():
+            self.kinds[i] = kind
+            self.actions[i] = _ACTIONS.get(kind, 0)
+        self.name_group = self.pattern.groupindex["NAME"]
 
     def tokens(self, text: str, file: str, comments: list[st.Comment]) -> Iterator[_Token]:
         """Yield the tokens of ``text``, then ``$END`` forever; comments go to ``comments``.
@@ -87,37 +102,41 @@ class Lexer:
         :data:`MAX_DEPTH` brackets are open.
         """
         keywords = self.keywords.get
+        kinds, actions, name = self.kinds, self.actions, self.name_group
         count = text.count
         line, line_start, opened, end = 1, 0, 0, 0
         # The scanner matches where the previous match ended, and stops (None) at the end
-        # of the text or at a character no token starts with.
+        # of the text or at a character no token starts with. A token's group is the
+        # last to close, so ``lastindex`` is its number.
         scanner = self.pattern.scanner(text)  # type: ignore[attr-defined]  # undocumented
         for m in iter(scanner.match, None):
-            kind: str = m.lastgroup  # a group always matched
-            start, end = m.span(kind)
-            if kind == "NAME":
+            group: int = m.lastindex
+            start, end = m.span(group)
+            if group == name:
                 value = text[start:end]
                 yield (keywords(value, "NAME"), value, line, start - line_start + 1,
                        end - line_start + 1)
                 continue
-            if kind in _QUIET:
-                if kind == "WHITESPACE":
+            action = actions[group]
+            if action:
+                if action == _SKIP_SPACE:
                     lines = count("\n", start, end)
                     if lines:
                         line += lines
                         line_start = text.rindex("\n", start, end) + 1
                     continue
-                if kind == "COMMENT":
+                if action == _SKIP_COMMENT:
                     comments.append(st.Comment(text[start:end], make_span(
                         file, line, start - line_start + 1, line, end - line_start + 1)))
                     continue
-                if kind == "LPAR" or kind == "LSQB":
+                if action == _OPEN:
                     opened += 1
                     if opened > MAX_DEPTH:
                         raise _GiveUp
-                elif opened:  # RPAR, RSQB
+                elif opened:
                     opened -= 1
-            yield kind, text[start:end], line, start - line_start + 1, end - line_start + 1
+            yield (kinds[group], text[start:end], line, start - line_start + 1,
+                   end - line_start + 1)
         if end != len(text):
             raise _GiveUp
         column = end - line_start + 1
@@ -125,9 +144,8 @@ class Lexer:
             yield "$END", "", line, column, column
 
 
-#: Tokens the lexer does more than pass on: skipped ones, and brackets (counted).
-_QUIET = frozenset({"WHITESPACE", "COMMENT", "LPAR", "LSQB", "RPAR", "RSQB"})
 _Binary = st.Binary
+_new = tuple.__new__  # a Span in one C call (make_span without the Python call)
 _power = POWERS.get  # by the token's text: no other token's text is an operator's
 
 
@@ -155,7 +173,7 @@ class _Descent:
         return tok
 
     def span(self, tok: _Token) -> Span:
-        return make_span(self.file, tok[2], tok[3], tok[2], tok[4])
+        return _new(Span, (self.file, tok[2], tok[3], tok[2], tok[4]))
 
     # ------------------------------------------------------------------ statements
 
@@ -173,11 +191,11 @@ class _Descent:
             self.tok = self.pull()
             if kind == "IMPORT":
                 path = self.expect("STRING")
-                out.append(st.Import(path[1][1:-1], make_span(file, kw[2], kw[3], path[2],
-                                                              path[4])))
+                out.append(st.Import(path[1][1:-1], _new(Span, (file, kw[2], kw[3], path[2],
+                                                              path[4]))))
             elif kind == "RUN":
                 name = self.expect("NAME")
-                out.append(st.Run(name[1], make_span(file, kw[2], kw[3], name[2], name[4]),
+                out.append(st.Run(name[1], _new(Span, (file, kw[2], kw[3], name[2], name[4])),
                                   self.span(name)))
             else:
                 raise _GiveUp
@@ -191,7 +209,7 @@ class _Descent:
         body = self.binary(0)
         end = body.span
         return new_definition(_KINDS[kw[0]], name[1], params, body,
-                              make_span(self.file, kw[2], kw[3], end[3], end[4]),
+                              _new(Span, (self.file, kw[2], kw[3], end[3], end[4])),
                               self.span(name))
 
     def params(self) -> tuple[st.Param, ...]:
@@ -210,8 +228,8 @@ class _Descent:
                 end_line, end_column = last[3], last[4]
             else:
                 end_line, end_column = name[2], name[4]
-            out.append(new_param(name[1], default, make_span(self.file, name[2], name[3],
-                                                             end_line, end_column)))
+            out.append(new_param(name[1], default, _new(Span, (self.file, name[2], name[3],
+                                                             end_line, end_column))))
             kind = self.tok[0]
             if kind == "_COMMA":
                 self.tok = self.pull()
@@ -248,8 +266,8 @@ class _Descent:
                     or type(right) is _Binary and right.op in COMPARISONS):
                 raise _GiveUp  # "comparisons do not chain": the reference says so
             a, b = left.span, right.span
-            node = new_binary(op[1], left, right, make_span(file, a[1], a[2], b[3], b[4]),
-                              make_span(file, op[2], op[3], op[2], op[4]))
+            node = new_binary(op[1], left, right, _new(Span, (file, a[1], a[2], b[3], b[4])),
+                              _new(Span, (file, op[2], op[3], op[2], op[4])))
             d = depth.get(id(left), 1)
             e = depth.get(id(right), 1)
             d = (d if d > e else e) + 1
@@ -266,7 +284,7 @@ class _Descent:
         self.tok = self.pull()
         x = self.binary(NOT_POWER if kind == "NOT" else SIGN_POWER)
         b = x.span
-        node = new_unary(op[1], x, make_span(self.file, op[2], op[3], b[3], b[4]))
+        node = new_unary(op[1], x, _new(Span, (self.file, op[2], op[3], b[3], b[4])))
         d = self.depth.get(id(x), 1) + 1
         if d > MAX_DEPTH:
             raise TooDeep(node.span)
@@ -280,7 +298,7 @@ class _Descent:
         if kind == "NAME":
             if self.tok[0] == "LPAR":
                 return self.call(tok)
-            return new_name(tok[1], make_span(self.file, tok[2], tok[3], tok[2], tok[4]))
+            return new_name(tok[1], _new(Span, (self.file, tok[2], tok[3], tok[2], tok[4])))
         if kind == "NUMBER":
             return self.number(tok)
         if kind == "LPAR":
@@ -293,14 +311,14 @@ class _Descent:
                 repeat = True
             else:
                 repeat = False
-            return deeper(self.state, new_group(tuple(items), repeat, make_span(
-                self.file, tok[2], tok[3], close[2], close[4])), items)
+            return deeper(self.state, new_group(tuple(items), repeat, _new(Span, (
+                self.file, tok[2], tok[3], close[2], close[4]))), items)
         if kind == "LSQB":
             items = self.items("RSQB")
             close = self.tok
             self.tok = self.pull()
-            return deeper(self.state, new_vector(tuple(items), make_span(
-                self.file, tok[2], tok[3], close[2], close[4])), items)
+            return deeper(self.state, new_vector(tuple(items), _new(Span, (
+                self.file, tok[2], tok[3], close[2], close[4]))), items)
         if kind == "NEVER":
             return st.Never(self.span(tok))
         if kind == "INF":
@@ -308,7 +326,7 @@ class _Descent:
         raise _GiveUp
 
     def number(self, tok: _Token) -> st.Number:
-        span = make_span(self.file, tok[2], tok[3], tok[2], tok[4])
+        span = _new(Span, (self.file, tok[2], tok[3], tok[2], tok[4]))
         known = self.numbers.get(tok[1])
         if known is not None:
             return new_number(known[0], known[1], known[2], known[3], span)
@@ -352,7 +370,7 @@ class _Descent:
         close = self.tok
         self.tok = self.pull()
         node = new_call(name[1], tuple(args),
-                        make_span(self.file, name[2], name[3], close[2], close[4]),
+                        _new(Span, (self.file, name[2], name[3], close[2], close[4])),
                         self.span(name))
         return deeper(self.state, node, [a.value for a in args])
 
@@ -367,8 +385,8 @@ class _Descent:
             self.tok = self.pull()
             value = self.binary(0)
             end = value.span
-            return new_argument(tok[1], value, make_span(self.file, tok[2], tok[3], end[3],
-                                                         end[4]))
+            return new_argument(tok[1], value, _new(Span, (self.file, tok[2], tok[3], end[3],
+                                                         end[4])))
         if self.tok[0] == "LPAR":
             first: st.Expr = self.call(tok)
         else:
