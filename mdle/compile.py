@@ -26,7 +26,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any
+from typing import Any, TypeVar
 
 from mdle import conditions as cond
 from mdle import syntax as st
@@ -162,6 +162,7 @@ class Checker:
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
         self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
+        self._spec_slots: dict[int, list[_Slot]] = {}  # by id of a law or sensor function
         #: Names defined by statements that did not parse: uses of them are not errors
         #: of their own (the syntax error is reported)
         self.unparsed: frozenset[str] = frozenset()
@@ -258,7 +259,9 @@ class Checker:
         A bare unknown name is a symbol (its use decides whether that is right). Raises
         _Abort after an error.
         """
-        self._enter(expr.span)
+        if self._depth >= MAX_NESTING:
+            self._enter(expr.span)  # reports, raises
+        self._depth += 1
         try:
             return self._value(expr, env)
         finally:
@@ -347,7 +350,6 @@ class Checker:
         """Bind call arguments to parameters; checks arity, keywords, symbols, dimensions."""
         bound: dict[str, Value] = {}
         given: dict[str, st.Argument] = {}
-        names = [s.name for s in slots]
         ok = True
         positional_done = False
         for i, a in enumerate(args):
@@ -357,6 +359,7 @@ class Checker:
                     ok = False
                     continue
                 if i >= len(slots):
+                    names = [s.name for s in slots]
                     takes = (f"takes {len(slots)} argument{'s' * (len(slots) != 1)}"
                              + (f" ({', '.join(names)})" if names else ""))
                     self.error(a.span, f"too many arguments: `{callee}` {takes}, "
@@ -368,6 +371,7 @@ class Checker:
                 positional_done = True
                 found = next((s for s in slots if s.name == a.name), None)
                 if found is None:
+                    names = [s.name for s in slots]
                     close = difflib.get_close_matches(a.name, names, n=1)
                     hint = (f"did you mean `{close[0]}`?" if close else
                             f"`{callee}` takes {', '.join(f'`{n}`' for n in names)}" if names
@@ -387,16 +391,19 @@ class Checker:
                 bound[slot.name] = self._argument(callee, slot, a.value, env)
             except _Abort:
                 ok = False
-        missing = [s for s in slots if s.name not in bound and s.name not in given
-                   and s.default is REQUIRED]
-        for s in missing:
-            self.error(span, f"`{callee}` needs `{s.name}`"
-                       + ("" if s.symbol else f" ({dim_example(s.dim)})"),
-                       hint=f"write it as `{_completed(callee, args, missing)}`")
-            ok = False
-        for s in slots:
-            if s.name not in bound and s.name not in given and s.default is not REQUIRED:
-                bound[s.name] = s.default
+        if len(given) < len(slots):  # defaults, or what is missing
+            missing = []
+            for s in slots:
+                if s.name not in bound and s.name not in given:
+                    if s.default is REQUIRED:
+                        missing.append(s)
+                    else:
+                        bound[s.name] = s.default
+            for s in missing:
+                self.error(span, f"`{callee}` needs `{s.name}`"
+                           + ("" if s.symbol else f" ({dim_example(s.dim)})"),
+                           hint=f"write it as `{_completed(callee, args, missing)}`")
+                ok = False
         if not ok:
             raise _Abort
         return bound
@@ -450,6 +457,13 @@ class Checker:
         return v
 
     def _slots_of_spec(self, spec: LawSpec | SensorSpec) -> list[_Slot]:
+        slots = self._spec_slots.get(id(spec))  # specs live in the registry: ids stay unique
+        if slots is None:
+            slots = self._spec_slots[id(spec)] = self._make_slots(spec)
+        return slots
+
+    @staticmethod
+    def _make_slots(spec: LawSpec | SensorSpec) -> list[_Slot]:
         return [_Slot(p.name, None if p.is_symbol else p.dim,
                       REQUIRED if p.default is REQUIRED else (
                           Symbol(p.default) if isinstance(p.default, str) else
@@ -460,8 +474,10 @@ class Checker:
                     span: Span) -> None:
         """Record the channels and robots a call names (see :class:`MessageUse`)."""
         for p in spec.params:
+            if not p.any_name:
+                continue
             v = bound.get(p.name)
-            if p.any_name and isinstance(v, Symbol):
+            if isinstance(v, Symbol):
                 kind = "read" if p.any_name == "channel" else "robot"
                 self._use(MessageUse(kind, v.name, None, span, spec.name))
 
@@ -507,13 +523,20 @@ class Checker:
 
     def condition(self, expr: st.Expr, env: Env) -> cond.Typed:
         """Type and compile an interrupt expression (or a part of one)."""
-        self._enter(expr.span)
+        if self._depth >= MAX_NESTING:
+            self._enter(expr.span)  # reports, raises
+        self._depth += 1
         try:
             return self._condition(expr, env)
         finally:
             self._depth -= 1
 
     def _condition(self, expr: st.Expr, env: Env) -> cond.Typed:
+        kind = type(expr)  # the syntax tree has no subclasses
+        if kind is st.Binary:
+            return self._binary_condition(expr, env)  # type: ignore[arg-type]
+        if kind is st.Name or kind is st.Call:
+            return self._reading(expr, env)  # type: ignore[arg-type]
         if isinstance(expr, st.Number):
             return cond.constant(None if (not expr.unit and expr.value == 0) else expr.dim,
                                  expr.value)
@@ -546,6 +569,9 @@ class Checker:
                 raise _Abort
             return cond.negate(expr.op, a)
         assert isinstance(expr, st.Binary)
+        return self._binary_condition(expr, env)
+
+    def _binary_condition(self, expr: st.Binary, env: Env) -> cond.Typed:
         a = self.condition(expr.left, env)
         b = self.condition(expr.right, env)
         op = expr.op
@@ -670,7 +696,9 @@ class Checker:
 
     def element(self, expr: st.Expr, env: Env) -> Element:
         """Compile an expression standing where an element is expected."""
-        self._enter(expr.span)
+        if self._depth >= MAX_NESTING:
+            self._enter(expr.span)  # reports, raises
+        self._depth += 1
         try:
             return self._element(expr, env)
         finally:
@@ -927,7 +955,7 @@ class Checker:
             values = {k: Quantity(float(v), None) for k, v in sigma.args.items()
                       if isinstance(v, (int, float))}
             self._within_limits(sigma.law, values, sigma_e, scale, expr.span)
-        return dataclasses.replace(sigma, timer=sigma.timer * beta, scale=scale, span=expr.span)
+        return _replaced(sigma, timer=sigma.timer * beta, scale=scale, span=expr.span)
 
     def _factor(self, expr: st.Expr, env: Env, what: str) -> float:
         q = self._number(expr, env)
@@ -1003,7 +1031,9 @@ class Checker:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
         self._use_stack.append([])
         try:
-            self._enter(d.span)
+            if self._depth >= MAX_NESTING:
+                self._enter(d.span)  # reports, raises
+            self._depth += 1
             try:
                 result = self._definition_body(d, env)
             finally:
@@ -1029,14 +1059,14 @@ class Checker:
                 self.error(d.body.span, f"`{d.name}` is declared an atom but is a string of "
                            "elements", hint=f"declare it with `behavior {d.name} = ...`")
                 raise _Abort
-            return dataclasses.replace(e, label=d.name, span=d.span)
+            return _replaced(e, label=d.name, span=d.span)
         kind = StringKind.PLAN if d.kind is st.DefKind.PLAN else StringKind.BEHAVIOR
         if isinstance(body, st.Group) and len(body.items) == 3 and \
                 self._head_kind(body.items[0], env) == "string":
             return self.string(body, env, d.name, kind)
         e = self.element(body, env)  # reports what is wrong with the body, if anything
         if isinstance(e, StringNode):
-            node = dataclasses.replace(e, label=d.name, kind=kind, span=d.span)
+            node = _replaced(e, label=d.name, kind=kind, span=d.span)
             self._depths[id(node)] = self._depths.get(id(e), 1)
             self._keep.append(node)
             return node
@@ -1071,7 +1101,26 @@ class Checker:
         return e if runnable else None
 
 
+_E = TypeVar("_E", AtomNode, StringNode)
+
+
+def _replaced(node: _E, **changes: Any) -> _E:
+    """Return ``dataclasses.replace(node, **changes)`` without calling ``__init__``.
+
+    The program's nodes are plain frozen dataclasses (no ``__post_init__``, no slots), so
+    a copy of the fields with some changed is the same node; ``__init__`` would set each
+    field through ``object.__setattr__``, and a large plan makes thousands of them.
+    """
+    new = object.__new__(type(node))
+    fields = new.__dict__
+    fields.update(node.__dict__)
+    fields.update(changes)
+    return new
+
+
 def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
+    if not bound:
+        return ()
     return tuple(sorted((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare))
                         for k, v in bound.items()))
 

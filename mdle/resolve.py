@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Any
 
 from mdle import syntax as st
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
@@ -100,20 +101,43 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
     found: list[st.Name | st.Call] = []
     stack: list[st.Expr] = [definition.body]
     stack.extend(p.default for p in definition.param_list if p.default is not None)
+    specs = (registry.laws, registry.sensors) if registry is not None else None
+    pop, push, extend = stack.pop, stack.append, stack.extend
+    # Dispatch on the exact node type (the syntax tree has no subclasses): one test for
+    # the common nodes instead of a chain of isinstance calls. Children are pushed left
+    # to right, as st.children gives them.
     while stack:
-        e = stack.pop()
-        if isinstance(e, (st.Name, st.Call)) and e.name in names and e.name not in shadow:
-            found.append(e)
-        if isinstance(e, st.Call) and e.name == "send" and e.name not in names:
-            stack.extend(a.value for a in e.args[1:])  # the channel names no definition
-            continue
-        if isinstance(e, st.Call) and registry is not None and e.name not in names:
-            spec = registry.laws.get(e.name) or registry.sensors.get(e.name)
-            stack.extend(a.value for i, a in enumerate(e.args)
-                         if not symbol_argument(spec, i, a))
-            continue
-        stack.extend(st.children(e))
+        e: Any = pop()
+        kind = type(e)
+        if kind is _NAME:
+            if e.name in names and e.name not in shadow:
+                found.append(e)
+        elif kind is _CALL:
+            name = e.name
+            if name in names:
+                if name not in shadow:
+                    found.append(e)
+                extend(a.value for a in e.args)
+            elif name == "send":
+                extend(a.value for a in e.args[1:])  # the channel names no definition
+            elif specs is not None:
+                spec = specs[0].get(name) or specs[1].get(name)
+                extend(a.value for i, a in enumerate(e.args)
+                       if not symbol_argument(spec, i, a))
+            else:
+                extend(a.value for a in e.args)
+        elif kind is _BINARY:
+            push(e.left)
+            push(e.right)
+        elif kind is _GROUP or kind is _VECTOR:
+            extend(e.items)
+        elif kind is _UNARY:
+            push(e.operand)
     return found
+
+
+_NAME, _CALL, _BINARY, _UNARY, _GROUP, _VECTOR = (st.Name, st.Call, st.Binary, st.Unary,
+                                                  st.Group, st.Vector)
 
 
 def uses_of(ns: Namespace) -> dict[str, list[st.Name | st.Call]]:
