@@ -58,6 +58,7 @@ from mdle.program import (
     StringNode,
 )
 from mdle.resolve import Namespace, build_namespace, find_cycles, uses_of
+from mdle.treebuild import builder
 from mdle.units import NONE, TIME, TURN_RATE, Dim
 
 __all__ = ["Checker", "check_program", "MAX_NESTING", "missing_entry", "never_ends"]
@@ -576,6 +577,8 @@ class Checker:
         b = self.condition(expr.right, env)
         op = expr.op
         if op in ("and", "or", "xor"):
+            if a.kind is BOOL and b.kind is BOOL:
+                return cond.logic(op, a, b)
             for side, t in ((expr.left, a), (expr.right, b)):
                 if not t.is_bool:
                     self.error(side.span, f"`{op}` joins conditions, but this is "
@@ -583,16 +586,17 @@ class Checker:
                                hint="compare it with something: `range(0 deg) < 1 m`")
                     raise _Abort
             return cond.logic(op, a, b)
-        for side, t in ((expr.left, a), (expr.right, b)):
-            if t.is_bool:
-                self.error(side.span, f"`{op}` needs numbers, found a condition")
-                raise _Abort
+        if a.kind is BOOL or b.kind is BOOL:
+            side = expr.left if a.kind is BOOL else expr.right
+            self.error(side.span, f"`{op}` needs numbers, found a condition")
+            raise _Abort
         if op in ("<", "<=", ">", ">=", "==", "!="):
             if not _same_dim(a, b):
                 self.error(expr.op_span, f"cannot compare {dim_words(a.dim)} with "
                            f"{dim_words(b.dim)}", hint=_unit_hint(expr, a, b))
                 raise _Abort
-            self._note_message_dim(a, b)
+            if self._messages:
+                self._note_message_dim(a, b)
             return cond.compare(op, a, b)
         if op in ("+", "-"):
             if not _same_dim(a, b):
@@ -600,7 +604,8 @@ class Checker:
                            f"{dim_words(b.dim)} and {dim_words(a.dim)}",
                            hint=_unit_hint(expr, a, b))
                 raise _Abort
-            self._note_message_dim(a, b)
+            if self._messages:
+                self._note_message_dim(a, b)
             return cond.arith(op, a, b, a.dim if a.dim is not None else b.dim)
         kind = None if a.dim is None or b.dim is None else (
             a.dim * b.dim if op == "*" else a.dim / b.dim)
@@ -820,8 +825,8 @@ class Checker:
             except _Abort:
                 failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
-        return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
-                        (1.0, 1.0), expr.span, tuple(sends))
+        return _new_atom(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
+                         (1.0, 1.0), expr.span, tuple(sends))
 
     def _send(self, call: st.Call, env: Env) -> Send:
         """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on."""
@@ -1011,7 +1016,7 @@ class Checker:
                            f"most {MAX_NESTING}", hint="flatten the plan: fewer levels of "
                                                        "strings inside strings")
             raise _Abort
-        node = StringNode(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
+        node = _new_string(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
         self._depths[id(node)] = depth
         self._keep.append(node)  # ids stay unique while the checker lives
         return node
@@ -1102,6 +1107,9 @@ class Checker:
 
 
 _E = TypeVar("_E", AtomNode, StringNode)
+#: Constructors of the program's nodes taking every field in order (see builder).
+_new_atom = builder(AtomNode)
+_new_string = builder(StringNode)
 
 
 def _replaced(node: _E, **changes: Any) -> _E:
@@ -1121,6 +1129,9 @@ def _replaced(node: _E, **changes: Any) -> _E:
 def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
     if not bound:
         return ()
+    if len(bound) == 1:
+        ((k, v),) = bound.items()
+        return ((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare)),)
     return tuple(sorted((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare))
                         for k, v in bound.items()))
 
@@ -1130,7 +1141,8 @@ def _is_send(expr: st.Expr) -> bool:
 
 
 def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
-    return a.dim is None or b.dim is None or same_kind(a.dim, b.dim)
+    x, y = a.dim, b.dim
+    return x is None or y is None or x is y or same_kind(x, y)
 
 
 def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
