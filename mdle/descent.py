@@ -251,8 +251,23 @@ class _Descent:
         builds from the same tokens (a prefix operator takes the operators that bind
         tighter than itself, as there). ``first`` is the first unit, when already read.
         """
-        left = self.unit() if first is None else first
         file = self.file
+        if first is not None:
+            left = first
+        else:  # a name or a number, read here: most operands are one of those
+            tok = self.tok
+            kind = tok[0]
+            if kind == "NAME":
+                self.tok = self.pull()
+                if self.tok[0] == "LPAR":
+                    left = self.call(tok)
+                else:
+                    left = new_name(tok[1], _new(Span, (file, tok[2], tok[3], tok[2], tok[4])))
+            elif kind == "NUMBER":
+                self.tok = self.pull()
+                left = self.number(tok)
+            else:
+                left = self.unit()
         depth = self.depth
         while True:
             op = self.tok
