@@ -117,15 +117,20 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
             if name in names:
                 if name not in shadow:
                     found.append(e)
-                extend(a.value for a in e.args)
+                for a in e.args:
+                    push(a.value)
             elif name == "send":
-                extend(a.value for a in e.args[1:])  # the channel names no definition
+                for a in e.args[1:]:  # the channel names no definition
+                    push(a.value)
             elif specs is not None:
                 spec = specs[0].get(name) or specs[1].get(name)
-                extend(a.value for i, a in enumerate(e.args)
-                       if not symbol_argument(spec, i, a))
+                for i, a in enumerate(e.args):
+                    # (only a name can be a declared symbol)
+                    if type(a.value) is not _NAME or not symbol_argument(spec, i, a):
+                        push(a.value)
             else:
-                extend(a.value for a in e.args)
+                for a in e.args:
+                    push(a.value)
         elif kind is _BINARY:
             push(e.left)
             push(e.right)
@@ -155,7 +160,6 @@ def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | Non
     defs = ns.definitions
     if uses is None:
         uses = uses_of(ns)
-    edges = {name: [(r.name, r) for r in uses[name]] for name in defs}
     color: dict[str, int] = {}  # 1: on the current path, 2: done
     in_cycle: set[str] = set()
     errors: list[Diagnostic] = []
@@ -163,15 +167,15 @@ def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | Non
         if color.get(root):
             continue
         path: list[str] = [root]
-        iters = [iter(edges[root])]
+        iters = [iter(uses[root])]
         color[root] = 1
         while iters:
-            nxt = next(iters[-1], None)
-            if nxt is None:
+            use = next(iters[-1], None)
+            if use is None:
                 color[path.pop()] = 2
                 iters.pop()
                 continue
-            target, use = nxt
+            target = use.name
             c = color.get(target)
             if c == 1:
                 cycle = path[path.index(target):] + [target]
@@ -185,5 +189,5 @@ def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | Non
             elif c is None:
                 color[target] = 1
                 path.append(target)
-                iters.append(iter(edges[target]))
+                iters.append(iter(uses[target]))
     return in_cycle, errors
