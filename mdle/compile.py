@@ -142,6 +142,9 @@ class Checker:
 
     def __init__(self, ns: Namespace, robot: KnownRobot | None = None) -> None:
         self.ns = ns
+        # ns.lookup as one dict: definitions over control laws over sensor functions
+        # (the namespace does not change while a checker uses it)
+        self._lookup = {**ns.registry.sensors, **ns.registry.laws, **ns.definitions}.get
         #: The robot whose speed and turn-rate limits constants are compared with (None:
         #: no comparison).
         self.robot = robot
@@ -164,6 +167,7 @@ class Checker:
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
         self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
         self._spec_slots: dict[int, list[_Slot]] = {}  # by id of a law or sensor function
+        self._def_slots: dict[int, list[_Slot]] = {}  # by id of a definition
         #: Names defined by statements that did not parse: uses of them are not errors
         #: of their own (the syntax error is reported)
         self.unparsed: frozenset[str] = frozenset()
@@ -270,11 +274,11 @@ class Checker:
 
     def _value(self, expr: st.Expr, env: Env) -> Value:
         if isinstance(expr, st.Number):
-            return Quantity(expr.value, expr.dim, bare=not expr.unit)
+            return _new_quantity(expr.value, expr.dim, not expr.unit)
         if isinstance(expr, st.Name):
             if expr.name in env:
                 return env[expr.name]
-            target = self.ns.lookup(expr.name)
+            target = self._lookup(expr.name)
             if target is not None:
                 self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
                            f"{_kind_name(target)}",
@@ -491,9 +495,10 @@ class Checker:
 
     def slots_of(self, d: st.Definition) -> list[_Slot]:
         """Return the parameters of a definition; a parameter's dimension is its default's."""
-        key = ("slots", d.name, id(d))
-        if key in self._cache:
-            return self._cache[key]
+        key = id(d)  # definitions live in the namespace: ids stay unique
+        known = self._def_slots.get(key)
+        if known is not None:
+            return known
         slots: list[_Slot] = []
         seen: dict[str, st.Param] = {}
         for p in d.param_list:
@@ -513,7 +518,7 @@ class Checker:
                 slots.append(_Slot(p.name, None, v, symbol=True))
             else:
                 slots.append(_Slot(p.name, None if v.bare else v.dim, v))
-        self._cache[key] = slots
+        self._def_slots[key] = slots
         return slots
 
     @staticmethod
@@ -621,7 +626,7 @@ class Checker:
                            "needs a condition or a number")
                 raise _Abort
             return cond.constant(None if v.zero else v.dim, v.value)
-        target = self.ns.lookup(name)
+        target = self._lookup(name)
         if isinstance(target, SensorSpec):
             bound = self.bind(name, self._slots_of_spec(target), args, env, expr.span)
             self._note_names(target, bound, expr.span)
@@ -728,11 +733,10 @@ class Checker:
 
     def _named_element(self, expr: st.Name | st.Call, env: Env) -> Element:
         name = expr.name
-        span = getattr(expr, "name_span", expr.span)
         if isinstance(expr, st.Name) and name in env:
             self.error(expr.span, f"`{name}` is a parameter, not an element")
             raise _Abort
-        target = self.ns.lookup(name)
+        target = self._lookup(name)
         if isinstance(target, st.Definition) and target.kind is not st.DefKind.INTERRUPT:
             if name in self.broken:
                 raise _Abort
@@ -754,6 +758,7 @@ class Checker:
             pool += list(self.ns.registry.laws)
         found = self._closest(name, pool)
         close = [found] if found else []
+        span = getattr(expr, "name_span", expr.span)
         self.error(span, f"unknown name `{name}`: not a control law, atom, behavior or plan",
                    hint=f"did you mean `{close[0]}`?" if close else None)
         raise _Abort
@@ -797,7 +802,7 @@ class Checker:
         if isinstance(head, (st.Name, st.Call)):
             if isinstance(head, st.Name) and head.name in env:
                 return "scaled"
-            if isinstance(self.ns.lookup(head.name), LawSpec):
+            if isinstance(self._lookup(head.name), LawSpec):
                 return "atom"
             return "string"
         return "scaled"
@@ -805,7 +810,7 @@ class Checker:
     def _atom(self, expr: st.Group, env: Env) -> AtomNode:
         u, xi, timer = expr.items[:3]
         assert isinstance(u, (st.Name, st.Call))
-        law = self.ns.lookup(u.name)
+        law = self._lookup(u.name)
         assert isinstance(law, LawSpec)
         failed = False
         try:
@@ -1110,6 +1115,7 @@ _E = TypeVar("_E", AtomNode, StringNode)
 #: Constructors of the program's nodes taking every field in order (see builder).
 _new_atom = builder(AtomNode)
 _new_string = builder(StringNode)
+_new_quantity = builder(Quantity)
 
 
 def _replaced(node: _E, **changes: Any) -> _E:

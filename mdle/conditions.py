@@ -349,9 +349,10 @@ class _Deferred(Interrupt):
     """
 
     def __init__(self, node: Node, source: str | Callable[[], str]) -> None:
-        object.__setattr__(self, "never", False)
-        object.__setattr__(self, "_node", node)
-        object.__setattr__(self, "_source", source)
+        fields = self.__dict__  # as object.__setattr__ would, one call fewer each
+        fields["never"] = False
+        fields["_node"] = node
+        fields["_source"] = source
 
     @functools.cached_property
     def test(self) -> Fn:
