@@ -335,7 +335,7 @@ class Checker:
                        hint="an element is (…, interrupt, timer): the condition goes second")
             raise _Abort
         q = self._number(expr, env)
-        if not (q.dim is None or q.dim == TIME or q.dim == NONE or q.zero):
+        if not (q.dim is None or q.dim is TIME or q.dim == TIME or q.dim == NONE or q.zero):
             self.error(expr.span, f"expected a timer such as `10 s` or `inf`, found "
                        f"{dim_words(q.dim)} (`{_short(expr)}`)")
             raise _Abort
