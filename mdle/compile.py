@@ -669,8 +669,10 @@ class Checker:
         try:
             t = self.condition(d.body, MappingProxyType(dict(bound)))
         finally:
-            self._key_uses[key] = self._use_stack.pop()
-            self._replay(key)
+            uses = self._use_stack.pop()
+            if uses:  # most instances name no channel or robot: nothing to keep
+                self._key_uses[key] = uses
+                self._replay(key)
             if call is not None:
                 self._notes.pop()
         if not t.is_bool:
@@ -1048,8 +1050,10 @@ class Checker:
                 result = self._definition_body(d, env)
             finally:
                 self._depth -= 1
-                self._key_uses[key] = self._use_stack.pop()
-                self._replay(key)
+                uses = self._use_stack.pop()
+                if uses:
+                    self._key_uses[key] = uses
+                    self._replay(key)
         except _Abort:
             self._cache[key] = None
             raise

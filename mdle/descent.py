@@ -265,7 +265,12 @@ class _Descent:
                     left = new_name(tok[1], _new(Span, (file, tok[2], tok[3], tok[2], tok[4])))
             elif kind == "NUMBER":
                 self.tok = self.pull()
-                left = self.number(tok)
+                known = self.numbers.get(tok[1])
+                if known is None:
+                    left = self.number(tok)
+                else:
+                    left = new_number(known[0], known[1], known[2], known[3],
+                                      _new(Span, (file, tok[2], tok[3], tok[2], tok[4])))
             else:
                 left = self.unit()
         depth = self.depth
