@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 from mdle import syntax as st
 from mdle.errors import Span, make_span
@@ -32,7 +32,6 @@ from mdle.treebuild import (
     SIGN_POWER,
     BuildState,
     TooDeep,
-    deeper,
     new_argument,
     new_binary,
     new_call,
@@ -145,6 +144,7 @@ class Lexer:
 
 
 _Binary = st.Binary
+_N = TypeVar("_N", st.Group, st.Vector, st.Call)
 _new = tuple.__new__  # a Span in one C call (make_span without the Python call)
 _power = POWERS.get  # by the token's text: no other token's text is an operator's
 
@@ -159,7 +159,9 @@ class _Descent:
     def __init__(self, tokens: Iterator[_Token], state: BuildState) -> None:
         self.state = state
         self.file = state.file
-        self.depth = state.depth
+        #: The nesting depth of the node a method has just returned (as
+        #: :func:`~mdle.treebuild.deeper` counts it: a name or a number is 1)
+        self.d = 1
         self.pull = tokens.__next__
         self.tok: _Token = self.pull()
         #: NUMBER tokens read so far: (value in SI, dimension, digits, unit)
@@ -249,11 +251,12 @@ class _Descent:
 
         Precedence climbing, left associative: the tree :func:`~mdle.treebuild.precedence`
         builds from the same tokens (a prefix operator takes the operators that bind
-        tighter than itself, as there). ``first`` is the first unit, when already read.
+        tighter than itself, as there). ``first`` is the first unit, when already read
+        (its depth in ``self.d``).
         """
         file = self.file
         if first is not None:
-            left = first
+            left, dl = first, self.d
         else:  # a name or a number, read here: most operands are one of those
             tok = self.tok
             kind = tok[0]
@@ -261,8 +264,10 @@ class _Descent:
                 self.tok = self.pull()
                 if self.tok[0] == "LPAR":
                     left = self.call(tok)
+                    dl = self.d
                 else:
                     left = new_name(tok[1], _new(Span, (file, tok[2], tok[3], tok[2], tok[4])))
+                    dl = 1
             elif kind == "NUMBER":
                 self.tok = self.pull()
                 known = self.numbers.get(tok[1])
@@ -271,13 +276,15 @@ class _Descent:
                 else:
                     left = new_number(known[0], known[1], known[2], known[3],
                                       _new(Span, (file, tok[2], tok[3], tok[2], tok[4])))
+                dl = 1
             else:
                 left = self.unit()
-        depth = self.depth
+                dl = self.d
         while True:
             op = self.tok
             power = _power(op[1])
             if power is None or power <= limit:
+                self.d = dl
                 return left
             self.tok = self.pull()
             right = self.binary(power)
@@ -286,15 +293,12 @@ class _Descent:
                     or type(right) is _Binary and right.op in COMPARISONS):
                 raise _GiveUp  # "comparisons do not chain": the reference says so
             a, b = left.span, right.span
-            node = new_binary(op[1], left, right, _new(Span, (file, a[1], a[2], b[3], b[4])),
+            left = new_binary(op[1], left, right, _new(Span, (file, a[1], a[2], b[3], b[4])),
                               _new(Span, (file, op[2], op[3], op[2], op[4])))
-            d = depth.get(id(left), 1)
-            e = depth.get(id(right), 1)
-            d = (d if d > e else e) + 1
-            if d > MAX_DEPTH:
-                raise TooDeep(node.span)
-            depth[id(node)] = d
-            left = node
+            dr = self.d
+            dl = (dl if dl > dr else dr) + 1
+            if dl > MAX_DEPTH:
+                raise TooDeep(left.span)
 
     def unit(self) -> st.Expr:
         op = self.tok
@@ -305,21 +309,23 @@ class _Descent:
         x = self.binary(NOT_POWER if kind == "NOT" else SIGN_POWER)
         b = x.span
         node = new_unary(op[1], x, _new(Span, (self.file, op[2], op[3], b[3], b[4])))
-        d = self.depth.get(id(x), 1) + 1
-        if d > MAX_DEPTH:
+        self.d += 1
+        if self.d > MAX_DEPTH:
             raise TooDeep(node.span)
-        self.depth[id(node)] = d
         return node
 
     def primary(self) -> st.Expr:
+        """Parse a primary; its depth goes to ``self.d``."""
         tok = self.tok
         self.tok = self.pull()
         kind = tok[0]
         if kind == "NAME":
             if self.tok[0] == "LPAR":
                 return self.call(tok)
+            self.d = 1
             return new_name(tok[1], _new(Span, (self.file, tok[2], tok[3], tok[2], tok[4])))
         if kind == "NUMBER":
+            self.d = 1
             return self.number(tok)
         if kind == "LPAR":
             items = self.items("RPAR")
@@ -331,19 +337,27 @@ class _Descent:
                 repeat = True
             else:
                 repeat = False
-            return deeper(self.state, new_group(tuple(items), repeat, _new(Span, (
-                self.file, tok[2], tok[3], close[2], close[4]))), items)
+            return self.deeper(new_group(items, repeat, _new(Span, (
+                self.file, tok[2], tok[3], close[2], close[4]))))
         if kind == "LSQB":
             items = self.items("RSQB")
             close = self.tok
             self.tok = self.pull()
-            return deeper(self.state, new_vector(tuple(items), _new(Span, (
-                self.file, tok[2], tok[3], close[2], close[4]))), items)
+            return self.deeper(new_vector(items, _new(Span, (
+                self.file, tok[2], tok[3], close[2], close[4]))))
+        self.d = 1
         if kind == "NEVER":
             return st.Never(self.span(tok))
         if kind == "INF":
             return st.Inf(self.span(tok))
         raise _GiveUp
+
+    def deeper(self, node: _N) -> _N:
+        """Return ``node``, one level deeper than its deepest part (``self.d``, set so)."""
+        self.d += 1
+        if self.d > MAX_DEPTH:
+            raise TooDeep(node.span)
+        return node
 
     def number(self, tok: _Token) -> st.Number:
         span = _new(Span, (self.file, tok[2], tok[3], tok[2], tok[4]))
@@ -357,27 +371,39 @@ class _Descent:
         self.numbers[tok[1]] = (node.value, node.dim, node.text, node.unit)
         return node
 
-    def items(self, close: str) -> list[st.Expr]:
-        """``expr (, expr)* ,?`` up to ``close``, which is left as the current token."""
+    def items(self, close: str) -> tuple[st.Expr, ...]:
+        """``expr (, expr)* ,?`` up to ``close``, which is left as the current token.
+
+        The deepest item's depth goes to ``self.d``.
+        """
         out = [self.binary(0)]
+        deepest = self.d
         while True:
             kind = self.tok[0]
             if kind == "_COMMA":
                 self.tok = self.pull()
                 if self.tok[0] == close:
-                    return out
+                    break
                 out.append(self.binary(0))
+                if self.d > deepest:
+                    deepest = self.d
             elif kind == close:
-                return out
+                break
             else:
                 raise _GiveUp
+        self.d = deepest
+        return tuple(out)
 
     def call(self, name: _Token) -> st.Call:
+        """Parse a call from its ``(``; its depth goes to ``self.d``."""
         self.tok = self.pull()
         args: list[st.Argument] = []
+        deepest = 0
         if self.tok[0] != "RPAR":
             while True:
                 args.append(self.argument())
+                if self.d > deepest:
+                    deepest = self.d
                 kind = self.tok[0]
                 if kind == "_COMMA":
                     self.tok = self.pull()
@@ -392,9 +418,14 @@ class _Descent:
         node = new_call(name[1], tuple(args),
                         _new(Span, (self.file, name[2], name[3], close[2], close[4])),
                         self.span(name))
-        return deeper(self.state, node, [a.value for a in args])
+        if not args:
+            self.d = 1
+            return node
+        self.d = deepest
+        return self.deeper(node)
 
     def argument(self) -> st.Argument:
+        """Parse an argument; its value's depth goes to ``self.d``."""
         tok = self.tok
         if tok[0] != "NAME":
             value = self.binary(0)
@@ -411,6 +442,7 @@ class _Descent:
             first: st.Expr = self.call(tok)
         else:
             first = new_name(tok[1], self.span(tok))
+            self.d = 1
         value = self.binary(0, first)
         return new_argument(None, value, value.span)
 
