@@ -54,11 +54,10 @@ _KINDS = {"ATOM": st.DefKind.ATOM, "BEHAVIOR": st.DefKind.BEHAVIOR, "PLAN": st.D
           "INTERRUPT": st.DefKind.INTERRUPT}
 
 
-#: What the lexer does with a token besides passing it on: skip it, keep it as a
-#: comment, count an opening or a closing bracket.
-_SKIP_SPACE, _SKIP_COMMENT, _OPEN, _CLOSE = 1, 2, 3, 4
-_ACTIONS = {"WHITESPACE": _SKIP_SPACE, "COMMENT": _SKIP_COMMENT, "LPAR": _OPEN, "LSQB": _OPEN,
-            "RPAR": _CLOSE, "RSQB": _CLOSE}
+#: Tokens the lexer does more than pass on: skipped ones, and brackets (counted).
+_QUIET = frozenset({"WHITESPACE", "COMMENT", "LPAR", "LSQB", "RPAR", "RSQB"})
+#: Characters of text the lexer splits at once (then a line break at the latest)
+_CHUNK = 1 << 16
 
 
 class _GiveUp(Exception):
@@ -76,23 +75,20 @@ class Lexer:
         names = next(t for t in terminals if t.name == "NAME")
         word = re.compile(names.pattern.to_regexp())
         self.keywords: dict[str, str] = {}
-        groups = []
+        groups: list[str] = []
+        regexps: list[str] = []
         for t in terminals:
             regexp = t.pattern.to_regexp()
             if t.pattern.type == "str" and word.fullmatch(t.pattern.value):
                 self.keywords[t.pattern.value] = t.name
                 continue
             groups.append(f"(?P<{t.name}>{regexp})")
-        # Spaces before a token are matched with it: one match per token, not two.
+            regexps.append(regexp)
+        #: Every terminal a group of its own, named (spaces before a token go with it)
         self.pattern = re.compile("[ \t\f\r]*(?:" + "|".join(groups) + ")")
-        #: Token kinds by group number (the lexer dispatches on numbers, not names)
-        self.kinds = [""] * (self.pattern.groups + 1)
-        #: What the lexer does with each group besides passing it on (see _ACTIONS)
-        self.actions = [0] * (self.pattern.groups + 1)
-        for kind, i in self.pattern.groupindex.items():
-            self.kinds[i] = kind
-            self.actions[i] = _ACTIONS.get(kind, 0)
-        self.name_group = self.pattern.groupindex["NAME"]
+        #: The same terminals in one group, and the spaces before them in another:
+        #: ``findall`` splits a text into (spaces, token) pairs
+        self.split = re.compile("([ \t\f\r]*)(" + "|".join(f"(?:{r})" for r in regexps) + ")")
 
     def tokens(self, text: str, file: str, comments: list[st.Comment]) -> Iterator[_Token]:
         """Yield the tokens of ``text``, then ``$END`` forever; comments go to ``comments``.
@@ -100,47 +96,59 @@ class Lexer:
         Raises _GiveUp at a character no token starts with, and when more than
         :data:`MAX_DEPTH` brackets are open.
         """
-        keywords = self.keywords.get
-        kinds, actions, name = self.kinds, self.actions, self.name_group
-        count = text.count
-        line, line_start, opened, end = 1, 0, 0, 0
-        # The scanner matches where the previous match ended, and stops (None) at the end
-        # of the text or at a character no token starts with. A token's group is the
-        # last to close, so ``lastindex`` is its number.
-        scanner = self.pattern.scanner(text)  # type: ignore[attr-defined]  # undocumented
-        for m in iter(scanner.match, None):
-            group: int = m.lastindex
-            start, end = m.span(group)
-            if group == name:
-                value = text[start:end]
-                yield (keywords(value, "NAME"), value, line, start - line_start + 1,
-                       end - line_start + 1)
-                continue
-            action = actions[group]
-            if action:
-                if action == _SKIP_SPACE:
-                    lines = count("\n", start, end)
-                    if lines:
-                        line += lines
-                        line_start = text.rindex("\n", start, end) + 1
-                    continue
-                if action == _SKIP_COMMENT:
-                    comments.append(st.Comment(text[start:end], make_span(
-                        file, line, start - line_start + 1, line, end - line_start + 1)))
-                    continue
-                if action == _OPEN:
-                    opened += 1
-                    if opened > MAX_DEPTH:
-                        raise _GiveUp
-                elif opened:
-                    opened -= 1
-            yield (kinds[group], text[start:end], line, start - line_start + 1,
-                   end - line_start + 1)
-        if end != len(text):
-            raise _GiveUp
-        column = end - line_start + 1
+        kinds: dict[str, str] = {}  # a token's kind by its text: the same text, the same kind
+        kind_of = kinds.get
+        findall = self.split.findall
+        line, column, opened, size, pos = 1, 1, 0, len(text), 0
+        while pos < size:
+            # The text in chunks ending after a line break (only whitespace spans one),
+            # each split into (spaces, token) pairs at C speed.
+            stop = text.find("\n", pos + _CHUNK)
+            stop = size if stop < 0 else stop + 1
+            for spaces, value in findall(text, pos, stop):
+                if spaces:
+                    column += len(spaces)
+                    pos += len(spaces)
+                pos += len(value)
+                end = column + len(value)
+                kind = kind_of(value)
+                if kind is None:
+                    kind = kinds[value] = self.kind(value)
+                if kind in _QUIET:
+                    if kind == "WHITESPACE":
+                        lines = value.count("\n")
+                        if lines:
+                            line += lines
+                            end = len(value) - value.rindex("\n")
+                    elif kind == "COMMENT":
+                        comments.append(st.Comment(value, make_span(file, line, column, line,
+                                                                    end)))
+                    elif kind == "LPAR" or kind == "LSQB":
+                        opened += 1
+                        if opened > MAX_DEPTH:
+                            raise _GiveUp
+                        yield kind, value, line, column, end
+                    else:
+                        if opened:
+                            opened -= 1
+                        yield kind, value, line, column, end
+                else:
+                    yield kind, value, line, column, end
+                column = end
+            if pos != stop:  # findall skipped a character no token starts with
+                raise _GiveUp
         while True:  # a parser looking past the end keeps finding it
             yield "$END", "", line, column, column
+
+    def kind(self, value: str) -> str:
+        """Return the kind of a token's text: the terminal the lexer's pattern matches it as.
+
+        A keyword's text is the keyword (a ``NAME`` equal to one becomes it, as in lark).
+        """
+        m = self.pattern.fullmatch(value)
+        if m is None or m.lastgroup is None:  # cannot be: the text was matched as a token
+            raise _GiveUp
+        return self.keywords.get(value, m.lastgroup)
 
 
 _Binary = st.Binary
