@@ -266,6 +266,8 @@ class Checker:
         """
         if self._depth >= MAX_NESTING:
             self._enter(expr.span)  # reports, raises
+        if type(expr) is st.Number:  # the common case, with nothing nested to count
+            return _new_quantity(expr.value, expr.dim, not expr.unit)
         self._depth += 1
         try:
             return self._value(expr, env)
@@ -533,16 +535,16 @@ class Checker:
             self._enter(expr.span)  # reports, raises
         self._depth += 1
         try:
+            kind = type(expr)  # the common nodes first (the syntax tree has no subclasses)
+            if kind is st.Binary:
+                return self._binary_condition(expr, env)  # type: ignore[arg-type]
+            if kind is st.Name or kind is st.Call:
+                return self._reading(expr, env)  # type: ignore[arg-type]
             return self._condition(expr, env)
         finally:
             self._depth -= 1
 
     def _condition(self, expr: st.Expr, env: Env) -> cond.Typed:
-        kind = type(expr)  # the syntax tree has no subclasses
-        if kind is st.Binary:
-            return self._binary_condition(expr, env)  # type: ignore[arg-type]
-        if kind is st.Name or kind is st.Call:
-            return self._reading(expr, env)  # type: ignore[arg-type]
         if isinstance(expr, st.Number):
             return cond.constant(None if (not expr.unit and expr.value == 0) else expr.dim,
                                  expr.value)

@@ -97,10 +97,12 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
     Parameters shadow; with a ``registry``, symbols that a control law or sensor function
     declares do too.
     """
-    shadow = {p.name for p in definition.param_list}
     found: list[st.Name | st.Call] = []
     stack: list[st.Expr] = [definition.body]
-    stack.extend(p.default for p in definition.param_list if p.default is not None)
+    shadow: frozenset[str] | set[str] = _NO_NAMES
+    if definition.params:
+        shadow = {p.name for p in definition.params}
+        stack.extend(p.default for p in definition.params if p.default is not None)
     specs = (registry.laws, registry.sensors) if registry is not None else None
     pop, push, extend = stack.pop, stack.append, stack.extend
     # Dispatch on the exact node type (the syntax tree has no subclasses): one test for
@@ -141,6 +143,7 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
     return found
 
 
+_NO_NAMES: frozenset[str] = frozenset()
 _NAME, _CALL, _BINARY, _UNARY, _GROUP, _VECTOR = (st.Name, st.Call, st.Binary, st.Unary,
                                                   st.Group, st.Vector)
 
