@@ -71,6 +71,7 @@ _MAX_CANDIDATES = 200
 Env = Mapping[str, Value]
 _EMPTY: Env = MappingProxyType({})
 _UNKNOWN = Quantity(math.nan, None)
+_MISSING = object()  # not in a cache (None there means: failed before)
 
 
 class _Abort(Exception):
@@ -191,7 +192,7 @@ class Checker:
 
     def _replay(self, key: tuple[Any, ...]) -> None:
         """Count a cached instance's uses again, for the instance using it too."""
-        if self._use_stack:
+        if self._use_stack and self._key_uses:
             self._use_stack[-1].extend(self._key_uses.get(key, ()))
 
     # ------------------------------------------------------------------ diagnostics
@@ -1034,8 +1035,8 @@ class Checker:
                  call: Span | None = None) -> Element:
         """Return the element a definition makes with these parameter values (cached)."""
         key = ("element", d.name, _freeze(bound))
-        if key in self._cache:
-            cached = self._cache[key]
+        cached = self._cache.get(key, _MISSING)
+        if cached is not _MISSING:
             if cached is None:  # failed before; its errors are already reported
                 raise _Abort
             self._replay(key)
@@ -1099,8 +1100,11 @@ class Checker:
         if d.name in self.broken:
             return None
         slots = self.slots_of(d)
-        runnable = all(s.default is not REQUIRED for s in slots)
-        bound = {s.name: (_UNKNOWN if s.default is REQUIRED else s.default) for s in slots}
+        if slots:
+            runnable = all(s.default is not REQUIRED for s in slots)
+            bound = {s.name: (_UNKNOWN if s.default is REQUIRED else s.default) for s in slots}
+        else:
+            runnable, bound = True, {}
         self._partial = not runnable
         try:
             if d.kind is st.DefKind.INTERRUPT:
