@@ -107,10 +107,12 @@ def _cpu_of_check(mdle: Path, path: Path, bytecode: str | None = None
 
     CPU time (user + system, of the child) is what the machine gave the check: on a
     loaded machine it is far steadier than the wall time. The peak RSS is read by the
-    child itself (``ru_maxrss`` of a process that only runs `mdle check`). With
-    ``bytecode`` (a folder), the child keeps its compiled modules there, as an installed
-    mdle does (pip compiles them); without, it runs as the environment says (where
-    ``PYTHONDONTWRITEBYTECODE`` is set, every start compiles mdle's modules again).
+    child itself: Linux's ``VmHWM``, the peak of its own memory (elsewhere ``ru_maxrss``,
+    which Linux carries over from the parent through fork and exec: it would read the
+    benchmark's own size for small plans). With ``bytecode`` (a folder), the child keeps
+    its compiled modules there, as an installed mdle does (pip compiles them); without,
+    it runs as the environment says (with ``PYTHONDONTWRITEBYTECODE`` set, every start
+    compiles mdle's modules again).
     """
     env = dict(os.environ)
     if bytecode is not None:
@@ -120,7 +122,10 @@ def _cpu_of_check(mdle: Path, path: Path, bytecode: str | None = None
              f"'-q', {str(path)!r}]\n"
              "try:\n    code = main()\nexcept SystemExit as e:\n    code = e.code\n"
              "r = resource.getrusage(resource.RUSAGE_SELF)\n"
-             "print(r.ru_utime + r.ru_stime, r.ru_maxrss * 1024, code, file=sys.stderr)")
+             "try:\n    rss = 1024 * int(next(line.split()[1] for line in open('/proc/self/status')"
+             " if line.startswith('VmHWM:')))\n"
+             "except (OSError, StopIteration):\n    rss = r.ru_maxrss * 1024\n"
+             "print(r.ru_utime + r.ru_stime, rss, code, file=sys.stderr)")
     t0 = time.perf_counter()
     r = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t0
