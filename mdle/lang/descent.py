@@ -168,7 +168,7 @@ class _Descent:
         self.state = state
         self.file = state.file
         #: The nesting depth of the node a method has just returned (as
-        #: :func:`~mdle.treebuild.deeper` counts it: a name or a number is 1)
+        #: :func:`~mdle.lang.treebuild.deeper` counts it: a name or a number is 1)
         self.d = 1
         self.pull = tokens.__next__
         self.tok: _Token = self.pull()
@@ -257,7 +257,7 @@ class _Descent:
     def binary(self, limit: int, first: st.Expr | None = None) -> st.Expr:
         """Parse ``unit (op unit)*`` with every operator binding tighter than ``limit``.
 
-        Precedence climbing, left associative: the tree :func:`~mdle.treebuild.precedence`
+        Precedence climbing, left associative: the tree :func:`~mdle.lang.treebuild.precedence`
         builds from the same tokens (a prefix operator takes the operators that bind
         tighter than itself, as there). ``first`` is the first unit, when already read
         (its depth in ``self.d``).
