@@ -1,12 +1,12 @@
 """The fast path for valid files: a recursive-descent parser over a one-regex lexer.
 
-lark's LALR parser (:mod:`mdle.parser`) is the reference: it defines what is valid and
+lark's LALR parser (:mod:`mdle.lang.parser`) is the reference: it defines what is valid and
 says what is wrong, in words, when something is not. It costs several microseconds of
 Python per token, though, and most files are valid. This module parses the same
 grammar (``grammar/mdle.lark``) by recursive descent, builds the same nodes with the
-same spans (:mod:`mdle.treebuild`), and gives up (:func:`parse_valid` returns None)
+same spans (:mod:`mdle.lang.treebuild`), and gives up (:func:`parse_valid` returns None)
 at the first thing it does not expect: a syntax error, an unknown unit, a number too
-large, nesting past :data:`~mdle.treebuild.MAX_DEPTH`. The caller then parses the file
+large, nesting past :data:`~mdle.lang.treebuild.MAX_DEPTH`. The caller then parses the file
 with lark, which reports every error exactly as before. So this parser never reports
 anything and never decides what is valid; tests check that both parsers give equal
 trees and spans on every plan they are given.

@@ -1,7 +1,7 @@
 """Syntax-tree nodes from tokens: what both MDLe parsers share.
 
-The lark parser (:mod:`mdle.parser`, the reference, used for every file with an error)
-and the fast recursive-descent parser (:mod:`mdle.descent`, used for valid files) build
+The lark parser (:mod:`mdle.lang.parser`, the reference, used for every file with an error)
+and the fast recursive-descent parser (:mod:`mdle.lang.descent`, used for valid files) build
 their nodes with these functions, so the two give the same tree, spans and messages.
 
 A token here is anything with ``line``, ``column``, ``end_line``, ``end_column`` and a
