@@ -469,7 +469,10 @@ class SimBackend:
             marked = (x, y, th)
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,
         # nothing can be touched this step and one distance query (at the end) suffices.
-        reach = sum(ph.max_abs_v * ph.duration for ph in phases)
+        reach = 0.0
+        for ph in phases:
+            dur, v0 = ph.duration, ph.v0
+            reach += max(abs(v0), abs(v0 + ph.a_v * dur)) * dur
         safe = clear[0] - CONTACT >= reach
         if not safe and self._clear_bound:
             clear = self._collider.clearance(x, y)   # the sweep needs the exact clearance
