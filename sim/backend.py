@@ -36,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
+from mdle.backend import (STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan,
+                          observation)
 from mdle.errors import BackendError, WorldError
 from mdle.messages import Inbox
 from mdle.sim.collision import CONTACT, Collider
@@ -246,17 +247,8 @@ class SimBackend:
             kind = self._obstacle(e.obstacle)[1]
             truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
                                 "t": e.time, "x": e.x, "y": e.y}
-        return Observation(
-            time=self._t,
-            pose=Pose(ox, oy, _wrap(oth)),
-            v=v,
-            omega=w,
-            scan=self._scan,
-            stalled=self._stalled,
-            motors_enabled=True,
-            truth=truth,
-            inbox=self.inbox,
-        )
+        return observation(self._t, Pose(ox, oy, _wrap(oth)), v, w, self._scan, self._stalled,
+                           truth, self.inbox)
 
     def command(self, cmd: Command) -> None:
         """Hold ``cmd`` (clamped to the limits) until the next command."""

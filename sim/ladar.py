@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import Scan
+from mdle.backend import Scan, plain_scan
 from mdle.errors import WorldError
 from mdle.sim.raycast import MAX_RANGE_SLACK, FanCaster, RayCaster, RayHits
 
@@ -202,8 +202,7 @@ class Ladar:
         the scan then owns.
         """
         self.settle(ranges, valid)
-        return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
-                    max_range=self.profile.max_range)
+        return plain_scan(ranges, self.bearings, valid, stamp, self.profile.max_range)
 
     def settle(self, ranges: np.ndarray, valid: np.ndarray) -> None:
         """Add noise, quantise and clip the ranges in place, then make both read-only.
@@ -217,8 +216,7 @@ class Ladar:
             noise *= p.sigma
             if p.noise == "relative":
                 noise *= ranges
-            noise *= valid                          # no noise on invalid beams
-            ranges += noise
+            np.add(ranges, noise, out=ranges, where=valid)   # no noise on invalid beams
         if p.resolution > 0:
             ranges /= p.resolution
             np.rint(ranges, out=ranges)

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import Pose, Scan
+from mdle.backend import Pose, Scan, plain_scan
 from mdle.errors import BackendError, WorldError
 from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from mdle.sim.backend import SimBackend, SimEvent
@@ -208,8 +208,7 @@ class Member(SimBackend):
         if self._batched and self._fan is not None:
             first = th + float(lad.bearings[0])
             ranges, hit = self._fan.cast(ox, oy, first)
-            scan = Scan(ranges=ranges, bearings=lad.bearings, valid=hit, stamp=stamp,
-                        max_range=lad.profile.max_range)
+            scan = plain_scan(ranges, lad.bearings, hit, stamp, lad.profile.max_range)
             self.team.pending.append((self, scan, (ox, oy, first, *self._fan_shape)))
             return scan  # its ranges are final once the team has occluded and settled it
         angles = lad.world_angles(th)

@@ -194,3 +194,20 @@ def test_collider_near_list_in_a_large_world_is_exact() -> None:
         assert math.isclose(d, n.distance, abs_tol=1e-12) and owner == n.obstacle
         checked += 1
     assert checked > 150
+
+
+def test_fast_observation_and_scan_equal_the_dataclass_constructors() -> None:
+    """observation() and plain_scan() fill every field as the dataclasses' own __init__ do."""
+    from mdle.backend import Observation, Pose, Scan, observation, plain_scan
+
+    r, b, v = np.ones(3), np.zeros(3), np.ones(3, dtype=bool)
+    fast = plain_scan(r, b, v, 0.5, 10.0)
+    slow = Scan(ranges=r, bearings=b, valid=v, stamp=0.5, max_range=10.0)
+    assert vars(fast) == vars(slow)
+    truth = {"clearance": 1.0}
+    got = observation(1.5, Pose(1.0, 2.0, 0.5), 0.3, -0.1, fast, True, truth)
+    assert got == Observation(time=1.5, pose=Pose(1.0, 2.0, 0.5), v=0.3, omega=-0.1,
+                              scan=fast, stalled=True, truth=truth)
+    assert list(vars(got)) == list(vars(Observation(0.0, Pose())))  # every field, in order
+    with pytest.raises(AttributeError):
+        got.time = 0.0  # type: ignore[misc]  # still frozen
