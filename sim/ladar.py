@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -35,7 +36,8 @@ from mdle.backend import Scan, plain_scan
 from mdle.errors import WorldError
 from mdle.sim.raycast import MAX_RANGE_SLACK, FanCaster, RayCaster, RayHits
 
-__all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_profile"]
+__all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_profile",
+           "settle_rows"]
 
 NOISE_MODELS = ("relative", "absolute", "none")
 
@@ -225,3 +227,32 @@ class Ladar:
         np.minimum(ranges, p.max_range, out=ranges)
         ranges.setflags(write=False)
         valid.setflags(write=False)
+
+
+def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) -> None:
+    """:meth:`Ladar.settle` for the scans of several ladars of one profile, as one block.
+
+    Row ``k`` of ``ranges`` and ``valid`` (S, B) is a scan of ``ladars[k]``; each ladar
+    draws its own noise, then noise, quantisation and clipping are applied to the block
+    at once: element by element the same arithmetic as :meth:`Ladar.settle`, so each row
+    comes out as that call would leave it. Both arrays are read-only afterwards.
+    """
+    p = ladars[0].profile
+    if any(lad.profile != p for lad in ladars):
+        raise ValueError("settle_rows needs ladars of one profile")
+    if p.noise != "none" and p.sigma > 0:
+        noise = np.empty(ranges.shape)
+        for lad, row in zip(ladars, noise, strict=True):
+            lad.rng.standard_normal(out=row)
+        noise *= p.sigma
+        if p.noise == "relative":
+            noise *= ranges
+        np.add(ranges, noise, out=ranges, where=valid)   # no noise on invalid beams
+    if p.resolution > 0:
+        ranges /= p.resolution
+        np.rint(ranges, out=ranges)
+        ranges *= p.resolution
+    np.maximum(ranges, 0.0, out=ranges)
+    np.minimum(ranges, p.max_range, out=ranges)
+    ranges.setflags(write=False)
+    valid.setflags(write=False)

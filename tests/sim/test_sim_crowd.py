@@ -169,3 +169,34 @@ def test_scans_taken_during_a_step_see_the_others_where_they_ended_it() -> None:
         assert seen.any(), f"{m.name} sees no other robot"
         assert np.allclose(scan.ranges, want, atol=1e-9)
         assert (scan.valid == (hits.hit | (t <= lad.profile.max_range))).all()
+
+
+def _mixed_team(cast_later: bool, ladars: tuple[str, ...] = ("lms200",)) -> TeamSim:
+    places = [_place(n, x, y, th, ladar=ladars[i % len(ladars)]) for i, (n, x, y, th) in
+              enumerate((("a", 0, 0, 0), ("b", 2.5, 0.4, 2.0), ("c", 1.5, -1.8, 1.0),
+                         ("d", -2, 0, 0), ("e", 4.0, 2.0, -2.0)))]
+    team = TeamSim(_world(), places, seed=5)
+    for m in team.members:
+        m._cast_later = m._cast_later and cast_later
+    return team
+
+
+@pytest.mark.parametrize("ladars", [("lms200",), ("lms200", "lms200-ideal")])
+def test_the_team_s_one_pass_scans_equal_each_robot_s_own_bit_for_bit(
+        ladars: tuple[str, ...]) -> None:
+    # the same seeded team, its scans cast at the end of each step in one pass per kind of
+    # ladar, or by each robot as it moves: every range, flag and pose the same
+    batched, alone = _mixed_team(True, ladars), _mixed_team(False, ladars)
+    assert all(m._cast_later for m in batched.members)
+    for k in range(20):
+        for team in (batched, alone):
+            for i, m in enumerate(team.members):
+                m.command(Command(0.3 + 0.05 * i, 0.4 * math.sin(k + i)))
+            team.step(0.1)
+        for mb, ma in zip(batched.members, alone.members, strict=True):
+            sb, sa = mb.observe().scan, ma.observe().scan
+            assert sb is not None and sa is not None
+            assert sb.stamp == sa.stamp and not sb.ranges.flags.writeable
+            assert np.array_equal(sb.ranges, sa.ranges)
+            assert np.array_equal(sb.valid, sa.valid)
+            assert mb.true_pose == ma.true_pose
