@@ -76,9 +76,8 @@ def main() -> int:
     from mdle import sim
     from mdle.atoms import default_registry
     from mdle.backend import Observation, Pose, RobotLimits
-    from mdle.loader import load_text
+    from mdle.lang import load_text, show_program
     from mdle.runtime import Scheduler
-    from mdle.show import show_program
 
     reg = default_registry().merged(Registry.from_modules(types.SimpleNamespace(probe=probe)))
     world = sim.load_world("ellipse")

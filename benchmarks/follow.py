@@ -52,7 +52,7 @@ from mdle.atoms.boundary import cached_view  # noqa: E402 (after the sys.path fi
 from mdle.atoms.follow import follow_boundary, scan_points_cached, start_follow  # noqa: E402
 from mdle.atoms.registry import Context  # noqa: E402 (after the sys.path fix)
 from mdle.backend import Observation  # noqa: E402 (after the sys.path fix)
-from mdle.loader import load_text  # noqa: E402 (after the sys.path fix)
+from mdle.lang import load_text  # noqa: E402 (after the sys.path fix)
 from mdle.runtime import Scheduler, run  # noqa: E402 (after the sys.path fix)
 
 ARGS: dict[str, Any] = {"side": "right", "rc": 0.5, "v": 1.0, "zeta": 1.0, "kf": 0.5,

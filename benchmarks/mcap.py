@@ -44,7 +44,7 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 sys.path.insert(0, str(_HERE.parent))
 
 from mdle.backend import Pose, Scan  # noqa: E402
-from mdle.loader import load_program  # noqa: E402
+from mdle.lang import load_program  # noqa: E402
 from mdle.ros.recorder import McapRecorder  # noqa: E402
 from mdle.runtime import Scheduler  # noqa: E402
 from mdle.runtime.events import Event, EventKind, Sample  # noqa: E402

@@ -131,9 +131,8 @@ def main() -> int:
                     help="plans `mdle check` reads: 10k (lines), 1MB, 5MB (bytes)")
     args = ap.parse_args()
 
-    from mdle import parser
-    from mdle.loader import load_text
-    from mdle.parser import iter_tokens, lark_parser, parse_module
+    from mdle.lang import load_text, parser
+    from mdle.lang.parser import iter_tokens, lark_parser, parse_module
 
     text = generated_plan(args.lines)
     n = text.count("\n")

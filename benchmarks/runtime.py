@@ -8,7 +8,7 @@ do (formatting 0.5 takes half the time of 0.4817366102...; a constant round pose
 flatter the trace writer). The figure is wall time per tick, the backend's own cost
 subtracted; the target is at most 10 microseconds with the trace written.
 
-Two plans of that shape are timed: one built by hand from :mod:`mdle.program` nodes
+Two plans of that shape are timed: one built by hand from :mod:`mdle.lang.program` nodes
 whose interrupts are a single cheap function each, and one written in MDLe and compiled
 by the checker, whose interrupts are the real closures (sensor calls, comparisons, ``and``
 and ``or``) a user's plan gets.
@@ -30,8 +30,7 @@ import time
 
 from mdle.atoms.registry import Context, LawSpec
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits
-from mdle.loader import load_text
-from mdle.program import AtomNode, Element, Interrupt, StringNode
+from mdle.lang import AtomNode, Element, Interrupt, StringNode, load_text
 from mdle.runtime import Scheduler
 from mdle.trace import TraceWriter
 

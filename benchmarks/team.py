@@ -37,7 +37,7 @@ sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 import numpy as np  # noqa: E402 (after the path fix above)
 
 from mdle.backend import Pose  # noqa: E402 (after the path fix above)
-from mdle.loader import load_text  # noqa: E402 (after the path fix above)
+from mdle.lang import load_text  # noqa: E402 (after the path fix above)
 from mdle.sim.ladar import LMS200  # noqa: E402 (after the path fix above)
 from mdle.sim.profiles import robot_profile  # noqa: E402 (after the path fix above)
 from mdle.sim.shapes import Rectangle, Wall  # noqa: E402 (after the path fix above)

@@ -5,7 +5,7 @@ and ``heading`` read odometry in the REP-105 ``odom`` frame: (0, 0, 0) where the
 stands when the run starts, x forward and y left of that pose. The simulator's world
 coordinates are ground truth only (plots, traces' ``true_x``, collisions).
 
->>> from mdle.loader import load_text
+>>> from mdle.lang import load_text
 >>> reads_pose(load_text("atom a = (go(0.2 m/s), x > 1 m, 5 s)\nrun a\n"))
 True
 >>> reads_pose(load_text("atom a = (go(0.2 m/s), range(0 deg) < 1 m, 5 s)\nrun a\n"))
@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import re
 
-from mdle.program import Program
+from mdle.lang import Program
 
 __all__ = ["FRAME_NOTE", "POSE_NAMES", "reads_pose"]
 

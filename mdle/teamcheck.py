@@ -11,10 +11,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from mdle.dimensions import dim_words, same_kind
 from mdle.errors import Diagnostic, Severity, Span
+from mdle.lang import MessageUse, dim_words, same_kind
 from mdle.messages import POSE_CHANNEL
-from mdle.program import MessageUse
 from mdle.units import Dim
 
 __all__ = ["check_team"]
@@ -33,7 +32,7 @@ def check_team(uses: Mapping[str, Sequence[MessageUse]], robots: Sequence[str]
     """Return (errors, warnings) about the team's messages and robot names.
 
     ``uses`` holds, by robot, what the element it runs names
-    (:meth:`mdle.program.Program.uses_of`); ``robots`` every robot of the world.
+    (:meth:`mdle.lang.Program.uses_of`); ``robots`` every robot of the world.
     """
     errors: list[Diagnostic] = []
     warnings: list[Diagnostic] = []

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.backend import Pose
-from mdle.errors import Diagnostic, MdleError, WorldError
+from mdle.errors import Diagnostic, MdleError, Severity, WorldError
 from mdle.messages import DeliveryRules
 
 __all__ = ["MemberSpec", "TeamSpec", "LoadedTeam", "parse_team", "read_team", "robot_plan",
@@ -188,7 +188,7 @@ def load_team(spec: TeamSpec, *, world: str | None = None, overrides: Sequence[s
     import dataclasses
 
     from mdle import sim
-    from mdle.loader import load_program
+    from mdle.lang import load_program
     from mdle.runtime import element_of
     from mdle.teamcheck import check_team
 
@@ -227,5 +227,13 @@ def load_team(spec: TeamSpec, *, world: str | None = None, overrides: Sequence[s
                                    for n, e in elements.items()}, robots)
     if errors:
         raise TeamError(errors, sources)
+    # A point robot has no body: the others' ladars cannot see it and no contact with it
+    # can be detected; a team almost always means robots with bodies.
+    warnings += [Diagnostic(None, f"robot `{r.name}` of world `{w.name}` is a point (profile "
+                                  f"`{r.profile.name}`, radius 0 m): the other robots' ladars "
+                                  "do not see it and no contact with it is detected",
+                            hint="give it a robot with a body, e.g. `robot: pioneer2dx`",
+                            severity=Severity.WARNING)
+                 for r in w.robots if r.name in members and r.profile.radius <= 0]
     return LoadedTeam(spec, w, programs, elements, {n: m.plan for n, m in members.items()},
                       warnings, sources)

@@ -15,10 +15,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from mdle.backend import Pose
+from mdle.lang import Element
 from mdle.messages import Message
-from mdle.program import Element
 from mdle.runtime import RunResult, Scheduler
-from mdle.runtime.observer import Observer
+from mdle.runtime.events import Observer
 
 __all__ = ["TeamRun", "message_record"]
 

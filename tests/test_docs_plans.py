@@ -59,7 +59,7 @@ def test_the_readme_and_docs_show_plans() -> None:
 @pytest.mark.parametrize("block", PLANS, ids=[b.where for b in PLANS])
 def test_shown_plan_runs_to_its_end_without_a_collision(block: Block) -> None:
     from mdle import sim
-    from mdle.loader import load_text
+    from mdle.lang import load_text
     from mdle.runtime import Cause, run_named
 
     world = _option(block, "world")
@@ -88,7 +88,7 @@ def test_no_plan_hides_in_an_untagged_block() -> None:
 def test_the_language_patrol_example_actually_turns() -> None:
     # plans/language/patrol.mdle once ended its patrol before the first turn
     from mdle import sim
-    from mdle.loader import load_program
+    from mdle.lang import load_program
     from mdle.runtime import run_named
 
     plan = REPO / "plans" / "language" / "patrol.mdle"

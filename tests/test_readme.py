@@ -15,7 +15,7 @@ def _blocks(lang: str) -> list[str]:
 
 
 def test_readme_plan_checks_clean() -> None:
-    from mdle.loader import load_text
+    from mdle.lang import load_text
 
     (plan,) = _blocks("mdle")
     program = load_text(plan, "README.md")

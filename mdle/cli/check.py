@@ -14,13 +14,14 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import sys
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from mdle.errors import Diagnostic, MdleError
+    from mdle.lang import Program
     from mdle.motion_limits import KnownRobot
-    from mdle.program import Program
 
 __all__ = ["add_parser", "run", "expand_paths"]
 
@@ -37,7 +38,8 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("files", nargs="+", metavar="FILE",
                    help="plan files; a folder means every .mdle file under it; a team file "
                         "(.yaml) is checked whole: its world, every robot's plan, and the "
-                        "messages and robot names across them")
+                        "messages and robot names across them; a world file (.yaml with "
+                        "obstacles, start, robot... and no `world:` key) is checked as a world")
     p.add_argument("-q", "--quiet", action="store_true",
                    help="print errors only (no warnings, no summary)")
     p.add_argument("--strict", action="store_true", help="treat warnings as errors (exit 1)")
@@ -67,7 +69,7 @@ def _load(path: str, args: argparse.Namespace,
           robots: dict[tuple[str, ...], KnownRobot]) -> Program | MdleError:
     from mdle.cli.options import known_robot
     from mdle.errors import MdleError
-    from mdle.loader import load_program
+    from mdle.lang import load_program
 
     try:
         robot = known_robot(path, args.world, args.robot, robots)
@@ -76,11 +78,46 @@ def _load(path: str, args: argparse.Namespace,
         return err
 
 
+#: Top-level keys only a world file has (a team file names its world under ``world:``).
+_WORLD_KEYS = frozenset(("name", "description", "start", "robot", "ladar", "extent",
+                         "obstacles"))
+_TOP_KEY = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)[ \t]*:", re.MULTILINE)
+
+
+def _is_world_file(path: str) -> bool:
+    """Return True for a YAML file whose top-level keys are a world's, not a team's.
+
+    Only the keys at column 0 are looked at (no YAML is loaded here): the file is read
+    whole later, with the size and nesting limits, by whichever reader it goes to.
+    """
+    from mdle.userfile import UserFileError, read_user_file
+
+    try:
+        text = read_user_file(path).decode("utf-8", "replace")
+    except (UserFileError, OSError):
+        return False  # the team reader reports it
+    keys = set(_TOP_KEY.findall(text))
+    return "world" not in keys and bool(keys & _WORLD_KEYS)
+
+
+def _check_world(path: str, quiet: bool) -> None:
+    """Check a world file (WorldError on errors) and say what it holds."""
+    from mdle.sim.world_yaml import read_world
+
+    world = read_world(path)
+    if not quiet:
+        n = len(world.obstacles)
+        print(f"{path}: a world, {n} obstacle{'s' * (n != 1)}", file=sys.stdout)
+
+
 def _check_team(path: str, quiet: bool) -> int:
     """Check a team file and its plans (MdleError on errors); returns the warnings."""
     from mdle.cli.output import print_diagnostics
     from mdle.teamfile import load_team, read_team
 
+    if _is_world_file(path):
+        _check_world(path, quiet)
+        return 0
     team = load_team(read_team(path))
     found = list(team.warnings)
     for program in team.programs.values():
@@ -93,9 +130,9 @@ def _check_team(path: str, quiet: bool) -> int:
 def run(args: argparse.Namespace) -> int:
     """Check each file; returns the exit code."""
     from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
-    from mdle.compile import missing_entry
     from mdle.errors import MdleError
     from mdle.frames import FRAME_NOTE, reads_pose
+    from mdle.lang import missing_entry
 
     files = expand_paths(args.files)
     robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once

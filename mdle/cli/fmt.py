@@ -36,8 +36,7 @@ def run(args: argparse.Namespace) -> int:
     from mdle.cli.check import expand_paths
     from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
     from mdle.errors import Diagnostic, MdleError
-    from mdle.format import format_source
-    from mdle.loader import read_source
+    from mdle.lang import format_source, read_source
 
     status = EXIT_OK
     files = expand_paths(args.files)

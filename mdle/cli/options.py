@@ -14,8 +14,12 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from mdle.motion_limits import KnownRobot
 
-__all__ = ["add_simulation_options", "known_robot", "positive_seconds", "seconds", "seed",
-           "world_beside", "writable_output"]
+__all__ = ["DEFAULT_RATE", "add_simulation_options", "known_robot", "positive_seconds",
+           "seconds", "seed", "world_beside", "writable_output"]
+
+#: Control rate (Hz) when neither ``--rate`` nor a team file gives one: the Pioneer's
+#: 100 ms server cycle.
+DEFAULT_RATE = 10.0
 
 
 def add_simulation_options(p: Any) -> None:

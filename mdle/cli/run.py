@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
 from mdle.cli.options import (
+    DEFAULT_RATE,
     add_simulation_options,
     known_robot,
     seconds,
@@ -77,8 +78,10 @@ def add_parser(subparsers: Any) -> None:
                    help="stop after this many seconds of (simulated) time")
     p.add_argument("--realtime", action="store_true",
                    help="pace the simulation to the wall clock")
-    p.add_argument("--rate", type=_hertz, default=10.0, metavar="HZ",
-                   help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle)")
+    # default None: a team file's `rate:` applies unless --rate is given (even --rate 10)
+    p.add_argument("--rate", type=_hertz, default=None, metavar="HZ",
+                   help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle; with a "
+                        "team, the team file's rate:)")
     p.add_argument("--trace", metavar="FILE.jsonl", help="write the run's trace (JSON lines)")
     p.add_argument("--record", metavar="FILE.mcap",
                    help="record the run as ROS 2 messages in an MCAP file (Foxglove, "
@@ -193,6 +196,8 @@ def run(args: argparse.Namespace) -> int:
         from mdle.cli.team import run_team
 
         return run_team(args)
+    if args.rate is None:
+        args.rate = DEFAULT_RATE
     if args.plan is None:
         _say("mdle run: give a PLAN.mdle, or a team with --team TEAM.yaml or --robot-plan "
              "NAME=PLAN.mdle")
@@ -227,7 +232,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     from mdle.errors import Diagnostic, MdleError
-    from mdle.loader import load_program
+    from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
 
     if args.plot:
@@ -246,7 +251,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     try:
         program = load_program(args.plan, settings=args.overrides, robot=robot)
     except MdleError as err:
-        from mdle.hints import yaml_as_plan
+        from mdle.lang import yaml_as_plan
 
         raise yaml_as_plan(args.plan, err, "to run a plan in this world: "
                           f"`mdle run PLAN.mdle --world {args.plan}`") from None

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.cli import output
-from mdle.cli.options import writable_output
+from mdle.cli.options import DEFAULT_RATE, writable_output
 from mdle.cli.signals import SignalGuard, signal_name
 from mdle.errors import Diagnostic, MdleError
 
@@ -68,7 +68,8 @@ def run_team(args: argparse.Namespace) -> int:
     seed = args.seed if args.seed is not None else (
         spec.seed if spec.seed is not None else world.seed)
     rules = spec.rules
-    rate = spec.rate if spec.rate is not None and args.rate == 10.0 else args.rate
+    rate = args.rate if args.rate is not None else (
+        spec.rate if spec.rate is not None else DEFAULT_RATE)
     until = args.until if args.until is not None else spec.until
     names = [r.name for r in world.robots]
     writers: dict[str, Any] = {}

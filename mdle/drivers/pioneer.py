@@ -1,5 +1,8 @@
 """A Pioneer robot (ARCOS firmware, or MobileSim/AMRISim) as an mdle backend.
 
+Over 500 lines: one backend class, whose handshake, reader thread, keep-alive, dead-man
+switch and goodbye share one connection state under one lock (the codec is arcos.py).
+
 :class:`PioneerBackend` implements :class:`mdle.backend.Backend` on the wall clock. The
 connection is synchronised (SYNC0, SYNC1, SYNC2 with retries, per baud rate on serial
 lines), opened, and the motors enabled; then a reader thread owns the incoming stream:

@@ -73,7 +73,7 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
     import numpy as np
 
     from mdle.backend import Pose
-    from mdle.loader import load_text
+    from mdle.lang import load_text
     from mdle.runtime import run
     from mdle.runtime.observer import Recorder
     from mdle.sim import SimBackend, load_world
@@ -83,7 +83,7 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
     if plan is None:
         program = load_text(follow_plan(side, rc, v, duration, extra), file=f"<{world}>")
     else:
-        from mdle.loader import load_program
+        from mdle.lang import load_program
 
         program = load_program(plan)
     w = load_world(world)

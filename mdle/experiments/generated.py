@@ -163,7 +163,7 @@ def run_spec(spec: RunSpec) -> Row:
     """
     from mdle.backend import Pose
     from mdle.experiments.engagement import follow_metrics
-    from mdle.loader import load_text
+    from mdle.lang import load_text
     from mdle.runtime import Recorder, run_named
     from mdle.sim import SimBackend
     from mdle.sim.generated import generate_shape

@@ -402,7 +402,7 @@ class Repl:
         try:
             names, warnings = self.session.load(path)
         except MdleError as err:
-            from mdle.hints import yaml_as_plan
+            from mdle.lang import yaml_as_plan
 
             raise yaml_as_plan(path, err, "to make it the session's world: "
                                f"`:world {path}`") from None

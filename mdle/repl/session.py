@@ -1,6 +1,6 @@
 """The REPL's state and what it can do, with no terminal in sight.
 
-A :class:`Session` holds the definitions typed so far (a :class:`~mdle.workspace.Workspace`),
+A :class:`Session` holds the definitions typed so far (a :class:`~mdle.lang.Workspace`),
 a simulated robot in a world (a :class:`sim.SimBackend` that is never reset between runs, so
 each run starts where the last one left the robot), the path and the per-tick samples since
 the last reset (the session trace), and the element last run (for ``:step``). Its methods
@@ -26,7 +26,7 @@ from mdle.atoms.registry import Registry
 from mdle.backend import Backend, Observation, Pose, RobotLimits
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
-from mdle.program import Element
+from mdle.lang import Element, Workspace
 from mdle.runtime import (
     Cause,
     Observer,
@@ -36,7 +36,6 @@ from mdle.runtime import (
     Scheduler,
     Termination,
 )
-from mdle.workspace import Workspace
 
 if TYPE_CHECKING:
     import numpy as np
@@ -386,7 +385,7 @@ class Session:
 
     def _forms(self) -> dict[str, str]:
         """Each definition's canonical text, to tell a changed definition from a retyped one."""
-        from mdle.format import format_statement
+        from mdle.lang import format_statement
 
         out = {}
         for name in self.workspace.names():
@@ -479,7 +478,7 @@ class Session:
         """
         import re
 
-        from mdle import syntax as st
+        from mdle.lang import DefKind
 
         program = self.workspace.program()
         if program.entry is not None:
@@ -489,7 +488,7 @@ class Session:
         if called is not None and called.group(1) in program.elements:
             return called.group(1)
         defs = [d for d in reversed(self.workspace.definitions()) if d.name in program.elements]
-        plans = [d for d in defs if d.kind is st.DefKind.PLAN]
+        plans = [d for d in defs if d.kind is DefKind.PLAN]
         return (plans or defs)[0].name if defs else None
 
     def save_text(self) -> str:

@@ -21,9 +21,8 @@ from collections.abc import Sequence
 
 from mdle.backend import Backend
 from mdle.errors import Diagnostic, MdleRuntimeError
-from mdle.program import Element, Program
-from mdle.runtime.events import RunResult
-from mdle.runtime.observer import Observer
+from mdle.lang import Element, Program
+from mdle.runtime.events import Observer, RunResult
 from mdle.runtime.scheduler import DEFAULT_STALL_TIMEOUT, Scheduler
 
 __all__ = ["run", "run_named", "element_of"]

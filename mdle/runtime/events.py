@@ -1,8 +1,10 @@
-"""What a run produces: events (starts and ends), terminations, per-tick samples, the result.
+"""What a run produces (events, terminations, per-tick samples, the result) and who hears it.
 
 These are plain frozen records. The scheduler makes them and hands them to observers
-(the trace writer, the live view); nothing here knows about JSON, rich or matplotlib.
-Times are seconds on the backend's clock (the observation time), poses are odometry.
+(the trace writer, the live view) through the :class:`Observer` hooks declared here, so
+the scheduler and the observers both depend on this module and not on each other.
+Nothing here knows about JSON, rich or matplotlib. Times are seconds on the backend's
+clock (the observation time), poses are odometry.
 """
 
 from __future__ import annotations
@@ -11,12 +13,12 @@ import enum
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import NamedTuple
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 from mdle.backend import Pose, Scan
 
 __all__ = ["Cause", "EventKind", "Event", "Termination", "Collision", "Sample", "RunResult",
-           "ended_how"]
+           "ended_how", "Observer"]
 
 _NO_DIAG: Mapping[str, float] = MappingProxyType({})
 
@@ -210,3 +212,28 @@ class RunResult:
         """
         return (self.termination.cause in (Cause.COMPLETED, Cause.INTERRUPT, Cause.TIMER)
                 and not self.collided and self.fault is None)
+
+
+@runtime_checkable
+class Observer(Protocol):
+    """Anything with the four observer hooks.
+
+    The scheduler calls them in this order: ``on_start`` once before the first tick,
+    ``on_event`` for every element start and end, ``on_tick`` once per tick with its
+    :class:`Sample`, ``on_end`` once with the :class:`RunResult` (also after an error or
+    Ctrl-C). Hooks must be quick: they run on the control loop.
+    """
+
+    # The running mdle.runtime.Scheduler: typed Any so that this module, which the
+    # scheduler imports, does not import it back; an observer types it as it needs.
+    def on_start(self, scheduler: Any) -> None:
+        """Handle the start of the run, just before its first tick."""
+
+    def on_event(self, event: Event) -> None:
+        """Handle an element starting or ending."""
+
+    def on_tick(self, sample: Sample) -> None:
+        """Handle a completed tick (its command has been sent)."""
+
+    def on_end(self, result: RunResult) -> None:
+        """Handle the end of the run (whatever the cause), after the robot was stopped."""

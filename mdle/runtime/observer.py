@@ -1,39 +1,21 @@
-"""Observers: what watches a run (trace writer, live view, tests) without steering it.
+"""Observers ready to subclass or use: what watches a run without steering it.
 
-An observer has four hooks, called by the scheduler in this order: ``on_start`` once
-before the first tick, ``on_event`` for every element start and end, ``on_tick`` once per
-tick with its :class:`~mdle.runtime.events.Sample`, ``on_end`` once with the
-:class:`~mdle.runtime.events.RunResult` (also after an error or Ctrl-C). Hooks must be
-quick: they run on the control loop.
+The hooks themselves (:class:`~mdle.runtime.events.Observer`: ``on_start``, ``on_event``,
+``on_tick``, ``on_end``) are declared with the events, in :mod:`mdle.runtime.events`,
+which the scheduler imports; this module is for observers (the live view, tests,
+notebooks), and the scheduler does not import it.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any
 
-from mdle.runtime.events import Event, RunResult, Sample
+from mdle.runtime.events import Event, Observer, RunResult, Sample
 
 if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
 
 __all__ = ["Observer", "BaseObserver", "Recorder"]
-
-
-@runtime_checkable
-class Observer(Protocol):
-    """Anything with the four observer hooks."""
-
-    def on_start(self, scheduler: "Scheduler") -> None:
-        """Handle the start of the run, just before its first tick."""
-
-    def on_event(self, event: Event) -> None:
-        """Handle an element starting or ending."""
-
-    def on_tick(self, sample: Sample) -> None:
-        """Handle a completed tick (its command has been sent)."""
-
-    def on_end(self, result: RunResult) -> None:
-        """Handle the end of the run (whatever the cause), after the robot was stopped."""
 
 
 class BaseObserver:

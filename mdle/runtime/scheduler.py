@@ -23,9 +23,17 @@ from typing import Any
 from mdle.atoms.registry import Context
 from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose
 from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
-from mdle.program import AtomNode, Element, Send, StringNode
-from mdle.runtime.events import Cause, Collision, Event, EventKind, RunResult, Sample, Termination
-from mdle.runtime.observer import Observer
+from mdle.lang import AtomNode, Element, Send, StringNode
+from mdle.runtime.events import (
+    Cause,
+    Collision,
+    Event,
+    EventKind,
+    Observer,
+    RunResult,
+    Sample,
+    Termination,
+)
 from mdle.runtime.pacing import Pacer
 
 __all__ = ["Scheduler", "ActiveElement", "TIME_EPS", "DEFAULT_STALL_TIMEOUT"]

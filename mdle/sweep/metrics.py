@@ -45,7 +45,7 @@ def follow_atoms(element: Any, law: str = "follow_boundary") -> dict[str, Follow
     Paths are named as the scheduler names them (``main/follow``, a repeated label
     gets ``#2``).
     """
-    from mdle.program import AtomNode
+    from mdle.lang import AtomNode
 
     out: dict[str, FollowSpec] = {}
 

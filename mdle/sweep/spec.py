@@ -255,7 +255,7 @@ def _parse(doc: _Doc, base: Path, default_name: str) -> Study:
 
 # ---------------------------------------------------------------- sections
 def _plan(doc: _Doc, base: Path, v: Any) -> tuple[str, str, tuple[tuple[str, str], ...]]:
-    from mdle.loader import plan_bundle
+    from mdle.lang import plan_bundle
 
     if isinstance(v, str):
         v = {"file": v}
@@ -278,7 +278,7 @@ def _plan(doc: _Doc, base: Path, v: Any) -> tuple[str, str, tuple[tuple[str, str
 
 def _check_plan(doc: _Doc, study: Study) -> None:
     """Check the plan, its entry, and each parameter value on its own."""
-    from mdle.loader import load_text
+    from mdle.lang import load_text
     from mdle.runtime.api import element_of
 
     files = dict(study.plan_files)

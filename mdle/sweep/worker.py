@@ -86,7 +86,7 @@ def _run(task: RunTask) -> tuple[dict[str, Any], bytes | None]:
     import numpy as np
 
     from mdle.backend import Pose
-    from mdle.loader import load_text
+    from mdle.lang import load_text
     from mdle.runtime import run
     from mdle.runtime.api import element_of
     from mdle.runtime.observer import Recorder

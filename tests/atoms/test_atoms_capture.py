@@ -12,7 +12,7 @@ from mdle.atoms import steering as S
 from mdle.atoms.follow import FollowState, lost
 from mdle.atoms.registry import Context
 from mdle.backend import Observation, Pose
-from mdle.loader import load_text
+from mdle.lang import load_text
 from mdle.runtime import run
 from mdle.runtime.events import Cause
 from mdle.runtime.scripted import ScriptedBackend

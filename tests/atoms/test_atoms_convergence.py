@@ -11,7 +11,7 @@ import pytest
 from mdle import sim
 from mdle.atoms import steering as S
 from mdle.backend import Pose
-from mdle.loader import load_text
+from mdle.lang import load_text
 from mdle.runtime import Recorder, run
 from mdle.sim.profiles import robot_profile
 from mdle.sim.shapes import Circle, Rectangle

@@ -39,7 +39,7 @@ def test_figures_1_to_3_avoid_then_follow(name: str, rc: float, sensing: str,
 
 
 def _run_pioneer(name: str) -> tuple[RunResult, list[Sample]]:
-    from mdle.loader import load_program
+    from mdle.lang import load_program
     from mdle.sim import SimBackend, load_world
 
     program = load_program(PLANS / f"{name}.mdle")

@@ -17,7 +17,7 @@ from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
 from mdle.drivers.pioneer import PioneerOptions
 from mdle.errors import BackendError
-from mdle.loader import load_text
+from mdle.lang import load_text
 from mdle.runtime import Cause, element_of, run
 
 if TYPE_CHECKING:

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from mdle.backend import Pose
 from mdle.drivers import open_backend
 from mdle.drivers.pioneer import PioneerOptions
-from mdle.loader import load_text
+from mdle.lang import load_text
 from mdle.runtime import element_of, run
 from mdle.runtime.events import RunResult
 from mdle.sim import SimBackend, load_world

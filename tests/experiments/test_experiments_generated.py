@@ -19,7 +19,7 @@ from mdle.experiments.generated import (
     run_study,
     study_specs,
 )
-from mdle.loader import load_text
+from mdle.lang import load_text
 
 SMALL = StudyConfig(shapes=3, starts=1, duration=4.0, blind=True)
 

@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hs
 
 from mdle.errors import MdleError, render_diagnostic
-from mdle.loader import load_program, read_source
+from mdle.lang import load_program, read_source
 from mdle.sim.world_yaml import parse_world, read_world
 from mdle.trace import read_trace
 

@@ -10,8 +10,7 @@ import pytest
 
 from mdle.atoms.registry import Context, Registry
 from mdle.errors import CheckError, Diagnostic, Span, render_diagnostic
-from mdle.loader import load_text
-from mdle.program import AtomNode, Program, StringKind, StringNode
+from mdle.lang import AtomNode, Program, StringKind, StringNode, load_text
 
 
 def _at(d: Diagnostic) -> Span:
@@ -307,7 +306,7 @@ def test_long_definition_chains_fail_cleanly(reg: Registry) -> None:
 
 
 def test_default_registry_plans(plans_dir: Path) -> None:
-    from mdle.loader import load_program
+    from mdle.lang import load_program
 
     p = load_program(plans_dir / "language" / "tour.mdle")
     assert p.entry == "main" and not p.warnings

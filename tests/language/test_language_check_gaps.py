@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import pytest
 
-from mdle import compile as compile_module
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Param
 from mdle.errors import CheckError, MdleError, MdleSyntaxError, render_diagnostic
-from mdle.loader import load_text
+from mdle.lang import check as compile_module
+from mdle.lang import load_text
 from mdle.units import LENGTH
 
 

@@ -208,3 +208,23 @@ def test_check_warns_about_a_file_run_cannot_run(tmp_path: Path) -> None:
     (tmp_path / "main.mdle").write_text('import "lib.mdle"\nrun creep\n')
     r = mdle("check", "lib.mdle", "main.mdle", cwd=tmp_path)
     assert r.stdout == "checked 2 files: 0 errors, 0 warnings\n", r.stdout
+
+
+def test_check_reads_a_world_file_as_a_world(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    """A world file given to check is checked as a world, not refused as a bad team file."""
+    from mdle.cli import main
+
+    world = REPO / "plans" / "paper" / "fig6-corridor.world.yaml"
+    assert main(["check", str(world)]) == 0
+    out = capsys.readouterr().out
+    assert f"{world}: a world, 12 obstacles" in out and "unknown key" not in out
+    bad = tmp_path / "bad.world.yaml"
+    bad.write_text("name: x\nobstacles:\n  - {type: circle, center: [3, 0]}\n")
+    assert main(["check", str(bad)]) == 1
+    assert f"{bad}:3:5: error: obstacles[0]: missing key `radius`" in capsys.readouterr().out
+    # a team file (it names its world) is still read as a team
+    team = tmp_path / "t.yaml"
+    team.write_text("world: ellipse\nname: x\nrobots: {}\n")
+    assert main(["check", str(team)]) == 1
+    assert "unknown key `name`" in capsys.readouterr().out

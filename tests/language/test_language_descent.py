@@ -1,4 +1,4 @@
-"""The fast parser (mdle/descent.py) against the reference (lark): same trees, same spans.
+"""The fast parser (mdle/lang/descent.py) against the reference (lark): same trees, same spans.
 
 The fast parser may only give up (then lark reads the file and reports); whenever it
 returns a tree, that tree, every span in it and the comments must be lark's.
@@ -17,9 +17,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hs
 
-from mdle import parser
-from mdle.descent import parse_valid
-from mdle.syntax_errors import EXAMPLES
+from mdle.lang import parser
+from mdle.lang.descent import parse_valid
+from mdle.lang.syntax_errors import EXAMPLES
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

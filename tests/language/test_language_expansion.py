@@ -14,10 +14,8 @@ import types
 
 from mdle.atoms.registry import Args, Context, Param, Registry, sensor
 from mdle.backend import Observation, Pose, RobotLimits
-from mdle.compile import never_ends
-from mdle.loader import load_text
-from mdle.program import StringNode
-from mdle.show import show_program, structure
+from mdle.lang import StringNode, load_text, show_program, structure
+from mdle.lang.check import never_ends
 from mdle.units import LENGTH
 
 CALLS: list[int] = [0]

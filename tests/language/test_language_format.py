@@ -10,10 +10,8 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, given, settings
 
-from mdle.format import WIDTH, format_source
-from mdle.loader import load_text
-from mdle.parser import parse_module
-from mdle.show import structure
+from mdle.lang import load_text, parse_module, structure
+from mdle.lang.format import WIDTH, format_source
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]

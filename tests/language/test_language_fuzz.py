@@ -10,9 +10,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hs
 
 from mdle.errors import MdleError, render_diagnostic
-from mdle.format import format_source
-from mdle.loader import load_program, load_text
-from mdle.workspace import Workspace
+from mdle.lang import Workspace, format_source, load_program, load_text
 
 HERE = Path(__file__).resolve().parent
 SEEDS = [p.read_text(encoding="utf-8") for p in sorted((HERE.parents[1] / "plans").rglob("*.mdle"))]

@@ -14,8 +14,8 @@ import pytest
 
 from mdle.atoms import default_registry
 from mdle.errors import Diagnostic, MdleError
-from mdle.hints import chained_hint
-from mdle.loader import load_text
+from mdle.lang import load_text
+from mdle.lang.hints import chained_hint
 
 MDLE = str(Path(sys.executable).parent / "mdle")
 REPO = Path(__file__).resolve().parents[2]

@@ -6,10 +6,8 @@ import gc
 
 import pytest
 
-from mdle import conditions
 from mdle.errors import CheckError
-from mdle.loader import load_text
-from mdle.program import StringNode
+from mdle.lang import StringNode, conditions, load_text
 
 PLAN = """
 atom a(d = 1 m) = (go(1 m/s), range(0 deg) < d, 2 s)

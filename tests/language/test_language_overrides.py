@@ -8,9 +8,8 @@ from pathlib import Path
 import pytest
 
 from mdle.errors import MdleError, render_diagnostic
-from mdle.loader import load_program
-from mdle.overrides import parse_override
-from mdle.program import AtomNode, StringNode
+from mdle.lang import AtomNode, StringNode, load_program
+from mdle.lang.overrides import parse_override
 
 PLAN = """\
 interrupt blocked(d = 0.5 m) = range(0 deg) < d

@@ -6,9 +6,9 @@ import math
 
 import pytest
 
-from mdle import syntax as st
 from mdle.errors import Diagnostic, MdleSyntaxError, Span
-from mdle.parser import MAX_DEPTH, parse_expression, parse_module
+from mdle.lang import syntax as st
+from mdle.lang.parser import MAX_DEPTH, parse_expression, parse_module
 from mdle.units import ANGLE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 

@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from mdle.errors import MdleError, MdleSyntaxError
-from mdle.loader import load_program, load_text
-from mdle.parser import parse_partial
+from mdle.lang import load_program, load_text
+from mdle.lang.parser import parse_partial
 
 SEVERAL = """\
 # several independent mistakes

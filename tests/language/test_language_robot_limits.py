@@ -15,7 +15,7 @@ import pytest
 
 from mdle.atoms import default_registry
 from mdle.errors import Diagnostic
-from mdle.loader import load_text
+from mdle.lang import load_text
 from mdle.motion_limits import KnownRobot
 
 PIONEER = KnownRobot("pioneer2dx", 2.2, 2.2, math.radians(500), "the default robot")

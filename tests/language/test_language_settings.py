@@ -5,9 +5,8 @@ from __future__ import annotations
 import pytest
 
 from mdle.errors import CheckError
-from mdle.loader import load_text
-from mdle.overrides import parse_setting
-from mdle.program import AtomNode, Program
+from mdle.lang import AtomNode, Program, load_text
+from mdle.lang.overrides import parse_setting
 
 
 def atom(p: Program, name: str) -> AtomNode:

@@ -12,10 +12,10 @@ from typing import Any
 
 import pytest
 
-from mdle import compile as compile_module
 from mdle.atoms import default_registry
 from mdle.errors import CheckError
-from mdle.loader import load_text
+from mdle.lang import check_names as compile_module
+from mdle.lang import load_text
 
 
 def test_many_unknown_names_compare_with_few_candidates(monkeypatch: pytest.MonkeyPatch) -> None:

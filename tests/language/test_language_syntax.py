@@ -5,9 +5,9 @@ from __future__ import annotations
 import pytest
 
 from mdle.errors import Diagnostic, MdleSyntaxError, Span, render_diagnostic
-from mdle.loader import load_text
-from mdle.parser import MAX_ERRORS, parse_expression, parse_module
-from mdle.syntax_errors import EXAMPLES, TERMINAL_WORDS
+from mdle.lang import load_text
+from mdle.lang.parser import MAX_ERRORS, parse_expression, parse_module
+from mdle.lang.syntax_errors import EXAMPLES, TERMINAL_WORDS
 
 CASES = [(label.message, snippet) for label, snippets in EXAMPLES.items() for snippet in snippets]
 
@@ -132,7 +132,7 @@ def test_expression_errors_in_the_repl() -> None:
 
 
 def test_terminal_words_cover_the_grammar() -> None:
-    from mdle.parser import lark_parser
+    from mdle.lang.parser import lark_parser
 
     names = {t.name for t in lark_parser().terminals} - {"COMMENT", "WHITESPACE"}
     assert names <= set(TERMINAL_WORDS)

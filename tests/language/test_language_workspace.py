@@ -8,8 +8,7 @@ import pytest
 
 from mdle.atoms.registry import Registry
 from mdle.errors import CheckError, MdleSyntaxError
-from mdle.program import AtomNode, StringNode
-from mdle.workspace import Workspace
+from mdle.lang import AtomNode, StringNode, Workspace
 
 
 def test_define_element_names_format(reg: Registry) -> None:

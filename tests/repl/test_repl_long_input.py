@@ -11,7 +11,7 @@ import io
 
 import pytest
 
-from mdle import workspace as workspace_module
+from mdle.lang import workspace as workspace_module
 from mdle.repl.commands import Repl
 from mdle.repl.plain import run_plain
 from mdle.repl.session import Session

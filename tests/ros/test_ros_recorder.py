@@ -10,7 +10,7 @@ from typing import Any
 import pytest
 
 from mdle.backend import Observation
-from mdle.loader import load_text
+from mdle.lang import load_text
 from mdle.ros.recorder import McapRecorder
 from mdle.runtime import Scheduler
 from mdle.trace import TraceWriter, read_trace

@@ -1,6 +1,6 @@
 """Hand-built IR for the runtime tests: small laws, signal interrupts, event tables.
 
-Nothing here uses the parser: elements are built from :mod:`mdle.program` nodes, and
+Nothing here uses the parser: elements are built from :mod:`mdle.lang.program` nodes, and
 interrupts read scripted signals from ``ctx.obs.truth`` so a test says per tick which
 conditions hold. Tests get the helpers through the ``ir`` fixture (pytest runs with
 ``--import-mode=importlib``, so a helper module could not be imported by name).
@@ -16,7 +16,7 @@ import pytest
 
 from mdle.atoms.registry import Context, LawSpec
 from mdle.backend import Command
-from mdle.program import INF, NEVER, AtomNode, Element, Interrupt, StringKind, StringNode
+from mdle.lang import INF, NEVER, AtomNode, Element, Interrupt, StringKind, StringNode
 from mdle.runtime import Event, EventKind
 
 

@@ -233,7 +233,7 @@ PLANS = sorted((REPO / "plans").rglob("*.mdle"))
 @pytest.mark.parametrize("plan_file", PLANS, ids=lambda p: str(p.relative_to(REPO)))
 def test_every_plan_in_plans_runs_in_the_simulator(
         plan_file: Path, tmp_path: Path, run_mdle: RunMdle) -> None:
-    from mdle.loader import load_program
+    from mdle.lang import load_program
 
     program = load_program(plan_file)
     extra = [] if program.entry else ["--plan", sorted(program.elements)[0]]

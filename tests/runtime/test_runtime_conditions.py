@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle import conditions as cond
 from mdle.atoms.registry import BOOL, Context, SensorSpec
+from mdle.lang import conditions as cond
 from mdle.units import LENGTH
 
 

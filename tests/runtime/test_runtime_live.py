@@ -8,8 +8,8 @@ import re
 from types import SimpleNamespace
 from typing import Any
 
+from mdle.lang import StringNode
 from mdle.live import LiveView, summary_rows
-from mdle.program import StringNode
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
 

@@ -14,8 +14,8 @@ from matplotlib.collections import LineCollection
 
 from mdle.atoms.registry import Context
 from mdle.backend import Command
+from mdle.lang import AtomNode, Element
 from mdle.plot import PlotError, boundary_points, plot_trace, trace_figure
-from mdle.program import AtomNode, Element
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
 from mdle.trace import TraceWriter, read_trace
@@ -132,7 +132,7 @@ def test_detected_boundary_is_drawn_where_the_obstacle_is(tmp_path: Path) -> Non
     import shapely
 
     from mdle import sim
-    from mdle.loader import load_text
+    from mdle.lang import load_text
 
     world = sim.load_world("hexagon")
     program = load_text("atom f = (follow_boundary(side = right, rc = 0.5 m, v = 1 m/s), "

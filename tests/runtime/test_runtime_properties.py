@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mdle.backend import Command
-from mdle.program import INF, NEVER, AtomNode, Element, StringNode
+from mdle.lang import INF, NEVER, AtomNode, Element, StringNode
 from mdle.runtime import Cause, EventKind, RunResult, run
 from mdle.runtime.scripted import ScriptedBackend
 

@@ -15,7 +15,7 @@ import pytest
 from mdle.atoms.registry import Context
 from mdle.backend import ClockMode, Command, Pose, Scan
 from mdle.errors import BackendError, MdleRuntimeError
-from mdle.program import Program
+from mdle.lang import Program
 from mdle.runtime import (
     BaseObserver,
     Cause,
@@ -67,7 +67,7 @@ def test_context_is_fresh_each_tick_with_local_time_per_element(ir: SimpleNamesp
         seen.append(("U", round(ctx.obs.time, 9), round(ctx.t, 9), dict(ctx.cache)))
         return Command()
 
-    from mdle.program import Interrupt
+    from mdle.lang import Interrupt
 
     a = ir.atom("a", law=ir.const_law("a", step=step), when=Interrupt(probe, "probe"))
     main = ir.string("main", ir.atom("w", timer=0.1), a, timer=0.25)
@@ -96,7 +96,7 @@ def test_failing_control_law_stops_robot_and_names_the_element(ir: SimpleNamespa
 
 
 def test_failing_interrupt_names_its_source(ir: SimpleNamespace) -> None:
-    from mdle.program import Interrupt
+    from mdle.lang import Interrupt
 
     def broken(ctx: Context) -> bool:
         raise KeyError("beam")
@@ -112,7 +112,7 @@ def test_failing_interrupt_deep_below_untested_levels_names_its_element_and_time
         ir: SimpleNamespace) -> None:
     # levels without anything to test (never, no timer) are skipped by the tick; the
     # error still names the level whose interrupt failed and its own local time
-    from mdle.program import Interrupt
+    from mdle.lang import Interrupt
 
     def broken(ctx: Context) -> bool:
         if ctx.obs.time > 0.25:

@@ -15,7 +15,7 @@ import pytest
 
 from mdle.atoms.registry import Context
 from mdle.backend import Command
-from mdle.program import StringKind
+from mdle.lang import StringKind
 from mdle.runtime import Cause, Recorder, Scheduler, run
 from mdle.runtime.scripted import ScriptedBackend
 

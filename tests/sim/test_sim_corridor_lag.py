@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mdle.loader import load_text
+from mdle.lang import load_text
 from mdle.runtime import run
 from mdle.runtime.events import Sample
 from mdle.runtime.observer import Recorder

@@ -7,7 +7,7 @@ import importlib
 
 import pytest
 
-MODULES = ["mdle.sweep.spec", "mdle.overrides"]
+MODULES = ["mdle.sweep.spec", "mdle.lang.overrides"]
 
 
 @pytest.mark.parametrize("name", MODULES)

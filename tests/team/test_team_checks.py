@@ -161,7 +161,7 @@ def test_robot_plan_options_with_a_world(tmp_path: Path,
 ])
 def test_send_and_receive_errors_in_a_plan(atom: str, message: str) -> None:
     from mdle.errors import MdleError
-    from mdle.loader import load_text
+    from mdle.lang import load_text
 
     with pytest.raises(MdleError, match=message.replace("(", r"\(").replace(")", r"\)")):
         load_text(f"atom a = {atom}\n")
@@ -169,7 +169,7 @@ def test_send_and_receive_errors_in_a_plan(atom: str, message: str) -> None:
 
 def test_a_plan_that_talks_runs_alone_too() -> None:
     from mdle import sim
-    from mdle.loader import load_text
+    from mdle.lang import load_text
     from mdle.runtime import run_named
 
     program = load_text("atom tell = (go(0.2 m/s), received(go), 2 s, send(pose), send(go, 1))\n"
@@ -180,8 +180,7 @@ def test_a_plan_that_talks_runs_alone_too() -> None:
 
 
 def test_show_lists_what_an_atom_sends(capsys: pytest.CaptureFixture[str]) -> None:
-    from mdle.loader import load_text
-    from mdle.show import show_program
+    from mdle.lang import load_text, show_program
 
     program = load_text("atom tell(ch = leg) = (stop, never, 1 s, send(ch, 2 * x), send(pose))\n"
                         "plan main = ((tell(leg2)), never, 5 s)\n")
@@ -216,3 +215,18 @@ def test_worlds_show_draws_a_team_world_s_robots(tmp_path: Path) -> None:
     # the world has no `start:`; its robots are drawn where they start, each with its scan
     assert main(["worlds", "show", str(tmp_path / "duel.world.yaml"), "-o", str(out)]) == 0
     assert out.stat().st_size > 0
+
+
+def test_a_point_robot_in_a_team_is_a_warning_naming_it(tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture[str]
+                                                        ) -> None:
+    team = _files(tmp_path, {"red": STILL, "blue": STILL})
+    world = tmp_path / "duel.world.yaml"
+    world.write_text(WORLD.replace("robot: pioneer2dx", "robot: ideal"))
+    assert main(["check", str(team)]) == 0
+    out = capsys.readouterr().out
+    assert "warning: robot `red` of world `duel` is a point (profile `ideal`, radius 0 m)" in out
+    assert "robot `blue`" in out and "1 file: 0 errors, 2 warnings" in out
+    world.write_text(WORLD)
+    assert main(["check", str(team)]) == 0
+    assert "is a point" not in capsys.readouterr().out

@@ -157,3 +157,27 @@ def test_a_team_run_is_drawn_and_animated_from_its_traces(tmp_path: Path) -> Non
     out = animate_team([read_trace(p) for p in paths], None, tmp_path / "team.gif",
                        max_frames=4)
     assert Path(out).stat().st_size > 0
+
+
+def test_rate_comes_from_the_command_line_then_the_team_file_then_10_hz(tmp_path: Path) -> None:
+    """--rate wins over the team file's rate: even when it is the default value, 10 Hz."""
+    import json
+
+    from mdle.cli import main
+
+    team = tmp_path / "t.team.yaml"
+    team.write_text((TEAM / "wait.team.yaml").read_text().replace("robots:", "rate: 20\nrobots:")
+                    .replace("wait.world.yaml", str(TEAM / "wait.world.yaml"))
+                    .replace(": scout.mdle", f": {TEAM / 'scout.mdle'}")
+                    .replace(": waiter.mdle", f": {TEAM / 'waiter.mdle'}"))
+
+    def rate(*args: str) -> float:
+        trace = tmp_path / "r.jsonl"
+        assert main(["run", "--team", str(team), "--until", "1", "-q", "--trace", str(trace),
+                     *args]) == 0
+        with open(tmp_path / "r.scout.jsonl") as f:
+            return float(json.loads(f.readline())["rate"])
+
+    assert rate() == 20.0
+    assert rate("--rate", "10") == 10.0
+    assert rate("--rate", "50") == 50.0

@@ -24,7 +24,7 @@ from types import CodeType
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
-from mdle.program import NEVER, Interrupt
+from mdle.lang.program import NEVER, Interrupt
 from mdle.units import Dim
 
 __all__ = ["Typed", "constant", "sensor_reading", "negate", "logic", "compare", "arith",
@@ -301,7 +301,7 @@ def _code(source: str) -> CodeType:
 
 
 def to_interrupt(t: Typed, source: str | Callable[[], str]) -> Interrupt:
-    """Return the runtime's :class:`~mdle.program.Interrupt` for a checked condition.
+    """Return the runtime's :class:`~mdle.lang.program.Interrupt` for a checked condition.
 
     ``source`` is the interrupt's text, or a function making it when first read.
     """

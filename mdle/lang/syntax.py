@@ -1,8 +1,8 @@
 """The MDLe syntax tree: immutable, typed nodes with source spans.
 
-The parser (:mod:`mdle.parser`) builds these from text; the checker
-(:mod:`mdle.compile`) reads them and builds the runnable program
-(:mod:`mdle.program`); the formatter (:mod:`mdle.format`) prints them back.
+The parser (:mod:`mdle.lang.parser`) builds these from text; the checker
+(:mod:`mdle.lang.check`) reads them and builds the runnable program
+(:mod:`mdle.lang.program`); the formatter (:mod:`mdle.lang.format`) prints them back.
 Nothing downstream of the parser reads a lark tree.
 
 Tuples are kept generic (:class:`Group`): what ``(a, b, c)`` means (an atom, a scaled

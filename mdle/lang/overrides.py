@@ -19,7 +19,7 @@ that passes its own argument (``cruise(0.1 m/s)``) keeps it. ``mdle run --set`` 
 ``mdle sweep`` both come here, through ``load_text(..., settings=...)`` /
 ``load_program(..., settings=...)``.
 
->>> from mdle.loader import load_text
+>>> from mdle.lang.loader import load_text
 >>> text = "atom cruise(v = 0.3 m/s) = (go(v), never, 1 s)\nplan main = ((cruise), never, inf)\n"
 >>> p = load_text(text, settings={"cruise.v": "0.5 m/s"})
 >>> p.elements["cruise"].args["v"]
@@ -35,13 +35,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from mdle import syntax as st
 from mdle.atoms.registry import Registry
 from mdle.errors import CheckError, Diagnostic, MdleError, Severity, Span
-from mdle.resolve import Namespace, build_namespace
+from mdle.lang import syntax as st
+from mdle.lang.resolve import Namespace, build_namespace
 
 if TYPE_CHECKING:  # the loader imports this module inside load_text
-    from mdle.loader import Loaded
+    from mdle.lang.loader import Loaded
 
 __all__ = ["Override", "parse_override", "parse_setting", "settable_parameters",
            "apply_overrides", "override_defaults", "OVERRIDE_FILE"]
@@ -89,7 +89,7 @@ def parse_override(text: str, file: str = OVERRIDE_FILE) -> Override:
         does not parse (the message points into ``text``, shown as file ``file``).
     """
     from mdle.errors import MdleSyntaxError
-    from mdle.parser import parse_expression
+    from mdle.lang.parser import parse_expression
 
     sources = {file: text}
     whole = Span(file, 1, 1, 1, len(text) + 1)
@@ -154,8 +154,9 @@ def apply_overrides(modules: Sequence[st.Module], overrides: Sequence[Override],
 
 def _misfit(o: Override, target: st.Definition, ns: Namespace) -> Diagnostic | None:
     """Return why ``o``'s value cannot replace the default of ``target``'s parameter."""
-    from mdle.compile import Checker, _Abort
-    from mdle.dimensions import Symbol, dim_example, dim_words, fits, unit_for
+    from mdle.lang.check import Checker
+    from mdle.lang.check_state import _Abort
+    from mdle.lang.dimensions import Symbol, dim_example, dim_words, fits, unit_for
 
     param = next(p for p in target.param_list if p.name == o.param)
     note = (Diagnostic(param.span, f"`{o.param}` of `{target.name}` is declared here",
@@ -303,7 +304,7 @@ def override_defaults(loaded: "Loaded", settings: Mapping[str, str] | Sequence[s
     Parameters
     ----------
     loaded : Loaded
-        The parsed files (:func:`mdle.loader.load_modules`).
+        The parsed files (:func:`mdle.lang.loader.load_modules`).
     settings : mapping or sequence
         ``NAME -> value text``, or ``NAME=VALUE`` texts as typed after ``--set``.
     registry : Registry, optional
@@ -315,7 +316,7 @@ def override_defaults(loaded: "Loaded", settings: Mapping[str, str] | Sequence[s
         Every override that names no parameter, does not parse or does not fit (located
         in its own text; the texts are in ``sources``).
     """
-    from mdle.loader import Loaded
+    from mdle.lang.loader import Loaded
 
     if registry is None:
         from mdle.atoms import default_registry

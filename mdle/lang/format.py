@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from mdle import syntax as st
+from mdle.lang import syntax as st
 
 __all__ = ["WIDTH", "format_source", "format_module", "format_statement", "format_expr"]
 
@@ -33,8 +33,8 @@ _INDENT = "    "
 def format_source(text: str, file: str = "<string>") -> str:
     """Return the canonical form of a text (raises MdleSyntaxError if it does not parse)."""
     from mdle.errors import MdleError
-    from mdle.hints import refine_error
-    from mdle.parser import parse_module
+    from mdle.lang.hints import refine_error
+    from mdle.lang.parser import parse_module
 
     try:
         module = parse_module(text, file)

@@ -11,17 +11,18 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from mdle import syntax as st
 from mdle.atoms.registry import Registry
-from mdle.compile import _Abort, _checker, check_program
 from mdle.errors import CheckError, Diagnostic, MdleError
-from mdle.format import format_statement
-from mdle.hints import refine_error
-from mdle.loader import load_modules, read_source
+from mdle.lang import syntax as st
+from mdle.lang.check import _checker, check_program
+from mdle.lang.check_state import _Abort
+from mdle.lang.format import format_statement
+from mdle.lang.hints import refine_error
+from mdle.lang.loader import load_modules, read_source
+from mdle.lang.parser import MAX_DEPTH, lex_fragment, parse_expression
+from mdle.lang.program import Element, Program
+from mdle.lang.resolve import build_namespace
 from mdle.motion_limits import KnownRobot
-from mdle.parser import MAX_DEPTH, lex_fragment, parse_expression
-from mdle.program import Element, Program
-from mdle.resolve import build_namespace
 
 __all__ = ["Workspace"]
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from mdle.program import AtomNode, Element, Program, StringNode
+from mdle.lang.program import AtomNode, Element, Program, StringNode
 from mdle.units import NONE, Dim
 
 __all__ = ["Structure", "structure", "show_element", "show_program", "format_time"]

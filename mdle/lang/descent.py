@@ -21,9 +21,9 @@ import re
 from collections.abc import Iterator, Sequence
 from typing import Any
 
-from mdle import syntax as st
 from mdle.errors import Span, make_span
-from mdle.treebuild import (
+from mdle.lang import syntax as st
+from mdle.lang.treebuild import (
     MAX_DEPTH,
     BuildState,
     Op,

@@ -19,8 +19,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from mdle import syntax as st
 from mdle.errors import Diagnostic, Span, make_span
+from mdle.lang import syntax as st
 from mdle.units import NONE, UNITS, unit_value
 
 __all__ = ["MAX_DEPTH", "BuildState", "TooDeep", "Op", "Prefixed", "token_span", "over",

@@ -1,5 +1,8 @@
 """Text to syntax tree: the lark LALR parser of ``grammar/mdle.lark``.
 
+Over 500 lines: besides building trees, it recovers from syntax errors and words them,
+and both work on lark's error objects and parser state, which no other module sees.
+
 The grammar is read once through :mod:`importlib.resources` (it ships inside the
 package as ``mdle.grammar``), and the analysed parser is cached in a per-user file
 (``$XDG_CACHE_HOME/mdle``, else ``~/.cache/mdle``), so ``mdle check`` does not rebuild
@@ -30,10 +33,10 @@ from typing import Any
 from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from mdle import syntax as st
-from mdle.descent import Lexer, parse_valid
 from mdle.errors import Diagnostic, MdleSyntaxError, Severity, Span
-from mdle.syntax_errors import (
+from mdle.lang import syntax as st
+from mdle.lang.descent import Lexer, parse_valid
+from mdle.lang.syntax_errors import (
     EXAMPLES,
     KEYWORDS,
     Label,
@@ -41,7 +44,7 @@ from mdle.syntax_errors import (
     describe_expected,
     describe_token,
 )
-from mdle.treebuild import (
+from mdle.lang.treebuild import (
     MAX_DEPTH,
     BuildState,
     Prefixed,
@@ -157,7 +160,7 @@ def _on_close(token: Token) -> Token:
 
 @v_args(inline=True)
 class _Build(Transformer):
-    """Builds :mod:`mdle.syntax` nodes as the LALR parser reduces each rule."""
+    """Builds :mod:`mdle.lang.syntax` nodes as the LALR parser reduces each rule."""
 
     def start(self, *statements: st.Statement) -> tuple[st.Statement, ...]:
         return statements

@@ -13,9 +13,9 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from mdle import syntax as st
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
 from mdle.errors import Diagnostic, Severity
+from mdle.lang import syntax as st
 
 __all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "uses_of",
            "find_cycles"]

@@ -15,14 +15,14 @@ import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
-from mdle import syntax as st
 from mdle.atoms.registry import Registry
-from mdle.compile import check_program
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
-from mdle.hints import refine_hints
+from mdle.lang import syntax as st
+from mdle.lang.check import check_program
+from mdle.lang.hints import refine_hints
+from mdle.lang.parser import normalise_newlines, parse_partial
+from mdle.lang.program import Program
 from mdle.motion_limits import KnownRobot
-from mdle.parser import normalise_newlines, parse_partial
-from mdle.program import Program
 from mdle.userfile import UserFileError, read_user_file
 
 __all__ = ["load_program", "load_text", "load_modules", "read_source", "plan_bundle", "Loaded"]
@@ -246,7 +246,7 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         Control laws and sensor functions; ``atoms.default_registry()`` when None.
     settings : mapping, optional
         Parameter defaults to override: ``NAME -> value text``, or ``NAME=VALUE`` texts
-        (``mdle run --set``); see :func:`mdle.overrides.override_defaults`.
+        (``mdle run --set``); see :func:`mdle.lang.overrides.override_defaults`.
     files : mapping, optional
         Imported files' texts by relative path, instead of the disk (see
         :func:`load_modules`); ``base_dir`` is the folder they are relative to.
@@ -270,7 +270,7 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
             raise _error(found.diagnostics + _check_errors(found, registry), loaded.sources,
                          found.syntax_failed)
         if settings:
-            from mdle.overrides import override_defaults
+            from mdle.lang.overrides import override_defaults
 
             loaded = override_defaults(loaded, settings, registry)
         return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main,
