@@ -212,21 +212,9 @@ class Ladar:
         For a scan made before its ranges were final (a team's robots occlude each
         other's scans once all have moved): the same draws as :meth:`finish`.
         """
-        p = self.profile
-        if p.noise != "none" and p.sigma > 0:
-            noise = self.rng.standard_normal(out=self._noise)
-            noise *= p.sigma
-            if p.noise == "relative":
-                noise *= ranges
-            np.add(ranges, noise, out=ranges, where=valid)   # no noise on invalid beams
-        if p.resolution > 0:
-            ranges /= p.resolution
-            np.rint(ranges, out=ranges)
-            ranges *= p.resolution
-        np.maximum(ranges, 0.0, out=ranges)
-        np.minimum(ranges, p.max_range, out=ranges)
-        ranges.setflags(write=False)
-        valid.setflags(write=False)
+        noisy = self.profile.noise != "none" and self.profile.sigma > 0
+        _settle(self.profile, ranges, valid,
+                self.rng.standard_normal(out=self._noise) if noisy else None)
 
 
 def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) -> None:
@@ -240,10 +228,18 @@ def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) 
     p = ladars[0].profile
     if any(lad.profile != p for lad in ladars):
         raise ValueError("settle_rows needs ladars of one profile")
+    noise = None
     if p.noise != "none" and p.sigma > 0:
         noise = np.empty(ranges.shape)
         for lad, row in zip(ladars, noise, strict=True):
             lad.rng.standard_normal(out=row)
+    _settle(p, ranges, valid, noise)
+
+
+def _settle(p: LadarProfile, ranges: np.ndarray, valid: np.ndarray,
+            noise: np.ndarray | None) -> None:
+    """Add the standard normal draws ``noise`` (scaled here), quantise, clip, freeze."""
+    if noise is not None:
         noise *= p.sigma
         if p.noise == "relative":
             noise *= ranges
