@@ -1,5 +1,9 @@
 """Boundary estimators: points, connected surfaces, tangents and curvatures from one scan.
 
+Over 500 lines: one vectorised pipeline (points, connected surfaces, then tangents and
+curvatures over shared window indexes), used as one namespace (``estimators as E``) by
+the laws, the experiments, the benchmark and ``docs/curvature.md``.
+
 Everything here is numpy, vectorised over the whole scan (no Python loop over beams), and
 never raises on well-formed arrays: where an estimate is undefined (an invalid beam, a window
 that does not fit inside one connected surface) the result is NaN and ``valid`` is False.

@@ -121,8 +121,9 @@ class Gains:
     corner_turn_jump : float, rad
         ... or the side tangent turned clockwise by more than this in the world frame.
     corner_exit_angle, corner_exit_range : float, rad and x rc
-        Corner mode ends when the side ray is back with ``|bs| <`` exit angle and
-        ``|rs - d| <`` exit range (d: distance to the remembered vertex) ...
+        Corner mode ends when the side ray is back on a face aligned with the path or turning
+        towards it, ``bs > -`` exit angle, no farther than ``rs - d <`` exit range (d: distance
+        to the remembered vertex; the paper: ``|bs|`` and ``|rs - d|`` below them) ...
     corner_max_turn : float, rad
         ... or after turning this much (or when the front ray hits).
     tau : float, s
@@ -137,9 +138,10 @@ class Gains:
         vertex circled, by more than this, becomes the point circled (a notch narrower than
         ``2 rc`` is bridged, as the rc level set does).
     scaled_damping : bool
-        Scale the side law's damping by ``min(1, rc/rs) / max(1, 1 - ks rs / cos bs)`` (a
-        quicker return to rc on convex curves, a line rather than a spiral from far away);
-        False: the paper's damping.
+        Scale the side law's damping by ``min(1, rc/rs) / max(1, 1 - ks rs / cos bs)`` and, on
+        a convex boundary, its distance term ``f`` by ``min(1 - ks rc, 2)^2`` (a quicker return
+        to rc on convex curves, a line rather than a spiral from far away); False: the paper's
+        damping and gain.
     """
 
     mu: float = 8.0
@@ -223,6 +225,13 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
         ks = min(side.kappa, (1.0 - g.conc_margin) * cb / rs)
         as_ = 1.0 - ks * rs / cb
         f = f_gain(rs, rc, g)
+        if g.scaled_damping and not front.hit and ks < 0.0:
+            # near rc the distance term acts through 1 / (1 - ks rs)^2, which softens the
+            # return to rc on a convex curve (2.25x on radius 1 at rc 0.5): restore the wall's
+            # stiffness with a gain that is constant along a constant-curvature boundary (so
+            # this is still the CLF law, of a V with distance gain kf c)
+            c = 1.0 - ks * rc if ks * rc > -1.0 else 2.0
+            f *= c * c
     else:
         bs, rs, cb, ks, as_, f = 0.0, rc, 1.0, 0.0, 0.0, 0.0
     tb = math.sin(bs) / cb
@@ -393,8 +402,11 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
             a = theta + nearest[1]
             mem.corner = (x + nearest[0] * math.cos(a), y + nearest[0] * math.sin(a))
     if mem.mode == CORNER:
-        back = side.hit and abs(side.beta) < g.corner_exit_angle \
-            and abs(side.r - math.hypot(mem.corner[0] - x, mem.corner[1] - y)) \
+        # the side is back on a face aligned with the path or converging on it (the far side
+        # of a gap narrower than 2 rc, met obliquely) no farther than the vertex: follow it.
+        # Circling the vertex on, the robot was held straight on towards that face.
+        back = side.hit and side.beta > -g.corner_exit_angle \
+            and side.r - math.hypot(mem.corner[0] - x, mem.corner[1] - y) \
             < g.corner_exit_range * rc
         if front.hit or back:
             mem.mode = FOLLOW

@@ -23,7 +23,8 @@ scans share one read-only bearing array, as the simulator's and the drivers' do.
 Figures (callgrind, Python 3.11, numpy 2.4): the whole step 484 k instructions per tick
 (boundary view 198 k, scan points 54 k, the rest 232 k), against 701 k before the numeric
 helpers were trimmed (625 k, 83 us quiet, with the earlier law); the controlled tick
-1.12 M (1.34 M before).
+1.12 M (1.34 M before), 1.08 M once the simulator's tick was trimmed (500 ticks, with
+``OPENBLAS_NUM_THREADS=1`` so that idle BLAS threads add no count).
 """
 
 from __future__ import annotations

@@ -100,7 +100,9 @@ def parse_team(text: str, file: str = "<string>") -> TeamSpec:
 
 
 def _parse(text: str, file: str) -> TeamSpec:
-    from mdle.sim.world_yaml import _Doc, _integer, _mapping, _number, _start, _string, _yaml_value
+    from mdle.sim.world_robots import _start
+    from mdle.sim.yaml_doc import _Doc, _yaml_value
+    from mdle.sim.yaml_values import _integer, _mapping, _number, _string
 
     doc = _Doc(file, text)
     top = _mapping(doc, "", _yaml_value(doc) or {}, _TOP_KEYS, "a team")

@@ -36,7 +36,8 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
+from mdle.backend import (STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan,
+                          observation)
 from mdle.errors import BackendError, WorldError
 from mdle.messages import Inbox
 from mdle.sim.collision import CONTACT, Collider
@@ -246,17 +247,8 @@ class SimBackend:
             kind = self._obstacle(e.obstacle)[1]
             truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
                                 "t": e.time, "x": e.x, "y": e.y}
-        return Observation(
-            time=self._t,
-            pose=Pose(ox, oy, _wrap(oth)),
-            v=v,
-            omega=w,
-            scan=self._scan,
-            stalled=self._stalled,
-            motors_enabled=True,
-            truth=truth,
-            inbox=self.inbox,
-        )
+        return observation(self._t, Pose(ox, oy, _wrap(oth)), v, w, self._scan, self._stalled,
+                           truth, self.inbox)
 
     def command(self, cmd: Command) -> None:
         """Hold ``cmd`` (clamped to the limits) until the next command."""
@@ -469,7 +461,10 @@ class SimBackend:
             marked = (x, y, th)
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,
         # nothing can be touched this step and one distance query (at the end) suffices.
-        reach = sum(ph.max_abs_v * ph.duration for ph in phases)
+        reach = 0.0
+        for ph in phases:
+            dur, v0 = ph.duration, ph.v0
+            reach += max(abs(v0), abs(v0 + ph.a_v * dur)) * dur
         safe = clear[0] - CONTACT >= reach
         if not safe and self._clear_bound:
             clear = self._collider.clearance(x, y)   # the sweep needs the exact clearance

@@ -27,15 +27,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from mdle.backend import Scan
+from mdle.backend import Scan, plain_scan
 from mdle.errors import WorldError
 from mdle.sim.raycast import MAX_RANGE_SLACK, FanCaster, RayCaster, RayHits
 
-__all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_profile"]
+__all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_profile",
+           "settle_rows"]
 
 NOISE_MODELS = ("relative", "absolute", "none")
 
@@ -202,8 +204,7 @@ class Ladar:
         the scan then owns.
         """
         self.settle(ranges, valid)
-        return Scan(ranges=ranges, bearings=self.bearings, valid=valid, stamp=stamp,
-                    max_range=self.profile.max_range)
+        return plain_scan(ranges, self.bearings, valid, stamp, self.profile.max_range)
 
     def settle(self, ranges: np.ndarray, valid: np.ndarray) -> None:
         """Add noise, quantise and clip the ranges in place, then make both read-only.
@@ -211,19 +212,43 @@ class Ladar:
         For a scan made before its ranges were final (a team's robots occlude each
         other's scans once all have moved): the same draws as :meth:`finish`.
         """
-        p = self.profile
-        if p.noise != "none" and p.sigma > 0:
-            noise = self.rng.standard_normal(out=self._noise)
-            noise *= p.sigma
-            if p.noise == "relative":
-                noise *= ranges
-            noise *= valid                          # no noise on invalid beams
-            ranges += noise
-        if p.resolution > 0:
-            ranges /= p.resolution
-            np.rint(ranges, out=ranges)
-            ranges *= p.resolution
-        np.maximum(ranges, 0.0, out=ranges)
-        np.minimum(ranges, p.max_range, out=ranges)
-        ranges.setflags(write=False)
-        valid.setflags(write=False)
+        noisy = self.profile.noise != "none" and self.profile.sigma > 0
+        _settle(self.profile, ranges, valid,
+                self.rng.standard_normal(out=self._noise) if noisy else None)
+
+
+def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) -> None:
+    """:meth:`Ladar.settle` for the scans of several ladars of one profile, as one block.
+
+    Row ``k`` of ``ranges`` and ``valid`` (S, B) is a scan of ``ladars[k]``; each ladar
+    draws its own noise, then noise, quantisation and clipping are applied to the block
+    at once: element by element the same arithmetic as :meth:`Ladar.settle`, so each row
+    comes out as that call would leave it. Both arrays are read-only afterwards.
+    """
+    p = ladars[0].profile
+    if any(lad.profile != p for lad in ladars):
+        raise ValueError("settle_rows needs ladars of one profile")
+    noise = None
+    if p.noise != "none" and p.sigma > 0:
+        noise = np.empty(ranges.shape)
+        for lad, row in zip(ladars, noise, strict=True):
+            lad.rng.standard_normal(out=row)
+    _settle(p, ranges, valid, noise)
+
+
+def _settle(p: LadarProfile, ranges: np.ndarray, valid: np.ndarray,
+            noise: np.ndarray | None) -> None:
+    """Add the standard normal draws ``noise`` (scaled here), quantise, clip, freeze."""
+    if noise is not None:
+        noise *= p.sigma
+        if p.noise == "relative":
+            noise *= ranges
+        np.add(ranges, noise, out=ranges, where=valid)   # no noise on invalid beams
+    if p.resolution > 0:
+        ranges /= p.resolution
+        np.rint(ranges, out=ranges)
+        ranges *= p.resolution
+    np.maximum(ranges, 0.0, out=ranges)
+    np.minimum(ranges, p.max_range, out=ranges)
+    ranges.setflags(write=False)
+    valid.setflags(write=False)

@@ -34,7 +34,8 @@ from typing import Any
 
 from mdle.errors import WorldError
 from mdle.sim.robot import RAMPS, Latency, OdometryNoise, RobotProfile
-from mdle.sim.world_yaml import _Doc, _mapping, _number, _show, _string, _yaml_value
+from mdle.sim.yaml_doc import _Doc, _yaml_value
+from mdle.sim.yaml_values import _mapping, _number, _show, _string
 
 __all__ = ["ROBOT_KEYS", "check_mount", "dump_robot", "parse_robot", "read_robot",
            "robot_overrides"]

@@ -24,14 +24,22 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import Pose, Scan
+from mdle.backend import Pose, Scan, plain_scan
 from mdle.errors import BackendError, WorldError
 from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from mdle.sim.backend import SimBackend, SimEvent
 from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlusions
+from mdle.sim.ladar import settle_rows
 from mdle.sim.world import RobotPlace, World
 
 __all__ = ["RobotPlace", "Member", "Radio", "TeamSim"]
+
+#: The arrays of a scan whose casting waits for the end of the team's step (never read:
+#: the team replaces the scan before anyone observes it).
+_LATER = np.zeros(0)
+_LATER.setflags(write=False)
+_LATER_VALID = np.zeros(0, dtype=bool)
+_LATER_VALID.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -105,6 +113,7 @@ class Member(SimBackend):
         self.index = index
         self.name = place.name
         self._batched = False
+        self._cast_later = False  # the team casts its scans (see TeamSim._settle_scans)
         self._crowd = False  # are there others to see?
         self.discs = NO_DISCS  # every robot's disc (its own skipped), from the team
         self.box = Inbox(place.start)  # what its radio receives (the observation's inbox)
@@ -163,6 +172,7 @@ class Member(SimBackend):
         self._fan_shape = (float(lad.bearings[1] - lad.bearings[0]) if len(lad.bearings) > 1
                            else 1.0, len(lad.bearings), lad.profile.max_range, self.index)
         self._batched = self._fan is not None
+        self._cast_later = self._fan is not None and self._fan.batchable()
 
     def move(self, dt: float, others_moved: float) -> None:
         """Advance ``dt``, the other robots standing where they are now.
@@ -181,6 +191,12 @@ class Member(SimBackend):
         # have moved (TeamSim.step)
         assert isinstance(self._collider, CrowdCollider)
         return self._collider.static_clearance(x, y)
+
+    def replace_scan(self, old: Scan, new: Scan) -> None:
+        """Put ``new`` wherever this robot keeps ``old`` (readable, or waiting its latency)."""
+        if self._scan is old:
+            self._scan = new
+        self._scan_queue = [(due, new if s is old else s) for due, s in self._scan_queue]
 
     def touched_by(self, event: SimEvent, name: str, index: int) -> None:
         """Record that robot ``name`` ran into this one (a collision; not stalled).
@@ -207,9 +223,13 @@ class Member(SimBackend):
         ox, oy = lad.origin(x, y, th)
         if self._batched and self._fan is not None:
             first = th + float(lad.bearings[0])
-            ranges, hit = self._fan.cast(ox, oy, first)
-            scan = Scan(ranges=ranges, bearings=lad.bearings, valid=hit, stamp=stamp,
-                        max_range=lad.profile.max_range)
+            if self._cast_later and self.team.stepping:
+                # cast with the others' scans at the end of the step, in one pass
+                scan = plain_scan(_LATER, lad.bearings, _LATER_VALID, stamp,
+                                  lad.profile.max_range)
+            else:
+                ranges, hit = self._fan.cast(ox, oy, first)
+                scan = plain_scan(ranges, lad.bearings, hit, stamp, lad.profile.max_range)
             self.team.pending.append((self, scan, (ox, oy, first, *self._fan_shape)))
             return scan  # its ranges are final once the team has occluded and settled it
         angles = lad.world_angles(th)
@@ -311,6 +331,8 @@ class TeamSim:
         #: scans taken during a step, finished at its end: (member, scan, (ox, oy, first
         #: beam's angle, step between beams, beams, max range, own disc))
         self.pending: list[tuple[Member, Scan, tuple[float, ...]]] = []
+        #: True during :meth:`step`: scans are then cast at its end, all in one pass
+        self.stepping = False
         for m in self.members:  # the first scans see the others too
             m.join(self.discs)
 
@@ -321,6 +343,18 @@ class TeamSim:
     def step(self, dt: float) -> None:
         """Move every robot by ``dt``, then deliver the messages sent during the tick."""
         sent_at = self._pos.copy()
+        self.stepping = True
+        try:
+            self._move_all(dt)
+        finally:
+            self.stepping = False
+        self.time += dt
+        self._add_others_to_clearances()
+        self._settle_scans()
+        self.radio.deliver(self.time, [m.box for m in self.members], sent_at)
+
+    def _move_all(self, dt: float) -> None:
+        """Move the robots one after the other, each seeing the others where they are."""
         pos = self._pos
         moved = self._moved
         for i, m in enumerate(self.members):
@@ -338,10 +372,6 @@ class TeamSim:
                 if e.obstacle >= len(self.world.obstacles):  # it touched another robot
                     j = e.obstacle - len(self.world.obstacles)
                     self.members[j].touched_by(e, m.name, len(self.world.obstacles) + i)
-        self.time += dt
-        self._add_others_to_clearances()
-        self._settle_scans()
-        self.radio.deliver(self.time, [m.box for m in self.members], sent_at)
 
     def _add_others_to_clearances(self) -> None:
         """Fold the other robots into every robot's clearance, all pairs at once."""
@@ -361,7 +391,13 @@ class TeamSim:
                 m._clear = (gap, base + j)
 
     def _settle_scans(self) -> None:
-        """Put the robots into the scans taken during the step, then add their noise."""
+        """Cast the scans taken during the step, put the robots into them, add their noise.
+
+        The scans of robots with the same ladar are cast in one pass
+        (:meth:`sim.raycast.FanCaster.cast_many`), and occluded and settled as one block
+        (:func:`sim.ladar.settle_rows`); a scan cast at once (a world the batch does not
+        take) is finished alone.
+        """
         pending, self.pending = self.pending, []
         if not pending:
             return
@@ -369,10 +405,35 @@ class TeamSim:
         scan_i, beam, t = occlusions(f[:, 0], f[:, 1], f[:, 2], f[:, 3],
                                      f[:, 4].astype(np.intp), f[:, 5],
                                      f[:, 6].astype(np.intp), self.discs)
-        bounds = np.searchsorted(scan_i, np.arange(len(pending) + 1))
+        groups: dict[tuple[Any, ...], list[int]] = {}
+        alone = []
         for k, (m, scan, _) in enumerate(pending):
-            a, b = int(bounds[k]), int(bounds[k + 1])
-            if b > a:
-                np.minimum.at(scan.ranges, beam[a:b], t[a:b])
-                scan.valid[beam[a:b]] = True
-            m._ladar.settle(scan.ranges, scan.valid)
+            if scan.ranges is _LATER:
+                groups.setdefault((m._ladar.profile, m._ladar.mount), []).append(k)
+            else:
+                alone.append(k)
+        for ks in groups.values():
+            first = pending[ks[0]][0]
+            assert first._fan is not None
+            ranges, valid = first._fan.cast_many(f[ks, 0], f[ks, 1], f[ks, 2])
+            row = np.full(len(pending), -1)
+            row[ks] = np.arange(len(ks))
+            r = row[scan_i]
+            mine = r >= 0
+            rows, beams = r[mine], beam[mine]
+            np.minimum.at(ranges, (rows, beams), t[mine])
+            valid[rows, beams] = True
+            settle_rows([pending[k][0]._ladar for k in ks], ranges, valid)
+            for j, k in enumerate(ks):
+                m, old, _ = pending[k]
+                m.replace_scan(old, plain_scan(ranges[j], old.bearings, valid[j], old.stamp,
+                                               old.max_range))
+        if alone:
+            bounds = np.searchsorted(scan_i, np.arange(len(pending) + 1))
+            for k in alone:
+                m, scan, _ = pending[k]
+                a, b = int(bounds[k]), int(bounds[k + 1])
+                if b > a:
+                    np.minimum.at(scan.ranges, beam[a:b], t[a:b])
+                    scan.valid[beam[a:b]] = True
+                m._ladar.settle(scan.ranges, scan.valid)

@@ -45,10 +45,15 @@ def _is_submodule(name: str, package: Path) -> bool:
     return bool(sub) and (package / f"{sub}.py").exists()
 
 
-def _outside_language() -> list[Path]:
-    # mdle/atoms and mdle/sim are links to the top-level folders; list the files once
-    files = [p for p in MDLE.rglob("*.py") if LANG not in p.parents]
+def _every_module() -> list[Path]:
+    # mdle/atoms and mdle/sim are links to the top-level folders; list their files once
+    files = [p for p in MDLE.rglob("*.py")
+             if not {MDLE / "atoms", MDLE / "sim"} & set(p.parents)]
     return sorted(files + [p for d in ("atoms", "sim") for p in (REPO / d).rglob("*.py")])
+
+
+def _outside_language() -> list[Path]:
+    return [p for p in _every_module() if LANG not in p.parents]
 
 
 def test_the_rest_of_mdle_imports_the_language_through_its_face() -> None:
@@ -84,13 +89,42 @@ def test_runtime_modules_import_one_another_without_a_circle() -> None:
         visit(m, ())
 
 
-@pytest.mark.parametrize("path", sorted(LANG.glob("*.py")), ids=lambda p: p.name)
-def test_a_long_language_module_says_why_at_its_top(path: Path) -> None:
-    text = path.read_text(encoding="utf-8")
-    if text.count("\n") <= 500:
-        return
-    doc = ast.get_docstring(ast.parse(text)) or ""
+#: Long modules other branches are editing now, let off the rule below until their reasons
+#: are written after those branches merge. Shrink it: an entry that is no longer over 500
+#: lines, or that now says why, fails :func:`test_the_long_module_allow_list_is_current`.
+LONG_WITHOUT_REASON_YET = frozenset({
+    "mdle/trace.py",
+    "mdle/runtime/scheduler.py",
+    "sim/backend.py",
+    "sim/raycast.py",
+    "atoms/steering.py",
+})
+
+
+def _lines(path: Path) -> int:
+    return path.read_text(encoding="utf-8").count("\n")
+
+
+def _says_why(path: Path) -> bool:
+    doc = ast.get_docstring(ast.parse(path.read_text(encoding="utf-8"))) or ""
     paragraphs = doc.split("\n\n")
-    assert len(paragraphs) > 1 and paragraphs[1].startswith("Over 500 lines:"), \
-        f"{path.name} has {text.count(chr(10))} lines: split it, or say why in its docstring's " \
+    return len(paragraphs) > 1 and paragraphs[1].startswith("Over 500 lines:")
+
+
+@pytest.mark.parametrize("path", _every_module(), ids=lambda p: str(p.relative_to(REPO)))
+def test_a_long_module_says_why_at_its_top(path: Path) -> None:
+    name = path.relative_to(REPO).as_posix()
+    if _lines(path) <= 500 or name in LONG_WITHOUT_REASON_YET:
+        return
+    assert _says_why(path), \
+        f"{name} has {_lines(path)} lines: split it, or say why in its docstring's " \
         "second paragraph (`Over 500 lines: ...`)"
+
+
+@pytest.mark.parametrize("name", sorted(LONG_WITHOUT_REASON_YET))
+def test_the_long_module_allow_list_is_current(name: str) -> None:
+    path = REPO / name
+    assert path.is_file(), f"{name} is gone: take it off LONG_WITHOUT_REASON_YET"
+    assert _lines(path) > 500, \
+        f"{name} is {_lines(path)} lines now: take it off LONG_WITHOUT_REASON_YET"
+    assert not _says_why(path), f"{name} says why it is long: take it off LONG_WITHOUT_REASON_YET"

@@ -46,8 +46,11 @@ class Checker(NameChecks, DimensionChecks, StructureChecks):
         if d.name in self.broken:
             return None
         slots = self.slots_of(d)
-        runnable = all(s.default is not REQUIRED for s in slots)
-        bound = {s.name: (_UNKNOWN if s.default is REQUIRED else s.default) for s in slots}
+        if slots:
+            runnable = all(s.default is not REQUIRED for s in slots)
+            bound = {s.name: (_UNKNOWN if s.default is REQUIRED else s.default) for s in slots}
+        else:
+            runnable, bound = True, {}
         self._partial = not runnable
         try:
             if d.kind is st.DefKind.INTERRUPT:

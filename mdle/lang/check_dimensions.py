@@ -17,7 +17,15 @@ from mdle.atoms.registry import BOOL, LawSpec, SensorSpec
 from mdle.errors import Diagnostic, Severity, Span
 from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
-from mdle.lang.check_state import CheckerState, Env, _Abort, _freeze, _kind_name, _short
+from mdle.lang.check_state import (
+    MAX_NESTING,
+    CheckerState,
+    Env,
+    _Abort,
+    _freeze,
+    _kind_name,
+    _short,
+)
 from mdle.lang.dimensions import (
     Quantity,
     Symbol,
@@ -30,8 +38,12 @@ from mdle.lang.dimensions import (
 )
 from mdle.lang.format import format_expr
 from mdle.lang.program import INF, Interrupt, MessageUse
+from mdle.lang.treebuild import builder
 from mdle.motion_limits import excess
 from mdle.units import NONE, TIME, TURN_RATE
+
+#: Quantity(value, dim, bare) without the frozen __init__ (see builder)
+_new_quantity = builder(Quantity)
 
 
 class DimensionChecks(CheckerState):
@@ -43,7 +55,11 @@ class DimensionChecks(CheckerState):
         A bare unknown name is a symbol (its use decides whether that is right). Raises
         _Abort after an error.
         """
-        self._enter(expr.span)
+        if self._depth >= MAX_NESTING:
+            self._enter(expr.span)  # reports, raises
+        if type(expr) is st.Number:  # the common case, with nothing nested to count
+            return _new_quantity(expr.value, expr.dim, not expr.unit)
+        self._depth += 1
         try:
             return self._value(expr, env)
         finally:
@@ -51,11 +67,11 @@ class DimensionChecks(CheckerState):
 
     def _value(self, expr: st.Expr, env: Env) -> Value:
         if isinstance(expr, st.Number):
-            return Quantity(expr.value, expr.dim, bare=not expr.unit)
+            return _new_quantity(expr.value, expr.dim, not expr.unit)
         if isinstance(expr, st.Name):
             if expr.name in env:
                 return env[expr.name]
-            target = self.ns.lookup(expr.name)
+            target = self._lookup(expr.name)
             if target is not None:
                 self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
                            f"{_kind_name(target)}",
@@ -112,7 +128,7 @@ class DimensionChecks(CheckerState):
                        hint="an element is (…, interrupt, timer): the condition goes second")
             raise _Abort
         q = self._number(expr, env)
-        if not (q.dim is None or q.dim == TIME or q.dim == NONE or q.zero):
+        if not (q.dim is None or q.dim is TIME or q.dim == TIME or q.dim == NONE or q.zero):
             self.error(expr.span, f"expected a timer such as `10 s` or `inf`, found "
                        f"{dim_words(q.dim)} (`{_short(expr)}`)")
             raise _Abort
@@ -141,8 +157,15 @@ class DimensionChecks(CheckerState):
 
     def condition(self, expr: st.Expr, env: Env) -> cond.Typed:
         """Type and compile an interrupt expression (or a part of one)."""
-        self._enter(expr.span)
+        if self._depth >= MAX_NESTING:
+            self._enter(expr.span)  # reports, raises
+        self._depth += 1
         try:
+            kind = type(expr)  # the common nodes first (the syntax tree has no subclasses)
+            if kind is st.Binary:
+                return self._binary_condition(expr, env)  # type: ignore[arg-type]
+            if kind is st.Name or kind is st.Call:
+                return self._reading(expr, env)  # type: ignore[arg-type]
             return self._condition(expr, env)
         finally:
             self._depth -= 1
@@ -180,10 +203,15 @@ class DimensionChecks(CheckerState):
                 raise _Abort
             return cond.negate(expr.op, a)
         assert isinstance(expr, st.Binary)
+        return self._binary_condition(expr, env)
+
+    def _binary_condition(self, expr: st.Binary, env: Env) -> cond.Typed:
         a = self.condition(expr.left, env)
         b = self.condition(expr.right, env)
         op = expr.op
         if op in ("and", "or", "xor"):
+            if a.kind is BOOL and b.kind is BOOL:
+                return cond.logic(op, a, b)
             for side, t in ((expr.left, a), (expr.right, b)):
                 if not t.is_bool:
                     self.error(side.span, f"`{op}` joins conditions, but this is "
@@ -191,16 +219,17 @@ class DimensionChecks(CheckerState):
                                hint="compare it with something: `range(0 deg) < 1 m`")
                     raise _Abort
             return cond.logic(op, a, b)
-        for side, t in ((expr.left, a), (expr.right, b)):
-            if t.is_bool:
-                self.error(side.span, f"`{op}` needs numbers, found a condition")
-                raise _Abort
+        if a.kind is BOOL or b.kind is BOOL:
+            side = expr.left if a.kind is BOOL else expr.right
+            self.error(side.span, f"`{op}` needs numbers, found a condition")
+            raise _Abort
         if op in ("<", "<=", ">", ">=", "==", "!="):
             if not _same_dim(a, b):
                 self.error(expr.op_span, f"cannot compare {dim_words(a.dim)} with "
                            f"{dim_words(b.dim)}", hint=_unit_hint(expr, a, b))
                 raise _Abort
-            self._note_message_dim(a, b)
+            if self._messages:
+                self._note_message_dim(a, b)
             return cond.compare(op, a, b)
         if op in ("+", "-"):
             if not _same_dim(a, b):
@@ -208,7 +237,8 @@ class DimensionChecks(CheckerState):
                            f"{dim_words(b.dim)} and {dim_words(a.dim)}",
                            hint=_unit_hint(expr, a, b))
                 raise _Abort
-            self._note_message_dim(a, b)
+            if self._messages:
+                self._note_message_dim(a, b)
             return cond.arith(op, a, b, a.dim if a.dim is not None else b.dim)
         kind = None if a.dim is None or b.dim is None else (
             a.dim * b.dim if op == "*" else a.dim / b.dim)
@@ -224,7 +254,7 @@ class DimensionChecks(CheckerState):
                            "needs a condition or a number")
                 raise _Abort
             return cond.constant(None if v.zero else v.dim, v.value)
-        target = self.ns.lookup(name)
+        target = self._lookup(name)
         if isinstance(target, SensorSpec):
             bound = self.bind(name, self._slots_of_spec(target), args, env, expr.span)
             self._note_names(target, bound, expr.span)
@@ -267,8 +297,10 @@ class DimensionChecks(CheckerState):
         try:
             t = self.condition(d.body, MappingProxyType(dict(bound)))
         finally:
-            self._key_uses[key] = self._use_stack.pop()
-            self._replay(key)
+            uses = self._use_stack.pop()
+            if uses:  # most instances name no channel or robot: nothing to keep
+                self._key_uses[key] = uses
+                self._replay(key)
             if call is not None:
                 self._notes.pop()
         if not t.is_bool:
@@ -339,7 +371,8 @@ class DimensionChecks(CheckerState):
 
 
 def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
-    return a.dim is None or b.dim is None or same_kind(a.dim, b.dim)
+    x, y = a.dim, b.dim
+    return x is None or y is None or x is y or same_kind(x, y)
 
 
 def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:

@@ -72,7 +72,6 @@ class NameChecks(CheckerState):
         """Bind call arguments to parameters; checks arity, keywords, symbols, dimensions."""
         bound: dict[str, Value] = {}
         given: dict[str, st.Argument] = {}
-        names = [s.name for s in slots]
         ok = True
         positional_done = False
         for i, a in enumerate(args):
@@ -82,6 +81,7 @@ class NameChecks(CheckerState):
                     ok = False
                     continue
                 if i >= len(slots):
+                    names = [s.name for s in slots]
                     takes = (f"takes {len(slots)} argument{'s' * (len(slots) != 1)}"
                              + (f" ({', '.join(names)})" if names else ""))
                     self.error(a.span, f"too many arguments: `{callee}` {takes}, "
@@ -93,6 +93,7 @@ class NameChecks(CheckerState):
                 positional_done = True
                 found = next((s for s in slots if s.name == a.name), None)
                 if found is None:
+                    names = [s.name for s in slots]
                     close = difflib.get_close_matches(a.name, names, n=1)
                     hint = (f"did you mean `{close[0]}`?" if close else
                             f"`{callee}` takes {', '.join(f'`{n}`' for n in names)}" if names
@@ -112,16 +113,19 @@ class NameChecks(CheckerState):
                 bound[slot.name] = self._argument(callee, slot, a.value, env)
             except _Abort:
                 ok = False
-        missing = [s for s in slots if s.name not in bound and s.name not in given
-                   and s.default is REQUIRED]
-        for s in missing:
-            self.error(span, f"`{callee}` needs `{s.name}`"
-                       + ("" if s.symbol else f" ({dim_example(s.dim)})"),
-                       hint=f"write it as `{_completed(callee, args, missing)}`")
-            ok = False
-        for s in slots:
-            if s.name not in bound and s.name not in given and s.default is not REQUIRED:
-                bound[s.name] = s.default
+        if len(given) < len(slots):  # defaults, or what is missing
+            missing = []
+            for s in slots:
+                if s.name not in bound and s.name not in given:
+                    if s.default is REQUIRED:
+                        missing.append(s)
+                    else:
+                        bound[s.name] = s.default
+            for s in missing:
+                self.error(span, f"`{callee}` needs `{s.name}`"
+                           + ("" if s.symbol else f" ({dim_example(s.dim)})"),
+                           hint=f"write it as `{_completed(callee, args, missing)}`")
+                ok = False
         if not ok:
             raise _Abort
         return bound
@@ -175,6 +179,13 @@ class NameChecks(CheckerState):
         return v
 
     def _slots_of_spec(self, spec: LawSpec | SensorSpec) -> list[_Slot]:
+        slots = self._spec_slots.get(id(spec))  # specs live in the registry: ids stay unique
+        if slots is None:
+            slots = self._spec_slots[id(spec)] = self._make_slots(spec)
+        return slots
+
+    @staticmethod
+    def _make_slots(spec: LawSpec | SensorSpec) -> list[_Slot]:
         return [_Slot(p.name, None if p.is_symbol else p.dim,
                       REQUIRED if p.default is REQUIRED else (
                           Symbol(p.default) if isinstance(p.default, str) else
@@ -185,16 +196,19 @@ class NameChecks(CheckerState):
                     span: Span) -> None:
         """Record the channels and robots a call names (see :class:`MessageUse`)."""
         for p in spec.params:
+            if not p.any_name:
+                continue
             v = bound.get(p.name)
-            if p.any_name and isinstance(v, Symbol):
+            if isinstance(v, Symbol):
                 kind = "read" if p.any_name == "channel" else "robot"
                 self._use(MessageUse(kind, v.name, None, span, spec.name))
 
     def slots_of(self, d: st.Definition) -> list[_Slot]:
         """Return the parameters of a definition; a parameter's dimension is its default's."""
-        key = ("slots", d.name, id(d))
-        if key in self._cache:
-            return self._cache[key]
+        key = id(d)  # definitions live in the namespace: ids stay unique
+        known = self._def_slots.get(key)
+        if known is not None:
+            return known
         slots: list[_Slot] = []
         seen: dict[str, st.Param] = {}
         for p in d.param_list:
@@ -214,16 +228,15 @@ class NameChecks(CheckerState):
                 slots.append(_Slot(p.name, None, v, symbol=True))
             else:
                 slots.append(_Slot(p.name, None if v.bare else v.dim, v))
-        self._cache[key] = slots
+        self._def_slots[key] = slots
         return slots
 
     def _named_element(self, expr: st.Name | st.Call, env: Env) -> Element:
         name = expr.name
-        span = getattr(expr, "name_span", expr.span)
         if isinstance(expr, st.Name) and name in env:
             self.error(expr.span, f"`{name}` is a parameter, not an element")
             raise _Abort
-        target = self.ns.lookup(name)
+        target = self._lookup(name)
         if isinstance(target, st.Definition) and target.kind is not st.DefKind.INTERRUPT:
             if name in self.broken:
                 raise _Abort
@@ -245,6 +258,7 @@ class NameChecks(CheckerState):
             pool += list(self.ns.registry.laws)
         found = self._closest(name, pool)
         close = [found] if found else []
+        span = getattr(expr, "name_span", expr.span)
         self.error(span, f"unknown name `{name}`: not a control law, atom, behavior or plan",
                    hint=f"did you mean `{close[0]}`?" if close else None)
         raise _Abort

@@ -33,6 +33,7 @@ MAX_NESTING = 120
 Env = Mapping[str, Value]
 _EMPTY: Env = MappingProxyType({})
 _UNKNOWN = Quantity(math.nan, None)
+_MISSING = object()  # not in a cache (None there means: failed before)
 
 
 class _Abort(Exception):
@@ -63,6 +64,11 @@ def _kind_name(target: object) -> str:
 
 
 def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
+    if not bound:
+        return ()
+    if len(bound) == 1:
+        ((k, v),) = bound.items()
+        return ((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare)),)
     return tuple(sorted((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare))
                         for k, v in bound.items()))
 
@@ -81,6 +87,9 @@ class CheckerState(ABC):
 
     def __init__(self, ns: Namespace, robot: KnownRobot | None = None) -> None:
         self.ns = ns
+        # ns.lookup as one dict: definitions over control laws over sensor functions
+        # (the namespace does not change while a checker uses it)
+        self._lookup = {**ns.registry.sensors, **ns.registry.laws, **ns.definitions}.get
         #: The robot whose speed and turn-rate limits constants are compared with (None:
         #: no comparison).
         self.robot = robot
@@ -102,6 +111,8 @@ class CheckerState(ABC):
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
         self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
+        self._spec_slots: dict[int, list[_Slot]] = {}  # by id of a law or sensor function
+        self._def_slots: dict[int, list[_Slot]] = {}  # by id of a definition
         #: Names defined by statements that did not parse: uses of them are not errors
         #: of their own (the syntax error is reported)
         self.unparsed: frozenset[str] = frozenset()
@@ -125,7 +136,7 @@ class CheckerState(ABC):
 
     def _replay(self, key: tuple[Any, ...]) -> None:
         """Count a cached instance's uses again, for the instance using it too."""
-        if self._use_stack:
+        if self._use_stack and self._key_uses:
             self._use_stack[-1].extend(self._key_uses.get(key, ()))
 
     # ------------------------------------------------------------------ diagnostics

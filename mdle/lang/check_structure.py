@@ -17,15 +17,36 @@ import dataclasses
 import math
 from collections.abc import Mapping
 from types import MappingProxyType
+from typing import Any, TypeVar
 
 from mdle.atoms.registry import LawSpec
 from mdle.errors import Diagnostic, Severity, Span
 from mdle.lang import syntax as st
-from mdle.lang.check_state import MAX_NESTING, CheckerState, Env, _Abort, _freeze, _short
+from mdle.lang.check_state import _MISSING, MAX_NESTING, CheckerState, Env, _Abort, _freeze, _short
 from mdle.lang.dimensions import Quantity, Symbol, Value
 from mdle.lang.format import format_expr
 from mdle.lang.program import AtomNode, Element, Interrupt, MessageUse, Send, StringKind, StringNode
+from mdle.lang.treebuild import builder
 from mdle.messages import POSE_CHANNEL
+
+_E = TypeVar("_E", AtomNode, StringNode)
+#: Constructors of the program's nodes taking every field in order (see builder).
+_new_atom = builder(AtomNode)
+_new_string = builder(StringNode)
+
+
+def _replaced(node: _E, **changes: Any) -> _E:
+    """Return ``dataclasses.replace(node, **changes)`` without calling ``__init__``.
+
+    The program's nodes are plain frozen dataclasses (no ``__post_init__``, no slots), so
+    a copy of the fields with some changed is the same node; ``__init__`` would set each
+    field through ``object.__setattr__``, and a large plan makes thousands of them.
+    """
+    new = object.__new__(type(node))
+    fields = new.__dict__
+    fields.update(node.__dict__)
+    fields.update(changes)
+    return new
 
 
 def _own_never(e: Element) -> bool:
@@ -66,7 +87,9 @@ class StructureChecks(CheckerState):
 
     def element(self, expr: st.Expr, env: Env) -> Element:
         """Compile an expression standing where an element is expected."""
-        self._enter(expr.span)
+        if self._depth >= MAX_NESTING:
+            self._enter(expr.span)  # reports, raises
+        self._depth += 1
         try:
             return self._element(expr, env)
         finally:
@@ -128,7 +151,7 @@ class StructureChecks(CheckerState):
         if isinstance(head, (st.Name, st.Call)):
             if isinstance(head, st.Name) and head.name in env:
                 return "scaled"
-            if isinstance(self.ns.lookup(head.name), LawSpec):
+            if isinstance(self._lookup(head.name), LawSpec):
                 return "atom"
             return "string"
         return "scaled"
@@ -136,7 +159,7 @@ class StructureChecks(CheckerState):
     def _atom(self, expr: st.Group, env: Env) -> AtomNode:
         u, xi, timer = expr.items[:3]
         assert isinstance(u, (st.Name, st.Call))
-        law = self.ns.lookup(u.name)
+        law = self._lookup(u.name)
         assert isinstance(law, LawSpec)
         failed = False
         try:
@@ -156,8 +179,8 @@ class StructureChecks(CheckerState):
             except _Abort:
                 failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
-        return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
-                        (1.0, 1.0), expr.span, tuple(sends))
+        return _new_atom(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
+                         (1.0, 1.0), expr.span, tuple(sends))
 
     def _send(self, call: st.Call, env: Env) -> Send:
         """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on."""
@@ -261,7 +284,7 @@ class StructureChecks(CheckerState):
             values = {k: Quantity(float(v), None) for k, v in sigma.args.items()
                       if isinstance(v, (int, float))}
             self._within_limits(sigma.law, values, sigma_e, scale, expr.span)
-        return dataclasses.replace(sigma, timer=sigma.timer * beta, scale=scale, span=expr.span)
+        return _replaced(sigma, timer=sigma.timer * beta, scale=scale, span=expr.span)
 
     def string(self, expr: st.Group, env: Env, label: str, kind: StringKind) -> StringNode:
         """Return a string element ((e1, ..., en), xi, T); the first item may be one element."""
@@ -305,7 +328,7 @@ class StructureChecks(CheckerState):
                            f"most {MAX_NESTING}", hint="flatten the plan: fewer levels of "
                                                        "strings inside strings")
             raise _Abort
-        node = StringNode(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
+        node = _new_string(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
         self._depths[id(node)] = depth
         self._keep.append(node)  # ids stay unique while the checker lives
         return node
@@ -314,8 +337,8 @@ class StructureChecks(CheckerState):
                  call: Span | None = None) -> Element:
         """Return the element a definition makes with these parameter values (cached)."""
         key = ("element", d.name, _freeze(bound))
-        if key in self._cache:
-            cached = self._cache[key]
+        cached = self._cache.get(key, _MISSING)
+        if cached is not _MISSING:
             if cached is None:  # failed before; its errors are already reported
                 raise _Abort
             self._replay(key)
@@ -325,13 +348,17 @@ class StructureChecks(CheckerState):
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
         self._use_stack.append([])
         try:
-            self._enter(d.span)
+            if self._depth >= MAX_NESTING:
+                self._enter(d.span)  # reports, raises
+            self._depth += 1
             try:
                 result = self._definition_body(d, env)
             finally:
                 self._depth -= 1
-                self._key_uses[key] = self._use_stack.pop()
-                self._replay(key)
+                uses = self._use_stack.pop()
+                if uses:
+                    self._key_uses[key] = uses
+                    self._replay(key)
         except _Abort:
             self._cache[key] = None
             raise
@@ -351,14 +378,14 @@ class StructureChecks(CheckerState):
                 self.error(d.body.span, f"`{d.name}` is declared an atom but is a string of "
                            "elements", hint=f"declare it with `behavior {d.name} = ...`")
                 raise _Abort
-            return dataclasses.replace(e, label=d.name, span=d.span)
+            return _replaced(e, label=d.name, span=d.span)
         kind = StringKind.PLAN if d.kind is st.DefKind.PLAN else StringKind.BEHAVIOR
         if isinstance(body, st.Group) and len(body.items) == 3 and \
                 self._head_kind(body.items[0], env) == "string":
             return self.string(body, env, d.name, kind)
         e = self.element(body, env)  # reports what is wrong with the body, if anything
         if isinstance(e, StringNode):
-            node = dataclasses.replace(e, label=d.name, kind=kind, span=d.span)
+            node = _replaced(e, label=d.name, kind=kind, span=d.span)
             self._depths[id(node)] = self._depths.get(id(e), 1)
             self._keep.append(node)
             return node

@@ -93,41 +93,68 @@ class Typed:
         return lambda ctx: value
 
 
+_new = object.__new__
+
+
+def _typed(kind: Kind, node: Node | None, const: Any) -> Typed:
+    """Return ``Typed(kind, node, const)`` without the frozen ``__init__``.
+
+    That sets each field through ``object.__setattr__``; the checker makes several of
+    these per interrupt, so the fields are written into ``__dict__`` directly (an equal
+    instance).
+    """
+    t = _new(Typed)
+    fields = t.__dict__
+    fields["kind"] = kind
+    fields["node"] = node
+    fields["const"] = const
+    return t
+
+
+def _node(op: str, parts: tuple[Any, ...]) -> Node:
+    """Return ``Node(op, parts)`` as :func:`_typed` makes a Typed."""
+    n = _new(Node)
+    fields = n.__dict__
+    fields["op"] = op
+    fields["parts"] = parts
+    return n
+
+
 def _operand(t: Typed) -> Node:
-    return Node("const", (t.const,)) if t.node is None else t.node
+    return _node("const", (t.const,)) if t.node is None else t.node
 
 
 def constant(kind: Kind, value: Any) -> Typed:
     """Return a value known at check time."""
-    return Typed(kind, None, value)
+    return _typed(kind, None, value)
 
 
 def sensor_reading(spec: SensorSpec, args: Mapping[str, Any]) -> Typed:
     """Return a sensor function read each time the interrupt is tested."""
-    return Typed(spec.result, Node("sensor", (spec.fn, args)))
+    return _typed(spec.result, _node("sensor", (spec.fn, args)), None)
 
 
 def negate(op: str, a: Typed) -> Typed:
     """Apply ``not a``, ``-a`` or ``+a`` (already type-checked)."""
     if op == "not":
-        if a.is_const:
+        if a.node is None:
             return constant(BOOL, not a.const)
-        return Typed(BOOL, Node("not", (_operand(a),)))
+        return _typed(BOOL, _node("not", (_operand(a),)), None)
     if op == "+":
         return a
-    if a.is_const:
+    if a.node is None:
         return constant(a.kind, -a.const)
-    return Typed(a.kind, Node("neg", (_operand(a),)))
+    return _typed(a.kind, _node("neg", (_operand(a),)), None)
 
 
 def logic(op: str, a: Typed, b: Typed) -> Typed:
     """Combine conditions with ``and``, ``or``, ``xor``, short-circuiting where it can."""
-    if a.is_const and b.is_const:
+    if a.node is None and b.node is None:
         value = {"and": a.const and b.const, "or": a.const or b.const,
                  "xor": bool(a.const) != bool(b.const)}[op]
         return constant(BOOL, bool(value))
     for fixed, other in ((a, b), (b, a)):
-        if fixed.is_const:
+        if fixed.node is None:
             if op == "and":
                 return other if fixed.const else constant(BOOL, False)
             if op == "or":
@@ -135,7 +162,7 @@ def logic(op: str, a: Typed, b: Typed) -> Typed:
             return negate("not", other) if fixed.const else other
     if op not in ("and", "or"):
         op = "xor"
-    return Typed(BOOL, Node(op, (_operand(a), _operand(b))))
+    return _typed(BOOL, _node(op, (_operand(a), _operand(b))), None)
 
 
 def _divide(x: float, y: float) -> float:
@@ -146,18 +173,17 @@ def _divide(x: float, y: float) -> float:
 
 def compare(op: str, a: Typed, b: Typed) -> Typed:
     """Return a comparison of two numbers of the same dimension."""
-    cmp = _COMPARE[op]
-    if a.is_const and b.is_const:
-        return constant(BOOL, bool(cmp(a.const, b.const)))
-    return Typed(BOOL, Node("cmp", (op, _operand(a), _operand(b))))
+    if a.node is None and b.node is None:
+        return constant(BOOL, bool(_COMPARE[op](a.const, b.const)))
+    return _typed(BOOL, _node("cmp", (op, _operand(a), _operand(b))), None)
 
 
 def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
     """Apply ``a + b`` and friends; division by zero gives inf (or nan), never an exception."""
-    fn = _divide if op == "/" else _ARITH[op]
-    if a.is_const and b.is_const:
+    if a.node is None and b.node is None:
+        fn = _divide if op == "/" else _ARITH[op]
         return constant(kind, fn(a.const, b.const))
-    return Typed(kind, Node("arith", (op, _operand(a), _operand(b))))
+    return _typed(kind, _node("arith", (op, _operand(a), _operand(b))), None)
 
 
 #: Nesting depth of one generated function: deeper subtrees (a chain of named interrupts,
@@ -323,9 +349,10 @@ class _Deferred(Interrupt):
     """
 
     def __init__(self, node: Node, source: str | Callable[[], str]) -> None:
-        object.__setattr__(self, "never", False)
-        object.__setattr__(self, "_node", node)
-        object.__setattr__(self, "_source", source)
+        fields = self.__dict__  # as object.__setattr__ would, one call fewer each
+        fields["never"] = False
+        fields["_node"] = node
+        fields["_source"] = source
 
     @functools.cached_property
     def test(self) -> Fn:

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Any
 
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
 from mdle.errors import Diagnostic, Severity
@@ -96,24 +97,55 @@ def references(definition: st.Definition, names: Mapping[str, st.Definition],
     Parameters shadow; with a ``registry``, symbols that a control law or sensor function
     declares do too.
     """
-    shadow = {p.name for p in definition.param_list}
     found: list[st.Name | st.Call] = []
     stack: list[st.Expr] = [definition.body]
-    stack.extend(p.default for p in definition.param_list if p.default is not None)
+    shadow: frozenset[str] | set[str] = _NO_NAMES
+    if definition.params:
+        shadow = {p.name for p in definition.params}
+        stack.extend(p.default for p in definition.params if p.default is not None)
+    specs = (registry.laws, registry.sensors) if registry is not None else None
+    pop, push, extend = stack.pop, stack.append, stack.extend
+    # Dispatch on the exact node type (the syntax tree has no subclasses): one test for
+    # the common nodes instead of a chain of isinstance calls. Children are pushed left
+    # to right, as st.children gives them.
     while stack:
-        e = stack.pop()
-        if isinstance(e, (st.Name, st.Call)) and e.name in names and e.name not in shadow:
-            found.append(e)
-        if isinstance(e, st.Call) and e.name == "send" and e.name not in names:
-            stack.extend(a.value for a in e.args[1:])  # the channel names no definition
-            continue
-        if isinstance(e, st.Call) and registry is not None and e.name not in names:
-            spec = registry.laws.get(e.name) or registry.sensors.get(e.name)
-            stack.extend(a.value for i, a in enumerate(e.args)
-                         if not symbol_argument(spec, i, a))
-            continue
-        stack.extend(st.children(e))
+        e: Any = pop()
+        kind = type(e)
+        if kind is _NAME:
+            if e.name in names and e.name not in shadow:
+                found.append(e)
+        elif kind is _CALL:
+            name = e.name
+            if name in names:
+                if name not in shadow:
+                    found.append(e)
+                for a in e.args:
+                    push(a.value)
+            elif name == "send":
+                for a in e.args[1:]:  # the channel names no definition
+                    push(a.value)
+            elif specs is not None:
+                spec = specs[0].get(name) or specs[1].get(name)
+                for i, a in enumerate(e.args):
+                    # (only a name can be a declared symbol)
+                    if type(a.value) is not _NAME or not symbol_argument(spec, i, a):
+                        push(a.value)
+            else:
+                for a in e.args:
+                    push(a.value)
+        elif kind is _BINARY:
+            push(e.left)
+            push(e.right)
+        elif kind is _GROUP or kind is _VECTOR:
+            extend(e.items)
+        elif kind is _UNARY:
+            push(e.operand)
     return found
+
+
+_NO_NAMES: frozenset[str] = frozenset()
+_NAME, _CALL, _BINARY, _UNARY, _GROUP, _VECTOR = (st.Name, st.Call, st.Binary, st.Unary,
+                                                  st.Group, st.Vector)
 
 
 def uses_of(ns: Namespace) -> dict[str, list[st.Name | st.Call]]:
@@ -131,7 +163,6 @@ def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | Non
     defs = ns.definitions
     if uses is None:
         uses = uses_of(ns)
-    edges = {name: [(r.name, r) for r in uses[name]] for name in defs}
     color: dict[str, int] = {}  # 1: on the current path, 2: done
     in_cycle: set[str] = set()
     errors: list[Diagnostic] = []
@@ -139,15 +170,15 @@ def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | Non
         if color.get(root):
             continue
         path: list[str] = [root]
-        iters = [iter(edges[root])]
+        iters = [iter(uses[root])]
         color[root] = 1
         while iters:
-            nxt = next(iters[-1], None)
-            if nxt is None:
+            use = next(iters[-1], None)
+            if use is None:
                 color[path.pop()] = 2
                 iters.pop()
                 continue
-            target, use = nxt
+            target = use.name
             c = color.get(target)
             if c == 1:
                 cycle = path[path.index(target):] + [target]
@@ -161,5 +192,5 @@ def find_cycles(ns: Namespace, uses: Mapping[str, list[st.Name | st.Call]] | Non
             elif c is None:
                 color[target] = 1
                 path.append(target)
-                iters.append(iter(edges[target]))
+                iters.append(iter(uses[target]))
     return in_cycle, errors

@@ -1,7 +1,7 @@
 """Syntax-tree nodes from tokens: what both MDLe parsers share.
 
-The lark parser (:mod:`mdle.parser`, the reference, used for every file with an error)
-and the fast recursive-descent parser (:mod:`mdle.descent`, used for valid files) build
+The lark parser (:mod:`mdle.lang.parser`, the reference, used for every file with an error)
+and the fast recursive-descent parser (:mod:`mdle.lang.descent`, used for valid files) build
 their nodes with these functions, so the two give the same tree, spans and messages.
 
 A token here is anything with ``line``, ``column``, ``end_line``, ``end_column`` and a
@@ -23,7 +23,8 @@ from mdle.errors import Diagnostic, Span, make_span
 from mdle.lang import syntax as st
 from mdle.units import NONE, UNITS, unit_value
 
-__all__ = ["MAX_DEPTH", "BuildState", "TooDeep", "Op", "Prefixed", "token_span", "over",
+__all__ = ["MAX_DEPTH", "POWERS", "NOT_POWER", "SIGN_POWER", "COMPARISON_POWER", "COMPARISONS",
+           "BuildState", "TooDeep", "Op", "Prefixed", "token_span", "over",
            "deeper", "number", "precedence", "too_deep"]
 
 #: Deepest nesting of parentheses and operators accepted in one expression.
@@ -201,10 +202,10 @@ def _unknown_unit(unit: str, span: Span) -> Diagnostic:
 
 #: Binding power of each operator (higher binds tighter); `not` sits between `and` and
 #: the comparisons, as in Python, and unary minus above `*`.
-_BINARY = {"or": 1, "xor": 2, "and": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5, "!=": 5,
-           "+": 6, "-": 6, "*": 7, "/": 7}
-_NOT, _SIGN, _COMPARISON = 4, 8, 5
-_CMP = frozenset({"<", "<=", ">", ">=", "==", "!="})
+POWERS = {"or": 1, "xor": 2, "and": 3, "<": 5, "<=": 5, ">": 5, ">=": 5, "==": 5, "!=": 5,
+          "+": 6, "-": 6, "*": 7, "/": 7}
+NOT_POWER, SIGN_POWER, COMPARISON_POWER = 4, 8, 5
+COMPARISONS = frozenset({"<", "<=", ">", ">=", "==", "!="})
 
 
 def precedence(state: BuildState, parts: tuple[Any, ...] | list[Any]) -> st.Expr:
@@ -224,7 +225,7 @@ def precedence(state: BuildState, parts: tuple[Any, ...] | list[Any]) -> st.Expr
             return
         right = operands.pop()
         left = operands.pop()
-        if power == _COMPARISON and any(isinstance(side, st.Binary) and side.op in _CMP
+        if power == COMPARISON_POWER and any(isinstance(side, st.Binary) and side.op in COMPARISONS
                                         for side in (left, right)):
             state.diagnostics.append(Diagnostic(
                 token_span(file, tok), "comparisons do not chain",
@@ -234,13 +235,13 @@ def precedence(state: BuildState, parts: tuple[Any, ...] | list[Any]) -> st.Expr
 
     for i, part in enumerate(parts):
         if i % 2:  # a binary operator
-            power = _BINARY[str(part)]
+            power = POWERS[str(part)]
             while ops and ops[-1][0] >= power:
                 apply()
             ops.append((power, part, False))
             continue
         while isinstance(part, Prefixed):
-            ops.append((_NOT if str(part.op) == "not" else _SIGN, part.op, True))
+            ops.append((NOT_POWER if str(part.op) == "not" else SIGN_POWER, part.op, True))
             part = part.operand
         operands.append(part)
     while ops:

@@ -1,5 +1,8 @@
 """What the REPL does with one input: a definition, an element to run, or a ``:`` command.
 
+Over 500 lines: one dispatch table of the ``:`` commands and the :class:`Repl` methods
+that carry them out, which share the session, the output streams and the failure count.
+
 :class:`Repl` is the interpreter both front ends share (:mod:`mdle.repl.prompt` on a
 terminal, :mod:`mdle.repl.plain` for piped input). :meth:`Repl.handle` never raises for
 a user's mistake: a bad definition, an unknown name, a world that does not load or a run
@@ -33,7 +36,8 @@ from mdle.cli.output import print_diagnostics
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
 from mdle.repl import views
-from mdle.repl.session import ReplError, RunReport, Session
+from mdle.repl.reports import RunReport
+from mdle.repl.session import ReplError, Session
 from mdle.runtime import Observer
 from mdle.runtime.events import ended_how
 

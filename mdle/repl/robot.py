@@ -28,15 +28,9 @@ from typing import Any, Protocol
 from mdle.atoms.registry import Registry
 from mdle.backend import Backend, Pose
 from mdle.errors import Diagnostic, MdleError
-from mdle.repl.session import (
-    DEFAULT_UNTIL,
-    ReplError,
-    RunReport,
-    Session,
-    StepOutcome,
-    _Run,
-    _side_stats,
-)
+from mdle.repl.reports import RunReport, StepOutcome, _side_stats
+from mdle.repl.runs import _Run
+from mdle.repl.session import DEFAULT_UNTIL, ReplError, Session
 from mdle.runtime import Cause, Observer
 
 __all__ = ["HardwareBackend", "RobotSession"]

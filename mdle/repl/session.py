@@ -1,10 +1,15 @@
 """The REPL's state and what it can do, with no terminal in sight.
 
+Over 500 lines: one class, whose world, definitions, running, stepping, loading and trace
+share one state (the backend, the runs since the reset, the element being stepped); its
+records are in reports.py and its run recorder in runs.py.
+
 A :class:`Session` holds the definitions typed so far (a :class:`~mdle.lang.Workspace`),
 a simulated robot in a world (a :class:`sim.SimBackend` that is never reset between runs, so
 each run starts where the last one left the robot), the path and the per-tick samples since
 the last reset (the session trace), and the element last run (for ``:step``). Its methods
-return plain records; :mod:`mdle.repl.commands` turns them into text.
+return plain records (:mod:`mdle.repl.reports`; each run is recorded as in
+:mod:`mdle.repl.runs`); :mod:`mdle.repl.commands` turns them into text.
 
 >>> s = Session("ellipse")
 >>> _ = s.define("atom creep = (go(0.5 m/s), never, 2 s)")
@@ -19,7 +24,6 @@ import math
 import os
 import tempfile
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 from mdle.atoms.registry import Registry
@@ -27,24 +31,29 @@ from mdle.backend import Backend, Observation, Pose, RobotLimits
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
 from mdle.lang import Element, Workspace
+from mdle.repl.reports import (
+    LoadedRun,
+    RunReport,
+    StepOutcome,
+    StepRow,
+    _closest,
+    _row,
+    _side_stats,
+)
+from mdle.repl.runs import _Recorded, _Run, _write_runs
 from mdle.runtime import (
     Cause,
     Observer,
-    Recorder,
-    RunResult,
     Sample,
     Scheduler,
-    Termination,
 )
 
 if TYPE_CHECKING:
     import numpy as np
 
     from mdle.sim import SimBackend, World
-    from mdle.sim.backend import SimEvent
 
-__all__ = ["DEFAULT_UNTIL", "SETTLED_WINDOW", "LoadedRun", "ReplError", "RunReport", "Session",
-           "SideStats", "StepOutcome", "StepRow"]
+__all__ = ["DEFAULT_UNTIL", "ReplError", "Session"]
 
 #: Longest a single run may go on, in simulated seconds, before the REPL stops it: an
 #: element with ``never`` and ``inf`` would otherwise never give the prompt back when no
@@ -55,156 +64,6 @@ DEFAULT_UNTIL = 600.0
 class ReplError(MdleError):
     """A REPL command cannot be done (nothing to step, nothing to save, a bad argument)."""
 
-
-@dataclass(frozen=True)
-class SideStats:
-    """The boundary distance a following law reported during a run (m).
-
-    Smallest and largest over the run, and mean and standard deviation over its last
-    ``window`` seconds (the settled part, when the run is longer than that), from ``n``
-    ticks.
-    """
-
-    low: float
-    high: float
-    mean: float
-    std: float
-    window: float
-    n: int
-
-
-#: Seconds at the end of a run over which the settled boundary distance is averaged.
-SETTLED_WINDOW = 10.0
-
-
-@dataclass(frozen=True)
-class RunReport:
-    """How one run (or a stepped run, once it ended) went.
-
-    ``label`` is the element's label, ``t0`` the backend time of its first tick (s),
-    ``pose`` the odometry pose at the end, ``true_pose`` the simulator's pose (None on a
-    robot),
-    ``interrupted`` True after Ctrl-C, ``limit`` the run limit when it stopped the run
-    (s, else None), ``collision`` the simulator's record of the first contact during the
-    run, ``error`` the error that aborted it (a failing law or interrupt), ``closest``
-    where the robot came closest to an obstacle: (time since the start (s), x, y (m, true
-    position)), None without ground truth, ``side`` the distance to the followed boundary
-    the control law reported (its ``side_range`` diagnostic on ticks with ``side_hit``), as
-    :class:`SideStats`, None when the law reported none.
-    """
-
-    label: str
-    result: RunResult
-    t0: float
-    pose: Pose
-    true_pose: Pose | None
-    interrupted: bool = False
-    limit: float | None = None
-    collision: SimEvent | None = None
-    error: MdleError | None = None
-    closest: tuple[float, float, float] | None = None
-    side: SideStats | None = None
-
-    @property
-    def decisive(self) -> Termination:
-        """The termination that ended the run.
-
-        The outermost element that ended by its own interrupt or timer (or was stopped) at
-        the final tick, else the root's.
-        """
-        root = self.result.termination
-        final = [t for t in self.result.terminations
-                 if abs(t.time - root.time) < 1e-9
-                 and t.cause not in (Cause.COMPLETED, Cause.ENDED_BY_PARENT)]
-        return min(final, key=lambda t: t.level) if final else root
-
-    @property
-    def ok(self) -> bool:
-        """False when the robot collided, the run was aborted or stopped by Ctrl-C."""
-        return (not self.interrupted and self.error is None and self.collision is None
-                and not self.result.collided and self.result.fault is None)
-
-
-@dataclass(frozen=True)
-class StepRow:
-    """One tick shown by ``:step``: the sample, and the scan the tick saw.
-
-    ``front`` is the range of the beam nearest 0 deg (m), ``nearest`` the smallest valid
-    range (m) and ``nearest_bearing`` its bearing (rad); None without a scan.
-    """
-
-    tick: int
-    sample: Sample
-    front: float | None
-    nearest: float | None
-    nearest_bearing: float | None
-
-
-@dataclass(frozen=True)
-class StepOutcome:
-    """What ``:step N`` did.
-
-    The rows, the report when the element ended, and whether a new run of the element was
-    started for it.
-    """
-
-    rows: tuple[StepRow, ...]
-    report: RunReport | None
-    started: bool
-    label: str
-    t0: float
-
-
-class _Run(Recorder):
-    """Records one run of the session: the scheduler, its events and samples."""
-
-    def __init__(self, label: str, text: str) -> None:
-        super().__init__()
-        self.label = label
-        self.text = text
-
-    @property
-    def scheduler(self) -> Scheduler | None:
-        """The run's scheduler, once it has started."""
-        return self.started
-
-    @property
-    def t0(self) -> float:
-        """Simulated time of the run's first sample (or event), seconds."""
-        if self.samples:
-            return self.samples[0].time
-        return self.events[0].time if self.events else 0.0
-
-
-@dataclass(frozen=True)
-class LoadedRun:
-    """What ``:load`` of a recording brought in: the element, result, ticks, world, notes.
-
-    ``cut`` is True when the recording was cut short (no ``end`` record); ``note`` says
-    what could not be restored (the world, the robot's place), None when everything was.
-    """
-
-    label: str
-    result: RunResult
-    ticks: int
-    world: str
-    cut: bool
-    note: str | None
-
-
-class _Element:
-    def __init__(self, label: str) -> None:
-        self.label = label
-
-
-class _Recorded:
-    """What a trace writer reads of a scheduler, for a run loaded from a recording."""
-
-    def __init__(self, label: str, rate: float, backend: Any) -> None:
-        self.element = _Element(label)
-        self.rate = rate
-        self.until = None
-        self.backend = backend
 
 
 class Session:
@@ -715,19 +574,9 @@ class Session:
         except OSError as exc:
             raise ReplError(f"cannot write `{os.fspath(path)}`: {exc.strerror}") from None
         try:
-            for r in runs:
-                assert r.scheduler is not None
-                writer.on_start(r.scheduler)
-                for e in r.events:
-                    writer.on_event(e)
-                for s in r.samples:
-                    writer.on_tick(s)
-            summary = _summary([r.result for r in runs if r.result is not None])
-            if summary is not None:
-                writer.on_end(summary)
+            return _write_runs(writer, runs)
         finally:
             writer.close()
-        return sum(len(r.samples) for r in runs)
 
     def plot(self, out: str | os.PathLike[str]) -> str:
         """Draw the path since the last reset as ``mdle plot`` does; returns ``out``.
@@ -742,64 +591,3 @@ class Session:
             trace = os.path.join(tmp, "session.jsonl")
             self.write_trace(trace)
             return plot_trace(trace, out, world=self.world)
-
-
-def _row(tick: int, sample: Sample, scan: Any) -> StepRow:
-    if scan is None or len(scan.ranges) == 0:
-        return StepRow(tick, sample, None, None, None)
-    import numpy as np
-
-    ranges = np.asarray(scan.ranges, dtype=float)
-    bearings = np.asarray(scan.bearings, dtype=float)
-    valid = np.asarray(scan.valid, dtype=bool) & np.isfinite(ranges)
-    front = float(ranges[int(np.argmin(np.abs(bearings)))])
-    if not valid.any():
-        return StepRow(tick, sample, front, None, None)
-    i = int(np.argmin(np.where(valid, ranges, np.inf)))
-    return StepRow(tick, sample, front, float(ranges[i]), float(bearings[i]))
-
-
-def _closest(samples: Sequence[Sample], t0: float) -> tuple[float, float, float] | None:
-    """(t - t0, x, y) of the sample with the smallest true clearance, None without truth."""
-    known = [s for s in samples if s.clearance is not None]
-    if not known:
-        return None
-    best = min(known, key=lambda s: float(s.clearance))  # type: ignore[arg-type]
-    x = best.true_x if best.true_x is not None else best.x
-    y = best.true_y if best.true_y is not None else best.y
-    return best.time - t0, x, y
-
-
-def _side_stats(samples: Sequence[Sample]) -> SideStats | None:
-    """Statistics of the ``side_range`` diagnostic on the ticks where the side ray hit."""
-    import numpy as np
-
-    rows = [(s.time, s.diag["side_range"]) for s in samples
-            if "side_range" in s.diag and s.diag.get("side_hit", 1.0) > 0.5]
-    if not rows:
-        return None
-    t, r = np.asarray(rows, dtype=float).T
-    window = min(SETTLED_WINDOW, float(t[-1] - t[0]))
-    last = r[t >= t[-1] - window]
-    return SideStats(float(r.min()), float(r.max()), float(last.mean()), float(last.std()),
-                     window, len(r))
-
-
-def _summary(results: Sequence[RunResult]) -> RunResult | None:
-    """One result for several runs: the last run's termination, everything else summed."""
-    if not results:
-        return None
-    last = results[-1]
-    clear = [r.min_clearance for r in results if r.min_clearance is not None]
-    return replace(
-        last,
-        terminations=tuple(t for r in results for t in r.terminations),
-        events=tuple(e for r in results for e in r.events),
-        ticks=sum(r.ticks for r in results),
-        duration=sum(r.duration for r in results),
-        distance=sum(r.distance for r in results),
-        min_clearance=min(clear) if clear else None,
-        collided=any(r.collided for r in results),
-        fault=next((r.fault for r in reversed(results) if r.fault), None),
-        max_lateness=max(r.max_lateness for r in results),
-    )

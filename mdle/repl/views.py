@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 
     from mdle.atoms.registry import Registry, Report
     from mdle.backend import RobotLimits
-    from mdle.repl.session import RunReport, StepRow
+    from mdle.repl.reports import RunReport, StepRow
     from mdle.sim import World
 
 __all__ = ["format_pose", "format_report", "format_scan", "format_step_rows", "law_reports",

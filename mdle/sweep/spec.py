@@ -1,5 +1,8 @@
 r"""Study specs: YAML to a validated :class:`Study` whose files travel as text.
 
+Over 500 lines: one schema, every section of which is read against the same document
+(its key paths and error positions), and the plan is checked with each parameter value.
+
 A study names a plan, the worlds, robots, sensing modes, control rates, seeds, start
 poses and plan parameters to combine; :func:`mdle.sweep.tasks.expand` turns it into one
 :class:`~mdle.sweep.tasks.RunTask` per combination. Every file a spec names (plan and
@@ -35,16 +38,8 @@ from pathlib import Path
 from typing import Any
 
 from mdle.errors import MdleError, WorldError
-from mdle.sim.world_yaml import (
-    _closest,
-    _Doc,
-    _integer,
-    _mapping,
-    _number,
-    _show,
-    _string,
-    _yaml_value,
-)
+from mdle.sim.yaml_doc import _Doc, _yaml_value
+from mdle.sim.yaml_values import _closest, _integer, _mapping, _number, _show, _string
 
 __all__ = ["SpecError", "Study", "WorldChoice", "RobotChoice", "StartRule", "parse_study",
            "read_study", "SENSING"]
@@ -374,7 +369,7 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
 def _robot(doc: _Doc, path: str, base: Path, v: Any) -> RobotChoice:
     import yaml
 
-    from mdle.sim.world_yaml import _robot as robot_section
+    from mdle.sim.world_robots import _robot as robot_section
 
     if isinstance(v, str) and (v.endswith((".yaml", ".yml")) or "/" in v):
         from mdle.userfile import UserFileError

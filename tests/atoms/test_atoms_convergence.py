@@ -91,3 +91,39 @@ def test_corner_mode_circles_a_nearer_point_across_a_narrow_notch() -> None:
     S.step(S.MISS, S.MISS, pose, 1.0, 0.02, mem2, 1.0, 0.5, S.Gains(),
            near=lambda: (0.58, -1.2))
     assert mem2.corner == (-0.3, -0.53)
+
+
+def test_corner_mode_hands_over_to_a_face_converging_on_the_path() -> None:
+    # Circling a vertex 0.5 m away, the side ray finds a face 0.45 m off, turned 40 deg towards
+    # the path (the far side of a gap met obliquely): the follow law takes over and turns away
+    # from it. Circled as a point, it pulled the robot towards the face.
+    def corner() -> S.Memory:
+        return S.Memory(mode=S.CORNER, corner=(0.0, -0.5), turned=0.5, seen=(0.0, -0.5),
+                        seen_at=0.0)
+
+    pose = (0.0, 0.0, 0.0)
+    mem = corner()
+    u = S.step(S.MISS, S.Ray(True, 0.45, math.radians(40.0), 0.0), pose, 1.0, 0.02, mem, 1.0,
+               0.5, S.Gains())
+    assert mem.mode == S.FOLLOW and u > 0.0
+    # the next face of a convex corner, still turning away, or a face beyond the vertex
+    # circled (the bottom of a notch): keep circling
+    for ray in (S.Ray(True, 0.5, math.radians(-30.0), 0.0), S.Ray(True, 1.2, 0.3, 0.0)):
+        mem = corner()
+        S.step(S.MISS, ray, pose, 1.0, 0.02, mem, 1.0, 0.5, S.Gains())
+        assert mem.mode == S.CORNER
+
+
+@pytest.mark.parametrize("sensing", ["exact", "scan"])
+def test_a_gap_narrower_than_2rc_is_followed_closely(sensing: str) -> None:
+    # A box and a disc 0.5 m apart: at each end of the gap the rc level set has a concave
+    # corner where the far obstacle's face is met obliquely. Corner mode used to go on
+    # circling the near lip as a point while the safety layer held the robot straight on
+    # towards the far face: it came to 0.16 m of the disc (rc 0.5 m) and took seconds to get
+    # back (mean |d - rc| 0.087 m exact, 0.106 m scan, over the second half of 40 s).
+    world = sim.World("gap", obstacles=(Rectangle((0.0, 0.0), (1.4, 0.9)),
+                                        Circle((2.1, 0.0), 0.97)),
+                      start_pose=Pose(2.1, 3.0, -math.pi / 2.0), robot=IDEAL)
+    t, d = _distances(world, 40.0, sensing=sensing)
+    assert d[t > 8.0].min() > 0.25
+    assert np.abs(d[t > 20.0] - 0.5).mean() < 0.075

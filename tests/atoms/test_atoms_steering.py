@@ -43,7 +43,9 @@ def test_clf_decreases_along_the_law_when_the_front_misses() -> None:
         ks = rng.uniform(-3.0, 1.0)
         u = S.clf_law(S.MISS, S.Ray(True, rs, bs, ks), v, rc, G, 1e9)
         ks_c = min(ks, 0.8 * math.cos(bs) / rs)
-        f = S.f_gain(rs, rc, G)
+        # on a convex boundary V's distance gain is kf (1 - ks rc)^2 (at most 4 kf): a
+        # constant along a boundary of constant curvature
+        f = S.f_gain(rs, rc, G) * (min(1 - ks_c * rc, 2.0) ** 2 if ks_c < 0 else 1.0)
         as_ = 1 - ks_c * rs / math.cos(bs)
         s2 = math.sin(-bs / 2)
         a = s2 * as_ - f * rs * math.tan(bs)

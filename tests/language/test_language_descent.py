@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 from typing import Any
@@ -112,6 +113,23 @@ def test_gives_up_on_every_labelled_syntax_error() -> None:
 def test_gives_up_where_lark_reports(text: str) -> None:
     assert fast(text) is None
     assert reference(text)[2]
+
+
+@pytest.mark.parametrize("levels", [98, 99, 100, 101, 102])
+@pytest.mark.parametrize("shape", [
+    lambda n: "x + " * (n - 1) + "x",  # a chain of operators, left associative
+    lambda n: "not " * (n - 1) + "x",  # prefix operators
+    lambda n: "- " * (n - 2) + "(x)",  # prefix operators around a group
+    lambda n: "f(" * (n - 1) + "x" + ")" * (n - 1),  # calls
+    lambda n: "[" * (n - 1) + "x" + "]" * (n - 1),  # vectors
+    lambda n: "(" * (n // 2) + "x * " * (n - n // 2 - 1) + "x" + ")" * (n // 2),
+    lambda n: "g(a = " * (n // 2) + "-" * (n - n // 2 - 1) + "x" + ")" * (n // 2),
+], ids=["operators", "not", "signs", "calls", "vectors", "groups-operators", "keywords"])
+def test_depth_limit_is_the_reference_s(levels: int, shape: Callable[[int], str]) -> None:
+    # The fast parser counts nesting as the reference does: it accepts exactly the
+    # expressions lark accepts, at the limit and on either side of it.
+    text = "interrupt i = " + shape(levels) + "\n"
+    assert same_as_reference(text) == (not reference(text)[2])
 
 
 def test_keyword_arguments_and_trailing_commas() -> None:

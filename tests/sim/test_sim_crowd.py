@@ -12,6 +12,7 @@ from mdle.errors import WorldError
 from mdle.sim.crowd import CrowdCollider, Discs, cast_discs
 from mdle.sim.ladar import ladar_profile
 from mdle.sim.profiles import robot_profile
+from mdle.sim.robot import Latency
 from mdle.sim.shapes import Parts, Rectangle
 from mdle.sim.team import TeamSim
 from mdle.sim.world import RobotPlace, World
@@ -169,3 +170,41 @@ def test_scans_taken_during_a_step_see_the_others_where_they_ended_it() -> None:
         assert seen.any(), f"{m.name} sees no other robot"
         assert np.allclose(scan.ranges, want, atol=1e-9)
         assert (scan.valid == (hits.hit | (t <= lad.profile.max_range))).all()
+
+
+def _mixed_team(cast_later: bool, ladars: tuple[str, ...] = ("lms200",),
+                robot: str = "pioneer2dx") -> TeamSim:
+    profile = robot_profile(robot)
+    if robot == "pioneer-p3dx":   # scans older than a tick: they wait in the queue
+        profile = profile.with_overrides(scan_latency=Latency("uniform", 0.12, 0.25))
+    places = [RobotPlace(n, profile, ladar_profile(ladars[i % len(ladars)]), Pose(x, y, th))
+              for i, (n, x, y, th) in
+              enumerate((("a", 0, 0, 0), ("b", 2.5, 0.4, 2.0), ("c", 1.5, -1.8, 1.0),
+                         ("d", -2, 0, 0), ("e", 4.0, 2.0, -2.0)))]
+    team = TeamSim(_world(), places, seed=5)
+    for m in team.members:
+        m._cast_later = m._cast_later and cast_later
+    return team
+
+
+@pytest.mark.parametrize(("ladars", "robot"), [
+    (("lms200",), "pioneer2dx"), (("lms200", "lms200-ideal"), "pioneer2dx"),
+    (("lms200",), "pioneer-p3dx")])   # the last: scans wait out their latency in a queue
+def test_the_team_s_one_pass_scans_equal_each_robot_s_own_bit_for_bit(
+        ladars: tuple[str, ...], robot: str) -> None:
+    # the same seeded team, its scans cast at the end of each step in one pass per kind of
+    # ladar, or by each robot as it moves: every range, flag and pose the same
+    batched, alone = _mixed_team(True, ladars, robot), _mixed_team(False, ladars, robot)
+    assert all(m._cast_later for m in batched.members)
+    for k in range(20):
+        for team in (batched, alone):
+            for i, m in enumerate(team.members):
+                m.command(Command(0.3 + 0.05 * i, 0.4 * math.sin(k + i)))
+            team.step(0.1)
+        for mb, ma in zip(batched.members, alone.members, strict=True):
+            sb, sa = mb.observe().scan, ma.observe().scan
+            assert sb is not None and sa is not None
+            assert sb.stamp == sa.stamp and not sb.ranges.flags.writeable
+            assert np.array_equal(sb.ranges, sa.ranges)
+            assert np.array_equal(sb.valid, sa.valid)
+            assert mb.true_pose == ma.true_pose

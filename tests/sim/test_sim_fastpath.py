@@ -194,3 +194,57 @@ def test_collider_near_list_in_a_large_world_is_exact() -> None:
         assert math.isclose(d, n.distance, abs_tol=1e-12) and owner == n.obstacle
         checked += 1
     assert checked > 150
+
+
+def test_fast_observation_and_scan_equal_the_dataclass_constructors() -> None:
+    """observation() and plain_scan() fill every field as the dataclasses' own __init__ do."""
+    from mdle.backend import Observation, Pose, Scan, observation, plain_scan
+
+    r, b, v = np.ones(3), np.zeros(3), np.ones(3, dtype=bool)
+    fast = plain_scan(r, b, v, 0.5, 10.0)
+    slow = Scan(ranges=r, bearings=b, valid=v, stamp=0.5, max_range=10.0)
+    assert vars(fast) == vars(slow)
+    truth = {"clearance": 1.0}
+    got = observation(1.5, Pose(1.0, 2.0, 0.5), 0.3, -0.1, fast, True, truth)
+    assert got == Observation(time=1.5, pose=Pose(1.0, 2.0, 0.5), v=0.3, omega=-0.1,
+                              scan=fast, stalled=True, truth=truth)
+    assert list(vars(got)) == list(vars(Observation(0.0, Pose())))  # every field, in order
+    with pytest.raises(AttributeError):
+        got.time = 0.0  # type: ignore[misc]  # still frozen
+
+
+def test_a_fan_cast_from_many_places_at_once_equals_each_cast_bit_for_bit() -> None:
+    world = World("boxes", obstacles=(
+        Wall(((-6, -6), (6, -6), (6, 6), (-6, 6)), 0.2, True),
+        Rectangle((2.0, 1.0), (1.0, 0.5), 0.3), Rectangle((-2.5, -1.0), (0.4, 2.0), 1.1)))
+    fan = Ladar(LMS200, np.random.default_rng(0), mount=(0.02, 0.01, 0.0)).fan(world.caster)
+    assert fan.batchable()
+    rng = np.random.default_rng(4)
+    ox, oy = rng.uniform(-5.5, 5.5, 60), rng.uniform(-5.5, 5.5, 60)
+    first = rng.uniform(-7.0, 7.0, 60)   # every heading: the intervals' wrap included
+    ranges, hit = fan.cast_many(ox, oy, first)
+    assert ranges.shape == hit.shape == (60, LMS200.beams)
+    for s in range(60):
+        want_r, want_h = fan.cast(float(ox[s]), float(oy[s]), float(first[s]))
+        assert np.array_equal(ranges[s], want_r) and np.array_equal(hit[s], want_h)
+    assert not Ladar(LMS200, np.random.default_rng(0)).fan(_mixed_world().caster).batchable()
+
+
+def test_settling_scans_as_one_block_draws_and_rounds_as_each_ladar_alone() -> None:
+    from mdle.sim.ladar import LMS200_IDEAL, settle_rows
+
+    rng = np.random.default_rng(9)
+    ranges = rng.uniform(0.0, 12.0, (3, LMS200.beams))
+    valid = ranges < 10.0
+    ranges[~valid] = LMS200.max_range
+    block, block_valid = ranges.copy(), valid.copy()
+    settle_rows([Ladar(LMS200, np.random.default_rng(s)) for s in range(3)], block,
+                block_valid)
+    for s in range(3):
+        r, v = ranges[s].copy(), valid[s].copy()
+        Ladar(LMS200, np.random.default_rng(s)).settle(r, v)
+        assert np.array_equal(block[s], r)
+    assert not block.flags.writeable and not block_valid.flags.writeable
+    with pytest.raises(ValueError, match="one profile"):
+        settle_rows([Ladar(LMS200, rng), Ladar(LMS200_IDEAL, rng)], ranges.copy(),
+                    valid.copy())
