@@ -22,10 +22,11 @@ tick). There batches and chunks close by size alone, as in a run at full speed
 (:data:`NO_AGE`).
 
 Last figures (``docs/trace.md``, "Cost"): the recorder alone about 128 000 instructions
-and 18-22 us of CPU per tick (load 9-12); the whole run 927 000 instructions per tick
-without recording, 159 000 more with it (+17 %, from +21 % before the batch encoding);
-CPU ratio x1.22 uncompressed and x1.27 lz4 at load 11, within that load's noise of the
-x1.25 target, and above it on an idle machine (x1.40 before the batch encoding).
+and 17-20 us of CPU per tick (load 7-11; 21-22 us before the batch encoding); the whole
+run 927 000 instructions per tick without recording, 159 000 more with it (+17 %, from
++21 % before the batch encoding; lz4 +20 %); CPU ratio x1.22 uncompressed and x1.27
+lz4 at load 11, within that load's noise of the x1.25 target, as the code before was;
+on an idle machine that code gave x1.40.
 
 Run: ``python benchmarks/mcap.py [--ticks N] [--repeat R] [--seconds S]``.
 """
