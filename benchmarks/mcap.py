@@ -24,9 +24,9 @@ tick). There batches and chunks close by size alone, as in a run at full speed
 Last figures (``docs/trace.md``, "Cost"): the recorder alone about 128 000 instructions
 and 17-20 us of CPU per tick (load 7-11; 21-22 us before the batch encoding); the whole
 run 927 000 instructions per tick without recording, 159 000 more with it (+17 %, from
-+21 % before the batch encoding; lz4 +20 %); CPU ratio x1.22 uncompressed and x1.27
-lz4 at load 11, within that load's noise of the x1.25 target, as the code before was;
-on an idle machine that code gave x1.40.
++21 % before the batch encoding; lz4 +20 %); CPU ratio x1.22-x1.25 uncompressed and
+x1.26-x1.27 lz4 at load 3-11, at the x1.25 target within the noise, as the code before
+was; on an idle machine that code gave x1.40.
 
 Run: ``python benchmarks/mcap.py [--ticks N] [--repeat R] [--seconds S]``.
 """
