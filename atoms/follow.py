@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from mdle.atoms import steering
+from mdle.atoms import safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_view, parse_side
 from mdle.atoms.latency import shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
@@ -165,7 +165,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        v, u, clearance = steering.safety_filter(points, v, u, g.umax, ctx.limits.radius,
+        v, u, clearance = safety.safety_filter(points, v, u, g.umax, ctx.limits.radius,
                                                  margin, float(args["lookahead"]),
                                                  side=1 if left else -1)
     if pred is not None:

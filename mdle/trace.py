@@ -1,5 +1,8 @@
 """Run traces as JSON lines: a writer (an observer of the scheduler) and a reader.
 
+Over 500 lines: the trace format in one place, the writer and the reader of the same
+records, which must agree field by field (and the laser records both use).
+
 One JSON object per line, each with a ``type``: one ``header`` (program, world, seed,
 versions), an ``event`` for every element start and end, a ``sample`` per tick, and an
 ``end`` record with the run's result. The header, events and the end record reach the file

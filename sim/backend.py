@@ -1,5 +1,8 @@
 """SimBackend: the embedded simulator behind :class:`mdle.backend.Backend`.
 
+Over 500 lines: one class, the simulated robot's observe/command/advance cycle, whose
+clock, kinematics, contact, scans and odometry share one state.
+
 Time advances only in :meth:`SimBackend.advance`, which integrates the held command
 exactly (arcs, with the profile's acceleration limits), sweeps the body so it never
 passes through an obstacle (on contact it stops and raises ``stalled``, as a Pioneer
@@ -36,8 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import (STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan,
-                          observation)
+from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan, observation
 from mdle.errors import BackendError, WorldError
 from mdle.messages import Inbox
 from mdle.sim.collision import CONTACT, Collider

@@ -1,5 +1,8 @@
 """Vectorised ray casting against exact boundary primitives (segments, arcs, ellipses).
 
+Over 500 lines: two casters of one method (any rays, and a ladar's fixed fan), which
+must agree to the bit; tests compare them.
+
 The hot path of the simulator. Segments use an angular-interval method: each segment
 subtends an interval of bearings as seen from the ray origin, so only the beams inside
 that interval are intersected with it (``searchsorted`` on the sorted beam angles), and

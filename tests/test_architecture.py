@@ -89,18 +89,6 @@ def test_runtime_modules_import_one_another_without_a_circle() -> None:
         visit(m, ())
 
 
-#: Long modules other branches are editing now, let off the rule below until their reasons
-#: are written after those branches merge. Shrink it: an entry that is no longer over 500
-#: lines, or that now says why, fails :func:`test_the_long_module_allow_list_is_current`.
-LONG_WITHOUT_REASON_YET = frozenset({
-    "mdle/trace.py",
-    "mdle/runtime/scheduler.py",
-    "sim/backend.py",
-    "sim/raycast.py",
-    "atoms/steering.py",
-})
-
-
 def _lines(path: Path) -> int:
     return path.read_text(encoding="utf-8").count("\n")
 
@@ -114,17 +102,8 @@ def _says_why(path: Path) -> bool:
 @pytest.mark.parametrize("path", _every_module(), ids=lambda p: str(p.relative_to(REPO)))
 def test_a_long_module_says_why_at_its_top(path: Path) -> None:
     name = path.relative_to(REPO).as_posix()
-    if _lines(path) <= 500 or name in LONG_WITHOUT_REASON_YET:
+    if _lines(path) <= 500:
         return
     assert _says_why(path), \
         f"{name} has {_lines(path)} lines: split it, or say why in its docstring's " \
         "second paragraph (`Over 500 lines: ...`)"
-
-
-@pytest.mark.parametrize("name", sorted(LONG_WITHOUT_REASON_YET))
-def test_the_long_module_allow_list_is_current(name: str) -> None:
-    path = REPO / name
-    assert path.is_file(), f"{name} is gone: take it off LONG_WITHOUT_REASON_YET"
-    assert _lines(path) > 500, \
-        f"{name} is {_lines(path)} lines now: take it off LONG_WITHOUT_REASON_YET"
-    assert not _says_why(path), f"{name} says why it is long: take it off LONG_WITHOUT_REASON_YET"

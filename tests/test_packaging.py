@@ -4,6 +4,7 @@ could clash with another project's package of that name."""
 
 from __future__ import annotations
 
+import sysconfig
 from importlib import metadata
 from pathlib import Path
 
@@ -13,7 +14,12 @@ import mdle.sim
 
 
 def test_no_top_level_sim_or_atoms_is_installed() -> None:
-    files = metadata.files("mdle") or []
+    # The installed distribution, not a source tree's mdle.egg-info (whose SOURCES.txt lists
+    # sim/ and atoms/ as they are in the checkout) that an earlier test's sys.path finds.
+    purelib = sysconfig.get_paths()["purelib"]
+    dist = next(iter(metadata.distributions(name="mdle", path=[purelib])), None)
+    assert dist is not None, f"mdle is not installed in {purelib}"
+    files = dist.files or []
     assert files, "mdle is not installed"
     tops = {Path(str(f)).parts[0] for f in files}
     assert not tops & {"sim", "atoms"}, sorted(tops)

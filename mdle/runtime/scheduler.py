@@ -1,5 +1,8 @@
 """The tick loop: executes a checked element on a backend, exactly as language.md says.
 
+Over 500 lines: one class, the tick loop, whose rules (below) all act on one stack of
+active elements; the slots and frames it makes are its private data.
+
 Each tick (rule 4): observe; test timers and interrupts from the outermost active element
 inwards, the outermost that fires ends with everything inside it (rule 3, innermost
 first, each with its END event); the element after it starts at once and is tested in the

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
+from mdle.atoms import safety
 from mdle.atoms import steering as S
 
 if TYPE_CHECKING:
@@ -109,9 +110,9 @@ def test_corner_law_on_the_circle_is_the_circling_rate() -> None:
 
 def test_safety_filter_keeps_a_clear_arc_and_replaces_a_blocked_one() -> None:
     far = np.array([[5.0, 5.0]])
-    assert S.safety_filter(far, 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (1.0, 0.2, math.inf)
+    assert safety.safety_filter(far, 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (1.0, 0.2, math.inf)
     post = np.array([[0.35, 0.02]])  # a thin post just left of straight ahead, followed side
-    v, u, own = S.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5, side=1)
+    v, u, own = safety.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5, side=1)
     assert own < 0.05
     assert v == 1.0 and u != 0.0
     # the chosen arc really clears the post
@@ -124,7 +125,7 @@ def test_safety_filter_slows_down_in_a_dead_end() -> None:
     # a narrow wedge ahead, opening towards the robot: no arc at full speed escapes it
     t = np.linspace(0.0, 2.0, 200)[:, None]
     walls = np.vstack((np.hstack((t, 0.2 - 0.1 * t)), np.hstack((t, -0.2 + 0.1 * t))))
-    v, u, own = S.safety_filter(walls[walls[:, 0] > 0.1], 1.0, 0.0, 3.0, 0.0, 0.15, 0.8)
+    v, u, own = safety.safety_filter(walls[walls[:, 0] > 0.1], 1.0, 0.0, 3.0, 0.0, 0.15, 0.8)
     assert own < 0.15
     assert v < 1.0  # slowed (or stopped to turn on the spot) rather than driving on
 
@@ -166,5 +167,5 @@ def test_own_arc_clearance_fast_path_equals_the_candidate_computation() -> None:
         pts = rng.uniform(-2.0, 2.0, (int(rng.integers(1, 80)), 2))
         v = float(rng.uniform(0.1, 1.0))
         u = 0.0 if rng.random() < 0.2 else float(rng.uniform(-3.0, 3.0))
-        slow = S._arc_clearance(pts, v, np.array([u]), 0.8, 8)[0][0]
-        assert S._own_clearance(pts, v, u, 0.8, 8) == pytest.approx(slow, abs=1e-12)
+        slow = safety._arc_clearance(pts, v, np.array([u]), 0.8, 8)[0][0]
+        assert safety._own_clearance(pts, v, u, 0.8, 8) == pytest.approx(slow, abs=1e-12)
