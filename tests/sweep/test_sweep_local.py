@@ -138,7 +138,9 @@ def _killer(executor: LocalExecutor, kills: int, done: threading.Event) -> None:
 def test_a_lost_worker_is_retried_once_then_recorded_lost(tiny_spec: Path, kills: int) -> None:
     study = read_study(tiny_spec)
     tasks = [replace(t, until=None) for t in expand(replace(study, rates=(50.0,)))][:1]
-    slow = [replace(t, plan_text=t.plan_text.replace("4 s)", "30 s)")) for t in tasks]
+    # long enough (6000 ticks) that the worker is still running when the killer strikes,
+    # by a wide margin (30 s of it once ended before the second kill, after a faster sim)
+    slow = [replace(t, plan_text=t.plan_text.replace("4 s)", "120 s)")) for t in tasks]
     executor = LocalExecutor(1)
     done = threading.Event()
     killer = threading.Thread(target=_killer, args=(executor, kills, done), daemon=True)
