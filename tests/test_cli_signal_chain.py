@@ -6,6 +6,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import pytest
+
 from mdle.cli import output
 from mdle.cli.signals import Interrupted, SignalGuard, interruption_of
 
@@ -102,10 +104,8 @@ def test_a_signal_raised_and_swallowed_on_the_way_still_stops_the_run() -> None:
     # sees it) swallows the Interrupted; the run that follows must stop at once all the same.
     guard = SignalGuard()
     guard.arm()
-    try:
+    with pytest.raises(Interrupted):  # raised, then swallowed on the way
         guard._handle(15, None)
-    except Interrupted:
-        pass  # swallowed on the way
     assert guard.received == 15 and not guard.pending
     target = _Target()
     with guard.stopping(target):
