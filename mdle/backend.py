@@ -12,6 +12,8 @@ import enum
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from mdle.frozen import builder
+
 if TYPE_CHECKING:  # numpy is only needed by those who build scans
     import numpy as np
 
@@ -112,10 +114,9 @@ def observation(time: float, pose: Pose, v: float, omega: float, scan: Scan | No
     simulated observation; this fills the same fields at once (motors enabled, no
     battery reading).
     """
-    obs = object.__new__(Observation)
-    obs.__dict__.update(time=time, pose=pose, v=v, omega=omega, scan=scan, stalled=stalled,
-                        motors_enabled=True, battery=None, truth=truth, inbox=inbox)
-    return obs
+    return _new_observation(time=time, pose=pose, v=v, omega=omega, scan=scan,
+                            stalled=stalled, motors_enabled=True, battery=None, truth=truth,
+                            inbox=inbox)
 
 
 def plain_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, stamp: float,
@@ -124,10 +125,12 @@ def plain_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, stam
 
     For a simulated ladar's scan at every tick (see :func:`observation` for why).
     """
-    scan = object.__new__(Scan)
-    scan.__dict__.update(ranges=ranges, bearings=bearings, valid=valid, stamp=stamp,
-                         max_range=max_range, tangents=None, curvatures=None)
-    return scan
+    return _new_scan(ranges=ranges, bearings=bearings, valid=valid, stamp=stamp,
+                     max_range=max_range, tangents=None, curvatures=None)
+
+
+_new_observation = builder(Observation)
+_new_scan = builder(Scan)
 
 
 @dataclass(frozen=True)

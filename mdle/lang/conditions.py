@@ -24,6 +24,7 @@ from types import CodeType
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
+from mdle.frozen import builder
 from mdle.lang.program import NEVER, Interrupt
 from mdle.units import Dim
 
@@ -93,31 +94,10 @@ class Typed:
         return lambda ctx: value
 
 
-_new = object.__new__
-
-
-def _typed(kind: Kind, node: Node | None, const: Any) -> Typed:
-    """Return ``Typed(kind, node, const)`` without the frozen ``__init__``.
-
-    That sets each field through ``object.__setattr__``; the checker makes several of
-    these per interrupt, so the fields are written into ``__dict__`` directly (an equal
-    instance).
-    """
-    t = _new(Typed)
-    fields = t.__dict__
-    fields["kind"] = kind
-    fields["node"] = node
-    fields["const"] = const
-    return t
-
-
-def _node(op: str, parts: tuple[Any, ...]) -> Node:
-    """Return ``Node(op, parts)`` as :func:`_typed` makes a Typed."""
-    n = _new(Node)
-    fields = n.__dict__
-    fields["op"] = op
-    fields["parts"] = parts
-    return n
+#: ``Typed(kind, node, const)`` and ``Node(op, parts)`` without the frozen ``__init__``:
+#: the checker makes several of each per interrupt (see :mod:`mdle.frozen`).
+_typed = builder(Typed)
+_node = builder(Node)
 
 
 def _operand(t: Typed) -> Node:

@@ -10,16 +10,15 @@ A token here is anything with ``line``, ``column``, ``end_line``, ``end_column``
 
 from __future__ import annotations
 
-import dataclasses
 import difflib
 import functools
 import math
 import re
-from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, TypeVar
+from typing import Any
 
 from mdle.errors import Diagnostic, Span, make_span
+from mdle.frozen import builder
 from mdle.lang import syntax as st
 from mdle.units import NONE, UNITS, unit_value
 
@@ -30,28 +29,7 @@ __all__ = ["MAX_DEPTH", "POWERS", "NOT_POWER", "SIGN_POWER", "COMPARISON_POWER",
 #: Deepest nesting of parentheses and operators accepted in one expression.
 MAX_DEPTH = 100
 
-_T = TypeVar("_T")
 _NUMBER = re.compile(r"((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?)[ \t]*(.*)", re.S)
-
-
-def builder(cls: type[_T]) -> Callable[..., _T]:
-    """Return a constructor of the frozen dataclass ``cls`` taking every field, in order.
-
-    A frozen dataclass's ``__init__`` sets each field through ``object.__setattr__``,
-    which is most of the cost of a small node; a parser makes one or two nodes per token.
-    The builder writes the fields into the new instance's ``__dict__`` (as
-    :func:`mdle.errors.make_span` does): the result is an ordinary, equal instance.
-    It suits plain data classes only (no ``__post_init__``, no slots).
-    """
-    names = [f.name for f in dataclasses.fields(cls)]  # type: ignore[arg-type]
-    assert not hasattr(cls, "__post_init__") and not hasattr(cls, "__slots__")
-    body = "".join(f"    d[{n!r}] = {n}\n" for n in names)
-    code = (f"def build({', '.join(names)}):\n    o = new(cls)\n    d = o.__dict__\n{body}"
-            "    return o\n")
-    namespace: dict[str, Any] = {"new": object.__new__, "cls": cls}
-    exec(code, namespace)
-    build: Callable[..., _T] = namespace["build"]
-    return build
 
 
 #: Fast constructors of the nodes the parsers make most (every field given, in order).
