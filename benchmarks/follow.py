@@ -12,6 +12,11 @@ which stay meaningful on a loaded machine. Last, a whole controlled tick is time
 (simulator, atom and scheduler: ``follow_boundary`` at 0.3 m/s on the default robot in the
 100-segment world of ``benchmarks/sim.py``, a scan every tick at 10 Hz; target 120 us).
 
+    python benchmarks/follow.py --split
+
+times the controlled tick's parts instead: the backend's observe, command and advance (the
+simulator), the atom's step, and the rest (the scheduler).
+
     python benchmarks/follow.py --instructions
 
 counts instructions instead (valgrind's callgrind, repeatable whatever else the machine
@@ -35,6 +40,7 @@ import math
 import os
 import pickle
 import re
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -214,6 +220,39 @@ def _count(obs: list[Observation], backend: sim.SimBackend, rounds: int,
         print(f"{CONTROLLED}: {tick / 1e3:.1f} k instructions/tick over {controlled} ticks")
 
 
+def _controlled_split(ticks: int) -> dict[str, float]:
+    """Time a controlled run's parts (us per tick): the backend's calls, the atom's step, the rest.
+
+    Each part is wrapped in a clock read (about 0.1 us each), so the parts add up to a little
+    more than :func:`_controlled_us` gives; the shares are what they are for.
+    """
+    sch = _controlled()
+    spent = dict.fromkeys(("backend.observe", "backend.command", "backend.advance",
+                           "follow_boundary step"), 0.0)
+    clock = time.perf_counter
+
+    def timed(fn: Callable[..., Any], key: str) -> Callable[..., Any]:
+        def call(*a: Any) -> Any:
+            t0 = clock()
+            out = fn(*a)
+            spent[key] += clock() - t0
+            return out
+        return call
+
+    backend = sch.backend
+    for name in ("observe", "command", "advance"):
+        setattr(backend, name, timed(getattr(backend, name), f"backend.{name}"))
+    slot = sch._stack[-1].slot  # the running atom's slot: its step is what the tick calls
+    slot.step = timed(slot.step, "follow_boundary step")
+    t0 = clock()
+    _controlled_ticks(sch, ticks)
+    whole = clock() - t0
+    out = {k: v / ticks * 1e6 for k, v in spent.items()}
+    out["scheduler (the rest)"] = whole / ticks * 1e6 - sum(out.values())
+    out["whole tick"] = whole / ticks * 1e6
+    return out
+
+
 def _controlled_us(ticks: int) -> float:
     sch = _controlled()
     t0 = time.perf_counter()
@@ -230,11 +269,21 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=2, help="callgrind passes per part")
     ap.add_argument("--controlled", type=int, default=500, metavar="TICKS",
                     help="controlled ticks timed or counted (0: skip)")
+    ap.add_argument("--split", action="store_true",
+                    help="time the controlled tick's parts (backend, atom, scheduler) instead")
     ap.add_argument("--replay", nargs=3, metavar=("SAVED", "PART", "ROUNDS"),
                     help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.replay:
         _replay(a.replay[0], a.replay[1], int(a.replay[2]))
+        return
+    if a.split:
+        rounds = [_controlled_split(a.controlled or 500) for _ in range(a.repeat)]
+        print(f"{CONTROLLED}, median of {a.repeat} runs of {a.controlled or 500} ticks, "
+              f"load average {os.getloadavg()[0]:.2f}:")
+        for key in rounds[0]:
+            us = statistics.median(r[key] for r in rounds)
+            print(f"  {key:24} {us:7.1f} us/tick")
         return
     obs, backend = _observations()
     if a.instructions:
