@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING, Any
 from mdle.atoms.memo import ByIdentity
 from mdle.atoms.registry import Args, Context, Param, sensor
 from mdle.atoms.steering import MISS, Ray
+from mdle.frozen import builder
 from mdle.units import ANGLE, CURVATURE, LENGTH
 
 if TYPE_CHECKING:
@@ -44,8 +45,8 @@ if TYPE_CHECKING:
 
     from mdle.backend import Scan
 
-__all__ = ["Side", "BoundaryView", "boundary_view", "cached_view", "parse_side",
-           "boundary_range", "boundary_curvature", "boundary_tangent", "SIDES"]
+__all__ = ["Side", "BoundaryView", "boundary_view", "cached_view", "cached_beams",
+           "parse_side", "boundary_range", "boundary_curvature", "boundary_tangent", "SIDES"]
 
 
 class Side(enum.Enum):
@@ -56,6 +57,7 @@ class Side(enum.Enum):
 
 
 SIDES: tuple[str, ...] = tuple(s.value for s in Side)
+_SIDE_NAMES: dict[str, Side] = {s.value: s for s in Side}
 #: Beams further than this from the wanted bearing do not count as that ray (radians).
 _BEARING_TOL = math.radians(1.5)
 
@@ -66,8 +68,11 @@ def parse_side(value: Any) -> Side:
     >>> parse_side("left")
     <Side.LEFT: 'left'>
     """
-    if isinstance(value, Side):
+    if value is Side.RIGHT or value is Side.LEFT:
         return value
+    side = _SIDE_NAMES.get(value) if type(value) is str else None
+    if side is not None:  # a dict of names: calling the Enum costs several microseconds
+        return side
     try:
         return Side(str(value))
     except ValueError:
@@ -100,9 +105,11 @@ class _Layout:
     two runs of beams: the side run ``0 .. n_side-1`` and the front run ``f0 .. f1`` around
     the front beam ``c``. Both are gathered into one short array (``take``, original-frame
     indices), with their unit directions and link limits per unit range; the pair
-    ``join, join+1`` (the last side beam and the first front beam) are not neighbours in the
-    scan (``join`` is -1 without a side run). ``gap`` is the depth gap always accepted
-    between neighbours (m).
+    ``n_side-1, n_side`` (the last side beam and the first front beam) are not neighbours in
+    the scan. ``gap`` is the depth gap always accepted
+    between neighbours (m), ``gaps`` that gap per neighbouring pair (numpy takes the larger
+    of two arrays for less than of an array and a scalar), ``cl`` the front beam's place
+    in ``take``, ``powers`` the exponents of the side fit's moments (:func:`_side_ray`).
     """
 
     c: int
@@ -114,8 +121,10 @@ class _Layout:
     take: np.ndarray
     unit: np.ndarray
     spacing: np.ndarray
-    join: int
     gap: float
+    gaps: np.ndarray
+    cl: int
+    powers: np.ndarray
 
 
 @lru_cache(maxsize=32)
@@ -146,10 +155,12 @@ def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
     np.cos(bl, out=unit.real)
     np.sin(bl, out=unit.imag)
     spacing = DEFAULT_GAP_FACTOR * np.abs(bl[1:] - bl[:-1])
-    for a in (take, unit, spacing):
+    gaps = np.full(spacing.size, DEFAULT_GAP)
+    powers = np.array([[1.0], [2.0], [3.0]])
+    for a in (take, unit, spacing, gaps, powers):
         a.setflags(write=False)
-    return _Layout(c, c_ok, s_ok, n_span, n_side, f0, take, unit, spacing, n_side - 1,
-                   DEFAULT_GAP)
+    return _Layout(c, c_ok, s_ok, n_span, n_side, f0, take, unit, spacing, DEFAULT_GAP, gaps,
+                   n_side + c - f0, powers)
 
 
 def _layout_of(bearings: Any, left: bool, side_span: float, windows: tuple[Any, ...]
@@ -166,31 +177,26 @@ def _layout_of(bearings: Any, left: bool, side_span: float, windows: tuple[Any, 
 _layouts = ByIdentity(_layout_of, size=32)
 
 
-def _run(links: list[bool], first: int, last: int, backwards: bool) -> int:
-    """Count the consecutive links that hold from ``first`` on (towards ``last``, exclusive)."""
-    seg = links[first:last]
-    if backwards:
-        seg.reverse()
-    seg.append(False)
-    return seg.index(False)
-
-
-def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
+def _side_ray(z: "np.ndarray", r0: float, powers: "np.ndarray") -> "Ray":
     """Fit the side ray to the first surface's beams 0..n (beam 0 at -90 deg), all valid.
 
-    ``z`` holds their points as complex ``x + iy`` in the law frame.
+    ``z`` holds their points as complex ``x + iy`` in the law frame; ``powers`` is the column
+    ``(1, 2, 3)`` (:attr:`_Layout.powers`).
 
     A quadratic ``h = a + b s + c s^2`` is fitted by least squares in the frame of the
-    total-least-squares line through the points (centred, scaled by the span), and its slope
-    and curvature are taken at the hit point, beam 0. Windows of three points (the paper's
-    one-sided ``(P0, Pw, P2w)``) are far noisier at the side ray: at 0.5 m with 0.8 % range
-    noise they give a curvature std of about 1.3 1/m and a tangent std of 6 deg; the fit over
+    total-least-squares line through the points (centred), and its slope and curvature are
+    taken at the hit point, beam 0. Windows of three points (the paper's one-sided
+    ``(P0, Pw, P2w)``) are far noisier at the side ray: at 0.5 m with 0.8 % range noise they
+    give a curvature std of about 1.3 1/m and a tangent std of 6 deg; the fit over
     ``span = 30`` beams (about 0.27 m of wall) gives 0.22 1/m and 1.9 deg.
 
-    Both fits are closed-form moments (no SVD): the line's direction is half the angle of
-    ``sum(q^2)`` (``q`` the centred points as complex numbers, ``sum(q^2) = sxx - syy +
-    2i sxy``), and the quadratic solves its 3x3 normal equations by Cramer's rule (falling
-    back to ``lstsq`` when they are singular).
+    Both fits are closed-form moments (no SVD), about ten numpy calls: the line's direction
+    is half the angle of ``sum(q^2)`` (``q`` the centred points as complex numbers,
+    ``sum(q^2) = sxx - syy + 2i sxy``). In that frame ``sum s = sum h = sum s h = 0`` (centred,
+    principal axes), so the quadratic's normal equations need only ``sum s^2``, ``sum s^3``,
+    ``sum s^4`` and ``sum s^2 h``: one product of the rows ``s, s^2, s^3`` with the complex
+    ``s + i h``. Cramer's rule on them is two lines. When they are singular (fewer
+    than three distinct abscissae) the minimum-norm solution of :func:`_side_fit_lstsq`.
     """
     import numpy as np
 
@@ -204,43 +210,53 @@ def _side_ray(z: "np.ndarray", r0: float) -> "Ray":
     if not (math.isfinite(sq.real) and math.isfinite(sq.imag)):
         return MISS
     ang = 0.5 * math.atan2(sq.imag, sq.real)
-    first, last = z[::m - 1].tolist()
-    d = last - first  # orient the line first -> last point
-    if math.cos(ang) * d.real + math.sin(ang) * d.imag < 0:
-        ang += math.pi
-    ang = math.atan2(math.sin(ang), math.cos(ang))
     w = q * complex(math.cos(ang), -math.sin(ang))  # s + i h in the line's frame
+    first, last = w[::m - 1].tolist()
+    # one product of the rows s, s^2, s^3 with s + i h gives every moment the fit needs
+    m1, m2, m3 = np.dot(w.real ** powers, w).tolist()
+    s2, s3, b2, s4 = m1.real, m2.real, m2.imag, m3.real  # sums s^2, s^3, s^2 h, s^4
+    s0 = first.real
+    if last.real < s0:  # orient the line first -> last point: s and h change sign
+        ang += math.pi
+        s0, s3, b2 = -s0, -s3, -b2
+    ang = math.atan2(math.sin(ang), math.cos(ang))
+    if not s2 > 0:
+        return MISS
+    # Cramer's rule on [[m 0 s2] [0 s2 s3] [s2 s3 s4]] (a b c) = (0 0 b2)
+    det = m * (s2 * s4 - s3 * s3) - s2 * s2 * s2
+    if abs(det) > 1e-12 * m * s2 * s4:
+        c2 = m * s2 * b2 / det
+        slope = 2.0 * c2 * s0 - m * s3 * b2 / det
+        kappa = 2.0 * c2 / (1.0 + slope * slope) ** 1.5
+    else:
+        slope, kappa = _side_fit_lstsq(q, ang)
+    return _ray(True, r0, ang + math.atan(slope), float(kappa))
+
+
+def _side_fit_lstsq(q: "np.ndarray", ang: float) -> tuple[float, float]:
+    """Return the side fit's slope and curvature at ``q[0]`` from ``lstsq`` (singular case).
+
+    The quadratic in the line's frame (direction ``ang``) over abscissae scaled by their
+    span: with fewer than three distinct abscissae the minimum-norm solution in that basis.
+    """
+    import numpy as np
+
+    w = q * complex(math.cos(ang), -math.sin(ang))
     s, h = w.real, w.imag
     scale = float(np.maximum.reduce(np.abs(s)))
-    if not scale > 0:
-        return MISS
-    x = np.empty((3, m))
+    x = np.empty((3, q.size))
     x[0] = 1.0
     np.divide(s, scale, out=x[1])
     np.multiply(x[1], x[1], out=x[2])
-    (a00, a01, a02), (_, a11, a12), (_, _, a22) = (x @ x.T).tolist()
-    b0, b1, b2 = (x @ h).tolist()
-    # Cramer's rule on the symmetric normal equations [[a00 a01 a02] [a01 a11 a12] [a02 a12 a22]]
-    m00 = a11 * a22 - a12 * a12
-    m01 = a01 * a22 - a12 * a02
-    m02 = a01 * a12 - a11 * a02
-    det = a00 * m00 - a01 * m01 + a02 * m02
-    if abs(det) > 1e-12 * a00 * a11 * a22:
-        c1 = (a00 * (b1 * a22 - a12 * b2) - b0 * (a01 * a22 - a12 * a02)
-              + a02 * (a01 * b2 - b1 * a02)) / det
-        c2 = (a00 * (a11 * b2 - b1 * a12) - a01 * (a01 * b2 - b1 * a02)
-              + b0 * m02) / det
-    else:  # fewer than three distinct abscissae: the minimum-norm solution, as lstsq gives
-        coef = np.linalg.lstsq(x.T, h, rcond=None)[0]
-        c1, c2 = float(coef[1]), float(coef[2])
+    coef = np.linalg.lstsq(x.T, h, rcond=None)[0]
+    c1, c2 = float(coef[1]), float(coef[2])
     slope = (c1 + 2.0 * c2 * float(x[1, 0])) / scale
-    kappa = 2.0 * c2 / scale ** 2 / (1.0 + slope * slope) ** 1.5
-    return Ray(True, r0, ang + math.atan(slope), float(kappa))
+    return slope, 2.0 * c2 / scale ** 2 / (1.0 + slope * slope) ** 1.5
 
 
 def _front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
                windows: tuple[int, ...], exact: bool = False) -> "Ray | None":
-    """Compute the front ray at local beam ``c`` of the points ``z`` (complex, law frame).
+    """Compute the front ray at beam ``c`` of the points ``z`` (complex, law frame).
 
     Its surface extends ``right`` beams before and ``left`` beams after it.
 
@@ -251,37 +267,51 @@ def _front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
     ``exact``; None when no window gives an estimate and the one-sided chord needs the
     surface's true extent on both sides (only for degenerate, coincident points).
     """
+    import numpy as np
+
     reach = min(right, left)
     ws = [w for w in windows if w <= reach] or ([reach] if reach >= 1 else [])
     if ws:
-        # at most a few windows at one beam: Python complex arithmetic, where numpy's
-        # per-call overhead on 3-element arrays would cost several times more
-        pts = z[c - max(ws): c + max(ws) + 1].tolist()
+        # at most a few windows at one beam: Python float arithmetic (which the interpreter
+        # runs fastest), where numpy's per-call overhead on 3-element arrays would cost
+        # several times more; the same operations as complex numbers, in the same order
         mid = max(ws)
-        p = pts[mid]
-        t_sum, k_sum, count = 0j, 0.0, 0
+        f = z[c - mid: c + mid + 1].view(np.float64).tolist()  # x0, y0, x1, y1, ...
+        px, py = f[2 * mid], f[2 * mid + 1]
+        tx = ty = k_sum = 0.0
+        count = 0
         for w in ws:
-            u, v = p - pts[mid - w], pts[mid + w] - p
-            chord = u + v
-            av_c = abs(v) * abs(chord)
-            den = abs(u) * av_c
+            i, j = 2 * (mid - w), 2 * (mid + w)
+            ux, uy = px - f[i], py - f[i + 1]  # u = p - P[c-w]
+            vx, vy = f[j] - px, f[j + 1] - py  # v = P[c+w] - p
+            cx, cy = ux + vx, uy + vy  # the chord u + v
+            av_c = math.hypot(vx, vy) * math.hypot(cx, cy)
+            den = math.hypot(ux, uy) * av_c
             if not den > 0:  # coincident points: no circle
                 continue
-            cross = u.real * v.imag - u.imag * v.real
-            dot = chord.real * v.real + chord.imag * v.imag
+            cross = ux * vy - uy * vx
+            dot = abs(cx * vx + cy * vy)
             # the circle's tangent at p: u turned by half the arc it spans (see estimators)
-            t_sum += u * complex(abs(dot), cross) / av_c
+            tx += (ux * dot - uy * cross) / av_c
+            ty += (ux * cross + uy * dot) / av_c
             k_sum += 2.0 * cross / den
             count += 1
         if count:
-            return Ray(True, r0, math.atan2(t_sum.imag, t_sum.real), k_sum / count)
+            return _ray(True, r0, math.atan2(ty, tx), k_sum / count)
     m = min(max(right, left), max(windows))
     if m >= 1:
         if not exact and min(left, right) >= max(windows):
             return None  # both capped: the side with the longer surface is not known here
         chord = complex(z[c + m] - z[c] if left >= right else z[c] - z[c - m])
-        return Ray(True, r0, math.atan2(chord.imag, chord.real), 0.0)
-    return Ray(True, r0, math.pi / 2.0, 0.0)  # an isolated return: a surface facing the robot
+        return _ray(True, r0, math.atan2(chord.imag, chord.real), 0.0)
+    return _ray(True, r0, math.pi / 2.0, 0.0)  # an isolated return: a surface facing the robot
+
+
+#: Fast constructors (a frozen dataclass's ``__init__`` costs about a microsecond).
+_ray = builder(Ray)
+_view = builder(BoundaryView)
+#: What :func:`atoms.estimators.beam_points` returns: points, mask, ranges.
+Beams = tuple["np.ndarray", "np.ndarray", "np.ndarray"]
 
 
 def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
@@ -291,7 +321,7 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
 
     Only the beams the two rays need are read (the side fit's span from -90 deg, the front
     beam and its windows), with the scan's connectivity rule (:func:`atoms.estimators.surfaces`)
-    applied to them.
+    applied to them; nothing more when neither ray's own beam saw a surface.
 
     Parameters
     ----------
@@ -320,70 +350,89 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
     >>> v.front.hit
     False
     """
+    return _view_of(scan, parse_side(side) is Side.LEFT, windows, side_span, None)
+
+
+def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span: float,
+             ctx: Context | None) -> BoundaryView:
+    """Compute :func:`boundary_view`; the scan's :func:`cached_beams` of ``ctx`` if given."""
     import numpy as np
 
-    side = parse_side(side)
     if scan is None or scan.ranges.size == 0:
-        return BoundaryView(MISS, MISS, False, math.inf if scan is None else scan.max_range)
-    left = side is Side.LEFT
+        return _view(MISS, MISS, False, math.inf if scan is None else scan.max_range)
     lay, wins = _layouts(scan.bearings, left, side_span,
                          windows if type(windows) is tuple else tuple(windows))
+    if scan.tangents is not None and scan.curvatures is not None:
+        return _oracle_view(scan, lay, left)
+    if ctx is None:
+        from mdle.atoms.estimators import beam_points
+
+        beams: Beams = beam_points(scan.ranges, scan.bearings, scan.valid)
+    else:
+        beams = cached_beams(ctx)  # type: ignore[assignment]  # a scan is there
+    z_all, _, r_all = beams
+    # NaN where a beam saw no surface: never linked to a neighbour (NaN compares False
+    # below) nor taken as a ray's own beam (checked here)
+    r = r_all[lay.take]
+    ns, cl = lay.n_side, lay.cl
+    r0 = r.item(0) if ns else math.nan
+    rc = r.item(cl) if lay.c_ok else math.nan
+    side_hit, front_hit = math.isfinite(r0), math.isfinite(rc)
+    side_ray = front = MISS
+    if not (side_hit or front_hit):  # neither ray's own beam saw a surface: nothing to read
+        return _view(front, side_ray, False, scan.max_range)
+    z = z_all[lay.take]
+    if left:
+        z = z.conjugate()  # mirrored: y -> -y (the beam order is reversed by take)
+    lim = np.maximum(lay.spacing * r[:-1], lay.gaps)
+    # links[j]: beams j and j+1 lie on one surface, as bytes 0/1 (searched in C below); the
+    # runs never cross the pair (n_side-1, n_side): they are not neighbours in the scan
+    links = (np.abs(z[1:] - z[:-1]) < lim).tobytes()
+    if side_hit:  # the side run: beams 0 .. end0 linked from beam 0
+        end0 = links.find(0, 0, ns - 1)
+        side_ray = _side_ray(z[:min(end0 if end0 >= 0 else ns - 1, lay.n_span) + 1], r0,
+                             lay.powers)
+    if front_hit:  # the front run: linked beams before and after the front beam
+        k = links.rfind(0, ns, cl)
+        right = cl - 1 - k if k >= 0 else cl - ns
+        k = links.find(0, cl)
+        ahead = (k if k >= 0 else len(links)) - cl
+        ray = _front_ray(z, cl, right, ahead, rc, wins)
+        if ray is None:  # degenerate window (coincident points): read the whole scan
+            bearings = np.asarray(scan.bearings, dtype=float)
+            ray = _front_full(np.asarray(scan.ranges, dtype=float), bearings,
+                              np.asarray(scan.valid, dtype=bool), left, lay.c, rc, wins)
+        front = ray
+    return _view(front, side_ray, False, scan.max_range)
+
+
+def _oracle_view(scan: "Scan", lay: _Layout, left: bool) -> BoundaryView:
+    """Return the view of an oracle scan: the exact values at the two beams."""
+    import numpy as np
+
     ranges = np.asarray(scan.ranges, dtype=float)
     valid = np.asarray(scan.valid, dtype=bool)
+    tangents, curvatures = scan.tangents, scan.curvatures
+    assert tangents is not None and curvatures is not None
     n = ranges.size
-    if scan.tangents is not None and scan.curvatures is not None:
-        tangents, curvatures = scan.tangents, scan.curvatures
 
-        def oracle(j: int) -> Ray:
-            i = n - 1 - j if left else j  # law-frame beam j is original beam i
-            r = float(ranges[i])
-            if not (valid[i] and math.isfinite(r) and r > 0):
-                return MISS
-            t, k = float(tangents[i]), float(curvatures[i])
-            if left:  # mirrored: the tangent reflects, the curvature keeps its sign
-                t = math.pi - t
-            if not (math.isfinite(t) and math.isfinite(k)):
-                return MISS
-            return Ray(True, r, math.atan2(math.sin(t), math.cos(t)), k)
-        side_ray = oracle(0) if lay.s_ok else MISS
-        if side_ray.hit and lay.n_side > 1:
-            k = _turning_ahead(ranges, valid, tangents, curvatures, lay, left)
-            if k is not None:
-                side_ray = Ray(True, side_ray.r, side_ray.beta, side_ray.kappa + k)
-        return BoundaryView(oracle(lay.c) if lay.c_ok else MISS, side_ray, True,
-                            scan.max_range)
-    r = ranges[lay.take]
-    ok = valid[lay.take]
-    ok &= r > 0
-    # NaN where invalid; an infinite range stays, and neither is ever linked to a neighbour
-    # (NaN and inf compare False below) nor taken as a ray's own beam (checked there)
-    r = np.where(ok, r, np.nan)
-    z = r * lay.unit
-    lim = lay.spacing * r[:-1]
-    np.maximum(lim, lay.gap, out=lim)
-    links = (np.abs(z[1:] - z[:-1]) < lim).tolist()
-    ns = lay.n_side
-    if 0 <= lay.join < len(links):
-        links[lay.join] = False  # the side run's last beam and the front run's first
-    side_ray = MISS
-    if ns:
-        r0 = float(r[0])
-        if math.isfinite(r0):
-            end0 = _run(links, 0, ns - 1, backwards=False)
-            side_ray = _side_ray(z[:min(end0, lay.n_span) + 1], r0)
-    front = MISS
-    cl = ns + lay.c - lay.f0
-    if lay.c_ok:
-        rc = float(r[cl])
-        if math.isfinite(rc):
-            right = _run(links, ns, cl, backwards=True)
-            ahead = _run(links, cl, len(links), backwards=False)
-            ray = _front_ray(z[ns:], cl - ns, right, ahead, rc, wins)
-            if ray is None:  # degenerate window (coincident points): read the whole scan
-                bearings = np.asarray(scan.bearings, dtype=float)
-                ray = _front_full(ranges, bearings, valid, left, lay.c, rc, wins)
-            front = ray
-    return BoundaryView(front, side_ray, False, scan.max_range)
+    def oracle(j: int) -> Ray:
+        i = n - 1 - j if left else j  # law-frame beam j is original beam i
+        r = float(ranges[i])
+        if not (valid[i] and math.isfinite(r) and r > 0):
+            return MISS
+        t, k = float(tangents[i]), float(curvatures[i])
+        if left:  # mirrored: the tangent reflects, the curvature keeps its sign
+            t = math.pi - t
+        if not (math.isfinite(t) and math.isfinite(k)):
+            return MISS
+        return Ray(True, r, math.atan2(math.sin(t), math.cos(t)), k)
+    side_ray = oracle(0) if lay.s_ok else MISS
+    if side_ray.hit and lay.n_side > 1:
+        k = _turning_ahead(ranges, valid, tangents, curvatures, lay, left)
+        if k is not None:
+            side_ray = Ray(True, side_ray.r, side_ray.beta, side_ray.kappa + k)
+    return BoundaryView(oracle(lay.c) if lay.c_ok else MISS, side_ray, True, scan.max_range)
 
 
 def _turning_ahead(ranges: "np.ndarray", valid: "np.ndarray", tangents: "np.ndarray",
@@ -443,13 +492,30 @@ def _front_full(ranges: "np.ndarray", bearings: "np.ndarray", valid: "np.ndarray
 def cached_view(ctx: Context, side: Side | str, windows: Sequence[int] = (7, 8, 9),
                 side_span: float = math.radians(30.0)) -> BoundaryView:
     """Return :func:`boundary_view` of this tick's scan, computed once per tick and side."""
-    side = parse_side(side)
-    key = ("boundary", side is Side.LEFT, tuple(windows), side_span)  # no Enum.__hash__
+    left = parse_side(side) is Side.LEFT
+    key = ("boundary", left, tuple(windows), side_span)  # no Enum.__hash__
     view = ctx.cache.get(key)
     if view is None:
-        view = boundary_view(ctx.obs.scan, side, windows, side_span)
+        view = _view_of(ctx.obs.scan, left, windows, side_span, ctx)
         ctx.cache[key] = view
     return view
+
+
+def cached_beams(ctx: Context) -> "Beams | None":
+    """Return :func:`atoms.estimators.beam_points` of this tick's scan, once per tick.
+
+    The boundary view and the safety layer's scan points share it; None without a scan.
+    """
+    beams = ctx.cache.get("beams")
+    if beams is None:
+        scan = ctx.obs.scan
+        if scan is None:
+            return None
+        import mdle.atoms.estimators as est  # numpy, on first use (not `from`: no __path__ probe)
+
+        beams = est.beam_points(scan.ranges, scan.bearings, scan.valid)
+        ctx.cache["beams"] = beams
+    return beams
 
 
 _SIDE = Param("side", default="right", choices=SIDES,

@@ -58,6 +58,8 @@ __all__ = [
     "Estimate",
     "scan_points",
     "valid_points",
+    "beam_points",
+    "points_of",
     "surfaces",
     "smooth_positions",
     "menger",
@@ -135,24 +137,29 @@ class Estimate:
 
 
 @lru_cache(maxsize=16)
-def _bearing_terms(key: bytes, gap_factor: float) -> tuple[np.ndarray, np.ndarray]:
+def _bearing_terms(key: bytes, gap_factor: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Compute the per-bearing constants of a scan layout, memoised and read-only.
 
-    The unit directions ``cos a + i sin a`` and the link limit per unit range of each beam
-    spacing, ``gap_factor * |a[j+1] - a[j]|``: a pure function of the bearings, and one
-    sensor always sends the same bearings.
+    The unit directions ``cos a + i sin a``, the link limit per unit range of each beam
+    spacing, ``gap_factor * |a[j+1] - a[j]|``, and a zero and a NaN per beam (numpy compares
+    and selects against an array of the same shape for less than against a Python scalar):
+    a pure function of the bearings, and one sensor always sends the same bearings.
     """
     a = np.frombuffer(key, dtype=np.float64)
     unit = np.empty(a.size, dtype=np.complex128)
     np.cos(a, out=unit.real)
     np.sin(a, out=unit.imag)
     spacing = gap_factor * np.abs(a[1:] - a[:-1])
-    unit.setflags(write=False)
-    spacing.setflags(write=False)
-    return unit, spacing
+    zero = np.zeros(a.size)
+    nan = np.full(a.size, np.nan)
+    for arr in (unit, spacing, zero, nan):
+        arr.setflags(write=False)
+    return unit, spacing, zero, nan
 
 
-def _terms_of(a: np.ndarray, gap_factor: float) -> tuple[np.ndarray, np.ndarray]:
+def _terms_of(a: np.ndarray, gap_factor: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return _bearing_terms(np.ascontiguousarray(a, dtype=float).tobytes(), float(gap_factor))
 
 
@@ -161,27 +168,51 @@ _terms_by_array = ByIdentity(_terms_of)
 
 
 def _unit_directions(a: np.ndarray, gap_factor: float = DEFAULT_GAP_FACTOR
-                     ) -> tuple[np.ndarray, np.ndarray]:
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Return :func:`_bearing_terms` of a 1-D bearing array."""
     return _terms_by_array(a, gap_factor)
+
+
+def beam_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the points of a 1-D scan as complex ``x + iy``, NaN where a beam saw no surface.
+
+    Also returns the mask of beams that saw one (``valid``, finite and positive range) and
+    the ranges, NaN where not. What the boundary view and the safety layer's point list
+    (:func:`points_of`) share in one tick.
+
+    >>> z, ok, r = beam_points(np.array([1.0, np.inf, 2.0]), np.array([0.0, 0.1, np.pi / 2]))
+    >>> ok.tolist(), r.tolist()
+    ([True, False, True], [1.0, nan, 2.0])
+    """
+    # np.asarray costs as much as a small ufunc: skipped for the arrays a scan holds
+    r = ranges if type(ranges) is np.ndarray and ranges.dtype.char == "d" \
+        else np.asarray(ranges, dtype=float)
+    unit, _, zero, nan = _unit_directions(bearings)
+    ok = np.isfinite(r)
+    ok &= r > zero
+    if valid is not None:
+        ok &= valid if type(valid) is np.ndarray and valid.dtype.char == "?" \
+            else np.asarray(valid, dtype=bool)
+    r = np.where(ok, r, nan)
+    return r * unit, ok, r
+
+
+#: A complex array viewed as rows of (x, y) floats in one call.
+_XY = np.dtype((np.float64, (2,)))
+
+
+def points_of(z: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Return the rows (M, 2) of the complex points ``z`` where ``ok``, as floats (x, y)."""
+    return z[ok].view(_XY)
 
 
 def _complex_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None,
                     gap_factor: float = DEFAULT_GAP_FACTOR
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Return the points of a 1-D scan as complex ``x + iy`` (NaN where invalid).
-
-    Also returns the valid mask, the NaN-masked ranges and the link limits per unit range of
-    :func:`_bearing_terms`.
-    """
-    r = np.asarray(ranges, dtype=float)
-    ok = np.isfinite(r)
-    ok &= r > 0
-    if valid is not None:
-        ok &= np.asarray(valid, dtype=bool)
-    r = np.where(ok, r, np.nan)
-    unit, spacing = _unit_directions(bearings, gap_factor)
-    return r * unit, ok, r, spacing
+    """Return :func:`beam_points` and the link limits per unit range of :func:`_bearing_terms`."""
+    z, ok, r = beam_points(ranges, bearings, valid)
+    return z, ok, r, _unit_directions(bearings, gap_factor)[1]
 
 
 def valid_points(ranges: np.ndarray, bearings: np.ndarray,
@@ -194,13 +225,8 @@ def valid_points(ranges: np.ndarray, bearings: np.ndarray,
     >>> p.round(6).tolist()
     [[1.0, 0.0], [0.0, 2.0]]
     """
-    r = np.asarray(ranges, dtype=float)
-    ok = np.isfinite(r)
-    ok &= r > 0
-    if valid is not None:
-        ok &= np.asarray(valid, dtype=bool)
-    z = r[ok] * _unit_directions(bearings)[0][ok]
-    return z.view(np.float64).reshape(-1, 2)
+    z, ok, _ = beam_points(ranges, bearings, valid)
+    return points_of(z, ok)
 
 
 def scan_points(ranges: np.ndarray, bearings: np.ndarray,

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from mdle.atoms import safety, steering
-from mdle.atoms.boundary import SIDES, Side, cached_view, parse_side
+from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
 from mdle.atoms.latency import shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.backend import Command
@@ -73,18 +73,21 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
 
 
 def scan_points_cached(ctx: Context) -> Any:
-    """Return the robot-frame points (M, 2) of this tick's valid beams, once per tick."""
+    """Return the robot-frame points (M, 2) of this tick's valid beams, once per tick.
+
+    From the tick's :func:`atoms.boundary.cached_beams`, which the boundary view shares.
+    """
     pts = ctx.cache.get("scan_points")
     if pts is None:
         import mdle.atoms.estimators as est  # numpy, on first use (not `from`: no __path__ probe)
 
-        scan = ctx.obs.scan
-        if scan is None:
+        beams = cached_beams(ctx)
+        if beams is None:
             import numpy as np
 
             pts = np.zeros((0, 2))
         else:
-            pts = est.valid_points(scan.ranges, scan.bearings, scan.valid)
+            pts = est.points_of(beams[0], beams[1])
         ctx.cache["scan_points"] = pts
     return pts
 
