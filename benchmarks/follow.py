@@ -55,8 +55,8 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from mdle import sim  # noqa: E402 (after the sys.path fix)
-from mdle.atoms.boundary import cached_view  # noqa: E402 (after the sys.path fix)
 from mdle.atoms import follow as follow_module  # noqa: E402 (after the sys.path fix)
+from mdle.atoms.boundary import cached_view  # noqa: E402 (after the sys.path fix)
 from mdle.atoms.follow import follow_boundary, scan_points_cached, start_follow  # noqa: E402
 from mdle.atoms.registry import Context  # noqa: E402 (after the sys.path fix)
 from mdle.backend import Observation  # noqa: E402 (after the sys.path fix)

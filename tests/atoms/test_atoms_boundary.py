@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 
 from mdle.atoms import default_registry
-from mdle.atoms.boundary import Side, boundary_view, cached_view, parse_side
+from mdle.atoms.boundary import Side, boundary_view, cached_beams, cached_view, parse_side
+from mdle.atoms.estimators import valid_points
+from mdle.atoms.follow import scan_points_cached
 from mdle.atoms.registry import Context
 from mdle.backend import Observation, Pose, RobotLimits, Scan
 
@@ -149,3 +151,34 @@ def test_parse_side_lists_the_options() -> None:
     assert parse_side("right") is Side.RIGHT
     with pytest.raises(ValueError, match="right, left"):
         parse_side("up")
+
+
+def test_view_and_scan_points_share_the_ticks_masked_points(raycast: Raycast) -> None:
+    # a wall on the right, a gap of invalid and non-positive beams, a cylinder ahead
+    r = np.minimum(raycast.line((0.0, -0.6), (0.0, -1.0)), raycast.circle((1.5, 0.0), 0.5))
+    valid = np.ones(r.size, dtype=bool)
+    valid[40:45] = False
+    r[50] = 0.0
+    r[60] = np.inf
+    scan = Scan(r, raycast.bearings, valid, 0.0, 10.0)
+    ctx = _ctx(scan)
+    for side in ("right", "left"):
+        assert cached_view(ctx, side) == boundary_view(scan, side)  # the cached path agrees
+    beams = cached_beams(ctx)
+    assert beams is not None and beams is ctx.cache["beams"]  # one computation per tick
+    z, seen, masked = beams
+    assert seen.tolist() == (valid & np.isfinite(r) & (r > 0)).tolist()
+    assert np.isnan(masked[~seen]).all() and np.array_equal(masked[seen], r[seen])
+    points = scan_points_cached(ctx)
+    assert np.array_equal(points, valid_points(r, raycast.bearings, valid))
+    assert points.shape == (int(seen.sum()), 2) and np.isfinite(points).all()
+
+
+def test_no_surface_at_either_rays_beam_gives_two_misses(raycast: Raycast) -> None:
+    # everything is seen except the -90 and 0 degree beams themselves
+    r = np.full(raycast.bearings.size, 1.0)
+    valid = np.ones(r.size, dtype=bool)
+    valid[[0, 90]] = False
+    view = boundary_view(Scan(r, raycast.bearings, valid, 0.0, 10.0), "right")
+    assert not view.side.hit and not view.front.hit
+    assert cached_beams(_ctx(None)) is None
