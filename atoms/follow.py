@@ -216,8 +216,6 @@ def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:
     rounds differently): the scan's ranges come in millimetres, so two beams are often
     equally near, and this picks the same one whichever way the points were made.
     """
-    import numpy as np
-
     if z.shape[0] == 0:
         return None
     x, y = z.real, z.imag
