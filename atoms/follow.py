@@ -216,12 +216,14 @@ def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:
     rounds differently): the scan's ranges come in millimetres, so two beams are often
     equally near, and this picks the same one whichever way the points were made.
     """
+    import numpy as np
+
     if z.shape[0] == 0:
         return None
     x, y = z.real, z.imag
     d2 = x * x  # full-length operations only (a reduction over the short axis is slow)
     d2 += y * y
-    d2[~(y < 0.0) if sgn > 0 else ~(y > 0.0)] = math.inf  # never the other side (finite)
+    d2 = np.where(y < 0.0 if sgn > 0 else y > 0.0, d2, math.inf)  # never the other side
     k = int(d2.argmin())
     r2 = float(d2[k])
     if not r2 < math.inf:

@@ -27,7 +27,7 @@ def as_complex(points: "np.ndarray") -> "np.ndarray":
     """Return robot-frame points (M, 2) as complex numbers (M,), sharing memory if it can."""
     import numpy as np
 
-    return np.ascontiguousarray(points, dtype=float).view(np.complex128).reshape(-1)
+    return np.ascontiguousarray(points, dtype=float).view(np.complex128).ravel()
 
 
 def _arc(speed: float, rate: float, lookahead: float, samples: int) -> list[complex]:
