@@ -156,7 +156,9 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                                        ctx.limits.max_turn_accel)
         if moved != _STILL:
             front, side = shift_front(front, moved), shift_side(side, moved)
-    z, dist = _points(ctx, moved, sgn)
+    z = safety.as_complex(scan_points_cached(ctx))
+    if moved != _STILL:
+        z = _into(z, moved[0], sgn * moved[1], sgn * moved[2])
     u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                       g.umax, filter_kappa=not view.exact,
                       near=lambda: _nearest_on_side(z, sgn))
@@ -165,18 +167,24 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        v, u, clearance = safety.filter_complex(z, dist, v, u, g.umax, ctx.limits.radius,
-                                                margin, float(args["lookahead"]),
+        v, u, clearance = safety.filter_complex(z, v, u, g.umax, ctx.limits.radius, margin,
+                                                float(args["lookahead"]),
                                                 side=1 if left else -1)
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
     f, s = view.front, view.side  # the trace shows what was measured
+    if f.hit:
+        fh, fr, fb, fk = 1.0, f.r, sgn * f.beta, sgn * f.kappa
+    else:
+        fh = fr = fb = fk = 0.0
+    if s.hit:
+        sh, sr, sb, sk = 1.0, s.r, sgn * s.beta, sgn * s.kappa
+    else:
+        sh = sr = sb = sk = 0.0
     mem = state.memory
     ctx.cache["trace"] = {
-        **({"front_hit": 1.0, "front_range": f.r, "front_tangent": sgn * f.beta,
-            "front_curvature": sgn * f.kappa} if f.hit else _NO_FRONT),
-        **({"side_hit": 1.0, "side_range": s.r, "side_tangent": sgn * s.beta,
-            "side_curvature": sgn * s.kappa} if s.hit else _NO_SIDE),
+        "front_hit": fh, "front_range": fr, "front_tangent": fb, "front_curvature": fk,
+        "side_hit": sh, "side_range": sr, "side_tangent": sb, "side_curvature": sk,
         "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
         "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
         "mode": _MODE_CODES[mem.mode],
@@ -190,22 +198,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
 
 #: No motion since the scan (the predictor's answer without latency or scan age).
 _STILL = (0.0, 0.0, 0.0)
-_NO_FRONT = dict.fromkeys(("front_hit", "front_range", "front_tangent", "front_curvature"), 0.0)
-_NO_SIDE = dict.fromkeys(("side_hit", "side_range", "side_tangent", "side_curvature"), 0.0)
 _command = builder(Command)
-
-
-def _points(ctx: Context, moved: tuple[float, float, float], sgn: float) -> tuple[Any, Any]:
-    """Return this tick's scan points (complex, (M,)) in the frame ``moved`` and their moduli.
-
-    ``moved`` is in the law's frame (mirrored for left following): mirrored back here.
-    """
-    import numpy as np
-
-    z = safety.as_complex(scan_points_cached(ctx))
-    if moved != _STILL:
-        z = _into(z, moved[0], sgn * moved[1], sgn * moved[2])
-    return z, np.abs(z)
 
 
 def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:

@@ -62,7 +62,7 @@ def _own_clearance(near: "np.ndarray", speed: float, rate: float, lookahead: flo
     import numpy as np
 
     d = np.abs(np.subtract(np.array(_arc(speed, rate, lookahead, samples))[:, None], near))
-    return float(d.ravel()[d.argmin()])
+    return float(d.item(d.argmin()))
 
 
 def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookahead: float,
@@ -122,24 +122,21 @@ def _admissible(near: "np.ndarray", speed: float, rates: "np.ndarray", u: float,
 _FEW = 4
 
 
-def filter_complex(z: "np.ndarray", dist: "np.ndarray", v: float, u: float, umax: float,
-                   radius: float, margin: float, lookahead: float, candidates: int = 25,
-                   samples: int = 8, side: int = -1) -> tuple[float, float, float]:
-    """Apply :func:`safety_filter` to complex scan points ``z`` (M,) and their moduli ``dist``.
+def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: float,
+                   margin: float, lookahead: float, candidates: int = 25, samples: int = 8,
+                   side: int = -1) -> tuple[float, float, float]:
+    """Apply :func:`safety_filter` to scan points as complex numbers ``z`` (M,)."""
+    import numpy as np
 
-    The per-tick path: the caller has the points as complex numbers already, and their
-    distances (which the corner bridging reads too).
-    """
     if z.shape[0] == 0 or v <= 0 or lookahead <= 0:
         return v, u, math.inf
+    dist = np.abs(z)
     near = z.compress(dist < v * lookahead + radius + margin + 0.05)
     if near.shape[0] == 0:
         return v, u, math.inf
     own = _own_clearance(near, v, u, lookahead, samples) - radius
     if own >= margin:  # admissible whatever the robot's distance now (need <= margin)
         return v, u, own
-    import numpy as np
-
     now = float(np.fmin.reduce(dist)) - radius  # the nearest of all (NaN aside) is near
     need = min(margin, now - 1e-3)
     if own >= need:
@@ -188,8 +185,5 @@ def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius:
     (v, u, clearance)
         The command to send and the predicted clearance of the law's own arc (m).
     """
-    import numpy as np
-
-    z = as_complex(points)
-    return filter_complex(z, np.abs(z), v, u, umax, radius, margin, lookahead, candidates,
-                          samples, side)
+    return filter_complex(as_complex(points), v, u, umax, radius, margin, lookahead,
+                          candidates, samples, side)
