@@ -119,7 +119,7 @@ def _admissible(near: "np.ndarray", speed: float, rates: "np.ndarray", u: float,
 
 
 #: How many candidate rates (nearest to the law's) are tried before the rest.
-_FEW = 4
+_FEW = 8
 
 
 def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: float,
