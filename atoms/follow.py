@@ -32,7 +32,8 @@ if TYPE_CHECKING:
     from mdle.atoms.latency import Predictor
     from mdle.atoms.steering import Gains, Memory
 
-__all__ = ["follow_boundary", "lost", "FollowState", "start_follow", "scan_points_cached"]
+__all__ = ["follow_boundary", "lost", "FollowState", "start_follow", "scan_points_cached",
+           "scan_points_complex"]
 
 #: The trace's ``mode`` field: 0 follow, 1 corner (circling a vertex), 2 search (the boundary
 #: was lost: circling the point seen last).
@@ -91,6 +92,25 @@ def scan_points_cached(ctx: Context) -> Any:
             pts = est.points_of(beams[0], beams[1])
         ctx.cache["scan_points"] = pts
     return pts
+
+
+def scan_points_complex(ctx: Context) -> Any:
+    """Return this tick's valid scan points as complex ``x + iy`` (M,), once per tick.
+
+    :func:`scan_points_cached` without the round trip through (M, 2) floats: the beams'
+    complex points, selected (what the safety layer's complex path reads).
+    """
+    z = ctx.cache.get("scan_points_z")
+    if z is None:
+        beams = cached_beams(ctx)
+        if beams is None:
+            import numpy as np
+
+            z = np.zeros(0, dtype=complex)
+        else:
+            z = beams[0][beams[1]]
+        ctx.cache["scan_points_z"] = z
+    return z
 
 
 #: What ``follow_boundary`` records each tick (``ctx.cache["trace"]``), with units.

@@ -11,7 +11,7 @@ import pytest
 from mdle.atoms import default_registry
 from mdle.atoms.boundary import Side, boundary_view, cached_beams, cached_view, parse_side
 from mdle.atoms.estimators import valid_points
-from mdle.atoms.follow import scan_points_cached
+from mdle.atoms.follow import scan_points_cached, scan_points_complex
 from mdle.atoms.registry import Context
 from mdle.backend import Observation, Pose, RobotLimits, Scan
 
@@ -172,6 +172,9 @@ def test_view_and_scan_points_share_the_ticks_masked_points(raycast: Raycast) ->
     points = scan_points_cached(ctx)
     assert np.array_equal(points, valid_points(r, raycast.bearings, valid))
     assert points.shape == (int(seen.sum()), 2) and np.isfinite(points).all()
+    z_points = scan_points_complex(ctx)
+    assert np.array_equal(np.stack((z_points.real, z_points.imag), 1), points)
+    assert scan_points_complex(_ctx(None)).shape == (0,)
 
 
 def test_no_surface_at_either_rays_beam_gives_two_misses(raycast: Raycast) -> None:
