@@ -35,11 +35,22 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 
-from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan, observation
+from mdle.backend import (
+    STOP,
+    ClockMode,
+    Command,
+    LazyTruth,
+    Observation,
+    Pose,
+    RobotLimits,
+    Scan,
+    observation,
+)
 from mdle.errors import BackendError, WorldError
 from mdle.messages import Inbox
 from mdle.sim.collision import CONTACT, Collider
@@ -108,6 +119,9 @@ class SimBackend:
     clock: ClockMode = ClockMode.SIMULATED
     #: What the robot's radio has received (a team member's; None: a robot alone).
     inbox: Inbox | None = None
+    #: A step that touched nothing leaves a lower bound of the clearance; the exact value
+    #: is measured when an observation's truth is read, or when a step needs it.
+    _lazy_clearance = True
 
     def __init__(self, world: World, *, seed: int | None = None,
                  robot: str | RobotProfile | None = None,
@@ -249,8 +263,24 @@ class SimBackend:
             kind = self._obstacle(e.obstacle)[1]
             truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
                                 "t": e.time, "x": e.x, "y": e.y}
+        if self._clear_bound:       # the step left a bound: measured only if read
+            del truth["clearance"]
+            lazy = LazyTruth(truth, partial(self._measure_clearance, self._x, self._y,
+                                            self._t), self._clear[0])
+            return observation(self._t, Pose(ox, oy, _wrap(oth)), v, w, self._scan,
+                               self._stalled, lazy, self.inbox)
         return observation(self._t, Pose(ox, oy, _wrap(oth)), v, w, self._scan, self._stalled,
                            truth, self.inbox)
+
+    def _measure_clearance(self, x: float, y: float, t: float) -> float:
+        """Return the exact clearance at ``(x, y)``, where the robot was at time ``t``.
+
+        If the robot has not moved since, its next step starts from the exact value.
+        """
+        clear = self._collider.clearance(x, y)
+        if self._t == t and self._clear_bound:
+            self._clear, self._clear_bound = clear, False
+        return clear[0]
 
     def command(self, cmd: Command) -> None:
         """Hold ``cmd`` (clamped to the limits) until the next command."""
@@ -418,8 +448,9 @@ class SimBackend:
 
         The held command changes at each ``(time, command)`` of ``switches`` (queued
         commands taking effect inside the step). Only the ``final`` piece of a tick takes
-        an oracle scan and leaves the exact clearance; earlier pieces keep a lower bound of
-        it (the centre moved at most its reach).
+        an oracle scan. A piece that touched nothing leaves a lower bound of the clearance
+        (the centre moved at most its reach), measured exactly when it no longer covers a
+        step or someone reads it (:meth:`observe`, ``_lazy_clearance``).
         """
         t0 = self._t
         # The last ladar instant inside (t0, t1], if any.
@@ -496,9 +527,9 @@ class SimBackend:
             if mark == i + 1:
                 marked = (x, y, th)
         if safe:
-            if final:
+            if final and not self._lazy_clearance:
                 clear = self._settled_clearance(x, y)
-            else:
+            else:       # a lower bound: the centre moved at most `reach`
                 clear = (clear[0] - reach, clear[1])
                 self._clear_bound = True
         if contact:

@@ -239,8 +239,11 @@ def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) 
 
 @dataclass(frozen=True)
 class _Settling:
-    """A profile's noise, quantum and range limit as 0-d arrays (a ufunc takes them far
-    faster than Python floats): what :meth:`Ladar.settle` applies to a scan."""
+    """What :meth:`Ladar.settle` applies to a profile's scans.
+
+    The noise, quantum and range limit as 0-d arrays: a ufunc takes them far faster than
+    Python floats.
+    """
 
     noisy: bool
     relative: bool
