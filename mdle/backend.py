@@ -185,9 +185,8 @@ def observation(time: float, pose: Pose, v: float, omega: float, scan: Scan | No
     simulated observation; this fills the same fields at once (motors enabled, no
     battery reading).
     """
-    return _new_observation(time=time, pose=pose, v=v, omega=omega, scan=scan,
-                            stalled=stalled, motors_enabled=True, battery=None, truth=truth,
-                            inbox=inbox)
+    # positional: the fields in order (motors enabled, no battery reading)
+    return _new_observation(time, pose, v, omega, scan, stalled, True, None, truth, inbox)
 
 
 def plain_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, stamp: float,
@@ -196,8 +195,7 @@ def plain_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, stam
 
     For a simulated ladar's scan at every tick (see :func:`observation` for why).
     """
-    return _new_scan(ranges=ranges, bearings=bearings, valid=valid, stamp=stamp,
-                     max_range=max_range, tangents=None, curvatures=None)
+    return _new_scan(ranges, bearings, valid, stamp, max_range, None, None)  # fields in order
 
 
 _new_observation = builder(Observation)

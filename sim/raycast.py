@@ -583,9 +583,12 @@ class FanCaster:
         if ids.shape[0] == 0:
             return
         zf = z[1:].take(ids, axis=1)                # rows: conj(p) q, kappa p, e
-        a = np.arctan2(zf[:2].imag, zf[:2].real)    # rows: sweep (p to q), p from psi
+        # Both angles in one flat call (a flat strided input skips numpy's buffered
+        # iterator): sweep (p to q) then p from psi, face by face; then hi, lo.
+        zr = zf[:2].reshape(-1)
+        a = np.arctan2(zr.imag, zr.real).reshape(2, -1)
         hi = a[0]
-        np.add(hi, a[1], hi)                        # rows: hi, lo
+        np.add(hi, a[1], hi)
         a += self._widen
         # 1/t = cross(d, e) / cross(p, e), with the edge e in the fan frame.
         f = np.divide(zf[2], zf[0].imag)
