@@ -14,8 +14,9 @@ which stay meaningful on a loaded machine. Last, a whole controlled tick is time
 
     python benchmarks/follow.py --split
 
-times the controlled tick's parts instead: the backend's observe, command and advance (the
-simulator), the atom's step, and the rest (the scheduler).
+times the controlled tick's parts instead: the backend's observe, command and advance, and
+the exact clearance it measures when the scheduler reads it (together the simulator's share,
+target 45 us), the atom's step, and the rest (the scheduler).
 
     python benchmarks/follow.py --instructions
 
@@ -228,7 +229,7 @@ def _controlled_split(ticks: int) -> dict[str, float]:
     """
     sch = _controlled()
     spent = dict.fromkeys(("backend.observe", "backend.command", "backend.advance",
-                           "follow_boundary step"), 0.0)
+                           "backend.clearance read", "follow_boundary step"), 0.0)
     clock = time.perf_counter
 
     def timed(fn: Callable[..., Any], key: str) -> Callable[..., Any]:
@@ -242,6 +243,8 @@ def _controlled_split(ticks: int) -> dict[str, float]:
     backend = sch.backend
     for name in ("observe", "command", "advance"):
         setattr(backend, name, timed(getattr(backend, name), f"backend.{name}"))
+    # the exact clearance, measured when the scheduler reads it (the simulator's work)
+    backend._measure_clearance = timed(backend._measure_clearance, "backend.clearance read")
     slot = sch._stack[-1].slot  # the running atom's slot: its step is what the tick calls
     slot.step = timed(slot.step, "follow_boundary step")
     t0 = clock()
@@ -250,6 +253,7 @@ def _controlled_split(ticks: int) -> dict[str, float]:
     out = {k: v / ticks * 1e6 for k, v in spent.items()}
     out["scheduler (the rest)"] = whole / ticks * 1e6 - sum(out.values())
     out["whole tick"] = whole / ticks * 1e6
+    out["simulator (backend.*)"] = sum(v for k, v in out.items() if k.startswith("backend."))
     return out
 
 

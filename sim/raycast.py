@@ -521,17 +521,13 @@ class FanCaster:
         if m:
             # A turn and an origin per place, in plain floats (a loop over robots, not
             # beams): math's cos and Python's complex products, as in :meth:`cast`.
-            rv = np.empty((4, n_scan, 1), dtype=complex)
-            off = np.zeros((4, n_scan, 1), dtype=complex)
-            for s, (x, y, p) in enumerate(zip(ox.tolist(), oy.tolist(), first.tolist(),
-                                              strict=True)):
-                rot = complex(math.cos(p + self._half), -math.sin(p + self._half))
-                c = complex(x, y) * rot
-                rv[0, s, 0] = rv[2, s, 0] = rv[3, s, 0] = rot
-                rv[1, s, 0] = rot.conjugate()
-                off[0, s, 0] = c
-                off[1, s, 0] = c.conjugate()
-                off[2, s, 0] = self._kappa * c
+            half, kappa = self._half, self._kappa
+            rots = [complex(math.cos(p + half), -math.sin(p + half)) for p in first.tolist()]
+            cs = [complex(x, y) * r for x, y, r in zip(ox.tolist(), oy.tolist(), rots,
+                                                       strict=True)]
+            rv = np.array([rots, [r.conjugate() for r in rots], rots, rots])[:, :, None]
+            off = np.array([cs, [c.conjugate() for c in cs], [kappa * c for c in cs],
+                            [0j] * n_scan])[:, :, None]
             z = np.multiply(self._zw[:, None, :], rv)                         # (4, S, m)
             np.subtract(z, off, z)
             z = z.reshape(4, n_scan * m)
