@@ -281,17 +281,18 @@ class SimBackend:
         if lazy:
             return observation(self._t, pose, v, w, self._scan, self._stalled,
                                LazyTruth(truth, partial(self._measure_clearance, self._x,
-                                                        self._y, self._t), self._clear[0]),
+                                                        self._y), self._clear[0]),
                                self.inbox)
         return observation(self._t, pose, v, w, self._scan, self._stalled, truth, self.inbox)
 
-    def _measure_clearance(self, x: float, y: float, t: float) -> float:
-        """Return the exact clearance at ``(x, y)``, where the robot was at time ``t``.
+    def _measure_clearance(self, x: float, y: float) -> float:
+        """Return the exact clearance at ``(x, y)``, where the robot was when observed.
 
-        If the robot has not moved since, its next step starts from the exact value.
+        If the robot is still there (a clearance depends on the place only), its next step
+        starts from the exact value.
         """
         clear = self._collider.clearance(x, y)
-        if self._t == t and self._clear_bound:
+        if self._clear_bound and self._x == x and self._y == y:
             self._clear, self._clear_bound = clear, False
         return clear[0]
 

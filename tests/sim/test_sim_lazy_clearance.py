@@ -12,7 +12,7 @@ import pickle
 
 import pytest
 
-from mdle.backend import Command, LazyTruth, clearance_floor
+from mdle.backend import Command, LazyTruth, Pose, clearance_floor
 from mdle.lang import load_text
 from mdle.runtime import Scheduler
 from mdle.sim.backend import SimBackend
@@ -98,6 +98,16 @@ def test_a_measured_clearance_starts_the_next_step_exactly() -> None:
     assert isinstance(late, LazyTruth)
     assert late["clearance"] == exact.clearance(late["x"], late["y"])[0]
     assert b._clear == kept
+    # read after a reset elsewhere and a step to the same time: the state is not touched
+    b.reset()
+    _drive(b, 0)
+    old = b.observe().truth
+    b.reset(Pose(-3.0, 3.0, 0.0))
+    _drive(b, 0)
+    kept = b._clear
+    assert isinstance(old, LazyTruth) and b._clear_bound
+    assert old["clearance"] == exact.clearance(old["x"], old["y"])[0] != kept[0]
+    assert b._clear == kept and b._clear_bound
 
 
 def _least(observers: list, ticks: int = 150) -> tuple[float | None, int]:
