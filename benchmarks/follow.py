@@ -246,10 +246,11 @@ def _controlled_split(ticks: int) -> dict[str, float]:
         return call
 
     backend = sch.backend
-    for name in ("observe", "command", "advance"):
-        setattr(backend, name, timed(getattr(backend, name), f"backend.{name}"))
-    # the exact clearance, measured when the scheduler reads it (the simulator's work)
-    backend._measure_clearance = timed(backend._measure_clearance, "backend.clearance read")
+    # and the exact clearance, measured when the scheduler reads it (the simulator's work)
+    for name, key in (("observe", "backend.observe"), ("command", "backend.command"),
+                      ("advance", "backend.advance"),
+                      ("_measure_clearance", "backend.clearance read")):
+        setattr(backend, name, timed(getattr(backend, name), key))
     slot = sch._stack[-1].slot  # the running atom's slot: its step is what the tick calls
     slot.step = timed(slot.step, "follow_boundary step")
     t0 = clock()

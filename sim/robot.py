@@ -298,6 +298,22 @@ def ramp_step(cur: float, target: float, accel: float, decel: float, ramp: str, 
     return cur + math.copysign(step, diff)
 
 
+def _ramp(cur: float, target: float, accel: float, decel: float, stage: bool
+          ) -> tuple[float, float, float]:
+    """Return (start, signed rate, time to reach) for one axis, as :func:`ramp_rate` ramps.
+
+    An infinite rate jumps: the start is then the target (rate and time 0). Written out
+    rather than calling ramp_rate: a tick plans once per step, and a call costs more.
+    """
+    diff = target - cur
+    if diff == 0.0:
+        return cur, 0.0, 0.0
+    rate = math.inf if stage and cur > 0 > target else decel if cur * diff < 0 else accel
+    if math.isfinite(rate):
+        return cur, math.copysign(rate, diff), abs(diff) / rate
+    return target, 0.0, 0.0
+
+
 def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
                 profile: RobotProfile) -> tuple[list[Phase], float, float]:
     """Split ``dt`` seconds under command ``(v_cmd, w_cmd)`` into phases.
@@ -305,24 +321,9 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
     Returns the phases and the speed and turn rate at the end.
     Infinite accelerations jump to the command at the start.
     """
-    # _ramp for both axes, written out (a tick plans once; the calls cost more than this).
     stage = profile.ramp == "stage"
-    dv, dw = v_cmd - v, w_cmd - w
-    av = tv = aw = tw = 0.0
-    if dv != 0.0:
-        rate = (math.inf if stage and v > 0 > v_cmd
-                else profile.max_decel if v * dv < 0 else profile.max_accel)
-        if math.isfinite(rate):
-            av, tv = math.copysign(rate, dv), abs(dv) / rate
-        else:
-            v = v_cmd
-    if dw != 0.0:
-        rate = (math.inf if stage and w > 0 > w_cmd
-                else profile.max_turn_decel if w * dw < 0 else profile.max_turn_accel)
-        if math.isfinite(rate):
-            aw, tw = math.copysign(rate, dw), abs(dw) / rate
-        else:
-            w = w_cmd
+    v, av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel, stage)
+    w, aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_decel, stage)
     # The cuts 0 < ... < dt: where each ramp ends inside the step (once if both end together).
     cuts = [0.0]
     inside_v, inside_w = 0.0 < tv < dt, 0.0 < tw < dt
