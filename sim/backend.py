@@ -12,7 +12,9 @@ does, and records a :class:`SimEvent`), takes ladar scans at the ladar's own ins
 Observations report odometry as a robot does (REP-105 ``odom`` frame): the pose relative
 to where the robot was at :meth:`SimBackend.reset` (the run's start), which is
 (0, 0, 0). World coordinates are ground truth: ``Observation.truth`` and
-:attr:`SimBackend.true_pose`.
+:attr:`SimBackend.true_pose`. The truth's exact clearance is a distance query over every
+segment, so a step that touched nothing keeps a lower bound instead, and the observation's
+truth (a :class:`mdle.backend.LazyTruth`) measures it only when read.
 
 >>> import math
 >>> from mdle.sim.world import World
