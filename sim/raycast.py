@@ -430,8 +430,9 @@ class FanCaster:
         # Bearings of face starts are measured from the direction psi (fan frame), so
         # that arctan2's (-pi, pi] puts them in [half + eps - 2 pi, half + eps): then an
         # interval's copy one turn up holds no beam, two turns down neither (hi < lo + pi),
-        # and one turn down only when hi reaches 3 pi - fov, which needs a fan wider than
-        # 4 pi / 3 (then checked per scan).
+        # and one turn down only when hi reaches 3 pi - fov; hi (lo at most pi, the sweep
+        # under pi) stays under 2 pi + 2 eps, so a fan narrower than pi never needs the
+        # check (a ladar's half turn does: checked per scan).
         psi = self._half + _EPS_ANGLE - math.pi
         self._kappa = complex(math.cos(psi), -math.sin(psi))
         # World-frame rows (end, conj(start), kappa start, edge): a scan multiplies them by
@@ -443,7 +444,7 @@ class FanCaster:
         self._off = np.zeros((4, 1), dtype=complex)
         self._rel_s = self._rel_c - psi             # the beams as seen from psi
         self._wrap_hi = 3.0 * math.pi - 2.0 * self._half - 3.0 * _EPS_ANGLE
-        self._may_wrap = 3.0 * self._half + 5.0 * _EPS_ANGLE + 1e-9 >= _TAU
+        self._may_wrap = 2.0 * self._half + 5.0 * _EPS_ANGLE + 1e-9 >= math.pi
         self._pair_ids = np.arange(4 * n)            # grown on demand
         self._widen = np.array([[_EPS_ANGLE], [-_EPS_ANGLE]])   # rows: hi, lo
         self._kind = np.zeros(n, dtype=np.int8)
