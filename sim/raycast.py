@@ -591,7 +591,7 @@ class FanCaster:
         a += self._widen
         # 1/t = cross(d, e) / cross(p, e), with the edge e in the fan frame.
         f = np.divide(zf[2], zf[0].imag)
-        if self._may_wrap and float(hi.max()) >= self._wrap_hi:
+        if self._may_wrap and float(np.maximum.reduce(hi)) >= self._wrap_hi:
             a = np.concatenate([a, a - _TAU], axis=1)
             ids = np.concatenate([ids, ids])
             f = np.concatenate([f, f])
