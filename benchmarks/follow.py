@@ -30,12 +30,12 @@ Figures (callgrind, Python 3.11, numpy 2.4): the whole step 484 k instructions p
 (boundary view 198 k, scan points 54 k, the rest 232 k), against 701 k before the numeric
 helpers were trimmed (625 k, 83 us quiet, with the earlier law); the controlled tick
 1.12 M (1.34 M before), 1.08 M once the simulator's tick was trimmed (500 ticks, with
-``OPENBLAS_NUM_THREADS=1`` so that idle BLAS threads add no count), and 0.984 M (1.088 M,
+``OPENBLAS_NUM_THREADS=1`` so that idle BLAS threads add no count), and 0.994 M (1.088 M,
 same run, before) once its scan, ramp quadrature and observation were trimmed and its exact
 clearance measured only when read. The same controlled run with the atom's step replaced
-by its recorded commands (the simulator and the scheduler alone) counts 0.426 M against
-0.531 M: the simulator's share, about 0.51 M before, is about 0.40 M (0.79x); its scan is
-about 0.28 M of that (the fan cast 0.21 M, 24 numpy calls).
+by its recorded commands (the simulator and the scheduler alone) counts 0.437 M against
+0.531 M: the simulator's share, about 0.51 M before, is about 0.41 M (0.81x); its scan is
+about 0.28 M of that (the fan cast 0.22 M, 25 numpy calls).
 """
 
 from __future__ import annotations

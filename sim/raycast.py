@@ -12,10 +12,10 @@ Arcs and ellipses (few per world) are intersected densely and analytically.
 
 :class:`FanCaster` is the same method specialised for a ladar, whose fan of beams never
 changes: it works in the fan's own frame, where the beam directions are constants, and
-needs 24 numpy calls per scan (the fixed cost of a call, about 3,500 instructions, is half
+needs 25 numpy calls per scan (the fixed cost of a call, about 3,500 instructions, is half
 of what a scan of a small world costs; the rest is mostly the arctan2 and the binary
 searches of the faces' intervals). At 100 segments (benchmarks/sim.py's world) a scan
-costs about 210,000 instructions (266,000 before back faces were dropped ahead of the
+costs about 218,000 instructions (266,000 before back faces were dropped ahead of the
 angles and the constants became 0-d arrays).
 
 All angles are in the world frame (radians, counter-clockwise); ranges in metres.
