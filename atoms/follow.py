@@ -25,6 +25,7 @@ from mdle.atoms.boundary import SIDES, Side, cached_view, parse_side
 from mdle.atoms.latency import shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.backend import Command
+from mdle.frozen import builder
 from mdle.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 if TYPE_CHECKING:
@@ -144,7 +145,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     sgn = -1.0 if left else 1.0
     law_pose = (pose.x, sgn * pose.y, sgn * pose.theta)
     front, side = view.front, view.side
-    moved = None
+    moved = _STILL
     pred = state.predictor
     if pred is not None and state.latency is not None:
         # answer the boundary as it will be when this command acts, not as it was scanned
@@ -153,67 +154,80 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         moved, law_pose = pred.predict(obs.time, stamp, law_pose, obs.v, sgn * obs.omega,
                                        state.latency, ctx.limits.max_accel,
                                        ctx.limits.max_turn_accel)
-        front, side = shift_front(front, moved), shift_side(side, moved)
-    points = scan_points_cached(ctx)
-    if moved is not None and moved != (0.0, 0.0, 0.0):
-        points = _into(points, moved[0], sgn * moved[1], sgn * moved[2])
+        if moved != _STILL:
+            front, side = shift_front(front, moved), shift_side(side, moved)
+    z = safety.as_complex(scan_points_cached(ctx))
+    if moved != _STILL:
+        z = _into(z, moved[0], sgn * moved[1], sgn * moved[2])
     u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                       g.umax, filter_kappa=not view.exact,
-                      near=lambda: _nearest_on_side(points, sgn))
+                      near=lambda: _nearest_on_side(z, sgn))
     u *= sgn
     u_law, v_law = u, v
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        v, u, clearance = safety.safety_filter(points, v, u, g.umax, ctx.limits.radius,
-                                                 margin, float(args["lookahead"]),
-                                                 side=1 if left else -1)
+        v, u, clearance = safety.filter_complex(z, v, u, g.umax, ctx.limits.radius, margin,
+                                                float(args["lookahead"]),
+                                                side=1 if left else -1)
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
     f, s = view.front, view.side  # the trace shows what was measured
+    if f.hit:
+        fh, fr, fb, fk = 1.0, f.r, sgn * f.beta, sgn * f.kappa
+    else:
+        fh = fr = fb = fk = 0.0
+    if s.hit:
+        sh, sr, sb, sk = 1.0, s.r, sgn * s.beta, sgn * s.kappa
+    else:
+        sh = sr = sb = sk = 0.0
+    mem = state.memory
     ctx.cache["trace"] = {
-        "front_hit": float(f.hit),
-        "front_range": f.r if f.hit else 0.0,
-        "front_tangent": sgn * f.beta if f.hit else 0.0,
-        "front_curvature": sgn * f.kappa if f.hit else 0.0,
-        "side_hit": float(s.hit),
-        "side_range": s.r if s.hit else 0.0,
-        "side_tangent": sgn * s.beta if s.hit else 0.0,
-        "side_curvature": sgn * s.kappa if s.hit else 0.0,
+        "front_hit": fh, "front_range": fr, "front_tangent": fb, "front_curvature": fk,
+        "side_hit": sh, "side_range": sr, "side_tangent": sb, "side_curvature": sk,
         "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
         "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
-        "mode": _MODE_CODES[state.memory.mode],
-        "lost": state.memory.lost_for(ctx.t),
+        "mode": _MODE_CODES[mem.mode],
+        "lost": 0.0 if mem.seen is None else max(ctx.t - mem.seen_at, 0.0),  # lost_for
         "u_law": u_law,
         "safety": float(u != u_law or v != v_law),
-        "predicted_clearance": clearance if math.isfinite(clearance) else -1.0,
+        "predicted_clearance": clearance if clearance < math.inf else -1.0,
     }
-    return Command(v, u)
+    return _command(v, u)
 
 
-def _nearest_on_side(points: Any, sgn: float) -> tuple[float, float] | None:
-    """Return (distance, law-frame bearing) of the nearest scan point on the followed side."""
+#: No motion since the scan (the predictor's answer without latency or scan age).
+_STILL = (0.0, 0.0, 0.0)
+_command = builder(Command)
+
+
+def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:
+    """Return (distance, law-frame bearing) of the nearest scan point on the followed side.
+
+    ``z``: the scan points (complex, (M,)); ``sgn`` -1 mirrors the law's frame for left
+    following. Distances are compared squared, as ``x x + y y`` (not the modulus, which
+    rounds differently): the scan's ranges come in millimetres, so two beams are often
+    equally near, and this picks the same one whichever way the points were made.
+    """
     import numpy as np
 
-    if points.shape[0] == 0:
+    if z.shape[0] == 0:
         return None
-    x, y = points[:, 0], points[:, 1] * sgn
+    x, y = z.real, z.imag
     d2 = x * x  # full-length operations only (a reduction over the short axis is slow)
     d2 += y * y
-    d2[~(y < 0.0)] = math.inf  # the other side is never nearest (the points are finite)
-    k = int(np.argmin(d2))
-    if not d2[k] < math.inf:
+    d2 = np.where(y < 0.0 if sgn > 0 else y > 0.0, d2, math.inf)  # never the other side
+    k = int(d2.argmin())
+    r2 = float(d2[k])
+    if not r2 < math.inf:
         return None
-    return math.sqrt(float(d2[k])), math.atan2(float(y[k]), float(x[k]))
+    return math.sqrt(r2), math.atan2(sgn * float(y[k]), float(x[k]))
 
 
-def _into(points: Any, dx: float, dy: float, dth: float) -> Any:
-    """Return robot-frame points (M, 2) in the frame moved by ``(dx, dy, dth)``."""
-    import numpy as np
-
+def _into(z: Any, dx: float, dy: float, dth: float) -> Any:
+    """Return robot-frame points (complex, (M,)) in the frame moved by ``(dx, dy, dth)``."""
     # as complex numbers: a shift and a rotation, two calls (no small arrays to build)
-    z = np.ascontiguousarray(points, dtype=float).view(np.complex128)
-    return ((z - complex(dx, dy)) * complex(math.cos(dth), -math.sin(dth))).view(np.float64)
+    return (z - complex(dx, dy)) * complex(math.cos(dth), -math.sin(dth))
 
 
 @sensor(result=TIME)

@@ -35,6 +35,10 @@ Pose3 = tuple[float, float, float]
 
 #: How much history is kept (s): longer than any scan age or command latency worth predicting.
 _HISTORY = 2.0
+#: Times closer than this (s) are the same moment.
+_SAME_TIME = 1e-9
+#: No motion.
+_NONE: Pose3 = (0.0, 0.0, 0.0)
 #: Integration step of the in-flight motion (s).
 _STEP = 0.02
 #: A ray whose hit would move further than this along the boundary is dropped (m): the local
@@ -127,10 +131,10 @@ class Predictor:
         accel, turn_accel : float
             The robot's acceleration limits (m/s^2, rad/s^2; ``inf``: none).
         """
-        seen = self.pose_at(stamp) if stamp < now else None
-        if seen is None:
-            seen = pose
-        start = _relative(seen, pose)
+        # a scan stamped now (to the clock's rounding: a stamp and a time summed from the same
+        # ticks differ in the last bits) was taken here: no motion since, nothing to look up
+        seen = self.pose_at(stamp) if stamp < now - _SAME_TIME else None
+        start = _NONE if seen is None else _relative(seen, pose)
         if latency <= 0:
             return start, pose
         n = max(1, math.ceil(latency / _STEP))

@@ -35,6 +35,8 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from mdle.frozen import builder
+
 if TYPE_CHECKING:
     from collections.abc import Callable
 
@@ -81,6 +83,8 @@ class Ray:
 
 #: A ray that saw nothing (the paper's virtual boundary takes over).
 MISS = Ray(False)
+#: Ray's constructor without the frozen ``__init__``'s per-field ``object.__setattr__``.
+_ray = builder(Ray)
 
 
 @dataclass(frozen=True)
@@ -211,18 +215,28 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
     for which ``dV/dt = -mu sin^2(bs/2) as D / cos bs <= 0``; with a front hit the feedforward
     is the regularised ``-B A / (A^2 + eps^2)``. Returns the turn rate, rad/s, within +-umax.
     """
-    if front.hit:
+    # (runs every tick: the clamps are written out as min(max(x, lo), hi) evaluates them)
+    fhit = front.hit
+    if fhit:
         b0 = front.beta
-        a0 = min(max(1.0 - front.kappa * front.r / math.sin(b0), g.a0_min), g.a0_max)
+        a0 = 1.0 - front.kappa * front.r / math.sin(b0)
+        lo, hi = g.a0_min, g.a0_max
+        a0 = lo if lo > a0 else a0
+        a0 = hi if hi < a0 else a0
     else:
-        b0, a0 = 0.0, 0.0
+        b0 = a0 = 0.0
     if side.hit:
         bs, rs = side.beta, side.r
         cb = math.cos(bs)
-        ks = min(side.kappa, (1.0 - g.conc_margin) * cb / rs)
+        ks = side.kappa
+        cap = (1.0 - g.conc_margin) * cb / rs
+        ks = cap if cap < ks else ks
         as_ = 1.0 - ks * rs / cb
-        f = f_gain(rs, rc, g)
-        if g.scaled_damping and not front.hit and ks < 0.0:
+        fmax = g.fmax
+        f = g.kf * (rs - rc)
+        f = -fmax if -fmax > f else f
+        f = fmax if fmax < f else f
+        if g.scaled_damping and not fhit and ks < 0.0:
             # near rc the distance term acts through 1 / (1 - ks rs)^2, which softens the
             # return to rc on a convex curve (2.25x on radius 1 at rc 0.5): restore the wall's
             # stiffness with a gain that is constant along a constant-curvature boundary (so
@@ -236,23 +250,32 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
     s2 = math.sin((b0 - bs) / 2.0)  # not wrapped: V uses quarter angles
     a_th = -a0 * s1 + s2 * (as_ - a0)
     a = a_th - f * rs * tb
-    if front.hit:
+    if fhit:
         b = -v * (s2 * ks / cb + f * tb)
         u_ff = -b * a / (a * a + g.eps_a * g.eps_a)
     else:
         ch = math.cos(bs / 2.0)
-        d = max(cb - ks * rs + 2.0 * f * rs * ch, g.d_min)
+        d = cb - ks * rs + 2.0 * f * rs * ch
+        d_min = g.d_min
+        d = d_min if d_min > d else d
         u_ff = v * (ks - 2.0 * f * ch) / d
-    damp = -a_th / max(1.0, a0) if a * a_th > 0 else -a / max(1.0, abs(a))
-    if g.scaled_damping and not front.hit and side.hit:
+    if a * a_th > 0:
+        damp = -a_th / (a0 if a0 > 1.0 else 1.0)
+    else:
+        aa = abs(a)
+        damp = -a / (aa if aa > 1.0 else 1.0)
+    if g.scaled_damping and not fhit and side.hit:
         # Any positive damping keeps dV/dt <= 0; two state-dependent scalings make the
         # distance converge faster. On a convex curve the angle term carries the factor
         # as = 1 - ks rs / cos bs > 1, which damps the return to rc as much as 2-3x
         # (measured on a circle): divide it out. Beyond rc the damping fades as rc / rs,
         # so the approach from far is a line at about 2 asin(v / (mu rc)) to the boundary
         # instead of a slow spiral (the paper's law needs over 40 s from 4.5 m at kf = 2).
-        damp *= min(1.0, rc / rs) / max(as_, 1.0)
-    return min(max(u_ff + g.mu * damp, -umax), umax)
+        q = rc / rs
+        damp *= (q if q < 1.0 else 1.0) / (1.0 if 1.0 > as_ else as_)
+    u = u_ff + g.mu * damp
+    u = -umax if -umax > u else u
+    return umax if umax < u else u
 
 
 def _valid_front(front: Ray, rc: float, g: Gains) -> Ray:
@@ -261,7 +284,7 @@ def _valid_front(front: Ray, rc: float, g: Gains) -> Ray:
     b0 = wrap(front.beta)
     if math.sin(b0) <= g.s_min or front.r > g.front_gate * rc:
         return MISS
-    return Ray(True, front.r, b0, front.kappa)
+    return front if b0 == front.beta else _ray(True, front.r, b0, front.kappa)
 
 
 def _valid_side(side: Ray, g: Gains) -> Ray:
@@ -270,7 +293,7 @@ def _valid_side(side: Ray, g: Gains) -> Ray:
     bs = wrap(side.beta)
     if math.cos(bs) <= g.c_min:
         return MISS
-    return Ray(True, side.r, bs, side.kappa)
+    return side if bs == side.beta else _ray(True, side.r, bs, side.kappa)
 
 
 def follow_law(front: Ray, side: Ray, v: float, rc: float, g: Gains,
@@ -367,7 +390,7 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
             mem.kappa = side.kappa
         else:
             mem.kappa += (side.kappa - mem.kappa) * min(1.0, dt / g.tau)
-        side = Ray(True, side.r, side.beta, mem.kappa)
+        side = _ray(True, side.r, side.beta, mem.kappa)
     mem.last_rs = side.r if side.hit else math.nan
     mem.time = t
 

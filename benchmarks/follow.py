@@ -30,12 +30,16 @@ Figures (callgrind, Python 3.11, numpy 2.4): the whole step 484 k instructions p
 (boundary view 198 k, scan points 54 k, the rest 232 k), against 701 k before the numeric
 helpers were trimmed (625 k, 83 us quiet, with the earlier law); the controlled tick
 1.12 M (1.34 M before), 1.08 M once the simulator's tick was trimmed (500 ticks, with
-``OPENBLAS_NUM_THREADS=1`` so that idle BLAS threads add no count), and 0.994 M (1.088 M,
-same run, before) once its scan, ramp quadrature and observation were trimmed and its exact
-clearance measured only when read. The same controlled run with the atom's step replaced
-by its recorded commands (the simulator and the scheduler alone) counts 0.437 M against
-0.531 M: the simulator's share, about 0.51 M before, is about 0.41 M (0.81x); its scan is
-about 0.28 M of that (the fan cast 0.22 M, 25 numpy calls).
+``OPENBLAS_NUM_THREADS=1`` so that idle BLAS threads add no count). The law, latency
+bookkeeping and safety layer (the rest) then went from 193 k to 117 k (scan points as
+complex numbers through the safety layer, the CLF law's clamps written out), the whole step
+from 444 k to 367 k, the controlled tick from 1.09 M to 0.97 M. Separately, trimming the
+simulator's scan, ramp quadrature and observation, and measuring its exact clearance only
+when read, took the controlled tick from 1.088 M to 0.994 M (with the atom as it was before
+the step's trimming above). The same controlled run with the atom's step replaced by its
+recorded commands (the simulator and the scheduler alone) counts 0.437 M against 0.531 M:
+the simulator's share, about 0.51 M before, is about 0.41 M (0.81x); its scan is about
+0.28 M of that (the fan cast 0.22 M, 25 numpy calls).
 """
 
 from __future__ import annotations

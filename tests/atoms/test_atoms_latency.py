@@ -20,6 +20,19 @@ def test_motion_since_the_scan_comes_from_the_odometry_history() -> None:
     assert pose == (1.0, 0.0, 0.0)
 
 
+def test_a_scan_stamped_now_to_the_clocks_rounding_means_no_motion() -> None:
+    # a stamp and a tick time summed from the same ticks differ in the last bits (46.5 and
+    # 46.50000000000039): the scan was taken here, so the rays and points stay as they are
+    p = Predictor()
+    now = sum([0.1] * 465)
+    assert now != 46.5 and abs(now - 46.5) < 1e-9
+    p.record_pose(46.4, (13.9, 4.6, 9.2))
+    p.record_pose(now, (13.93, 4.61, 9.22))
+    moved, pose = p.predict(now, 46.5, p.poses[-1][1], 0.3, 0.2, 0.0, math.inf, math.inf)
+    assert moved == (0.0, 0.0, 0.0)
+    assert pose == p.poses[-1][1]
+
+
 def test_commands_in_flight_act_after_the_latency_with_the_ramp() -> None:
     p = Predictor()
     p.record_pose(0.0, (0.0, 0.0, 0.0))

@@ -167,5 +167,54 @@ def test_own_arc_clearance_fast_path_equals_the_candidate_computation() -> None:
         pts = rng.uniform(-2.0, 2.0, (int(rng.integers(1, 80)), 2))
         v = float(rng.uniform(0.1, 1.0))
         u = 0.0 if rng.random() < 0.2 else float(rng.uniform(-3.0, 3.0))
-        slow = safety._arc_clearance(pts, v, np.array([u]), 0.8, 8)[0][0]
-        assert safety._own_clearance(pts, v, u, 0.8, 8) == pytest.approx(slow, abs=1e-12)
+        z = safety.as_complex(pts)
+        slow = safety._arc_clearance(z, v, np.array([u]), 0.8, 8)[0][0]
+        assert safety._own_clearance(z, v, u, 0.8, 8) == pytest.approx(slow, abs=1e-12)
+
+
+def _arcs_brute(pts: np.ndarray, v: float, rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Clearance and nearest-point side of each arc (0.8 s, 8 samples), one arc at a time."""
+    clear, cross = [], []
+    for u in rates:
+        s = v * 0.8 * np.arange(1, 9) / 8
+        th = u / v * s
+        ax = s if u == 0 else np.sin(th) / (u / v)
+        ay = 0 * s if u == 0 else (1 - np.cos(th)) / (u / v)
+        d = np.hypot(pts[None, :, 0] - ax[:, None], pts[None, :, 1] - ay[:, None])
+        i, j = np.unravel_index(np.argmin(d), d.shape)
+        clear.append(d[i, j])
+        cross.append(math.cos(th[i]) * (pts[j, 1] - ay[i]) - math.sin(th[i]) * (pts[j, 0] - ax[i]))
+    return np.array(clear), np.array(cross)
+
+
+def test_candidate_arcs_clearance_and_side_match_one_arc_at_a_time() -> None:
+    rng = np.random.default_rng(1)
+    rates = np.linspace(-3.0, 3.0, 25)  # the straight arc (rate 0) among them
+    for _ in range(50):
+        pts = rng.uniform(-1.5, 1.5, (int(rng.integers(1, 60)), 2))
+        v = float(rng.uniform(0.1, 1.0))
+        clear, cross = safety._arc_clearance(safety.as_complex(pts), v, rates, 0.8, 8)
+        want_clear, want_cross = _arcs_brute(pts, v, rates)
+        assert clear == pytest.approx(want_clear, abs=1e-12)
+        assert cross == pytest.approx(want_cross, abs=1e-12)
+
+
+def test_admissible_rate_tried_nearest_first_is_the_nearest_admissible() -> None:
+    # the staged search (a few rates nearest to u, then the rest) picks what a sweep of all
+    # candidates picks: the admissible rate nearest to u, the lower one on a tie
+    rng = np.random.default_rng(2)
+    rates = np.linspace(-3.0, 3.0, 25)
+    found = 0
+    for n in range(400):
+        pts = rng.uniform(-1.2, 1.2, (int(rng.integers(1, 40)), 2))
+        v = float(rng.uniform(0.1, 1.0))
+        u = float(rates[n % 25]) if n % 3 == 0 else float(rng.uniform(-3.0, 3.0))
+        side, need = (-1, 1)[n % 2], float(rng.uniform(0.0, 0.3))
+        clear, cross = _arcs_brute(pts, v, rates)
+        ok = (clear - 0.1 >= need) & (cross * side > 0)
+        want = float(rates[np.flatnonzero(ok)[np.argmin(np.abs(rates[ok] - u))]]) \
+            if ok.any() else None
+        got = safety._admissible(safety.as_complex(pts), v, rates, u, 0.8, 8, 0.1, need, side)
+        assert got == want
+        found += want is not None and abs(want - u) > 0.5
+    assert found > 20  # the rest, not only the few nearest, were needed and searched
