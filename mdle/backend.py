@@ -9,6 +9,8 @@ radians, counter-clockwise positive, x forward and y left in the robot frame (RE
 from __future__ import annotations
 
 import enum
+import math
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
@@ -23,6 +25,8 @@ __all__ = [
     "Pose",
     "Scan",
     "Observation",
+    "LazyTruth",
+    "clearance_floor",
     "observation",
     "plain_scan",
     "Command",
@@ -100,12 +104,79 @@ class Observation:
     stalled: bool = False
     motors_enabled: bool = True
     battery: float | None = None
-    truth: dict[str, Any] = field(default_factory=dict)
+    truth: Mapping[str, Any] = field(default_factory=dict)
     inbox: "Inbox | None" = None
 
 
+class LazyTruth(Mapping[str, Any]):
+    """Ground truth whose ``clearance`` is measured only when someone reads it.
+
+    A simulator knows a lower bound of the clearance for free at every tick (where it was
+    last measured, less how far the robot can have moved since) and the exact value for a
+    distance query; most ticks nobody needs the exact value (the runtime keeps only the
+    smallest clearance of a run, which a bound above it cannot change). ``fields`` are the
+    other entries; ``measure`` returns the exact clearance, called at most once;
+    :attr:`clearance_floor` is the bound (see :func:`clearance_floor`). Reading it as a
+    mapping (``[]``, ``get``, iteration, ``dict(...)``, equality) gives what a dict holding
+    the exact value would; it pickles as that dict.
+    """
+
+    __slots__ = ("_fields", "_measure", "clearance_floor")
+
+    def __init__(self, fields: dict[str, Any], measure: Callable[[], float],
+                 clearance_floor: float) -> None:
+        self._fields = fields
+        self._measure: Callable[[], float] | None = measure
+        #: A lower bound of ``self["clearance"]``, known without measuring.
+        self.clearance_floor = clearance_floor
+
+    def _measured(self) -> dict[str, Any]:
+        if self._measure is not None:
+            self._fields["clearance"] = self._measure()
+            self._measure = None
+        return self._fields
+
+    def __getitem__(self, key: str) -> Any:
+        if key == "clearance":
+            return self._measured()[key]
+        return self._fields[key]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        """Return ``self[key]``, or ``default`` when there is no such entry."""
+        if key == "clearance":
+            return self._measured()[key]
+        return self._fields.get(key, default)
+
+    def __contains__(self, key: object) -> bool:
+        return key == "clearance" or key in self._fields
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._measured())
+
+    def __len__(self) -> int:
+        return len(self._fields) + (self._measure is not None)
+
+    def __repr__(self) -> str:
+        return repr(self._measured())
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return dict, (dict(self._measured()),)
+
+
+def clearance_floor(truth: Mapping[str, Any]) -> float:
+    """Return a lower bound of ``truth["clearance"]`` known without measuring it.
+
+    :attr:`LazyTruth.clearance_floor` of a :class:`LazyTruth`, the exact value of any other
+    mapping; ``-inf`` when there is no clearance.
+    """
+    if isinstance(truth, LazyTruth):
+        return truth.clearance_floor
+    value = truth.get("clearance")
+    return -math.inf if value is None else float(value)
+
+
 def observation(time: float, pose: Pose, v: float, omega: float, scan: Scan | None,
-                stalled: bool, truth: dict[str, Any], inbox: Inbox | None = None
+                stalled: bool, truth: Mapping[str, Any], inbox: Inbox | None = None
                 ) -> Observation:
     """Return ``Observation(time, pose, v, omega, scan, stalled, truth=truth, inbox=inbox)``.
 
@@ -114,9 +185,8 @@ def observation(time: float, pose: Pose, v: float, omega: float, scan: Scan | No
     simulated observation; this fills the same fields at once (motors enabled, no
     battery reading).
     """
-    return _new_observation(time=time, pose=pose, v=v, omega=omega, scan=scan,
-                            stalled=stalled, motors_enabled=True, battery=None, truth=truth,
-                            inbox=inbox)
+    # positional: the fields in order (motors enabled, no battery reading)
+    return _new_observation(time, pose, v, omega, scan, stalled, True, None, truth, inbox)
 
 
 def plain_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, stamp: float,
@@ -125,8 +195,7 @@ def plain_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, stam
 
     For a simulated ladar's scan at every tick (see :func:`observation` for why).
     """
-    return _new_scan(ranges=ranges, bearings=bearings, valid=valid, stamp=stamp,
-                     max_range=max_range, tangents=None, curvatures=None)
+    return _new_scan(ranges, bearings, valid, stamp, max_range, None, None)  # fields in order
 
 
 _new_observation = builder(Observation)

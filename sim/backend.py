@@ -12,7 +12,9 @@ does, and records a :class:`SimEvent`), takes ladar scans at the ladar's own ins
 Observations report odometry as a robot does (REP-105 ``odom`` frame): the pose relative
 to where the robot was at :meth:`SimBackend.reset` (the run's start), which is
 (0, 0, 0). World coordinates are ground truth: ``Observation.truth`` and
-:attr:`SimBackend.true_pose`.
+:attr:`SimBackend.true_pose`. The truth's exact clearance is a distance query over every
+segment, so a step that touched nothing keeps a lower bound instead, and the observation's
+truth (a :class:`mdle.backend.LazyTruth`) measures it only when read.
 
 >>> import math
 >>> from mdle.sim.world import World
@@ -35,12 +37,24 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
 
-from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan, observation
+from mdle.backend import (
+    STOP,
+    ClockMode,
+    Command,
+    LazyTruth,
+    Observation,
+    Pose,
+    RobotLimits,
+    Scan,
+    observation,
+)
 from mdle.errors import BackendError, WorldError
+from mdle.frozen import builder
 from mdle.messages import Inbox
 from mdle.sim.collision import CONTACT, Collider
 from mdle.sim.ladar import Ladar, LadarProfile, ladar_profile
@@ -55,8 +69,15 @@ _TAU = 2.0 * math.pi
 _EPS = 1e-9  # s: instants closer than this are the same instant
 
 
+_PI = math.pi
+
+
 def _wrap(a: float) -> float:
     return (a + math.pi) % _TAU - math.pi
+
+
+_new_pose = builder(Pose)        # Pose(x, y, theta) without the frozen __init__'s cost
+_new_command = builder(Command)  # Command(v, omega), the same
 
 
 @dataclass(frozen=True)
@@ -108,6 +129,9 @@ class SimBackend:
     clock: ClockMode = ClockMode.SIMULATED
     #: What the robot's radio has received (a team member's; None: a robot alone).
     inbox: Inbox | None = None
+    #: A step that touched nothing leaves a lower bound of the clearance; the exact value
+    #: is measured when an observation's truth is read, or when a step needs it.
+    _lazy_clearance = True
 
     def __init__(self, world: World, *, seed: int | None = None,
                  robot: str | RobotProfile | None = None,
@@ -194,6 +218,7 @@ class SimBackend:
         # The server loop (control_cycle): speeds step at the motion instants, reports
         # come on their own clock, commands are read between them (see _advance_cycled).
         self._cycled = prof.control_cycle > 0
+        self._queued = prof.command_latency > 0 or self._cycled   # commands wait (_send)
         self._reports_on = prof.sip_cycle > 0
         if self._cycled:
             clock = self._clock
@@ -240,26 +265,58 @@ class SimBackend:
             ox, oy, oth, v, w = self._report
         else:
             ox, oy, oth, v, w = self._ox, self._oy, self._oth, self._v, self._w
+        pose = _new_pose(ox, oy, (oth + _PI) % _TAU - _PI)      # theta wrapped to [-pi, pi)
+        theta = (self._th + _PI) % _TAU - _PI
+        # The step left a bound of the clearance: measured only if read (LazyTruth).
+        lazy = self._clear_bound
+        truth: dict[str, Any] = (
+            {"x": self._x, "y": self._y, "theta": theta, "collided": self._collided} if lazy
+            else {"x": self._x, "y": self._y, "theta": theta, "clearance": self._clear[0],
+                  "collided": self._collided})
         # a collision since the previous observation: truth["contact"] names it
-        truth: dict[str, Any] = {"x": self._x, "y": self._y, "theta": _wrap(self._th),
-                                    "clearance": self._clear[0], "collided": self._collided}
         if len(self.events) > self._reported:
             e = self.events[self._reported]
             self._reported = len(self.events)
             kind = self._obstacle(e.obstacle)[1]
             truth["contact"] = {"obstacle": e.label, "kind": kind, "index": e.obstacle,
                                 "t": e.time, "x": e.x, "y": e.y}
-        return observation(self._t, Pose(ox, oy, _wrap(oth)), v, w, self._scan, self._stalled,
-                           truth, self.inbox)
+        if lazy:
+            return observation(self._t, pose, v, w, self._scan, self._stalled,
+                               LazyTruth(truth, partial(self._measure_clearance, self._x,
+                                                        self._y), self._clear[0]),
+                               self.inbox)
+        return observation(self._t, pose, v, w, self._scan, self._stalled, truth, self.inbox)
+
+    def _measure_clearance(self, x: float, y: float) -> float:
+        """Return the exact clearance at ``(x, y)``, where the robot was when observed.
+
+        If the robot is still there (a clearance depends on the place only), its next step
+        starts from the exact value.
+        """
+        clear = self._collider.clearance(x, y)
+        if self._clear_bound and self._x == x and self._y == y:
+            self._clear, self._clear_bound = clear, False
+        return clear[0]
 
     def command(self, cmd: Command) -> None:
         """Hold ``cmd`` (clamped to the limits) until the next command."""
         lim = self.limits
-        v = min(max(float(cmd.v), -lim.max_reverse_speed), lim.max_speed)
-        w = min(max(float(cmd.omega), -lim.max_turn_rate), lim.max_turn_rate)
+        v, w = float(cmd.v), float(cmd.omega)
+        # min(max(.)) written out (a NaN stays NaN, and is refused below)
+        if v > lim.max_speed:
+            v = lim.max_speed
+        elif v < -lim.max_reverse_speed:
+            v = -lim.max_reverse_speed
+        if w > lim.max_turn_rate:
+            w = lim.max_turn_rate
+        elif w < -lim.max_turn_rate:
+            w = -lim.max_turn_rate
         if not (math.isfinite(v) and math.isfinite(w)):
             raise BackendError(f"command is not finite: v={cmd.v}, omega={cmd.omega}")
-        self._send(Command(v, w))
+        if self._queued:
+            self._send(_new_command(v, w))
+        else:
+            self._cmd = _new_command(v, w)
 
     def _send(self, cmd: Command) -> None:
         latency = self.profile.command_latency
@@ -418,8 +475,9 @@ class SimBackend:
 
         The held command changes at each ``(time, command)`` of ``switches`` (queued
         commands taking effect inside the step). Only the ``final`` piece of a tick takes
-        an oracle scan and leaves the exact clearance; earlier pieces keep a lower bound of
-        it (the centre moved at most its reach).
+        an oracle scan. A piece that touched nothing leaves a lower bound of the clearance
+        (the centre moved at most its reach), measured exactly when it no longer covers a
+        step or someone reads it (:meth:`observe`, ``_lazy_clearance``).
         """
         t0 = self._t
         # The last ladar instant inside (t0, t1], if any.
@@ -464,9 +522,8 @@ class SimBackend:
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,
         # nothing can be touched this step and one distance query (at the end) suffices.
         reach = 0.0
-        for ph in phases:
-            dur, v0 = ph.duration, ph.v0
-            reach += max(abs(v0), abs(v0 + ph.a_v * dur)) * dur
+        for dur, v0, a_v, _, _ in phases:
+            reach += max(abs(v0), abs(v0 + a_v * dur)) * dur
         safe = clear[0] - CONTACT >= reach
         if not safe and self._clear_bound:
             clear = self._collider.clearance(x, y)   # the sweep needs the exact clearance
@@ -480,14 +537,14 @@ class SimBackend:
                           Phase(ph.duration - cut, ph.v_at(cut), ph.a_v, ph.w_at(cut), ph.a_w)]
             for piece in pieces:
                 if safe:
-                    x, y, th = integrate(x, y, th, piece, piece.duration)
+                    x, y, th = integrate(x, y, th, piece, piece[0])
                 else:
                     r = self._collider.sweep(x, y, th, piece, clear)
                     x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
                     if r.contact:
                         contact = True
                         break
-                t += piece.duration
+                t += piece[0]           # its duration
                 if not scanned and t >= scan_at - 1e-12:
                     self._scanned(self._take_scan(x, y, th, scan_at))
                     scanned = True
@@ -496,9 +553,9 @@ class SimBackend:
             if mark == i + 1:
                 marked = (x, y, th)
         if safe:
-            if final:
+            if final and not self._lazy_clearance:
                 clear = self._settled_clearance(x, y)
-            else:
+            else:       # a lower bound: the centre moved at most `reach`
                 clear = (clear[0] - reach, clear[1])
                 self._clear_bound = True
         if contact:

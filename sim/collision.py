@@ -43,6 +43,8 @@ _TAU = 2.0 * math.pi
 _FEW_ELLIPSES = 8  # up to this many near ellipses, one at a time in plain floats
 _CULL_ABOVE = 256  # segments: larger worlds keep a list of the candidates near the robot
 _NEAR_SLACK = 0.5  # m: the list stays valid while the robot is this close to where it was made
+# 0 and 1 as 0-d arrays: a ufunc takes them far faster than Python floats
+_ZERO, _ONE = np.array(0.0), np.array(1.0)
 
 
 @dataclass(frozen=True)
@@ -166,8 +168,8 @@ class Collider:
         w, r, u = bufs
         np.subtract(q, s0, out=w)
         ur = np.multiply(w, proj, out=r).real          # position of q along each segment
-        np.maximum(ur, 0.0, out=u)
-        np.minimum(u, 1.0, out=u)
+        np.maximum(ur, _ZERO, out=u)
+        np.minimum(u, _ONE, out=u)
         np.multiply(e, u, out=r)
         np.subtract(w, r, out=r)                       # w less its nearest segment point
         return np.abs(r, out=u)

@@ -146,6 +146,7 @@ class Ladar:
         self.rel = rel
         self._noise = np.empty(self.profile.beams)
         self._angles = np.empty(self.profile.beams)
+        self._settling = _Settling.of(self.profile)
 
     def origin(self, x: float, y: float, th: float) -> tuple[float, float]:
         """Return the world position of the ladar on a robot at ``(x, y, th)``."""
@@ -203,7 +204,8 @@ class Ladar:
         ``ranges`` (``max_range`` where not ``valid``) and ``valid`` are new arrays that
         the scan then owns.
         """
-        self.settle(ranges, valid)
+        how = self._settling        # self.settle, written out (a call per scan saved)
+        how.settle(ranges, valid, self.rng.standard_normal(out=self._noise) if how.noisy else None)
         return plain_scan(ranges, self.bearings, valid, stamp, self.profile.max_range)
 
     def settle(self, ranges: np.ndarray, valid: np.ndarray) -> None:
@@ -212,9 +214,8 @@ class Ladar:
         For a scan made before its ranges were final (a team's robots occlude each
         other's scans once all have moved): the same draws as :meth:`finish`.
         """
-        noisy = self.profile.noise != "none" and self.profile.sigma > 0
-        _settle(self.profile, ranges, valid,
-                self.rng.standard_normal(out=self._noise) if noisy else None)
+        how = self._settling
+        how.settle(ranges, valid, self.rng.standard_normal(out=self._noise) if how.noisy else None)
 
 
 def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) -> None:
@@ -228,27 +229,52 @@ def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) 
     p = ladars[0].profile
     if any(lad.profile != p for lad in ladars):
         raise ValueError("settle_rows needs ladars of one profile")
+    how = ladars[0]._settling
     noise = None
-    if p.noise != "none" and p.sigma > 0:
+    if how.noisy:
         noise = np.empty(ranges.shape)
         for lad, row in zip(ladars, noise, strict=True):
             lad.rng.standard_normal(out=row)
-    _settle(p, ranges, valid, noise)
+    how.settle(ranges, valid, noise)
 
 
-def _settle(p: LadarProfile, ranges: np.ndarray, valid: np.ndarray,
-            noise: np.ndarray | None) -> None:
-    """Add the standard normal draws ``noise`` (scaled here), quantise, clip, freeze."""
-    if noise is not None:
-        noise *= p.sigma
-        if p.noise == "relative":
-            noise *= ranges
-        np.add(ranges, noise, out=ranges, where=valid)   # no noise on invalid beams
-    if p.resolution > 0:
-        ranges /= p.resolution
-        np.rint(ranges, out=ranges)
-        ranges *= p.resolution
-    np.maximum(ranges, 0.0, out=ranges)
-    np.minimum(ranges, p.max_range, out=ranges)
-    ranges.setflags(write=False)
-    valid.setflags(write=False)
+@dataclass(frozen=True)
+class _Settling:
+    """What :meth:`Ladar.settle` applies to a profile's scans.
+
+    The noise, quantum and range limit as 0-d arrays: a ufunc takes them far faster than
+    Python floats.
+    """
+
+    noisy: bool
+    relative: bool
+    sigma: np.ndarray
+    resolution: np.ndarray | None
+    zero: np.ndarray
+    max_range: np.ndarray
+
+    @classmethod
+    def of(cls, p: LadarProfile) -> _Settling:
+        """Return the settling of profile ``p``."""
+        return cls(p.noise != "none" and p.sigma > 0, p.noise == "relative",
+                   np.array(float(p.sigma)),
+                   np.array(float(p.resolution)) if p.resolution > 0 else None,
+                   np.array(0.0), np.array(float(p.max_range)))
+
+    def settle(self, ranges: np.ndarray, valid: np.ndarray, noise: np.ndarray | None
+               ) -> None:
+        """Add the standard normal draws ``noise`` (scaled here), quantise, clip, freeze."""
+        if noise is not None:
+            noise *= self.sigma
+            if self.relative:
+                noise *= ranges
+            noise *= valid                  # no noise on invalid beams (adding 0 keeps them)
+            ranges += noise
+        if self.resolution is not None:
+            ranges /= self.resolution
+            np.rint(ranges, out=ranges)
+            ranges *= self.resolution
+        np.maximum(ranges, self.zero, out=ranges)
+        np.minimum(ranges, self.max_range, out=ranges)
+        ranges.setflags(write=False)
+        valid.setflags(write=False)

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from functools import cache
 from typing import TYPE_CHECKING, Any, NamedTuple
 
 from mdle.backend import RobotLimits
@@ -39,16 +38,13 @@ __all__ = [
 
 
 
-@cache
-def _gauss_legendre() -> tuple[tuple[float, float], ...]:
-    """Return the 8 Gauss-Legendre nodes and weights.
-
-    Made on first use: reading a profile, as ``mdle check`` does, needs no numpy.
-    """
-    import numpy as np
-
-    nodes, weights = np.polynomial.legendre.leggauss(8)
-    return tuple((float(x), float(w)) for x, w in zip(nodes, weights, strict=True))
+#: The 8 Gauss-Legendre nodes and weights on [-1, 1] (numpy's ``leggauss(8)``, written out
+#: so that reading a profile, as ``mdle check`` does, needs no numpy; a test compares them).
+GAUSS_LEGENDRE_8: tuple[tuple[float, float], ...] = (
+    (-0.9602898564975362, 0.10122853629037706), (-0.7966664774136267, 0.22238103445337443),
+    (-0.525532409916329, 0.3137066458778869), (-0.18343464249564978, 0.36268378337836166),
+    (0.18343464249564978, 0.36268378337836166), (0.525532409916329, 0.3137066458778869),
+    (0.7966664774136267, 0.22238103445337443), (0.9602898564975362, 0.10122853629037706))
 
 
 _MAX_TURN_PER_PIECE = 0.25  # rad: keeps the quadrature error far below 1e-12
@@ -266,6 +262,8 @@ class Phase(NamedTuple):
         return max(abs(self.v0), abs(self.v0 + self.a_v * self.duration))
 
 
+_new_phase = tuple.__new__  # a Phase without the named tuple's Python-level __new__
+
 #: How the firmware ramps towards a command (the profile's ``ramp``).
 RAMPS = ("firmware", "stage")
 
@@ -300,16 +298,20 @@ def ramp_step(cur: float, target: float, accel: float, decel: float, ramp: str, 
     return cur + math.copysign(step, diff)
 
 
-def _ramp(cur: float, target: float, accel: float, decel: float, ramp: str
-          ) -> tuple[float, float]:
-    """Return (rate, time to reach) for one axis; slowing down uses ``decel``."""
+def _ramp(cur: float, target: float, accel: float, decel: float, stage: bool
+          ) -> tuple[float, float, float]:
+    """Return (start, signed rate, time to reach) for one axis, as :func:`ramp_rate` ramps.
+
+    An infinite rate jumps: the start is then the target (rate and time 0). Written out
+    rather than calling ramp_rate: a tick plans once per step, and a call costs more.
+    """
     diff = target - cur
     if diff == 0.0:
-        return 0.0, 0.0
-    rate = ramp_rate(cur, target, accel, decel, ramp)
-    if not math.isfinite(rate):
-        return math.inf, 0.0
-    return math.copysign(rate, diff), abs(diff) / rate
+        return cur, 0.0, 0.0
+    rate = math.inf if stage and cur > 0 > target else decel if cur * diff < 0 else accel
+    if math.isfinite(rate):
+        return cur, math.copysign(rate, diff), abs(diff) / rate
+    return target, 0.0, 0.0
 
 
 def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
@@ -319,12 +321,9 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
     Returns the phases and the speed and turn rate at the end.
     Infinite accelerations jump to the command at the start.
     """
-    av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel, profile.ramp)
-    aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_decel, profile.ramp)
-    if math.isinf(av):
-        v, av, tv = v_cmd, 0.0, 0.0
-    if math.isinf(aw):
-        w, aw, tw = w_cmd, 0.0, 0.0
+    stage = profile.ramp == "stage"
+    v, av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel, stage)
+    w, aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_decel, stage)
     # The cuts 0 < ... < dt: where each ramp ends inside the step (once if both end together).
     cuts = [0.0]
     inside_v, inside_w = 0.0 < tv < dt, 0.0 < tw < dt
@@ -343,17 +342,11 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
         a_w = aw if t0 < tw else 0.0
         v0 = v_cmd if t0 >= tv > 0 else v + av * t0
         w0 = w_cmd if t0 >= tw > 0 else w + aw * t0
-        phases.append(Phase(t1 - t0, v0, a_v, w0, a_w))
+        phases.append(_new_phase(Phase, (t1 - t0, v0, a_v, w0, a_w)))
         t0 = t1
     v_end = v_cmd if tv <= dt else v + av * dt
     w_end = w_cmd if tw <= dt else w + aw * dt
     return phases, v_end, w_end
-
-
-def _sinc(x: float) -> float:
-    if abs(x) < 1e-4:
-        return 1.0 - x * x / 6.0
-    return math.sin(x) / x
 
 
 def integrate(x: float, y: float, th: float, phase: Phase, tau: float
@@ -361,30 +354,44 @@ def integrate(x: float, y: float, th: float, phase: Phase, tau: float
     """Return the pose after ``tau`` seconds of ``phase`` from ``(x, y, th)`` (exact)."""
     if tau <= 0.0:
         return x, y, th
-    if phase.a_v == 0.0 and phase.a_w == 0.0:
-        dth = phase.w0 * tau
-        chord = phase.v0 * tau * _sinc(dth / 2.0)
-        mid = th + dth / 2.0
-        return x + chord * math.cos(mid), y + chord * math.sin(mid), th + dth
+    _, v0, av, w0, aw = phase
+    cos, sin = math.cos, math.sin
+    if av == 0.0 and aw == 0.0:
+        dth = w0 * tau
+        half_turn = dth / 2.0
+        # The chord of the arc: v tau sinc(dth / 2), sinc by its series near 0.
+        sinc = (1.0 - half_turn * half_turn / 6.0 if abs(half_turn) < 1e-4
+                else sin(half_turn) / half_turn)
+        chord = v0 * tau * sinc
+        mid = th + half_turn
+        return x + chord * cos(mid), y + chord * sin(mid), th + dth
     # Ramp: theta(t) is quadratic; integrate v cos(theta), v sin(theta) piecewise with
     # Gauss-Legendre nodes (plain floats: a tick has one or two pieces, numpy would cost more).
-    v0, av, w0, aw = phase.v0, phase.a_v, phase.w0, phase.a_w
     turn = abs(w0) * tau + 0.5 * abs(aw) * tau * tau
     pieces = max(1, math.ceil(turn / _MAX_TURN_PER_PIECE))
     h = tau / pieces
     half = h / 2.0
     haw = 0.5 * aw                  # (0.5 * aw) * t * t: the same rounding as written out
-    cos, sin = math.cos, math.sin
     dx = dy = 0.0
-    gl = _gauss_legendre()
-    for i in range(pieces):
-        mid = i * h + half
-        for xg, wg in gl:
-            t = mid + half * xg
-            a = th + w0 * t + haw * t * t
-            vw = (v0 + av * t) * wg
-            dx += vw * cos(a)
-            dy += vw * sin(a)
+    if av == 0.0:
+        # Constant speed: (v0 + 0 t) wg is v0 wg.
+        for i in range(pieces):
+            mid = i * h + half
+            for xg, wg in GAUSS_LEGENDRE_8:
+                t = mid + half * xg
+                a = th + w0 * t + haw * t * t
+                vw = v0 * wg
+                dx += vw * cos(a)
+                dy += vw * sin(a)
+    else:
+        for i in range(pieces):
+            mid = i * h + half
+            for xg, wg in GAUSS_LEGENDRE_8:
+                t = mid + half * xg
+                a = th + w0 * t + haw * t * t
+                vw = (v0 + av * t) * wg
+                dx += vw * cos(a)
+                dy += vw * sin(a)
     dx *= half
     dy *= half
     return x + dx, y + dy, th + w0 * tau + haw * tau * tau

@@ -107,6 +107,10 @@ class Member(SimBackend):
     moves it. :attr:`radio` takes what its plan sends.
     """
 
+    # The team folds the other robots into every clearance once all have moved (TeamSim
+    # step): a step ends with the walls' exact clearance, never a bound.
+    _lazy_clearance = False
+
     def __init__(self, team: "TeamSim", index: int, world: World, place: RobotPlace,
                  seed: int, sensing: str) -> None:
         self.team = team

@@ -24,7 +24,7 @@ from types import MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import Context
-from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose
+from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose, clearance_floor
 from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
 from mdle.lang import AtomNode, Element, Send, StringNode
 from mdle.runtime.events import (
@@ -448,10 +448,13 @@ class Scheduler:
         self._pose = pose
         truth = obs.truth
         if truth:
-            clearance = truth.get("clearance")
-            if clearance is not None and (self._min_clearance is None
-                                          or clearance < self._min_clearance):
-                self._min_clearance = float(clearance)
+            # a backend's bound of the clearance that is no lower than the least so far
+            # cannot make a new least: then the exact value need not be measured
+            least = self._min_clearance
+            if least is None or clearance_floor(truth) < least:
+                clearance = truth.get("clearance")
+                if clearance is not None and (least is None or clearance < least):
+                    self._min_clearance = float(clearance)
             if truth.get("collided"):
                 self._collided = True
             reported = truth.get("contact")

@@ -96,6 +96,28 @@ def test_ramps_match_a_fine_reference() -> None:
     assert abs(x - rx) < 1e-7 and abs(y - ry) < 1e-7 and abs(th - rth) < 1e-9
 
 
+def test_a_turn_ramp_at_constant_speed_matches_simpson() -> None:
+    # The constant-speed branch of the quadrature (the usual tick of a following robot),
+    # over several pieces, against composite Simpson on theta(t) in closed form.
+    ph = Phase(duration=0.9, v0=0.5, a_v=0.0, w0=0.2, a_w=1.7)
+    x, y, th = integrate(1.0, -2.0, 0.3, ph, 0.9)
+    t = np.linspace(0.0, 0.9, 200001)
+    a = 0.3 + 0.2 * t + 0.85 * t * t
+    wts = np.ones_like(t)
+    wts[1:-1:2], wts[2:-1:2] = 4.0, 2.0
+    h = t[1] - t[0]
+    assert math.isclose(x, 1.0 + h / 3 * float(wts @ (0.5 * np.cos(a))), abs_tol=1e-12)
+    assert math.isclose(y, -2.0 + h / 3 * float(wts @ (0.5 * np.sin(a))), abs_tol=1e-12)
+    assert th == 0.3 + 0.2 * 0.9 + 0.85 * 0.9 * 0.9
+
+
+def test_the_written_out_gauss_legendre_nodes_are_numpys() -> None:
+    from mdle.sim.robot import GAUSS_LEGENDRE_8
+
+    nodes, weights = np.polynomial.legendre.leggauss(8)
+    assert GAUSS_LEGENDRE_8 == tuple(zip(nodes.tolist(), weights.tolist(), strict=True))
+
+
 def test_acceleration_limit_of_the_pioneer() -> None:
     b = SimBackend(World("open"), robot="pioneer2dx")
     b.command(Command(0.3, 0.0))

@@ -248,3 +248,18 @@ def test_settling_scans_as_one_block_draws_and_rounds_as_each_ladar_alone() -> N
     with pytest.raises(ValueError, match="one profile"):
         settle_rows([Ladar(LMS200, rng), Ladar(LMS200_IDEAL, rng)], ranges.copy(),
                     valid.copy())
+
+
+def test_a_half_turn_fan_sees_a_face_that_wraps_round_behind_it() -> None:
+    # A face passing within 1e-9 m of the ladar, from its left beam round behind it to past
+    # its right beam: its bearing interval, measured from the fan's reference direction,
+    # ends more than a turn up, so its copy one turn down holds the first beam. A half
+    # turn (the LMS-200's fan) must check for that, as wider fans do.
+    h = 5e-4
+    world = World("w", obstacles=(Wall(((-4e-10 - h, 5.0), (2e-10 - h, -5.0)), 2 * h),))
+    rel = np.linspace(0.0, math.pi, 181)
+    ranges, hit = world.caster.fan(rel, 10.0).cast(0.0, 0.0, -math.pi / 2)
+    want = world.caster.cast(np.array([0.0, 0.0]), -math.pi / 2 + rel, 10.0, detail=False,
+                             rel=rel)
+    assert hit[0] and np.array_equal(hit, want.hit)
+    np.testing.assert_allclose(ranges[hit], want.ranges[hit], rtol=0, atol=1e-9)
