@@ -111,8 +111,7 @@ class _Layout:
     the scan. ``gap`` is the depth gap always accepted
     between neighbours (m), ``gaps`` that gap per neighbouring pair (numpy takes the larger
     of two arrays for less than of an array and a scalar), ``cl`` the front beam's place
-    in ``take``, ``powers`` the exponents of the side fit's moments
-    (:func:`atoms.ray_fits.side_ray`).
+    in ``take``.
     """
 
     c: int
@@ -127,7 +126,6 @@ class _Layout:
     gap: float
     gaps: np.ndarray
     cl: int
-    powers: np.ndarray
 
 
 @lru_cache(maxsize=32)
@@ -159,11 +157,10 @@ def _layout(key: bytes, left: bool, side_span: float, wmax: int) -> _Layout:
     np.sin(bl, out=unit.imag)
     spacing = DEFAULT_GAP_FACTOR * np.abs(bl[1:] - bl[:-1])
     gaps = np.full(spacing.size, DEFAULT_GAP)
-    powers = np.array([[1.0], [2.0], [3.0]])
-    for a in (take, unit, spacing, gaps, powers):
+    for a in (take, unit, spacing, gaps):
         a.setflags(write=False)
     return _Layout(c, c_ok, s_ok, n_span, n_side, f0, take, unit, spacing, DEFAULT_GAP, gaps,
-                   n_side + c - f0, powers)
+                   n_side + c - f0)
 
 
 def _layout_of(bearings: Any, left: bool, side_span: float, windows: tuple[Any, ...]
@@ -262,8 +259,7 @@ def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span:
     links = (np.abs(z[1:] - z[:-1]) < lim).tobytes()
     if side_hit:  # the side run: beams 0 .. end0 linked from beam 0
         end0 = links.find(0, 0, ns - 1)
-        side_ray = _side_ray(z[:min(end0 if end0 >= 0 else ns - 1, lay.n_span) + 1], r0,
-                             lay.powers)
+        side_ray = _side_ray(z[:min(end0 if end0 >= 0 else ns - 1, lay.n_span) + 1], r0)
     if front_hit:  # the front run: linked beams before and after the front beam
         k = links.rfind(0, ns, cl)
         right = cl - 1 - k if k >= 0 else cl - ns

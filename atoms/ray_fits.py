@@ -23,11 +23,10 @@ __all__ = ["side_ray", "front_ray"]
 _ray = builder(Ray)
 
 
-def side_ray(z: "np.ndarray", r0: float, powers: "np.ndarray") -> "Ray":
+def side_ray(z: "np.ndarray", r0: float) -> "Ray":
     """Fit the side ray to the first surface's beams 0..n (beam 0 at -90 deg), all valid.
 
-    ``z`` holds their points as complex ``x + iy`` in the law frame; ``powers`` is the column
-    ``(1, 2, 3)`` (a bearing layout's constant).
+    ``z`` holds their points as complex ``x + iy`` in the law frame.
 
     A quadratic ``h = a + b s + c s^2`` is fitted by least squares in the frame of the
     total-least-squares line through the points (centred), and its slope and curvature are
@@ -39,10 +38,11 @@ def side_ray(z: "np.ndarray", r0: float, powers: "np.ndarray") -> "Ray":
     Both fits are closed-form moments (no SVD), about ten numpy calls: the line's direction
     is half the angle of ``sum(q^2)`` (``q`` the centred points as complex numbers,
     ``sum(q^2) = sxx - syy + 2i sxy``). In that frame ``sum s = sum h = sum s h = 0`` (centred,
-    principal axes), so the quadratic's normal equations need only ``sum s^2``, ``sum s^3``,
-    ``sum s^4`` and ``sum s^2 h``: one product of the rows ``s, s^2, s^3`` with the complex
-    ``s + i h``. Cramer's rule on them is two lines. When they are singular (fewer
-    than three distinct abscissae) the minimum-norm solution of :func:`_side_fit_lstsq`.
+    principal axes), so the quadratic's normal equations need only ``sum s^2`` (from
+    ``sum |q|^2`` and ``|sum q^2|``), ``sum s^3 + i sum s^2 h`` (one dot product of ``s^2``
+    with the complex ``s + i h``) and ``sum s^4``; Cramer's rule on them is two lines. When
+    they are singular (fewer than three distinct abscissae) the minimum-norm solution of
+    :func:`_side_fit_lstsq`.
     """
     import numpy as np
 
@@ -58,10 +58,12 @@ def side_ray(z: "np.ndarray", r0: float, powers: "np.ndarray") -> "Ray":
     ang = 0.5 * math.atan2(sq.imag, sq.real)
     w = q * complex(math.cos(ang), -math.sin(ang))  # s + i h in the line's frame
     first, last = w[::m - 1].tolist()
-    # one product of the rows s, s^2, s^3 with s + i h gives every moment the fit needs
-    m1, m2, m3 = np.dot(w.real ** powers, w).tolist()
-    s2, s3, b2, s4 = m1.real, m2.real, m2.imag, m3.real  # sums s^2, s^3, s^2 h, s^4
-    s0 = first.real
+    s = w.real
+    t = s * s  # (a product: pow is many times slower per element)
+    s3b2 = complex(np.dot(t, w))  # sum s^3 + i sum s^2 h
+    s4 = float(np.dot(t, t))
+    s2 = 0.5 * (float(np.vdot(q, q).real) + abs(sq))  # sum s^2 (sum s^2 - sum h^2 = |sq|)
+    s0, s3, b2 = first.real, s3b2.real, s3b2.imag
     if last.real < s0:  # orient the line first -> last point: s and h change sign
         ang += math.pi
         s0, s3, b2 = -s0, -s3, -b2
