@@ -179,7 +179,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                                        ctx.limits.max_turn_accel)
         if moved != _STILL:
             front, side = shift_front(front, moved), shift_side(side, moved)
-    z = safety.as_complex(scan_points_cached(ctx))
+    z = scan_points_complex(ctx)  # the safety layer and the corner search read complex points
     if moved != _STILL:
         z = _into(z, moved[0], sgn * moved[1], sgn * moved[2])
     u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
