@@ -15,8 +15,8 @@ which stay meaningful on a loaded machine. Last, a whole controlled tick is time
     python benchmarks/follow.py --split
 
 times the controlled tick's parts instead: the backend's observe, command and advance, and
-the exact clearance it measures when the scheduler reads it (together the simulator's share,
-target 45 us), the atom's step, and the rest (the scheduler).
+the exact clearance it measures when the scheduler reads it (together the simulator's
+share), the atom's step, and the rest (the scheduler).
 
     python benchmarks/follow.py --instructions
 
@@ -26,27 +26,21 @@ replayed under callgrind with 0 and with ``--rounds`` passes, and the controlled
 0 and ``--controlled`` ticks; the difference per tick is the part's own count. The replayed
 scans share one read-only bearing array, as the simulator's and the drivers' do.
 
-Figures (callgrind, Python 3.11, numpy 2.4): the whole step 484 k instructions per tick
-(boundary view 198 k, scan points 54 k, the rest 232 k), against 701 k before the numeric
-helpers were trimmed (625 k, 83 us quiet, with the earlier law); the controlled tick
-1.12 M (1.34 M before), 1.08 M once the simulator's tick was trimmed (500 ticks, with
-``OPENBLAS_NUM_THREADS=1`` so that idle BLAS threads add no count). The law, latency
-bookkeeping and safety layer (the rest) then went from 193 k to 117 k (scan points as
-complex numbers through the safety layer, the CLF law's clamps written out), the whole step
-from 444 k to 367 k, the controlled tick from 1.09 M to 0.97 M. Separately, trimming the
-simulator's scan, ramp quadrature and observation, and measuring its exact clearance only
-when read, took the controlled tick from 1.088 M to 0.994 M (with the atom as it was before
-the step's trimming above). The same controlled run with the atom's step replaced by its
-recorded commands (the simulator and the scheduler alone) counts 0.437 M against 0.531 M:
-the simulator's share, about 0.51 M before, is about 0.41 M (0.81x); its scan is about
-0.28 M of that (the fan cast 0.22 M, 25 numpy calls). Both together: 0.878 M per
-controlled tick (0.974 M with the step's trimming alone, same run).
-The sensing (view and scan points) then went from 250 k (view 198 k, scan points 53 k,
-each computing its own masked points) to 179 k for both together (0.71x; the view alone
-167 k, the points alone 61 k, as each now computes the tick's shared masked points): the
-whole step 308 k, the controlled tick 0.81 M (with both trimmings). Timed quiet (load 0.3,
-best of 5): view + scan points 21.1 us against 30.4 us, the whole step 39.0 us against
-50.1 us.
+Figures (Python 3.11, numpy 2.4; callgrind with ``OPENBLAS_NUM_THREADS=1`` so that idle
+BLAS threads add no count; wall time on a quiet machine, load 0.8, best of 5):
+
+    per tick                              wall      callgrind   last release
+    step (replay)                         37.5 us   295 k       66 us, 444 k
+      view + scan points                  21.4 us   178 k       30 us, 250 k
+      law + latency + safety layer        16.1 us   117 k       32 us, 193 k
+    controlled tick (500 ticks)           131 us    806 k       197 us, 1.07 M
+      simulator (--split, median of 5)    64 us                 75-89 us
+      the atom's step                     64 us                 99-126 us
+      the scheduler                       8 us                  7-9 us
+
+The step costs more in the controlled run than in the replay: the room returns a point on
+most beams, the front ray hits in 74 % of the ticks and corner mode runs in 38 %
+(docs/steering.md, "Limits and known weak points", says what remains).
 """
 
 from __future__ import annotations
