@@ -269,10 +269,10 @@ class SimBackend:
         theta = (self._th + _PI) % _TAU - _PI
         # The step left a bound of the clearance: measured only if read (LazyTruth).
         lazy = self._clear_bound
-        truth: dict[str, Any] = (
-            {"x": self._x, "y": self._y, "theta": theta, "collided": self._collided} if lazy
-            else {"x": self._x, "y": self._y, "theta": theta, "clearance": self._clear[0],
-                  "collided": self._collided})
+        truth: dict[str, Any] = {"x": self._x, "y": self._y, "theta": theta,
+                                 "collided": self._collided}
+        if not lazy:
+            truth["clearance"] = self._clear[0]
         # a collision since the previous observation: truth["contact"] names it
         if len(self.events) > self._reported:
             e = self.events[self._reported]
@@ -319,9 +319,8 @@ class SimBackend:
             self._cmd = _new_command(v, w)
 
     def _send(self, cmd: Command) -> None:
-        latency = self.profile.command_latency
-        if latency > 0 or self._cycled:
-            self._pending.append((self._t + latency, cmd))
+        if self._queued:
+            self._pending.append((self._t + self.profile.command_latency, cmd))
         else:
             self._cmd = cmd
 

@@ -204,8 +204,7 @@ class Ladar:
         ``ranges`` (``max_range`` where not ``valid``) and ``valid`` are new arrays that
         the scan then owns.
         """
-        how = self._settling        # self.settle, written out (a call per scan saved)
-        how.settle(ranges, valid, self.rng.standard_normal(out=self._noise) if how.noisy else None)
+        self.settle(ranges, valid)
         return plain_scan(ranges, self.bearings, valid, stamp, self.profile.max_range)
 
     def settle(self, ranges: np.ndarray, valid: np.ndarray) -> None:

@@ -298,17 +298,16 @@ def ramp_step(cur: float, target: float, accel: float, decel: float, ramp: str, 
     return cur + math.copysign(step, diff)
 
 
-def _ramp(cur: float, target: float, accel: float, decel: float, stage: bool
+def _ramp(cur: float, target: float, accel: float, decel: float, ramp: str
           ) -> tuple[float, float, float]:
     """Return (start, signed rate, time to reach) for one axis, as :func:`ramp_rate` ramps.
 
-    An infinite rate jumps: the start is then the target (rate and time 0). Written out
-    rather than calling ramp_rate: a tick plans once per step, and a call costs more.
+    An infinite rate jumps: the start is then the target (rate and time 0).
     """
     diff = target - cur
     if diff == 0.0:
         return cur, 0.0, 0.0
-    rate = math.inf if stage and cur > 0 > target else decel if cur * diff < 0 else accel
+    rate = ramp_rate(cur, target, accel, decel, ramp)
     if math.isfinite(rate):
         return cur, math.copysign(rate, diff), abs(diff) / rate
     return target, 0.0, 0.0
@@ -321,9 +320,8 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
     Returns the phases and the speed and turn rate at the end.
     Infinite accelerations jump to the command at the start.
     """
-    stage = profile.ramp == "stage"
-    v, av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel, stage)
-    w, aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_decel, stage)
+    v, av, tv = _ramp(v, v_cmd, profile.max_accel, profile.max_decel, profile.ramp)
+    w, aw, tw = _ramp(w, w_cmd, profile.max_turn_accel, profile.max_turn_decel, profile.ramp)
     # The cuts 0 < ... < dt: where each ramp ends inside the step (once if both end together).
     cuts = [0.0]
     inside_v, inside_w = 0.0 < tv < dt, 0.0 < tw < dt
