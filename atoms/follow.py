@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.atoms import safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
-from mdle.atoms.latency import shift_front, shift_side
+from mdle.atoms.latency import STILL, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.backend import Command
 from mdle.frozen import builder
@@ -168,7 +168,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     sgn = -1.0 if left else 1.0
     law_pose = (pose.x, sgn * pose.y, sgn * pose.theta)
     front, side = view.front, view.side
-    moved = _STILL
+    moved = STILL
     pred = state.predictor
     if pred is not None and state.latency is not None:
         # answer the boundary as it will be when this command acts, not as it was scanned
@@ -177,10 +177,10 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         moved, law_pose = pred.predict(obs.time, stamp, law_pose, obs.v, sgn * obs.omega,
                                        state.latency, ctx.limits.max_accel,
                                        ctx.limits.max_turn_accel)
-        if moved != _STILL:
+        if moved != STILL:
             front, side = shift_front(front, moved), shift_side(side, moved)
     z = scan_points_complex(ctx)  # the safety layer and the corner search read complex points
-    if moved != _STILL:
+    if moved != STILL:
         z = _into(z, moved[0], sgn * moved[1], sgn * moved[2])
     u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                       g.umax, filter_kappa=not view.exact,
@@ -211,7 +211,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
         "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
         "mode": _MODE_CODES[mem.mode],
-        "lost": 0.0 if mem.seen is None else max(ctx.t - mem.seen_at, 0.0),  # lost_for
+        "lost": mem.lost_for(ctx.t),
         "u_law": u_law,
         "safety": float(u != u_law or v != v_law),
         "predicted_clearance": clearance if clearance < math.inf else -1.0,
@@ -219,8 +219,6 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     return _command(v, u)
 
 
-#: No motion since the scan (the predictor's answer without latency or scan age).
-_STILL = (0.0, 0.0, 0.0)
 _command = builder(Command)
 
 

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 from mdle.atoms.steering import MISS, Ray, wrap
 
-__all__ = ["Predictor", "shift_front", "shift_side", "compose"]
+__all__ = ["Predictor", "shift_front", "shift_side", "compose", "STILL"]
 
 Pose3 = tuple[float, float, float]
 
@@ -37,8 +37,8 @@ Pose3 = tuple[float, float, float]
 _HISTORY = 2.0
 #: Times closer than this (s) are the same moment.
 _SAME_TIME = 1e-9
-#: No motion.
-_NONE: Pose3 = (0.0, 0.0, 0.0)
+#: No motion (what :meth:`Predictor.predict` answers for a scan taken now, without latency).
+STILL: Pose3 = (0.0, 0.0, 0.0)
 #: Integration step of the in-flight motion (s).
 _STEP = 0.02
 #: A ray whose hit would move further than this along the boundary is dropped (m): the local
@@ -134,7 +134,7 @@ class Predictor:
         # a scan stamped now (to the clock's rounding: a stamp and a time summed from the same
         # ticks differ in the last bits) was taken here: no motion since, nothing to look up
         seen = self.pose_at(stamp) if stamp < now - _SAME_TIME else None
-        start = _NONE if seen is None else _relative(seen, pose)
+        start = STILL if seen is None else _relative(seen, pose)
         if latency <= 0:
             return start, pose
         n = max(1, math.ceil(latency / _STEP))

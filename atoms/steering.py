@@ -232,10 +232,7 @@ def clf_law(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -
         cap = (1.0 - g.conc_margin) * cb / rs
         ks = cap if cap < ks else ks
         as_ = 1.0 - ks * rs / cb
-        fmax = g.fmax
-        f = g.kf * (rs - rc)
-        f = -fmax if -fmax > f else f
-        f = fmax if fmax < f else f
+        f = f_gain(rs, rc, g)
         if g.scaled_damping and not fhit and ks < 0.0:
             # near rc the distance term acts through 1 / (1 - ks rs)^2, which softens the
             # return to rc on a convex curve (2.25x on radius 1 at rc 0.5): restore the wall's
