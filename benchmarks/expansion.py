@@ -26,7 +26,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.append(str(Path(__file__).resolve().parent.parent))  # the installed mdle wins
 
 from mdle.atoms.registry import Args, Context, Param, Registry, sensor  # noqa: E402 (after the path fix)
 from mdle.units import LENGTH  # noqa: E402

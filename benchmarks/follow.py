@@ -10,7 +10,9 @@ latency bookkeeping and the safety layer are the difference. Each figure is the 
 ``--repeat`` rounds, in microseconds per tick; the shares are ratios within the process,
 which stay meaningful on a loaded machine. Last, a whole controlled tick is timed
 (simulator, atom and scheduler: ``follow_boundary`` at 0.3 m/s on the default robot in the
-100-segment world of ``benchmarks/sim.py``, a scan every tick at 10 Hz; target 120 us).
+100-segment world of ``benchmarks/sim.py``, a scan every tick at 10 Hz; target 120 us), in
+rounds that alternate between the install's compiled simulator loops and numpy's (the same
+numbers), and the ratio of the two is printed.
 
     python benchmarks/follow.py --split
 
@@ -27,16 +29,17 @@ replayed under callgrind with 0 and with ``--rounds`` passes, and the controlled
 scans share one read-only bearing array, as the simulator's and the drivers' do.
 
 Figures (Python 3.11, numpy 2.4; callgrind with ``OPENBLAS_NUM_THREADS=1`` so that idle
-BLAS threads add no count; wall time on a quiet machine, load 0.8, best of 5):
+BLAS threads add no count; wall time on a quiet machine, load 0.2, best of 5):
 
     per tick                              wall      callgrind   last release
-    step (replay)                         37.5 us   295 k       66 us, 444 k
+    step (replay)                         37.6 us   295 k       66 us, 444 k
       view + scan points                  21.4 us   178 k       30 us, 250 k
-      law + latency + safety layer        16.1 us   117 k       32 us, 193 k
-    controlled tick (500 ticks)           131 us    806 k       197 us, 1.07 M
-      simulator (--split, median of 5)    64 us                 75-89 us
-      the atom's step                     64 us                 99-126 us
-      the scheduler                       8 us                  7-9 us
+      law + latency + safety layer        16.2 us   117 k       32 us, 193 k
+    controlled tick (500 ticks)           101 us    642 k       197 us, 1.07 M
+      with numpy's simulator loops        132 us    808 k
+      simulator (--split, median of 5)    38.5 us               75-89 us
+      the atom's step                     60 us                 99-126 us
+      the scheduler                       6.7 us                7-9 us
 
 The step costs more in the controlled run than in the replay: the room returns a point on
 most beams, the front ray hits in 74 % of the ticks and corner mode runs in 38 %
@@ -62,8 +65,10 @@ from pathlib import Path
 from typing import Any
 
 # A script's folder comes first on sys.path: keep benchmarks/*.py from shadowing packages.
+# The checkout's root goes last: the installed mdle (with its compiled fan cast) wins, and
+# a checkout where mdle is not installed still runs.
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__).resolve().parent]
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.append(str(Path(__file__).resolve().parents[1]))
 
 from mdle import sim  # noqa: E402 (after the sys.path fix)
 from mdle.atoms import follow as follow_module  # noqa: E402 (after the sys.path fix)
@@ -73,6 +78,7 @@ from mdle.atoms.registry import Context  # noqa: E402 (after the sys.path fix)
 from mdle.backend import Observation  # noqa: E402 (after the sys.path fix)
 from mdle.lang import load_text  # noqa: E402 (after the sys.path fix)
 from mdle.runtime import Scheduler, run  # noqa: E402 (after the sys.path fix)
+from mdle.sim.raycast import COMPILED  # noqa: E402 (after the sys.path fix)
 
 ARGS: dict[str, Any] = {"side": "right", "rc": 0.5, "v": 1.0, "zeta": 1.0, "kf": 0.5,
                         "umax": math.inf, "tau": 0.2, "margin": 0.15, "lookahead": 0.8,
@@ -125,18 +131,19 @@ def _per_tick(obs: list[Observation], backend: sim.SimBackend,
     return (time.perf_counter() - t0) / len(obs) * 1e6
 
 
-def _controlled() -> Scheduler:
+def _controlled(compiled: bool | None = None) -> Scheduler:
     """Return a scheduler running ``follow_boundary`` on the simulator, after its first tick.
 
     The 100-segment world of ``benchmarks/sim.py`` (boxes at fixed density in a room), its
     default robot (pioneer2dx), a noisy LMS-200 scan every tick at 10 Hz, no observers.
+    ``compiled``: the fan cast's loop, as :class:`mdle.sim.SimBackend` takes it.
     """
     here = Path(__file__).with_name("sim.py")  # not importable as `sim`: that is the package
     spec = importlib.util.spec_from_file_location("sim_benchmark", here)
     assert spec is not None and spec.loader is not None
     worlds = sys.modules.setdefault(spec.name, importlib.util.module_from_spec(spec))
     spec.loader.exec_module(worlds)
-    backend = sim.SimBackend(worlds.scattered_world(100), seed=0)
+    backend = sim.SimBackend(worlds.scattered_world(100), seed=0, compiled=compiled)
     program = load_text("atom f = (follow_boundary(side = right, rc = 0.5 m, v = 0.3 m/s), "
                         "never, inf)\nplan main = ((f), never, inf)\n")
     sch = Scheduler(program.elements["main"], backend, 1 / CONTROLLED_DT, [], stall_timeout=None)
@@ -285,8 +292,8 @@ def _controlled_split(ticks: int) -> dict[str, float]:
     return out
 
 
-def _controlled_us(ticks: int) -> float:
-    sch = _controlled()
+def _controlled_us(ticks: int, compiled: bool | None = None) -> float:
+    sch = _controlled(compiled)
     t0 = time.perf_counter()
     _controlled_ticks(sch, ticks)
     return (time.perf_counter() - t0) / ticks * 1e6
@@ -333,9 +340,21 @@ def main() -> None:
     print(f"  law + latency + safety layer   {rest:7.1f} us/tick")
     print(f"whole step: {whole / 60.0:.2f}x the 60 us target")
     if a.controlled:
-        us = min(_controlled_us(a.controlled) for _ in range(a.repeat))
+        # Rounds alternate between the install's fan cast and numpy's (the same numbers),
+        # so that the ratio of the two is taken under the same load.
+        runs: dict[bool | None, list[float]] = {None: [], False: []}
+        for _ in range(a.repeat):
+            for compiled, times in runs.items():
+                if compiled is None or COMPILED:
+                    times.append(_controlled_us(a.controlled, compiled))
+        us = min(runs[None])
+        how = "compiled" if COMPILED else "numpy (no compiled fan cast in this install)"
         print(f"{CONTROLLED}: {us:.1f} us/tick, best of {a.repeat} runs of {a.controlled} "
-              f"ticks (target: 120 us)")
+              f"ticks (target: 120 us); fan cast: {how}")
+        if runs[False]:
+            slow = min(runs[False])
+            print(f"  the same with numpy's fan cast: {slow:.1f} us/tick "
+                  f"(compiled: {us / slow:.2f}x)")
 
 
 if __name__ == "__main__":

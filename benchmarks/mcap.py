@@ -50,7 +50,7 @@ import numpy as np
 # this file is named mcap.py: its own folder must not shadow the `mcap` package
 _HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
-sys.path.insert(0, str(_HERE.parent))
+sys.path.append(str(_HERE.parent))     # the installed mdle wins, else this checkout's
 
 from mdle.backend import Pose, Scan  # noqa: E402
 from mdle.lang import load_program  # noqa: E402

@@ -16,10 +16,11 @@ import time
 from pathlib import Path
 
 # A script's folder comes first on sys.path: keep benchmarks/*.py (benchmarks/sim.py, say)
-# from shadowing the packages of the same name, and put the checkout's root there instead,
-# so `python benchmarks/random_starts.py` works from a checkout where mdle is not installed.
+# from shadowing the packages of the same name, and put the checkout's root last instead,
+# so `python benchmarks/random_starts.py` works from a checkout where mdle is not installed
+# (where it is, the installed mdle, with its compiled fan cast, wins).
 _HERE = Path(__file__).resolve().parent
-sys.path[:] = [str(_HERE.parent)] + [p for p in sys.path if Path(p or ".").resolve() != _HERE]
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE] + [str(_HERE.parent)]
 
 # After the sys.path fix: a run imports ``sim``, which benchmarks/sim.py would shadow.
 from mdle.cli.sweep import progress_bar  # noqa: E402 (see above)

@@ -2,7 +2,8 @@
 
 Run:  python benchmarks/sim.py [--runs 15] [--calls 200]
       python benchmarks/sim.py --timing-only          # the timing model's cost alone
-      valgrind --tool=callgrind python benchmarks/sim.py --ticks-only pioneer-p3dx 400
+      OPENBLAS_NUM_THREADS=1 PYTHONHASHSEED=0 \
+          valgrind --tool=callgrind python benchmarks/sim.py --ticks-only pioneer-p3dx 400
 
 Each figure is measured in ``--runs`` runs of ``--calls`` calls each; a run's figure is
 its median call (robust to other processes taking the CPU for a moment). Printed: the

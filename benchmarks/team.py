@@ -101,8 +101,13 @@ def instructions(n: int, ticks: int, beacons: bool) -> int:
     """Return the instructions callgrind counts for ``--only n --ticks ticks``."""
     cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable,
            os.path.abspath(__file__), "--only", str(n), "--ticks", str(ticks)]
+    # A fixed hash seed (set and dict orders), one BLAS thread (idle BLAS threads spin for
+    # as long as the machine lets them) and no .pyc written (a source changed between two
+    # runs would be compiled in only one): the counts repeat from run to run.
+    env = {**os.environ, "PYTHONHASHSEED": "0", "OPENBLAS_NUM_THREADS": "1",
+           "PYTHONDONTWRITEBYTECODE": "1"}
     out = subprocess.run(cmd + (["--beacons"] if beacons else []), capture_output=True,
-                         text=True, check=False).stderr
+                         text=True, check=False, env=env).stderr
     m = re.search(r"Collected\s*:\s*(\d+)", out)
     if m is None:
         raise SystemExit(f"callgrind gave no count:\n{out[-2000:]}")

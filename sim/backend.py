@@ -59,7 +59,15 @@ from mdle.messages import Inbox
 from mdle.sim.collision import CONTACT, Collider
 from mdle.sim.ladar import Ladar, LadarProfile, ladar_profile
 from mdle.sim.profiles import robot_profile
-from mdle.sim.robot import Phase, RobotProfile, RunClock, integrate, plan_phases, ramp_step
+from mdle.sim.robot import (
+    Phase,
+    RobotProfile,
+    RunClock,
+    integrate,
+    new_phase,
+    plan_phases,
+    ramp_step,
+)
 from mdle.sim.world import World
 
 __all__ = ["SENSING_MODES", "SimBackend", "SimEvent"]
@@ -117,6 +125,10 @@ class SimBackend:
     clock : RunClock, optional
         For a profile with a ``control_cycle``: the run's motion-cycle phase and report
         instants (default: drawn from the seed). Replays of recorded runs set them.
+    compiled : bool, optional
+        Cast the ladar's scans with the compiled face loop (True) or with numpy (False);
+        default: compiled where this install has it (:data:`sim.raycast.COMPILED`). The
+        numbers are the same; False is for comparing the two.
 
     Raises
     ------
@@ -136,7 +148,8 @@ class SimBackend:
     def __init__(self, world: World, *, seed: int | None = None,
                  robot: str | RobotProfile | None = None,
                  ladar: str | LadarProfile | None = None, sensing: str = "scan",
-                 start: Pose | None = None, clock: RunClock | None = None) -> None:
+                 start: Pose | None = None, clock: RunClock | None = None,
+                 compiled: bool | None = None) -> None:
         if sensing not in SENSING_MODES:
             raise BackendError(f"unknown sensing mode `{sensing}` (one of: "
                                f"{', '.join(SENSING_MODES)})")
@@ -153,6 +166,7 @@ class SimBackend:
         self._clock = clock or RunClock()
         self.events: list[SimEvent] = []
         self._start = start
+        self._compiled = compiled
         self.reset()
 
     # ------------------------------------------------------------------ lifecycle
@@ -175,7 +189,7 @@ class SimBackend:
         self._slip_rng = np.random.default_rng(slip_seq)
         self._ladar = Ladar(self.ladar_profile, np.random.default_rng(ladar_seq),
                             mount=self.profile.ladar_mount, oracle=self._oracle)
-        self._fan = (self._ladar.fan(self.world.caster)
+        self._fan = (self._ladar.fan(self.world.caster, self._compiled)
                      if not self._oracle and math.isfinite(self._ladar.profile.max_range)
                      else None)
         self._t = 0.0
@@ -363,7 +377,7 @@ class SimBackend:
             if at > t1 - _EPS:
                 break
             if at > t + _EPS:
-                phases.append(Phase(at - t, v, 0.0, w, 0.0))
+                phases.append(new_phase(Phase, (at - t, v, 0.0, w, 0.0)))
                 t = at
             if nc <= nr:
                 d = self._desired
@@ -379,7 +393,7 @@ class SimBackend:
                 while pending and pending[0][0] <= at + _EPS:
                     self._desired = pending.popleft()[1]
         if t1 > t:
-            phases.append(Phase(t1 - t, v, 0.0, w, 0.0))
+            phases.append(new_phase(Phase, (t1 - t, v, 0.0, w, 0.0)))
         if phases:
             self._step(t1, True, held=(phases, v, w, mark))
         else:
@@ -532,8 +546,10 @@ class SimBackend:
             pieces = [ph]
             if not scanned and t < scan_at < t + ph.duration:
                 cut = scan_at - t
-                pieces = [Phase(cut, ph.v0, ph.a_v, ph.w0, ph.a_w),
-                          Phase(ph.duration - cut, ph.v_at(cut), ph.a_v, ph.w_at(cut), ph.a_w)]
+                dur, v0, a_v, w0, a_w = ph
+                pieces = [new_phase(Phase, (cut, v0, a_v, w0, a_w)),
+                          new_phase(Phase, (dur - cut, v0 + a_v * cut, a_v, w0 + a_w * cut,
+                                             a_w))]
             for piece in pieces:
                 if safe:
                     x, y, th = integrate(x, y, th, piece, piece[0])

@@ -17,14 +17,17 @@ them to the static world's clearance, so the swept motion of
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from mdle.sim.collision import Collider
 from mdle.sim.shapes import Parts
 
-__all__ = ["Discs", "NO_DISCS", "CrowdCollider", "cast_discs", "occlusions"]
+__all__ = ["COMPILED", "Discs", "NO_DISCS", "CrowdCollider", "cast_discs", "occlude",
+           "occlusions"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,9 +90,34 @@ def cast_discs(ox: float, oy: float, angles: np.ndarray, discs: Discs, skip: int
     return best, np.where(np.isfinite(best), j, -1)
 
 
+def _compiled_occlusions() -> tuple[Callable[..., int], Callable[..., int]] | None:
+    """Return the loops of :func:`occlusions` and :func:`occlude` in C (sim/_kernels.c).
+
+    None where it was not built (an optional build: numpy gives the same numbers), or where
+    numpy's cos and sin do not round as libm's, which the loop uses, do (checked here).
+    """
+    try:
+        from mdle.sim._kernels import occlude, occlusions
+    except ImportError:
+        return None
+    x = np.linspace(-40.0, 40.0, 97)
+    if (np.cos(x).tolist() != [math.cos(v) for v in x.tolist()]
+            or np.sin(x).tolist() != [math.sin(v) for v in x.tolist()]):
+        return None
+    return occlusions, occlude
+
+
+_KERNELS = _compiled_occlusions()
+# The kernel's inputs: one contiguous block of float64 or intp each (no copy when they are).
+_as_f = partial(np.ascontiguousarray, dtype=np.float64)
+_as_i = partial(np.ascontiguousarray, dtype=np.intp)
+#: Whether :func:`occlusions` runs compiled (False: numpy, the same numbers).
+COMPILED = _KERNELS is not None
+
+
 def occlusions(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarray,
-               beams: np.ndarray, max_range: np.ndarray, skip: np.ndarray, discs: Discs
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+               beams: np.ndarray, max_range: np.ndarray, skip: np.ndarray, discs: Discs,
+               compiled: bool | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Find where the discs cut the rays of several scans at once: one call per team tick.
 
     Scan ``s`` has ``beams[s]`` rays from ``(ox[s], oy[s])``, ray ``b`` at the world
@@ -102,7 +130,20 @@ def occlusions(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarr
     Returns (scan, beam, distance) of every ray that meets a disc within the scan's
     ``max_range``, grouped by scan in increasing order (a beam may appear more than
     once: keep the nearest). The windows assume a fan narrower than a full turn.
+
+    ``compiled``: the loop in C (True), numpy (False), or C where this install has it
+    (None; :data:`COMPILED`). Both give the same arrays.
     """
+    if compiled and _KERNELS is None:
+        raise ValueError("this install of mdle has no compiled occlusions")
+    if _KERNELS is not None and compiled is not False:
+        n_scan = ox.shape[0]
+        cap = int(beams.sum()) * len(discs) if n_scan else 0
+        scan, beam, t = np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap)
+        n = _KERNELS[0](_as_f(ox), _as_f(oy), _as_f(first), _as_f(step), _as_i(beams),
+                        _as_f(max_range), _as_i(skip), _as_f(discs.cx), _as_f(discs.cy),
+                        _as_f(discs.r), scan, beam, t)
+        return scan[:n], beam[:n], t[:n]
     dx = discs.cx[None, :] - ox[:, None]          # (S, N): each disc from each origin
     dy = discs.cy[None, :] - oy[:, None]
     d2 = dx * dx + dy * dy
@@ -132,6 +173,28 @@ def occlusions(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarr
     t = proj - np.sqrt(np.maximum(disc, 0.0))
     keep = (disc >= 0.0) & (proj > 0.0) & (t <= max_range[scan])
     return scan[keep], beam[keep], t[keep]
+
+
+def occlude(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarray,
+            beams: np.ndarray, max_range: np.ndarray, skip: np.ndarray, discs: Discs,
+            ranges: np.ndarray, valid: np.ndarray, compiled: bool | None = None) -> None:
+    """Put the discs into scans cast without them: :func:`occlusions`, applied in place.
+
+    ``ranges`` and ``valid`` (S, B), row ``s`` scan ``s``: a range becomes the nearer of
+    itself and any disc's cut, and a cut beam is valid. ``compiled`` as for
+    :func:`occlusions`; both paths leave the same numbers.
+    """
+    if compiled and _KERNELS is None:
+        raise ValueError("this install of mdle has no compiled occlusions")
+    if _KERNELS is not None and compiled is not False and ranges.flags.c_contiguous \
+            and valid.flags.c_contiguous:
+        _KERNELS[1](_as_f(ox), _as_f(oy), _as_f(first), _as_f(step), _as_i(beams),
+                    _as_f(max_range), _as_i(skip), _as_f(discs.cx), _as_f(discs.cy),
+                    _as_f(discs.r), ranges, valid)
+        return
+    scan, beam, t = occlusions(ox, oy, first, step, beams, max_range, skip, discs, compiled)
+    np.minimum.at(ranges, (scan, beam), t)
+    valid[scan, beam] = True
 
 
 class CrowdCollider(Collider):

@@ -158,9 +158,12 @@ class Ladar:
         """Return the beam directions in the world frame for heading ``th`` (reused buffer)."""
         return np.add(self.bearings, th, out=self._angles)
 
-    def fan(self, caster: RayCaster) -> FanCaster:
-        """Make a fan caster for this ladar's beams in ``caster``'s world (for :meth:`scan`)."""
-        return caster.fan(self.rel, self.profile.max_range)
+    def fan(self, caster: RayCaster, compiled: bool | None = None) -> FanCaster:
+        """Make a fan caster for this ladar's beams in ``caster``'s world (for :meth:`scan`).
+
+        ``compiled``: as :class:`sim.raycast.FanCaster` takes it.
+        """
+        return caster.fan(self.rel, self.profile.max_range, compiled)
 
     def scan(self, fan: FanCaster, x: float, y: float, th: float, stamp: float) -> Scan:
         """Take a noisy scan from a robot at ``(x, y, th)`` (fast path; not in oracle mode).
@@ -226,7 +229,7 @@ def settle_rows(ladars: Sequence[Ladar], ranges: np.ndarray, valid: np.ndarray) 
     comes out as that call would leave it. Both arrays are read-only afterwards.
     """
     p = ladars[0].profile
-    if any(lad.profile != p for lad in ladars):
+    if any(lad.profile is not p and lad.profile != p for lad in ladars):  # `is`: no __eq__
         raise ValueError("settle_rows needs ladars of one profile")
     how = ladars[0]._settling
     noise = None

@@ -14,9 +14,10 @@ Arcs and ellipses (few per world) are intersected densely and analytically.
 changes: it works in the fan's own frame, where the beam directions are constants, and
 needs 25 numpy calls per scan (the fixed cost of a call, about 3,500 instructions, is half
 of what a scan of a small world costs; the rest is mostly the arctan2 and the binary
-searches of the faces' intervals). At 100 segments (benchmarks/sim.py's world) a scan
-costs about 218,000 instructions (266,000 before back faces were dropped ahead of the
-angles and the constants became 0-d arrays).
+searches of the faces' intervals). Where the install built ``sim/_kernels.c`` (an
+optional build; :data:`COMPILED`), the faces go through one compiled call instead, which
+gives the same numbers bit for bit. At 100 segments (benchmarks/sim.py's world) a scan
+costs about 64,000 instructions compiled and 224,000 in numpy.
 
 All angles are in the world frame (radians, counter-clockwise); ranges in metres.
 
@@ -33,13 +34,14 @@ All angles are in the world frame (radians, counter-clockwise); ranges in metres
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from mdle.sim.shapes import Parts
 
-__all__ = ["MAX_RANGE_SLACK", "FanCaster", "RayCaster", "RayHits"]
+__all__ = ["COMPILED", "MAX_RANGE_SLACK", "FanCaster", "RayCaster", "RayHits"]
 
 _TAU = 2.0 * math.pi
 _EPS_ANGLE = 1e-10   # widen segment intervals so a beam through a vertex is never lost
@@ -48,6 +50,47 @@ _CULL_ABOVE = 256    # bounding-box culling pays off only in larger worlds
 #: A hit at ``max_range`` counts, give or take this relative rounding (a few ulps), so
 #: that a hit exactly at the limit counts in every code path, however it was rounded.
 MAX_RANGE_SLACK = 1e-15
+
+
+def _compiled_faces() -> Callable[..., None] | None:
+    """Return the fan cast's face loop in C (sim/_kernels.c), or None where it was not built.
+
+    It is an optional build (pyproject.toml): an install without a C compiler casts with
+    numpy, which gives the same numbers.
+    """
+    try:
+        from mdle.sim._kernels import faces
+    except ImportError:
+        return None
+    return faces
+
+
+def _numpy_complex_rounding() -> bool | None:
+    """How numpy rounds complex products here: fused (True), plain (False), or mixed (None).
+
+    numpy's SIMD loops compute ``a.re b.re - a.im b.im`` with a fused multiply-add where
+    the CPU has one; the compiled face loop must round as numpy does to cast the same
+    numbers, and it divides a complex by a real as a product with the reciprocal, as numpy
+    does. Both are checked on inputs where the roundings differ, at several lengths (SIMD
+    body and scalar tail); None (anything else) leaves the numpy path in charge.
+    """
+    u = 1.0 + 2.0 ** -30
+    verdicts: set[bool | None] = set()
+    for n in (1, 3, 8, 17):
+        a = np.full(n, complex(u, 1.0))
+        re = np.multiply(a, a).real
+        fused, plain = 2.0 ** -29 + 2.0 ** -60, u * u - 1.0
+        verdicts.update(True if x == fused else False if x == plain else None for x in re)
+        q = np.divide(np.full(n, complex(5.0, 5.0)), np.full(n, 3.0))
+        if not (q.real == 5.0 * (1.0 / 3.0)).all():     # 5 / 3 rounds the other way
+            verdicts.add(None)
+    return verdicts.pop() if len(verdicts) == 1 else None
+
+
+_KERNEL = _compiled_faces()
+_FUSED = _numpy_complex_rounding() if _KERNEL is not None else None
+#: Whether scans use the compiled face loop (False: the numpy path, the same numbers).
+COMPILED = _FUSED is not None
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,9 +152,13 @@ class RayCaster:
         # A face whose line passes within _T_MIN of the origin is never hit (t <= _T_MIN).
         self._front_min = _T_MIN * np.abs(self._ze)
 
-    def fan(self, rel: np.ndarray, max_range: float) -> FanCaster:
-        """Make a :class:`FanCaster` for a fixed fan of beams (a ladar's), with its buffers."""
-        return FanCaster(self, rel, max_range)
+    def fan(self, rel: np.ndarray, max_range: float, compiled: bool | None = None
+            ) -> FanCaster:
+        """Make a :class:`FanCaster` for a fixed fan of beams (a ladar's), with its buffers.
+
+        ``compiled``: as :class:`FanCaster` takes it.
+        """
+        return FanCaster(self, rel, max_range, compiled)
 
     # ------------------------------------------------------------------ public
     def cast(self, origin: np.ndarray, angles: np.ndarray, max_range: float = math.inf,
@@ -392,14 +439,20 @@ class FanCaster:
         Beam angles relative to the first beam, ascending, the last at most 2 pi.
     max_range : float, metres
         Finite and positive: hits beyond it are misses.
+    compiled : bool, optional
+        Cast the faces with the compiled loop (True), with numpy (False), or the compiled
+        loop where this install has it (None, the default; see :data:`COMPILED`). Both
+        give the same numbers.
 
     Raises
     ------
     ValueError
-        A fan that is not ascending, wider than a turn, or an invalid range.
+        A fan that is not ascending, wider than a turn, or an invalid range; or
+        ``compiled=True`` on an install without the compiled loop.
     """
 
-    def __init__(self, caster: RayCaster, rel: np.ndarray, max_range: float) -> None:
+    def __init__(self, caster: RayCaster, rel: np.ndarray, max_range: float,
+                 compiled: bool | None = None) -> None:
         rel = np.asarray(rel, dtype=float).reshape(-1)
         if rel.shape[0] == 0 or rel[0] != 0.0 or bool((np.diff(rel) < 0).any()):
             raise ValueError("a fan's relative angles must start at 0 and ascend")
@@ -407,6 +460,10 @@ class FanCaster:
             raise ValueError(f"a fan spans at most 2 pi radians, not {rel[-1]!r}")
         if not (math.isfinite(max_range) and max_range > 0):
             raise ValueError(f"a fan needs a finite, positive max_range, not {max_range!r}")
+        if compiled and not COMPILED:
+            raise ValueError("this install of mdle has no compiled fan cast (it was built "
+                             "without a C compiler, or numpy rounds in a way it does not match)")
+        self._kernel = _KERNEL if COMPILED and compiled is not False else None
         self.caster = caster
         self.max_range = float(max_range)
         n = rel.shape[0]
@@ -526,13 +583,18 @@ class FanCaster:
             rots = [complex(math.cos(p + half), -math.sin(p + half)) for p in first.tolist()]
             cs = [complex(x, y) * r for x, y, r in zip(ox.tolist(), oy.tolist(), rots,
                                                        strict=True)]
-            rv = np.array([rots, [r.conjugate() for r in rots], rots, rots])[:, :, None]
-            off = np.array([cs, [c.conjugate() for c in cs], [kappa * c for c in cs],
-                            [0j] * n_scan])[:, :, None]
-            z = np.multiply(self._zw[:, None, :], rv)                         # (4, S, m)
-            np.subtract(z, off, z)
-            z = z.reshape(4, n_scan * m)
-            self._faces(z, np.tile(caster._front_min, n_scan), best, m, n_beam)
+            if self._kernel is not None:    # every scan in one call
+                self._kernel(self._zw, caster._front_min, best, self._rel_s, self._dconj,
+                             np.array(rots), np.array(cs), np.array([kappa * c for c in cs]),
+                             _EPS_ANGLE, self._wrap_hi, self._may_wrap, _FUSED)
+            else:
+                rv = np.array([rots, [r.conjugate() for r in rots], rots, rots])[:, :, None]
+                off = np.array([cs, [c.conjugate() for c in cs], [kappa * c for c in cs],
+                                [0j] * n_scan])[:, :, None]
+                z = np.multiply(self._zw[:, None, :], rv)                     # (4, S, m)
+                np.subtract(z, off, z)
+                z = z.reshape(4, n_scan * m)
+                self._faces(z, np.tile(caster._front_min, n_scan), best, m, n_beam)
         best = best.reshape(n_scan, n_beam)
         t = np.divide(self._one, best)
         hit = np.greater_equal(best, self._inv_hit_a)
@@ -557,16 +619,26 @@ class FanCaster:
             if idx.shape[0] < n_seg:
                 zw = zw.take(idx, axis=1)           # take: far faster than [:, idx] here
                 front_min = front_min.take(idx)
+        c = complex(ox, oy) * rot
+        if self._kernel is not None:
+            self._compiled(zw, front_min, best, rot, c)
+            return
         rv, off = self._rv, self._off
         rv[0, 0] = rv[2, 0] = rv[3, 0] = rot
         rv[1, 0] = rot.conjugate()
-        c = complex(ox, oy) * rot
         off[0, 0] = c
         off[1, 0] = c.conjugate()
         off[2, 0] = self._kappa * c
         z = np.multiply(zw, rv, out=self._z if zw is self._zw else None)
         np.subtract(z, off, z)                      # rows: q, conj(p), kappa p, e
         self._faces(z, front_min, best, 0, 0)
+
+    def _compiled(self, zw: np.ndarray, front_min: np.ndarray, best: np.ndarray, rot: complex,
+                  c: complex) -> None:
+        """:meth:`_faces` of the world rows ``zw`` turned by ``rot`` less ``c``, in C."""
+        assert self._kernel is not None
+        self._kernel(zw, front_min, best, self._rel_s, self._dconj, rot, c, self._kappa * c,
+                     _EPS_ANGLE, self._wrap_hi, self._may_wrap, _FUSED)
 
     def _faces(self, z: np.ndarray, front_min: np.ndarray, best: np.ndarray, m: int,
                n_beam: int) -> None:

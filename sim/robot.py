@@ -31,6 +31,7 @@ __all__ = [
     "RAMPS",
     "RobotProfile",
     "integrate",
+    "new_phase",
     "plan_phases",
     "ramp_rate",
     "ramp_step",
@@ -94,7 +95,9 @@ class Latency:
     def draw(self, rng: np.random.Generator) -> float:
         """Draw one delay (seconds, >= 0)."""
         if self.kind == "uniform":
-            return self.a if self.b <= self.a else float(rng.uniform(self.a, self.b))
+            # rng.uniform(a, b)'s own arithmetic (a + (b - a) * a double in [0, 1)), the
+            # same number, without its argument checks: a timed run draws once a tick.
+            return self.a if self.b <= self.a else self.a + (self.b - self.a) * rng.random()
         return max(0.0, float(rng.normal(self.a, self.b)))
 
     def describe(self) -> str:
@@ -262,7 +265,8 @@ class Phase(NamedTuple):
         return max(abs(self.v0), abs(self.v0 + self.a_v * self.duration))
 
 
-_new_phase = tuple.__new__  # a Phase without the named tuple's Python-level __new__
+#: Make a Phase from a tuple, without the named tuple's Python-level __new__ (hot paths).
+new_phase = tuple.__new__
 
 #: How the firmware ramps towards a command (the profile's ``ramp``).
 RAMPS = ("firmware", "stage")
@@ -340,7 +344,7 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
         a_w = aw if t0 < tw else 0.0
         v0 = v_cmd if t0 >= tv > 0 else v + av * t0
         w0 = w_cmd if t0 >= tw > 0 else w + aw * t0
-        phases.append(_new_phase(Phase, (t1 - t0, v0, a_v, w0, a_w)))
+        phases.append(new_phase(Phase, (t1 - t0, v0, a_v, w0, a_w)))
         t0 = t1
     v_end = v_cmd if tv <= dt else v + av * dt
     w_end = w_cmd if tw <= dt else w + aw * dt

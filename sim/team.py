@@ -28,7 +28,7 @@ from mdle.backend import Pose, Scan, plain_scan
 from mdle.errors import BackendError, WorldError
 from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from mdle.sim.backend import SimBackend, SimEvent
-from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlusions
+from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlude, occlusions
 from mdle.sim.ladar import settle_rows
 from mdle.sim.world import RobotPlace, World
 
@@ -325,13 +325,19 @@ class TeamSim:
         if rules.seed is None:
             rules = dataclasses.replace(rules, seed=int(seeds[n]))
         self.radio = Radio([p.name for p in self.places], rules)
-        self._pos = np.array([[m._x, m._y] for m in self.members], dtype=float).reshape(n, 2)
-        # one set of discs for all, their centres views of _pos, which moves in place
+        # x and y as rows (contiguous, for the compiled occlusions); _pos is its (N, 2) view
+        self._xy = np.array([[m._x for m in self.members], [m._y for m in self.members]],
+                            dtype=float).reshape(2, n)
+        self._pos = self._xy.T
+        # one set of discs for all, their centres views of _xy, which moves in place
         self._z = self._pos[:, 0] + 1j * self._pos[:, 1]
-        self.discs = Discs(self._pos[:, 0], self._pos[:, 1],
+        self.discs = Discs(self._xy[0], self._xy[1],
                            np.array([p.profile.radius for p in self.places]), np.arange(n),
                            self._z)
         self._moved = [0.0] * n  # how far each robot moved in its last step, m
+        r = self.discs.r
+        self._touch = r[:, None] + r[None, :]   # centre distance at which two robots touch
+        self._rows = np.arange(n)
         #: scans taken during a step, finished at its end: (member, scan, (ox, oy, first
         #: beam's angle, step between beams, beams, max range, own disc))
         self.pending: list[tuple[Member, Scan, tuple[float, ...]]] = []
@@ -383,12 +389,11 @@ class TeamSim:
         if n < 2:
             return
         z = self._z
-        gaps = np.abs(z[:, None] - z[None, :])
-        r = self.discs.r
-        gaps -= r[:, None] + r[None, :]
-        np.fill_diagonal(gaps, np.inf)
+        gaps = np.abs(z[:, None] - z)
+        gaps -= self._touch                   # the sums of the radii, pair by pair
+        gaps.flat[::n + 1] = np.inf           # not oneself (np.fill_diagonal, without its checks)
         near = gaps.argmin(axis=1)
-        least = gaps[np.arange(n), near].tolist()
+        least = gaps[self._rows, near].tolist()
         base = len(self.world.obstacles)
         for m, gap, j in zip(self.members, least, near.tolist(), strict=True):
             if gap < m._clear[0]:
@@ -405,34 +410,43 @@ class TeamSim:
         pending, self.pending = self.pending, []
         if not pending:
             return
-        f = np.array([p[2] for p in pending])   # one row per scan: see `pending`
-        scan_i, beam, t = occlusions(f[:, 0], f[:, 1], f[:, 2], f[:, 3],
-                                     f[:, 4].astype(np.intp), f[:, 5],
-                                     f[:, 6].astype(np.intp), self.discs)
+        # One column per field of `pending`'s rows, each contiguous: x, y, first beam's
+        # angle, step between beams, beams, max range, own disc.
+        c = np.array(list(zip(*(p[2] for p in pending), strict=True)))
+        beams_n, own = c[4].astype(np.intp), c[6].astype(np.intp)
+        scans = (c[0], c[1], c[2], c[3], beams_n, c[5], own, self.discs)
         groups: dict[tuple[Any, ...], list[int]] = {}
         alone = []
         for k, (m, scan, _) in enumerate(pending):
             if scan.ranges is _LATER:
-                groups.setdefault((m._ladar.profile, m._ladar.mount), []).append(k)
+                # one profile object and mount per group (an id: no dataclass hash per scan)
+                groups.setdefault((id(m._ladar.profile), m._ladar.mount), []).append(k)
             else:
                 alone.append(k)
+        cuts = None     # every scan's cuts, found when a group or a lone scan needs them
         for ks in groups.values():
             first = pending[ks[0]][0]
             assert first._fan is not None
-            ranges, valid = first._fan.cast_many(f[ks, 0], f[ks, 1], f[ks, 2])
-            row = np.full(len(pending), -1)
-            row[ks] = np.arange(len(ks))
-            r = row[scan_i]
-            mine = r >= 0
-            rows, beams = r[mine], beam[mine]
-            np.minimum.at(ranges, (rows, beams), t[mine])
-            valid[rows, beams] = True
+            if len(ks) == len(pending):     # every scan (the usual case): rows are scans
+                ranges, valid = first._fan.cast_many(c[0], c[1], c[2])
+                occlude(*scans, ranges, valid)
+            else:
+                ranges, valid = first._fan.cast_many(c[0, ks], c[1, ks], c[2, ks])
+                scan_i, beam, t = cuts = cuts or occlusions(*scans)
+                row = np.full(len(pending), -1)
+                row[ks] = np.arange(len(ks))
+                r = row[scan_i]
+                mine = r >= 0
+                rows, beams = r[mine], beam[mine]
+                np.minimum.at(ranges, (rows, beams), t[mine])
+                valid[rows, beams] = True
             settle_rows([pending[k][0]._ladar for k in ks], ranges, valid)
             for j, k in enumerate(ks):
                 m, old, _ = pending[k]
                 m.replace_scan(old, plain_scan(ranges[j], old.bearings, valid[j], old.stamp,
                                                old.max_range))
         if alone:
+            scan_i, beam, t = cuts = cuts or occlusions(*scans)
             bounds = np.searchsorted(scan_i, np.arange(len(pending) + 1))
             for k in alone:
                 m, scan, _ = pending[k]

@@ -38,7 +38,21 @@ def build_parser() -> argparse.ArgumentParser:
         description="Write, check, simulate and run MDLe motion plans for mobile robots.",
         epilog="Run `mdle COMMAND --help` for a command's options.",
     )
-    parser.add_argument("--version", action="version", version=f"mdle {__version__}")
+    class Version(argparse.Action):
+        """Print the version and how the simulator's per-tick loops run, then exit."""
+
+        def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                     values: object, option_string: str | None = None) -> None:
+            from importlib.util import find_spec
+
+            loops = ("compiled loops" if find_spec("mdle.sim._kernels") is not None
+                     else "numpy loops; its C extension was not built (no C compiler)")
+            print(f"mdle {__version__} (simulator: {loops})")
+            parser.exit()
+
+    parser.add_argument("--version", action=Version, nargs=0,
+                        help="show the version and whether the simulator's loops are "
+                             "compiled, then exit")
     parser.add_argument("--debug", action="store_true",
                         help="show Python tracebacks for internal errors")
     sub = parser.add_subparsers(title="commands", metavar="COMMAND")

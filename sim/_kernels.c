@@ -1,0 +1,459 @@
+/* The simulator's two per-tick loops, compiled: the fan cast's faces (sim/raycast.py,
+ * FanCaster._faces) and a team's occlusions of the scans by the robots' discs
+ * (sim/crowd.py, occlusions).
+ *
+ * The numpy paths spend most of their time on the fixed cost of ~25-40 calls on arrays of
+ * a few hundred numbers; these do the same arithmetic in one call each. They are an
+ * optional build: without a C compiler mdle installs without them and uses numpy.
+ *
+ * Both reproduce the numpy paths bit for bit.
+ *
+ * faces: complex products take numpy's form on this
+ * machine (`fused`: the fused multiply-add numpy's SIMD loops use, or plain products,
+ * found by a probe at import); a complex divided by a real is a product with the
+ * reciprocal, as numpy's division gives. The bearings come from libm's atan2, which can
+ * differ from numpy's arctan2 in the last bit: they only choose which beams a face's
+ * interval (widened by 1e-10 rad) holds, so a difference matters only for a beam within
+ * an ulp of a widened end, which meets the face's line within 1e-10 rad of the end.
+ *
+ * Built with -ffp-contract=off: every product is rounded where the numpy path rounds it.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <stdlib.h>
+
+#define TAU 6.283185307179586
+
+typedef struct {
+    double re, im;
+} cplx;
+
+/* numpy's complex product of a and b (in that order), fused or plain. */
+static inline cplx cmul(cplx a, cplx b, int fused)
+{
+    cplx r;
+    if (fused) {
+        r.re = fma(a.re, b.re, -(a.im * b.im));
+        r.im = fma(a.re, b.im, a.im * b.re);
+    } else {
+        r.re = a.re * b.re - a.im * b.im;
+        r.im = a.re * b.im + a.im * b.re;
+    }
+    return r;
+}
+
+/* The first index whose value is >= x (numpy's searchsorted, side="left"). */
+static inline Py_ssize_t lower_bound(const double *v, Py_ssize_t n, double x)
+{
+    Py_ssize_t lo = 0, hi = n;
+    while (lo < hi) {
+        Py_ssize_t mid = (lo + hi) >> 1;
+        if (v[mid] < x)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+typedef struct {
+    double hi, lo;
+    cplx f;
+} face;
+
+/* Raise best[k] (1/t) to each front face's hit. Returns 0, or -1 when out of memory. */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+/* A clone with the FMA instruction where the CPU has it; fma() is a libm call elsewhere. */
+__attribute__((target_clones("fma", "default")))
+#endif
+static int
+cast_faces(const double *zw, const double *front_min, Py_ssize_t m, double *best,
+           const double *rel_s, const double *dconj, Py_ssize_t n, cplx rot, cplx c, cplx kc,
+           double eps, double wrap_hi, int may_wrap, int fused)
+{
+    const cplx *z = (const cplx *)zw; /* rows: end, conj(start), kappa start, edge */
+    const cplx *d = (const cplx *)dconj;
+    cplx rot_c = {rot.re, -rot.im};
+    face *fs = malloc((size_t)(m > 0 ? m : 1) * sizeof(face));
+    Py_ssize_t nf = 0;
+    double top = -INFINITY;
+    if (fs == NULL)
+        return -1;
+    for (Py_ssize_t j = 0; j < m; j++) {
+        cplx q = cmul(z[j], rot, fused);
+        cplx pc = cmul(z[m + j], rot_c, fused);
+        q.re -= c.re;
+        q.im -= c.im;
+        pc.re -= c.re;
+        pc.im -= -c.im;
+        cplx w = cmul(pc, q, fused); /* conj(p) q = (p . q) + i cross(p, e) */
+        if (!(w.im > front_min[j]))
+            continue; /* a back face, or the origin on its line */
+        cplx kp = cmul(z[2 * m + j], rot, fused);
+        kp.re -= kc.re;
+        kp.im -= kc.im;
+        cplx e = cmul(z[3 * m + j], rot, fused);
+        double lo = atan2(kp.im, kp.re);
+        double hi = atan2(w.im, w.re) + lo;
+        double s = 1.0 / w.im;
+        face *f = &fs[nf++];
+        f->hi = hi + eps;
+        f->lo = lo + -eps;
+        f->f.re = e.re * s;
+        f->f.im = e.im * s;
+        if (f->hi > top)
+            top = f->hi;
+    }
+    /* A fan wider than a half turn can also meet an interval one turn down. */
+    int turns = (may_wrap && top >= wrap_hi) ? 2 : 1;
+    for (int turn = 0; turn < turns; turn++) {
+        for (Py_ssize_t i = 0; i < nf; i++) {
+            double hi = turn ? fs[i].hi - TAU : fs[i].hi;
+            double lo = turn ? fs[i].lo - TAU : fs[i].lo;
+            Py_ssize_t k_hi = lower_bound(rel_s, n, hi);
+            cplx f = fs[i].f;
+            for (Py_ssize_t k = lower_bound(rel_s, n, lo); k < k_hi; k++) {
+                double inv = cmul(d[k], f, fused).im;
+                if (inv > best[k])
+                    best[k] = inv;
+            }
+        }
+    }
+    free(fs);
+    return 0;
+}
+
+/* Where the discs cut the rays of several scans (crowd.occlusions, its arithmetic in its
+ * order). Writes (scan, beam, distance) of every cut, grouped by scan, into the out
+ * arrays (room for `cap`); returns how many, or -1 when they have no room. The disc's
+ * window of beams comes from libm's asin and atan2 (numpy's can differ in the last bit:
+ * as for faces, only a beam within an ulp of a window's end, a ray grazing the disc,
+ * could change side); the distances use cos, sin and sqrt, which numpy computes as libm
+ * does here (a probe in crowd.py checks it). */
+typedef struct {
+    /* Either the cuts as (scan, beam, distance), room for `cap`; */
+    Py_ssize_t cap, *scan, *beam;
+    double *t;
+    /* or, where `ranges` is set, applied to the scans' rows of `width` beams at once:
+     * ranges = min(ranges, distance) and valid = 1 (np.minimum.at and an assignment). */
+    double *ranges;
+    char *valid;
+    Py_ssize_t width;
+} cut_sink;
+
+static Py_ssize_t
+disc_cuts(Py_ssize_t S, const double *ox, const double *oy, const double *first,
+          const double *step, const Py_ssize_t *beams, const double *max_range,
+          const Py_ssize_t *skip, Py_ssize_t N, const double *cx, const double *cy,
+          const double *r, const cut_sink *out)
+{
+    Py_ssize_t n = 0;
+    for (Py_ssize_t s = 0; s < S; s++) {
+        Py_ssize_t own = skip[s] < 0 ? skip[s] + N : skip[s]; /* numpy's negative index */
+        double st = step[s];
+        double last = (double)(beams[s] - 1);
+        for (Py_ssize_t k = 0; k < N; k++) {
+            double dx = cx[k] - ox[s];
+            double dy = cy[k] - oy[s];
+            double d2 = dx * dx + dy * dy;
+            double reach = max_range[s] + r[k];
+            if (k == own || !(d2 > r[k] * r[k]) || !(d2 < reach * reach))
+                continue;
+            double rp = r[k];
+            double half = asin(rp / sqrt(d2));
+            double phi = fmod(atan2(dy, dx) - first[s], TAU); /* np.mod: the divisor's sign */
+            if (phi != 0.0) {
+                if (phi < 0.0)
+                    phi += TAU;
+            } else {
+                phi = 0.0;
+            }
+            double lo_f = ceil((phi - half) / st);
+            double hi_f = floor((phi + half) / st);
+            lo_f = lo_f > 0.0 ? lo_f : 0.0;
+            hi_f = hi_f < last ? hi_f : last;
+            Py_ssize_t lo = (Py_ssize_t)lo_f, hi = (Py_ssize_t)hi_f;
+            double c = d2 - rp * rp;
+            for (Py_ssize_t b = lo; b <= hi; b++) {
+                double angle = first[s] + (double)b * st;
+                double proj = dx * cos(angle) + dy * sin(angle);
+                double disc = proj * proj - c;
+                double t = proj - sqrt(disc > 0.0 ? disc : 0.0);
+                if (disc >= 0.0 && proj > 0.0 && t <= max_range[s]) {
+                    if (out->ranges != NULL) {
+                        double *at = &out->ranges[s * out->width + b];
+                        if (t < *at)
+                            *at = t;
+                        out->valid[s * out->width + b] = 1;
+                    } else {
+                        if (n >= out->cap)
+                            return -1;
+                        out->scan[n] = s;
+                        out->beam[n] = b;
+                        out->t[n] = t;
+                    }
+                    n++;
+                }
+            }
+        }
+    }
+    return n;
+}
+
+/* A C-contiguous buffer of `count` numbers (-1: any count, stored in *count_out) of
+ * kind 'd' (float64), 'Z' (complex128: two doubles each, counted as such) or 'n'
+ * (numpy's intp). */
+static int get_buf(PyObject *obj, Py_buffer *view, char kind, Py_ssize_t count,
+                   Py_ssize_t *count_out, int writable, const char *name)
+{
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) < 0)
+        return -1;
+    const char *fmt = view->format ? view->format : "B";
+    if (fmt[0] == '<' || fmt[0] == '=' || fmt[0] == '@')
+        fmt++;
+    int ok;
+    Py_ssize_t size;
+    if (kind == '?') {
+        ok = fmt[0] == '?' && fmt[1] == '\0' && view->itemsize == 1;
+        size = 1;
+    } else if (kind == 'n') {
+        ok = (fmt[0] == 'l' || fmt[0] == 'q' || fmt[0] == 'n') && fmt[1] == '\0' &&
+             view->itemsize == (Py_ssize_t)sizeof(Py_ssize_t);
+        size = (Py_ssize_t)sizeof(Py_ssize_t);
+    } else {
+        ok = (kind == 'Z') ? (fmt[0] == 'Z' && fmt[1] == 'd' && fmt[2] == '\0')
+                           : (fmt[0] == 'd' && fmt[1] == '\0');
+        size = (Py_ssize_t)sizeof(double);
+    }
+    Py_ssize_t have = view->len / size;
+    if (!ok || (count >= 0 && have != count)) {
+        if (count >= 0)
+            PyErr_Format(PyExc_ValueError, "%s: expected %zd %s in one C-contiguous block",
+                         name, count, kind == 'n' ? "intp" : "doubles");
+        else
+            PyErr_Format(PyExc_ValueError, "%s: expected %s in one C-contiguous block", name,
+                         kind == 'n' ? "intp" : kind == 'Z' ? "complex128"
+                         : kind == '?' ? "bool" : "float64");
+        PyBuffer_Release(view);
+        return -1;
+    }
+    if (count_out != NULL)
+        *count_out = have;
+    return 0;
+}
+
+static void release_all(Py_buffer *views, int n)
+{
+    for (int i = 0; i < n; i++)
+        PyBuffer_Release(&views[i]);
+}
+
+PyDoc_STRVAR(faces_doc,
+"faces(zw, front_min, best, rel_s, dconj, rot, c, kc, eps, wrap_hi, may_wrap, fused)\n"
+"--\n\n"
+"Raise best (1/t per beam, in place) to the faces' hits: FanCaster._faces, compiled.\n"
+"zw: (4, m) complex world rows; front_min: (m,); rel_s: (n,) float; dconj: (n,) complex;\n"
+"rot, c, kc: complex (the fan's turn, the turned origin, kappa times it) and best (n,),\n"
+"or (S,) complex arrays of them and best (S, n): S scans in one call.");
+
+static int get_complex(PyObject *obj, cplx *out)
+{
+    Py_complex z = PyComplex_AsCComplex(obj);
+    out->re = z.real;
+    out->im = z.imag;
+    return PyErr_Occurred() ? -1 : 0;
+}
+
+static PyObject *faces(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 12) {
+        PyErr_Format(PyExc_TypeError, "faces() takes 12 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    double eps = PyFloat_AsDouble(args[8]);
+    double wrap_hi = PyFloat_AsDouble(args[9]);
+    int may_wrap = PyObject_IsTrue(args[10]);
+    int fused = PyObject_IsTrue(args[11]);
+    if (PyErr_Occurred() || may_wrap < 0 || fused < 0)
+        return NULL;
+    Py_buffer v[8];
+    Py_ssize_t m, n, S = 1, two_s;
+    cplx one[3];
+    const cplx *per[3] = {&one[0], &one[1], &one[2]}; /* rot, c, kc of each scan */
+    int got = 0;
+    int batch = PyObject_CheckBuffer(args[5]);
+    if (!batch) {
+        for (int i = 0; i < 3; i++)
+            if (get_complex(args[5 + i], &one[i]) < 0)
+                return NULL;
+    }
+    if (get_buf(args[1], &v[got], 'd', -1, &m, 0, "front_min") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[0], &v[got], 'Z', 8 * m, NULL, 0, "zw") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[3], &v[got], 'd', -1, &n, 0, "rel_s") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[4], &v[got], 'Z', 2 * n, NULL, 0, "dconj") < 0)
+        goto fail;
+    got++;
+    if (batch) {
+        static const char *const names[] = {"rot", "c", "kc"};
+        for (int i = 0; i < 3; i++) {
+            if (get_buf(args[5 + i], &v[got], 'Z', i ? 2 * S : -1, &two_s, 0, names[i]) < 0)
+                goto fail;
+            S = two_s / 2;
+            per[i] = (const cplx *)v[got].buf;
+            got++;
+        }
+    }
+    if (get_buf(args[2], &v[got], 'd', S * n, NULL, 1, "best") < 0)
+        goto fail;
+    got++;
+    double *best = (double *)v[got - 1].buf;
+    int status = 0;
+    for (Py_ssize_t k = 0; k < S && status == 0; k++)
+        status = cast_faces((const double *)v[1].buf, (const double *)v[0].buf, m,
+                            best + k * n, (const double *)v[2].buf,
+                            (const double *)v[3].buf, n, per[0][batch ? k : 0],
+                            per[1][batch ? k : 0], per[2][batch ? k : 0], eps, wrap_hi,
+                            may_wrap, fused);
+    release_all(v, got);
+    if (status < 0)
+        return PyErr_NoMemory();
+    Py_RETURN_NONE;
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
+PyDoc_STRVAR(occlusions_doc,
+"occlusions(ox, oy, first, step, beams, max_range, skip, cx, cy, r, scan, beam, t)\n"
+"--\n\n"
+"Where the discs cut the rays of several scans: crowd.occlusions, compiled.\n"
+"Scans: ox, oy, first, step, max_range (S,) float; beams, skip (S,) intp. Discs: cx, cy,\n"
+"r (N,) float. Writes the cuts into scan, beam (intp) and t (float), grouped by scan,\n"
+"and returns how many; ValueError when they have no room.");
+
+PyDoc_STRVAR(occlude_doc,
+"occlude(ox, oy, first, step, beams, max_range, skip, cx, cy, r, ranges, valid)\n"
+"--\n\n"
+"occlusions, applied: ranges (S, B) float becomes the nearer of itself and each cut,\n"
+"and valid (S, B) bool is set where a disc cuts. Returns how many cuts.");
+
+/* The scans' and discs' arrays (args[0..9]) of occlusions and occlude. */
+static int get_scans_discs(PyObject *const *args, Py_buffer *v, int *got, Py_ssize_t *S,
+                           Py_ssize_t *N)
+{
+    static const char kinds[] = "ddddndnddd";
+    static const char *const names[] = {"ox", "oy", "first", "step", "beams", "max_range",
+                                        "skip", "cx", "cy", "r"};
+    for (; *got < 10; (*got)++) {
+        int i = *got;
+        Py_ssize_t want = i == 0 ? -1 : i < 7 ? *S : i == 7 ? -1 : *N;
+        Py_ssize_t *out = i == 0 ? S : i == 7 ? N : NULL;
+        if (get_buf(args[i], &v[i], kinds[i], want, out, 0, names[i]) < 0)
+            return -1;
+    }
+    return 0;
+}
+
+static PyObject *run_cuts(PyObject *const *args, Py_buffer *v, Py_ssize_t S, Py_ssize_t N,
+                          const cut_sink *sink, int got)
+{
+    Py_ssize_t n = disc_cuts(S, v[0].buf, v[1].buf, v[2].buf, v[3].buf, v[4].buf, v[5].buf,
+                             v[6].buf, N, v[7].buf, v[8].buf, v[9].buf, sink);
+    (void)args;
+    release_all(v, got);
+    if (n < 0) {
+        PyErr_SetString(PyExc_ValueError, "occlusions: the out arrays have no room left");
+        return NULL;
+    }
+    return PyLong_FromSsize_t(n);
+}
+
+static PyObject *occlusions(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 13) {
+        PyErr_Format(PyExc_TypeError, "occlusions() takes 13 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    Py_buffer v[13];
+    Py_ssize_t S, N, cap;
+    int got = 0;
+    if (get_scans_discs(args, v, &got, &S, &N) < 0)
+        goto fail;
+    if (get_buf(args[10], &v[got], 'n', -1, &cap, 1, "scan") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[11], &v[got], 'n', cap, NULL, 1, "beam") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[12], &v[got], 'd', cap, NULL, 1, "t") < 0)
+        goto fail;
+    got++;
+    cut_sink sink = {cap, v[10].buf, v[11].buf, v[12].buf, NULL, NULL, 0};
+    return run_cuts(args, v, S, N, &sink, got);
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
+static PyObject *occlude(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 12) {
+        PyErr_Format(PyExc_TypeError, "occlude() takes 12 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    Py_buffer v[12];
+    Py_ssize_t S, N, cells;
+    int got = 0;
+    if (get_scans_discs(args, v, &got, &S, &N) < 0)
+        goto fail;
+    if (get_buf(args[10], &v[got], 'd', -1, &cells, 1, "ranges") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[11], &v[got], '?', cells, NULL, 1, "valid") < 0)
+        goto fail;
+    got++;
+    Py_ssize_t width = S ? cells / S : 0;
+    const Py_ssize_t *beams = v[4].buf;
+    for (Py_ssize_t s = 0; s < S; s++) {
+        if (beams[s] > width || width * S != cells) {
+            PyErr_Format(PyExc_ValueError, "occlude: ranges has %zd cells, not %zd rows of "
+                         "at least %zd beams", cells, S, beams[s]);
+            goto fail;
+        }
+    }
+    cut_sink sink = {0, NULL, NULL, NULL, v[10].buf, v[11].buf, width};
+    return run_cuts(args, v, S, N, &sink, got);
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
+static PyMethodDef methods[] = {
+    {"faces", (PyCFunction)(void (*)(void))faces, METH_FASTCALL, faces_doc},
+    {"occlusions", (PyCFunction)(void (*)(void))occlusions, METH_FASTCALL, occlusions_doc},
+    {"occlude", (PyCFunction)(void (*)(void))occlude, METH_FASTCALL, occlude_doc},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {
+    PyModuleDef_HEAD_INIT, "_kernels",
+    "The simulator's per-tick loops, compiled (an optional build: sim/raycast.py and "
+    "sim/crowd.py fall back to numpy).",
+    0, methods, NULL, NULL, NULL, NULL,
+};
+
+PyMODINIT_FUNC PyInit__kernels(void)
+{
+    return PyModuleDef_Init(&module);
+}
