@@ -294,6 +294,8 @@ def ramp_step(cur: float, target: float, accel: float, decel: float, ramp: str, 
     The step a cycled firmware takes (:attr:`RobotProfile.control_cycle`): at most
     ``rate * dt`` towards ``target``, the rate as :func:`ramp_rate` chooses it.
     """
+    if cur == target:       # at the command already (what the rest would return)
+        return target
     rate = ramp_rate(cur, target, accel, decel, ramp)
     diff = target - cur
     step = rate * dt
