@@ -173,6 +173,8 @@ disc_cuts(Py_ssize_t S, const double *ox, const double *oy, const double *first,
             double hi_f = floor((phi + half) / st);
             lo_f = lo_f > 0.0 ? lo_f : 0.0;
             hi_f = hi_f < last ? hi_f : last;
+            if (!(lo_f <= hi_f))
+                continue; /* no beam (or NaN): never an index outside [0, beams) */
             Py_ssize_t lo = (Py_ssize_t)lo_f, hi = (Py_ssize_t)hi_f;
             double c = d2 - rp * rp;
             for (Py_ssize_t b = lo; b <= hi; b++) {

@@ -318,3 +318,30 @@ def test_the_occlusion_kernels_refuse_arrays_that_do_not_fit() -> None:
     ranges, valid = np.full((1, 101), 8.0), np.zeros((1, 101), bool)
     apply(*scans, ranges, valid)
     assert valid.sum() > 10 and ranges.min() == pytest.approx(1.5, abs=1e-3)
+
+
+@needs_kernel
+@needs_cuts
+def test_hostile_numbers_never_take_the_loops_outside_their_arrays() -> None:
+    # NaN, infinite or huge origins and steps: garbage in, but never a crash or a write
+    # outside the arrays (the C loops clamp every index they compute).
+    d = Discs(np.array([2.0, 0.0]), np.array([0.0, 3.0]), np.array([0.5, 0.4]),
+              np.array([0, 1]))
+    odd = [math.nan, math.inf, -math.inf, 1e300, -1e300, 1e-300, 0.0]
+    for x in odd:
+        for step in [*odd, -0.01]:
+            scans = (np.array([x]), np.array([0.0]), np.array([-0.5]), np.array([step]),
+                     np.array([181], np.intp), np.array([8.0]), np.array([1], np.intp), d)
+            scan, beam, t = occlusions(*scans, compiled=True)
+            assert ((beam >= 0) & (beam < 181)).all() and (scan == 0).all()
+            ranges, valid = np.full((1, 181), 8.0), np.zeros((1, 181), bool)
+            occlude(*scans, ranges, valid, compiled=True)
+            assert ranges.shape == (1, 181)
+    fan = _boxes(25, 6, 1).caster.fan(np.linspace(0.0, math.pi, 181), 8.0, True)
+    headings = [a for a in odd if not math.isinf(a)]   # math.cos refuses an infinite one
+    for x in odd:
+        for first in headings:
+            ranges, hit = fan.cast(x, 0.5, first)
+            assert ranges.shape == hit.shape == (181,)
+    many = fan.cast_many(np.array(odd), np.zeros(len(odd)), np.resize(headings, len(odd)))
+    assert many[0].shape == (len(odd), 181)
