@@ -124,13 +124,6 @@ cast_faces(const double *zw, const double *front_min, Py_ssize_t m, double *best
     return 0;
 }
 
-/* Where the discs cut the rays of several scans (crowd.occlusions, its arithmetic in its
- * order). Writes (scan, beam, distance) of every cut, grouped by scan, into the out
- * arrays (room for `cap`); returns how many, or -1 when they have no room. The disc's
- * window of beams comes from libm's asin and atan2 (numpy's can differ in the last bit:
- * as for faces, only a beam within an ulp of a window's end, a ray grazing the disc,
- * could change side); the distances use cos, sin and sqrt, which numpy computes as libm
- * does here (a probe in crowd.py checks it). */
 typedef struct {
     /* Either the cuts as (scan, beam, distance), room for `cap`; */
     Py_ssize_t cap, *scan, *beam;
@@ -142,6 +135,13 @@ typedef struct {
     Py_ssize_t width;
 } cut_sink;
 
+/* Where the discs cut the rays of several scans (crowd.occlusions, its arithmetic in its
+ * order). Writes (scan, beam, distance) of every cut, grouped by scan, into the out
+ * arrays (room for `cap`); returns how many, or -1 when they have no room. The disc's
+ * window of beams comes from libm's asin and atan2 (numpy's can differ in the last bit:
+ * as for faces, only a beam within an ulp of a window's end, a ray grazing the disc,
+ * could change side); the distances use cos, sin and sqrt, which numpy computes as libm
+ * does here (a probe in crowd.py checks it). */
 static Py_ssize_t
 disc_cuts(Py_ssize_t S, const double *ox, const double *oy, const double *first,
           const double *step, const Py_ssize_t *beams, const double *max_range,
