@@ -365,80 +365,73 @@ static int get_scans_discs(PyObject *const *args, Py_buffer *v, int *got, Py_ssi
     return 0;
 }
 
-static PyObject *run_cuts(PyObject *const *args, Py_buffer *v, Py_ssize_t S, Py_ssize_t N,
-                          const cut_sink *sink, int got)
+/* occlusions (apply = 0: the cuts into scan, beam, t) and occlude (apply = 1: into
+ * ranges, valid): the same scans and discs, and a different sink. */
+static PyObject *disc_entry(PyObject *const *args, Py_ssize_t nargs, int apply)
 {
+    const char *name = apply ? "occlude" : "occlusions";
+    Py_ssize_t want = apply ? 12 : 13;
+    if (nargs != want) {
+        PyErr_Format(PyExc_TypeError, "%s() takes %zd arguments (%zd given)", name, want,
+                     nargs);
+        return NULL;
+    }
+    Py_buffer v[13];
+    Py_ssize_t S, N, count;
+    int got = 0;
+    cut_sink sink = {0, NULL, NULL, NULL, NULL, NULL, 0};
+    if (get_scans_discs(args, v, &got, &S, &N) < 0)
+        goto fail;
+    /* The sink's arrays, writable, as long as the first: scan, beam, t or ranges, valid. */
+    static const char *const sink_names[2][3] = {{"scan", "beam", "t"},
+                                                 {"ranges", "valid", NULL}};
+    static const char sink_kinds[2][4] = {"nnd", "d?"};
+    for (int i = 0; i < 3 - apply; i++, got++)
+        if (get_buf(args[10 + i], &v[got], sink_kinds[apply][i], i ? count : -1,
+                    i ? NULL : &count, 1, sink_names[apply][i]) < 0)
+            goto fail;
+    if (apply) {
+        Py_ssize_t width = S ? count / S : 0;
+        const Py_ssize_t *beams = v[4].buf;
+        for (Py_ssize_t s = 0; s < S; s++) {
+            if (beams[s] > width || width * S != count) {
+                PyErr_Format(PyExc_ValueError, "occlude: ranges has %zd cells, not %zd rows "
+                             "of at least %zd beams", count, S, beams[s]);
+                goto fail;
+            }
+        }
+        sink.ranges = v[10].buf;
+        sink.valid = v[11].buf;
+        sink.width = width;
+    } else {
+        sink.cap = count;
+        sink.scan = v[10].buf;
+        sink.beam = v[11].buf;
+        sink.t = v[12].buf;
+    }
     Py_ssize_t n = disc_cuts(S, v[0].buf, v[1].buf, v[2].buf, v[3].buf, v[4].buf, v[5].buf,
-                             v[6].buf, N, v[7].buf, v[8].buf, v[9].buf, sink);
-    (void)args;
+                             v[6].buf, N, v[7].buf, v[8].buf, v[9].buf, &sink);
     release_all(v, got);
     if (n < 0) {
         PyErr_SetString(PyExc_ValueError, "occlusions: the out arrays have no room left");
         return NULL;
     }
     return PyLong_FromSsize_t(n);
+fail:
+    release_all(v, got);
+    return NULL;
 }
 
 static PyObject *occlusions(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     (void)self;
-    if (nargs != 13) {
-        PyErr_Format(PyExc_TypeError, "occlusions() takes 13 arguments (%zd given)", nargs);
-        return NULL;
-    }
-    Py_buffer v[13];
-    Py_ssize_t S, N, cap;
-    int got = 0;
-    if (get_scans_discs(args, v, &got, &S, &N) < 0)
-        goto fail;
-    if (get_buf(args[10], &v[got], 'n', -1, &cap, 1, "scan") < 0)
-        goto fail;
-    got++;
-    if (get_buf(args[11], &v[got], 'n', cap, NULL, 1, "beam") < 0)
-        goto fail;
-    got++;
-    if (get_buf(args[12], &v[got], 'd', cap, NULL, 1, "t") < 0)
-        goto fail;
-    got++;
-    cut_sink sink = {cap, v[10].buf, v[11].buf, v[12].buf, NULL, NULL, 0};
-    return run_cuts(args, v, S, N, &sink, got);
-fail:
-    release_all(v, got);
-    return NULL;
+    return disc_entry(args, nargs, 0);
 }
 
 static PyObject *occlude(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     (void)self;
-    if (nargs != 12) {
-        PyErr_Format(PyExc_TypeError, "occlude() takes 12 arguments (%zd given)", nargs);
-        return NULL;
-    }
-    Py_buffer v[12];
-    Py_ssize_t S, N, cells;
-    int got = 0;
-    if (get_scans_discs(args, v, &got, &S, &N) < 0)
-        goto fail;
-    if (get_buf(args[10], &v[got], 'd', -1, &cells, 1, "ranges") < 0)
-        goto fail;
-    got++;
-    if (get_buf(args[11], &v[got], '?', cells, NULL, 1, "valid") < 0)
-        goto fail;
-    got++;
-    Py_ssize_t width = S ? cells / S : 0;
-    const Py_ssize_t *beams = v[4].buf;
-    for (Py_ssize_t s = 0; s < S; s++) {
-        if (beams[s] > width || width * S != cells) {
-            PyErr_Format(PyExc_ValueError, "occlude: ranges has %zd cells, not %zd rows of "
-                         "at least %zd beams", cells, S, beams[s]);
-            goto fail;
-        }
-    }
-    cut_sink sink = {0, NULL, NULL, NULL, v[10].buf, v[11].buf, width};
-    return run_cuts(args, v, S, N, &sink, got);
-fail:
-    release_all(v, got);
-    return NULL;
+    return disc_entry(args, nargs, 1);
 }
 
 static PyMethodDef methods[] = {

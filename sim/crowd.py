@@ -108,11 +108,28 @@ def _compiled_occlusions() -> tuple[Callable[..., int], Callable[..., int]] | No
 
 
 _KERNELS = _compiled_occlusions()
-# The kernel's inputs: one contiguous block of float64 or intp each (no copy when they are).
-_as_f = partial(np.ascontiguousarray, dtype=np.float64)
-_as_i = partial(np.ascontiguousarray, dtype=np.intp)
 #: Whether :func:`occlusions` runs compiled (False: numpy, the same numbers).
 COMPILED = _KERNELS is not None
+_as_f = partial(np.ascontiguousarray, dtype=np.float64)
+_as_i = partial(np.ascontiguousarray, dtype=np.intp)
+
+
+def _kernels(compiled: bool | None) -> tuple[Callable[..., int], Callable[..., int]] | None:
+    """Return the C loops to use for ``compiled`` (None: numpy); True without them raises."""
+    if compiled and _KERNELS is None:
+        raise ValueError("this install of mdle has no compiled occlusions")
+    return None if compiled is False else _KERNELS
+
+
+def _kernel_inputs(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarray,
+                   beams: np.ndarray, max_range: np.ndarray, skip: np.ndarray, discs: Discs
+                   ) -> tuple[np.ndarray, ...]:
+    """Return the C loops' scan and disc arguments: contiguous float64 or intp, each.
+
+    (No copy where an array already is.)
+    """
+    return (_as_f(ox), _as_f(oy), _as_f(first), _as_f(step), _as_i(beams), _as_f(max_range),
+            _as_i(skip), _as_f(discs.cx), _as_f(discs.cy), _as_f(discs.r))
 
 
 def occlusions(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarray,
@@ -134,15 +151,13 @@ def occlusions(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarr
     ``compiled``: the loop in C (True), numpy (False), or C where this install has it
     (None; :data:`COMPILED`). Both give the same arrays.
     """
-    if compiled and _KERNELS is None:
-        raise ValueError("this install of mdle has no compiled occlusions")
-    if _KERNELS is not None and compiled is not False:
+    kernels = _kernels(compiled)
+    if kernels is not None:
         n_scan = ox.shape[0]
         cap = int(beams.sum()) * len(discs) if n_scan else 0
         scan, beam, t = np.empty(cap, np.intp), np.empty(cap, np.intp), np.empty(cap)
-        n = _KERNELS[0](_as_f(ox), _as_f(oy), _as_f(first), _as_f(step), _as_i(beams),
-                        _as_f(max_range), _as_i(skip), _as_f(discs.cx), _as_f(discs.cy),
-                        _as_f(discs.r), scan, beam, t)
+        n = kernels[0](*_kernel_inputs(ox, oy, first, step, beams, max_range, skip, discs),
+                       scan, beam, t)
         return scan[:n], beam[:n], t[:n]
     dx = discs.cx[None, :] - ox[:, None]          # (S, N): each disc from each origin
     dy = discs.cy[None, :] - oy[:, None]
@@ -184,13 +199,10 @@ def occlude(ox: np.ndarray, oy: np.ndarray, first: np.ndarray, step: np.ndarray,
     itself and any disc's cut, and a cut beam is valid. ``compiled`` as for
     :func:`occlusions`; both paths leave the same numbers.
     """
-    if compiled and _KERNELS is None:
-        raise ValueError("this install of mdle has no compiled occlusions")
-    if _KERNELS is not None and compiled is not False and ranges.flags.c_contiguous \
-            and valid.flags.c_contiguous:
-        _KERNELS[1](_as_f(ox), _as_f(oy), _as_f(first), _as_f(step), _as_i(beams),
-                    _as_f(max_range), _as_i(skip), _as_f(discs.cx), _as_f(discs.cy),
-                    _as_f(discs.r), ranges, valid)
+    kernels = _kernels(compiled)
+    if kernels is not None and ranges.flags.c_contiguous and valid.flags.c_contiguous:
+        kernels[1](*_kernel_inputs(ox, oy, first, step, beams, max_range, skip, discs),
+                   ranges, valid)
         return
     scan, beam, t = occlusions(ox, oy, first, step, beams, max_range, skip, discs, compiled)
     np.minimum.at(ranges, (scan, beam), t)

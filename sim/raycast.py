@@ -584,9 +584,8 @@ class FanCaster:
             cs = [complex(x, y) * r for x, y, r in zip(ox.tolist(), oy.tolist(), rots,
                                                        strict=True)]
             if self._kernel is not None:    # every scan in one call
-                self._kernel(self._zw, caster._front_min, best, self._rel_s, self._dconj,
-                             np.array(rots), np.array(cs), np.array([kappa * c for c in cs]),
-                             _EPS_ANGLE, self._wrap_hi, self._may_wrap, _FUSED)
+                self._compiled(self._zw, caster._front_min, best, np.array(rots),
+                               np.array(cs), np.array([kappa * c for c in cs]))
             else:
                 rv = np.array([rots, [r.conjugate() for r in rots], rots, rots])[:, :, None]
                 off = np.array([cs, [c.conjugate() for c in cs], [kappa * c for c in cs],
@@ -621,7 +620,7 @@ class FanCaster:
                 front_min = front_min.take(idx)
         c = complex(ox, oy) * rot
         if self._kernel is not None:
-            self._compiled(zw, front_min, best, rot, c)
+            self._compiled(zw, front_min, best, rot, c, self._kappa * c)
             return
         rv, off = self._rv, self._off
         rv[0, 0] = rv[2, 0] = rv[3, 0] = rot
@@ -633,12 +632,17 @@ class FanCaster:
         np.subtract(z, off, z)                      # rows: q, conj(p), kappa p, e
         self._faces(z, front_min, best, 0, 0)
 
-    def _compiled(self, zw: np.ndarray, front_min: np.ndarray, best: np.ndarray, rot: complex,
-                  c: complex) -> None:
-        """:meth:`_faces` of the world rows ``zw`` turned by ``rot`` less ``c``, in C."""
+    def _compiled(self, zw: np.ndarray, front_min: np.ndarray, best: np.ndarray,
+                  rot: complex | np.ndarray, c: complex | np.ndarray,
+                  kc: complex | np.ndarray) -> None:
+        """:meth:`_faces` of the world rows ``zw`` turned by ``rot`` less ``c``, in C.
+
+        ``kc`` is ``kappa c`` as Python's complex product rounds it. One scan (complex
+        numbers, ``best`` (B,)) or ``S`` (arrays of them, ``best`` (S * B,)).
+        """
         assert self._kernel is not None
-        self._kernel(zw, front_min, best, self._rel_s, self._dconj, rot, c, self._kappa * c,
-                     _EPS_ANGLE, self._wrap_hi, self._may_wrap, _FUSED)
+        self._kernel(zw, front_min, best, self._rel_s, self._dconj, rot, c, kc, _EPS_ANGLE,
+                     self._wrap_hi, self._may_wrap, _FUSED)
 
     def _faces(self, z: np.ndarray, front_min: np.ndarray, best: np.ndarray, m: int,
                n_beam: int) -> None:
