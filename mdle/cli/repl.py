@@ -114,6 +114,11 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
         raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
                                    hint="e.g. --connect tcp://localhost:8101 or "
                                         "--connect serial:///dev/ttyS0"))
+    profile = None
+    if args.robot:  # read before connecting: a bad profile touches no robot
+        from mdle.sim.profiles import robot_profile
+
+        profile = robot_profile(args.robot)
     try:
         backend = open_backend("pioneer", args.connect, args.laser)
     except (KeyboardInterrupt, SystemExit):  # a signal while connecting: the backend
@@ -121,6 +126,10 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
         print("interrupted while connecting: robot stopped, session closed", file=sys.stderr)
         raise
     assert isinstance(backend, PioneerBackend), "open_backend('pioneer') makes a Pioneer"
+    if profile is not None:  # the law's latency and the ladar, as in `mdle run`
+        from mdle.drivers.profile import apply_robot_profile
+
+        apply_robot_profile(backend, profile)
     info = backend.info
     name = f"`{info.name or 'Pioneer'}` ({info.subtype or 'unknown model'})"
     try:

@@ -470,11 +470,10 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         from mdle.drivers.pioneer import PioneerBackend
 
         if profile is not None and isinstance(backend, PioneerBackend):
-            # the recording's base_link -> laser and scan period
-            x, y, th = profile.ladar_mount
-            backend.laser_mount = (float(x), float(y), float(th))
-            if profile.scan_period is not None:
-                backend.laser_timing = (profile.scan_period, 0.0)
+            # the law's latency, the recording's base_link -> laser and scan period
+            from mdle.drivers.profile import apply_robot_profile
+
+            apply_robot_profile(backend, profile)
         return backend, None
     from mdle import sim
 
