@@ -224,7 +224,8 @@ class PioneerBackend:
         self._last_command = -math.inf
         self._moving = False
         self._sent = Command()  # the last speeds sent, as they went on the wire (SI)
-        self._tick_start: float | None = None
+        self._tick_start: float | None = None  # the current tick's place on the grid
+        self._observed_at: float | None = None  # when observe() last ran (monotonic s)
         self._t0 = time.monotonic()
         self._assembler = arcos_laser.ScanAssembler(opt.laser_max_range_mm, opt.laser_fov_deg)
         self._old_sigterm: Any = None
@@ -278,8 +279,9 @@ class PioneerBackend:
         if self._closed:
             raise BackendError("the Pioneer connection is closed")
         now = time.monotonic()
-        if self._tick_start is None:
-            self._tick_start = now
+        # a run's first tick starts its grid (advance); an observation outside a run (a
+        # REPL's :pose, a report) must not, or the next run's first ticks come unpaced
+        self._observed_at = now
         with self._lock:
             s = self._shared
             odo, sip_stamp, failure, scan = s.odometry, s.sip_stamp, s.failure, s.scan
@@ -327,12 +329,15 @@ class PioneerBackend:
     def advance(self, dt: float) -> float:
         """Wait until this tick's wall-clock deadline (never longer); return the lateness.
 
-        Ticks are laid on a fixed grid from the first observation, so the rate does not
-        drift; after a tick later than a whole period the grid restarts from now. The
-        wait ends early if the connection is lost (the next observe reports it).
+        Ticks are laid on a fixed grid from the observation of a run's first tick (the
+        first since :meth:`stop`), so the rate does not drift; after a tick later than a
+        whole period the grid restarts from now. The wait ends early if the connection is
+        lost (the next observe reports it).
         """
         now = time.monotonic()
-        start = self._tick_start if self._tick_start is not None else now
+        start = self._tick_start
+        if start is None:  # the run's first tick: the grid starts at its observation
+            start = self._observed_at if self._observed_at is not None else now
         deadline = start + dt
         if deadline > now:
             self._lost.wait(deadline - now)
