@@ -123,7 +123,7 @@ class ScanSource(Protocol):
 #: The command latency laws predict over on an ARCOS server when no robot profile says
 #: otherwise (s): a command waits for the server's next read, acts at its next motion
 #: step and shows in the next SIP, 1.5 cycles of 100 ms on average (``pioneer-p3dx``,
-#: fitted on AMRISim, has 151 ms). With 0 the shipped corridor plan's law ran without
+#: fitted on AMRISim, has 170 ms). With 0 the shipped corridor plan's law ran without
 #: its lag prediction, and 11 of 44 doors took the robot below its 0.52 m side range.
 SERVER_LOOP_LATENCY = 0.15
 

@@ -50,7 +50,9 @@ def test_the_robot_profile_gives_the_law_its_latency(fake_robot: FakeRobot,
         assert isinstance(backend, PioneerBackend)
         profile = robot_profile("pioneer-p3dx")
         # what the simulator's laws see with this profile: the server loop's mean delay
-        assert math.isclose(backend.limits.command_latency, 0.0 + 1.5 * 0.1006)
+        assert math.isclose(backend.limits.command_latency,
+                            profile.command_latency + 1.5 * profile.control_cycle)
+        assert backend.limits.command_latency > 0.15
         assert backend.limits.command_latency == profile.limits.command_latency
         assert backend.limits.scan_latency == profile.limits.scan_latency > 0.0
         # the speed limits stay the robot's own (a P3-DX's working limits), not the profile's
