@@ -30,6 +30,7 @@ from mdle.cli.options import (
     world_beside,
     writable_output,
 )
+from mdle.cli.ros2 import add_ros2_options, ros2_options_given
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 
 if TYPE_CHECKING:
@@ -93,13 +94,14 @@ def add_parser(subparsers: Any) -> None:
                         "cheapest to write; lz4: about a third smaller)")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
-    p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
-                   help="where to run (default: sim)")
+    p.add_argument("--backend", choices=("sim", "pioneer", "ros2"), default="sim",
+                   help="where to run (default: sim; ros2: a ROS 2 robot, docs/ros2.md)")
     p.add_argument("--connect", metavar="URL",
                    help="robot connection for --backend pioneer (tcp://host:port, "
                         "serial:///dev/ttyS0)")
     p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
     add_simulation_options(p)
+    add_ros2_options(p)
     p.set_defaults(handler=run, own_signals=True)
 
 
@@ -246,8 +248,11 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.start is not None and args.backend != "sim":
         raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
                                          "starts where it stands"))
+    given = ros2_options_given(args)
+    if given is not None and args.backend != "ros2":
+        raise MdleError(Diagnostic(None, f"{given} is for a ROS 2 robot: it needs --backend ros2"))
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
-        else known_robot(None)
+        else known_robot(None, None, args.robot if args.backend == "ros2" else None)
     try:
         program = load_program(args.plan, settings=args.overrides, robot=robot)
     except MdleError as err:
@@ -446,6 +451,12 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     """
     from mdle.errors import Diagnostic, MdleError
 
+    if args.backend == "ros2":
+        from mdle.cli.ros2 import open_ros2_backend
+
+        header.update(ros2={"namespace": args.ns or "", "domain_id": args.domain_id},
+                      robot=args.robot)
+        return open_ros2_backend(args, args.rate), None
     if args.backend == "pioneer":
         if not args.connect:
             raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
