@@ -77,6 +77,27 @@ def test_a_plan_runs_over_ros2_with_the_simulators_element_sequence(
     assert ("main/cruise", "end") in expected and ("main/spin", "end") in expected
     assert element_sequence(tmp_path / "ros.jsonl") == expected
     assert _end(server) == 130
+    # the run's trace is a recording `mdle robots fit` fits a profile to
+    fit = subprocess.run(mdle_argv("robots", "fit", str(tmp_path / "ros.jsonl"), "-o",
+                                   str(tmp_path / "fitted.yaml")),
+                         env=procs.env, capture_output=True, text=True, timeout=300)
+    assert fit.returncode == 0, fit.stderr
+    assert "RMS" in fit.stdout and (tmp_path / "fitted.yaml").is_file()
+
+
+def test_the_repl_drives_a_ros2_robot_and_stops_it_on_quit(procs: Procs,
+                                                          tmp_path: Path) -> None:
+    server = _serve(procs, tmp_path, "--world", "empty")
+    session = subprocess.run(
+        mdle_argv("repl", "--backend", "ros2", "--yes", "--plain"),
+        input="atom fwd = (go(0.2 m/s), never, 2 s)\nfwd\n:quit\n", env=procs.env,
+        capture_output=True, text=True, timeout=120)
+    assert session.returncode == 0, session.stdout + session.stderr
+    assert "fwd (level 0) ended by timer at 2.00 s" in session.stdout
+    x = float(re.search(r"pose\s+x ([-\d.]+) m", session.stdout).group(1))  # type: ignore[union-attr]
+    assert 0.2 < x < 0.45   # 0.2 m/s for 2 s, less the ramp and the robot's lag
+    assert "robot stopped; connection to ROS 2 robot" in session.stderr
+    assert _end(server) == 130
 
 
 def test_a_two_robot_team_runs_in_namespaces(procs: Procs, tmp_path: Path) -> None:
