@@ -13,7 +13,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli.options import add_simulation_options, positive_seconds
-from mdle.cli.ros2 import add_ros2_options, ros2_options_given
+from mdle.cli.ros2 import add_ros2_options, check_ros2_options
 
 if TYPE_CHECKING:
     from mdle.repl.robot import RobotSession
@@ -80,12 +80,7 @@ def run(args: argparse.Namespace) -> int:
         raise MdleError(Diagnostic(None, f"{given} drives a robot: it needs --backend pioneer",
                                    hint="e.g. mdle repl --backend pioneer --connect "
                                         "tcp://localhost:8101 --laser sim"))
-    ros2_given = ros2_options_given(args)
-    if ros2_given is not None and args.backend != "ros2":
-        from mdle.errors import Diagnostic, MdleError
-
-        raise MdleError(Diagnostic(None, f"{ros2_given} is for a ROS 2 robot: it needs "
-                                         "--backend ros2"))
+    check_ros2_options(args)
     session: Session
     if args.backend == "ros2":
         session = _ros2_session(args, until)
@@ -150,7 +145,7 @@ def _ros2_session(args: argparse.Namespace, until: float | None) -> RobotSession
     from mdle.cli.ros2 import open_ros2_backend
     from mdle.repl.robot import RobotSession
 
-    backend = open_ros2_backend(args, 10.0)
+    backend = open_ros2_backend(args, 10.0, {})
     try:
         session = RobotSession(backend, connect=backend.description, laser=None,
                                until=until, armed=args.yes, name="the ROS 2 robot")

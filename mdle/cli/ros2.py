@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-__all__ = ["add_ros2_options", "open_ros2_backend", "ros2_options_given"]
+__all__ = ["add_ros2_options", "check_ros2_options", "open_ros2_backend"]
 
 
 def add_ros2_options(p: Any) -> None:
@@ -23,21 +23,27 @@ def add_ros2_options(p: Any) -> None:
                    help="with --backend ros2: the robot has no laser (no scan is awaited)")
 
 
-def ros2_options_given(args: argparse.Namespace) -> str | None:
-    """Return the first ROS 2 option given (to refuse it without --backend ros2), or None."""
+def check_ros2_options(args: argparse.Namespace) -> None:
+    """Refuse a ROS 2 option given without ``--backend ros2`` (an MdleError naming it)."""
+    if args.backend == "ros2":
+        return
     for flag, value in (("--ns", args.ns), ("--domain-id", args.domain_id),
                         ("--twist-stamped", args.twist_stamped),
                         ("--use-sim-time", args.use_sim_time), ("--no-laser", args.no_laser)):
         if value not in (None, False):
-            return flag
-    return None
+            from mdle.errors import Diagnostic, MdleError
+
+            raise MdleError(Diagnostic(None, f"{flag} is for a ROS 2 robot: it needs "
+                                             "--backend ros2",
+                                       hint="e.g. --backend ros2 --ns robot1 (docs/ros2.md)"))
 
 
-def open_ros2_backend(args: argparse.Namespace, rate: float) -> Any:
+def open_ros2_backend(args: argparse.Namespace, rate: float, header: dict[str, Any]) -> Any:
     """Return a connected :class:`~mdle.ros2.backend.Ros2Backend` for the options.
 
     The robot profile (``--robot``, else the default one) gives the limits commands are
-    clamped to and the laser's mount when ``tf_static`` has none.
+    clamped to and the laser's mount when ``tf_static`` has none. ``header`` (a trace
+    header) gets the namespace, domain and profile.
 
     Raises
     ------
@@ -58,6 +64,7 @@ def open_ros2_backend(args: argparse.Namespace, rate: float) -> Any:
         x, y, th = profile.ladar_mount
         mount = (float(x), float(y), float(th))
     period = profile.scan_period if profile.scan_period is not None else 0.1
+    header.update(ros2={"namespace": ns, "domain_id": domain}, robot=args.robot)
     options = Ros2Options(namespace=ns, domain=domain, twist_stamped=args.twist_stamped,
                           use_sim_time=args.use_sim_time, laser=not args.no_laser,
                           mount=mount)

@@ -1,5 +1,8 @@
 """``mdle run``: run a plan in the embedded simulator or on a robot.
 
+Over 500 lines: one command, whose options, backends (simulator, Pioneer, ROS 2) and
+outputs share one run's parts and its clean end from wherever it is interrupted.
+
 Exit codes: 0 the program ran to its end (or to ``--until``), 1 plan or world errors
 (shown as ``mdle check`` shows them) and robot or connection faults, 3 the robot
 collided or stalled fatally, 74 the trace or a recording could not be written (disk
@@ -30,7 +33,7 @@ from mdle.cli.options import (
     world_beside,
     writable_output,
 )
-from mdle.cli.ros2 import add_ros2_options, ros2_options_given
+from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 
 if TYPE_CHECKING:
@@ -248,9 +251,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.start is not None and args.backend != "sim":
         raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
                                          "starts where it stands"))
-    given = ros2_options_given(args)
-    if given is not None and args.backend != "ros2":
-        raise MdleError(Diagnostic(None, f"{given} is for a ROS 2 robot: it needs --backend ros2"))
+    check_ros2_options(args)
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
         else known_robot(None, None, args.robot if args.backend == "ros2" else None)
     try:
@@ -451,12 +452,8 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     """
     from mdle.errors import Diagnostic, MdleError
 
-    if args.backend == "ros2":
-        from mdle.cli.ros2 import open_ros2_backend
-
-        header.update(ros2={"namespace": args.ns or "", "domain_id": args.domain_id},
-                      robot=args.robot)
-        return open_ros2_backend(args, args.rate), None
+    if args.backend == "ros2":  # mdle/cli/ros2.py
+        return open_ros2_backend(args, args.rate, header), None
     if args.backend == "pioneer":
         if not args.connect:
             raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
