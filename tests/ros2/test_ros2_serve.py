@@ -1,0 +1,63 @@
+"""The simulator as a ROS 2 robot, stepped in this process (DDS on loopback)."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from mdle import sim
+from mdle.ros2 import types as msg
+from mdle.ros2.convert import twist_message
+from mdle.ros2.dds import Node, QosKind, take
+from mdle.ros2.serve import ServeOptions, SimServer
+
+
+def _server(dds_env: dict[str, str], world: str, **kw: object) -> SimServer:
+    options = ServeOptions(domain=int(dds_env["ROS_DOMAIN_ID"]), **kw)  # type: ignore[arg-type]
+    return SimServer(sim.load_world(world), options=options)
+
+
+def test_it_obeys_cmd_vel_publishes_at_its_rates_and_its_watchdog_stops_the_robot(
+        dds_env: dict[str, str]) -> None:
+    from mdle.backend import Command
+
+    server = _server(dds_env, "empty", namespace="/bot", cmd_timeout=0.3)
+    peer = Node(server.node.domain)
+    cmd = peer.writer("/bot/cmd_vel", msg.Twist, QosKind.RELIABLE)
+    odom = peer.reader("/bot/odom", msg.Odometry, QosKind.SENSOR)
+    scans = peer.reader("/bot/scan", msg.LaserScan, QosKind.SENSOR)
+    clock = peer.reader("/clock", msg.Clock, QosKind.SENSOR)
+    time.sleep(0.5)  # discovery
+    robot = server.robots[0]
+    for i in range(100):  # 1 s of simulated time, a command every 0.1 s
+        if i % 10 == 0:
+            cmd.write(twist_message(Command(0.3, 0.0)))
+        server.step()
+        time.sleep(0.001)
+    assert robot.commands > 0 and robot.backend.observe().v > 0.1
+    # the report cycle (the profile's, else every step), and once at the start
+    assert robot.published["odom"] == pytest.approx(1.0 / robot.period + 1, abs=1)
+    assert robot.published["scan"] >= 5
+    time.sleep(0.5)
+    got = take(odom, 100)
+    assert got and got[-1].header.frame_id == "bot/odom"
+    assert got[-1].child_frame_id == "bot/base_link" and got[-1].pose.pose.position.x > 0
+    assert take(scans, 100)[-1].header.frame_id == "bot/laser"
+    assert take(clock, 1000)[-1].clock.sec == 1
+    # no command for longer than the watchdog's limit: the server stops the robot
+    for _ in range(200):
+        server.step()
+    assert not robot.moving and robot.backend.observe().v == pytest.approx(0.0, abs=1e-6)
+
+
+def test_a_team_world_serves_each_robot_in_its_own_namespace(dds_env: dict[str, str],
+                                                             repo: object) -> None:
+    from pathlib import Path
+
+    assert isinstance(repo, Path)
+    server = _server(dds_env, str(repo / "plans/team/pair.world.yaml"), namespace="/lab")
+    assert [r.ns for r in server.robots] == ["/lab/leader", "/lab/follower"]
+    assert server.robots[1].frames["base_link"] == "lab/follower/base_link"
+    server.step()
+    assert all(r.published["odom"] >= 1 for r in server.robots)
