@@ -61,3 +61,35 @@ def test_a_team_world_serves_each_robot_in_its_own_namespace(dds_env: dict[str, 
     assert server.robots[1].frames["base_link"] == "lab/follower/base_link"
     server.step()
     assert all(r.published["odom"] >= 1 for r in server.robots)
+
+
+def test_every_endpoint_announces_its_ros2_type_hash_in_user_data(
+        dds_env: dict[str, str]) -> None:
+    from cyclonedds.builtin import (
+        BuiltinDataReader,
+        BuiltinTopicDcpsPublication,
+        BuiltinTopicDcpsSubscription,
+    )
+    from cyclonedds.qos import Policy
+
+    from mdle.ros2.typehash import type_hash
+
+    server = _server(dds_env, "empty")
+    peer = Node(server.node.domain)
+    expected = {("rt/odom", "nav_msgs::msg::dds_::Odometry_"): "nav_msgs/msg/Odometry",
+                ("rt/scan", "sensor_msgs::msg::dds_::LaserScan_"): "sensor_msgs/msg/LaserScan",
+                ("rt/tf", "tf2_msgs::msg::dds_::TFMessage_"): "tf2_msgs/msg/TFMessage",
+                ("rt/clock", "rosgraph_msgs::msg::dds_::Clock_"): "rosgraph_msgs/msg/Clock",
+                ("rt/cmd_vel", "geometry_msgs::msg::dds_::Twist_"): "geometry_msgs/msg/Twist"}
+    readers = [BuiltinDataReader(peer.participant, kind)
+               for kind in (BuiltinTopicDcpsPublication, BuiltinTopicDcpsSubscription)]
+    seen: dict[tuple[str, str], bytes | None] = {}
+    end = time.monotonic() + 10
+    while time.monotonic() < end and not set(expected) <= set(seen):
+        for reader in readers:
+            for s in reader.take(64):
+                data = s.qos[Policy.Userdata]
+                seen[(s.topic_name, s.type_name)] = None if data is None else data.data
+        time.sleep(0.05)
+    for key, ros_type in expected.items():
+        assert seen.get(key) == f"typehash={type_hash(ros_type)};".encode(), (key, seen)
