@@ -100,6 +100,9 @@ class SimServer:
             raise BackendError(f"the simulation step must be in (0, 1] s, got {opt.step:g}")
         if not (math.isfinite(opt.speed) and 0 < opt.speed <= 100):
             raise BackendError(f"the speed must be in (0, 100], got {opt.speed:g}")
+        if not (math.isfinite(opt.cmd_timeout) and opt.cmd_timeout >= 0):
+            raise BackendError(f"the command timeout must be 0 (never) or more seconds, got "
+                               f"{opt.cmd_timeout:g}")
         self.world = world
         self.team: Any = None
         self.node = Node(opt.domain, "")

@@ -51,3 +51,15 @@ def test_sim_serve_says_what_it_speaks(capsys: pytest.CaptureFixture[str]) -> No
     assert "--ros2" in capsys.readouterr().err
     assert main(["sim"]) == 2
     assert "mdle sim serve --ros2" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--speed", "0"], "the speed must be in (0, 100], got 0"),
+    (["--step", "nan"], "the simulation step must be in (0, 1] s, got nan"),
+    (["--cmd-timeout", "-1"], "the command timeout must be 0 (never) or more seconds, got -1"),
+    (["--ns", "a b"], "--ns `a b`: `a b` is not a ROS name part"),
+])
+def test_sim_serve_refuses_bad_numbers_and_names(capsys: pytest.CaptureFixture[str],
+                                                 args: list[str], message: str) -> None:
+    assert main(["sim", "serve", "--ros2", "--world", "empty", *args]) == 1
+    assert message in capsys.readouterr().err
