@@ -25,7 +25,7 @@ import threading
 import time
 import weakref
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.errors import BackendError
@@ -300,7 +300,10 @@ class Ros2Backend:
         else:  # the sender's wall clock: its age, where the clocks plausibly agree
             age = time.time() - stamp
             at = self._now() - (age if 0.0 <= age < 1.0 else 0.0)
-        return self._scan_reader.scan(m, yaw, at)
+        try:
+            return self._scan_reader.scan(m, yaw, at)
+        except ValueError as exc:  # a broken laser or driver: stop rather than guess
+            self._abort(f"a malformed scan on {self._node.topic_name('scan')}: {exc}")
 
     def _odometry(self, m: Any) -> tuple[Pose, float, float]:
         """Return the pose relative to the first odometry (REP-105 odom), v and omega."""
@@ -393,7 +396,7 @@ class Ros2Backend:
         else:
             self._cmd.write(twist)
 
-    def _abort(self, message: str) -> None:
+    def _abort(self, message: str) -> NoReturn:
         self.failure = message
         self.stop()
         raise BackendError(message)

@@ -132,9 +132,21 @@ class ScanReader:
         Beams that are not finite or lie outside [range_min, range_max] are not valid and
         hold ``range_max``; a laser that turns clockwise (negative increment) is read in
         reverse, so bearings always increase.
+
+        Raises
+        ------
+        ValueError
+            A scan no laser sends: no beams, or angles that are not finite numbers, or
+            several beams with no angle between them.
         """
         ranges = np.asarray(m.ranges, dtype=np.float64)
         n = len(ranges)
+        if n == 0:
+            raise ValueError("a scan without beams")
+        if not (math.isfinite(m.angle_min) and math.isfinite(m.angle_increment)
+                and (n == 1 or m.angle_increment != 0.0)):
+            raise ValueError(f"a scan of {n} beams from angle {m.angle_min} by "
+                             f"{m.angle_increment} rad")
         key = (m.angle_min, m.angle_increment, n, mount_yaw)
         if key != self._key:
             bearings: np.ndarray = m.angle_min + m.angle_increment * np.arange(n) + mount_yaw

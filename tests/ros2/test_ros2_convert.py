@@ -79,3 +79,16 @@ def test_the_laser_mount_composes_a_chain_of_static_transforms() -> None:
     assert mount_from_transforms(chain, "base_link", "base_link") == (0.0, 0.0, 0.0)
     assert mount_from_transforms(chain, "base_link", "sonar") is None
     assert mount_from_transforms(chain, "odom", "laser") is None
+
+
+@pytest.mark.parametrize(("fields", "message"), [
+    ({"ranges": []}, "a scan without beams"),
+    ({"ranges": [1.0, 2.0], "angle_increment": 0.0}, "a scan of 2 beams from angle"),
+    ({"ranges": [1.0], "angle_min": float("nan")}, "a scan of 1 beams from angle nan"),
+])
+def test_a_scan_no_laser_sends_is_refused(fields: dict[str, object], message: str) -> None:
+    m = msg.LaserScan(angle_min=-0.1, angle_increment=0.1, range_max=5.0)
+    for key, value in fields.items():
+        setattr(m, key, value)
+    with pytest.raises(ValueError, match=message):
+        ScanReader().scan(m, 0.0, 1.0)
