@@ -310,6 +310,9 @@ class Ros2Backend:
         from mdle.ros2.convert import odometry_values
 
         pose, v, omega = odometry_values(m)
+        if not all(math.isfinite(a) for a in (pose.x, pose.y, pose.theta, v, omega)):
+            self._abort(f"malformed odometry on {self._node.topic_name('odom')}: pose "
+                        f"({pose.x}, {pose.y}, {pose.theta}), speeds ({v}, {omega})")
         if self._origin is None:
             th = pose.theta
             self._origin = (pose.x, pose.y, math.cos(th), math.sin(th), th)

@@ -110,6 +110,16 @@ def test_commands_are_clamped_and_a_stale_scan_stops_the_robot(
     assert sent[-1] == (0.0, 0.0)
 
 
+def test_odometry_that_is_not_a_number_stops_the_robot(robot: FakeRobot,
+                                                       dds_env: dict[str, str]) -> None:
+    with _backend(dds_env) as backend:
+        backend.observe()
+        robot.pose = (math.nan, 3.0, 0.0)
+        time.sleep(0.2)
+        with pytest.raises(BackendError, match=r"malformed odometry on /r1/odom: pose \(nan"):
+            backend.observe()
+
+
 def test_twist_stamped_commands_carry_the_robot_frame(dds_env: dict[str, str]) -> None:
     robot = FakeRobot(int(dds_env["ROS_DOMAIN_ID"]), stamped=True)
     try:
