@@ -89,11 +89,11 @@ def test_the_repl_drives_a_ros2_robot_and_stops_it_on_quit(procs: Procs,
                                                           tmp_path: Path) -> None:
     server = _serve(procs, tmp_path, "--world", "empty")
     session = subprocess.run(
-        mdle_argv("repl", "--backend", "ros2", "--yes", "--plain"),
+        mdle_argv("repl", "--backend", "ros2", "--use-sim-time", "--yes", "--plain"),
         input="atom fwd = (go(0.2 m/s), never, 2 s)\nfwd\n:quit\n", env=procs.env,
         capture_output=True, text=True, timeout=120)
     assert session.returncode == 0, session.stdout + session.stderr
-    # the wall clock's ticks: the timer ends at the first tick at or after 2 s
+    # the timer ends at the first tick at or after 2 s of the simulator's clock
     assert re.search(r"fwd \(level 0\) ended by timer at 2\.[01]\d s", session.stdout), \
         session.stdout
     x = float(re.search(r"pose\s+x ([-\d.]+) m", session.stdout).group(1))  # type: ignore[union-attr]
