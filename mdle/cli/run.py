@@ -1,5 +1,8 @@
 """``mdle run``: run a plan in the embedded simulator or on a robot.
 
+Over 500 lines: one command, whose options, backends (simulator, Pioneer, ROS 2) and
+outputs share one run's parts and its clean end from wherever it is interrupted.
+
 Exit codes: 0 the program ran to its end (or to ``--until``), 1 plan or world errors
 (shown as ``mdle check`` shows them) and robot or connection faults, 3 the robot
 collided or stalled fatally, 74 the trace or a recording could not be written (disk
@@ -30,6 +33,7 @@ from mdle.cli.options import (
     world_beside,
     writable_output,
 )
+from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 
 if TYPE_CHECKING:
@@ -93,13 +97,14 @@ def add_parser(subparsers: Any) -> None:
                         "cheapest to write; lz4: about a third smaller)")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
-    p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
-                   help="where to run (default: sim)")
+    p.add_argument("--backend", choices=("sim", "pioneer", "ros2"), default="sim",
+                   help="where to run (default: sim; ros2: a ROS 2 robot, docs/ros2.md)")
     p.add_argument("--connect", metavar="URL",
                    help="robot connection for --backend pioneer (tcp://host:port, "
                         "serial:///dev/ttyS0)")
     p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
     add_simulation_options(p)
+    add_ros2_options(p)
     p.set_defaults(handler=run, own_signals=True)
 
 
@@ -246,8 +251,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.start is not None and args.backend != "sim":
         raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
                                          "starts where it stands"))
+    check_ros2_options(args)
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
-        else known_robot(None)
+        else known_robot(None, None, args.robot if args.backend == "ros2" else None)
     try:
         program = load_program(args.plan, settings=args.overrides, robot=robot)
     except MdleError as err:
@@ -446,6 +452,8 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     """
     from mdle.errors import Diagnostic, MdleError
 
+    if args.backend == "ros2":  # mdle/cli/ros2.py
+        return open_ros2_backend(args, args.rate, header), None
     if args.backend == "pioneer":
         if not args.connect:
             raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
