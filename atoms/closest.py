@@ -72,8 +72,9 @@ POINT_KAPPA = -100.0
 #: A fit whose residuals exceed this fraction of the range (plus 5 mm) is no circle: the
 #: nearest point is taken as a point (about 2.5 times the LMS-200's 0.8 % range noise).
 FIT_TOLERANCE = 0.02
-#: A remembered point counts once it is this far behind the ladar's -90 deg edge (rad).
-FOV_EDGE = math.radians(1.0)
+#: A remembered point counts once it is within this of the ladar's -90 deg edge or beyond
+#: it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind it.
+FOV_EDGE = math.radians(2.0)
 
 
 def nearest_point(z: "np.ndarray", reach: float, radius: float) -> Ray:
@@ -133,10 +134,28 @@ def nearest_point(z: "np.ndarray", reach: float, radius: float) -> Ray:
         return MISS
     n = q / rq  # unit line of sight, robot -> q
     t = complex(-n.imag, n.real)  # the tangent, obstacle on its right: i n
+    point = _ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)
     near = z[abs(z - q) < radius]
+    for _ in range(3):
+        # a window across a vertex or a cusp is no circle: halve it, then take the point
+        ray = _fit(near, q, rq, t, radius)
+        if ray is not None:
+            return ray
+        radius *= 0.5
+        near = near[abs(near - q) < radius]
+    return point
+
+
+def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -> Ray | None:
+    """Fit a circle to the points ``near`` around ``q``; None if they are not on one.
+
+    See :func:`nearest_point`; ``t`` is the unit tangent at ``q`` (``i q / |q|``).
+    """
+    import numpy as np
+
     m = near.shape[0]
     if m < 3:
-        return _ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)
+        return None
     w = (near - q) * t.conjugate()  # s + i h: s along t, h along i t = -n (towards the robot)
     s = w.real
     uu = w.real * w.real
@@ -147,35 +166,34 @@ def nearest_point(z: "np.ndarray", reach: float, radius: float) -> Ray:
     u1 = float(np.add.reduce(uu))
     u2 = float(np.dot(uu, uu))
     h2 = float(np.dot(w.imag, w.imag))
-    point = _ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)
     fit = _solve3(float(m), s1h0.real, u1, s2h1.real, suuh.real, u2,
                   s1h0.imag, s2h1.imag, suuh.imag)
     if fit is None:
-        return point
+        return None
     a, b, c = fit
     # residual sum of squares from the normal equations: a vertex or a cusp is no circle,
     # and a tip is what the robot turns around as a point
     rss = h2 - a * s1h0.imag - b * s2h1.imag - c * suuh.imag
     tol = FIT_TOLERANCE * rq + 0.005
     if rss > m * tol * tol:
-        return point
+        return None
     # the robot is at s = 0, h = rq
     gs, gh = 0.5 * b, c * rq - 0.5  # grad G / 2 there
     half = math.hypot(gs, gh)
     root2 = 0.25 * b * b + 0.25 - a * c
     if not (half > 0.0 and root2 > 0.0):
-        return point
+        return None
     r = -(c * rq * rq - rq + a) / (half + math.sqrt(root2))
     # direction robot -> nearest point in the local frame is grad G; the tangent is i times it
     nl = complex(gs, gh) / half
     foot = complex(0.0, rq) + r * nl  # the fitted nearest point, local frame
     if not (r > 0.0 and abs(foot) <= radius):
-        return point  # no extrapolation beyond the fitted points
+        return None  # no extrapolation beyond the fitted points
     tan_ = complex(-nl.imag, nl.real) * t  # back into the law's frame
     kappa = c / math.sqrt(root2)
     beta = math.atan2(tan_.imag, tan_.real)
     if not (math.isfinite(beta) and math.isfinite(kappa)):
-        return point
+        return None
     return _ray(True, r, beta, kappa)
 
 
@@ -313,14 +331,15 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     kept = _remembered(mem, x, y, theta)
     mode = FOLLOW
     if kept.hit:
-        behind = wrap(kept.beta - math.pi / 2.0) < -math.pi / 2.0 - FOV_EDGE
+        edge = wrap(kept.beta - math.pi / 2.0) < -math.pi / 2.0 + FOV_EDGE
         if not near.hit:
             # nothing on the followed side: circle the boundary point seen last, until the
             # scan shows the boundary again (a deflection, a face ending, a start that grazed)
             near, mode = kept, SEARCH
-        elif behind and kept.r < near.r - g.bridge:
-            # the point turned around (a vertex, the near side of a thin pole) has left the
-            # ladar's field of view: the faces it still sees are farther
+        elif edge and kept.r < near.r - (0.005 if near.kappa == POINT_KAPPA else g.bridge):
+            # the point turned around (a vertex, the near side of a thin pole) is at the edge
+            # of the ladar's field of view or beyond it: the faces it still sees are farther.
+            # (A fitted face must be farther by the bridge margin: its estimate is sound.)
             near, mode = kept, CORNER
     mem.mode = mode
     mem.time = t

@@ -125,6 +125,11 @@ REPORTS = {
         ("tangent", Report(ANGLE, f"boundary direction at the {ray} hit")),
         ("curvature", Report(CURVATURE, f"boundary curvature at the {ray} hit")))},
     "side_bearing": Report(ANGLE, "where the side ray looks (the followed side)"),
+    "near_hit": Report(flag=True, doc="the whole-scan model sees a boundary point to follow"),
+    "near_range": Report(LENGTH, "distance to the nearest boundary point followed (0: none)"),
+    "near_tangent": Report(ANGLE, "boundary direction at the nearest point followed"),
+    "near_curvature": Report(CURVATURE, "boundary curvature at the nearest point followed"),
+    "near_bearing": Report(ANGLE, "where the nearest point followed lies"),
     "rc": Report(LENGTH, "the distance kept from the boundary"),
     "mode": Report(codes=tuple(_MODE_CODES), doc="what the law is doing"),
     "lost": Report(TIME, "how long the boundary has been lost"),
@@ -205,8 +210,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                                                 side=1 if left else -1)
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
-    f = view.front  # the trace shows what was measured
-    s = side if state.scan_model else view.side
+    f, s = view.front, view.side  # the trace shows what the two rays measured
     if f.hit:
         fh, fr, fb, fk = 1.0, f.r, sgn * f.beta, sgn * f.kappa
     else:
@@ -219,9 +223,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     ctx.cache["trace"] = {
         "front_hit": fh, "front_range": fr, "front_tangent": fb, "front_curvature": fk,
         "side_hit": sh, "side_range": sr, "side_tangent": sb, "side_curvature": sk,
-        # where the side ray looks (the followed side), or where the nearest point lies
-        "side_bearing": sgn * (s.beta - math.pi / 2 if state.scan_model and s.hit
-                               else -math.pi / 2),
+        "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
+        **_near_trace(side if state.scan_model else steering.MISS, sgn),
         "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
         "mode": _MODE_CODES[mem.mode],
         "lost": mem.lost_for(ctx.t),
@@ -233,6 +236,16 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
 
 
 _command = builder(Command)
+
+
+def _near_trace(near: steering.Ray, sgn: float) -> dict[str, float]:
+    """Return the trace's fields of the nearest boundary point the law followed (law frame in)."""
+    if not near.hit:
+        return {"near_hit": 0.0, "near_range": 0.0, "near_tangent": 0.0, "near_curvature": 0.0,
+                "near_bearing": 0.0}
+    return {"near_hit": 1.0, "near_range": near.r, "near_tangent": sgn * near.beta,
+            "near_curvature": sgn * near.kappa,
+            "near_bearing": sgn * steering.wrap(near.beta - math.pi / 2)}
 
 
 def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:
