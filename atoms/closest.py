@@ -331,12 +331,12 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     kept = _remembered(mem, x, y, theta)
     mode = FOLLOW
     if kept.hit:
-        edge = wrap(kept.beta - math.pi / 2.0) < -math.pi / 2.0 + FOV_EDGE
         if not near.hit:
             # nothing on the followed side: circle the boundary point seen last, until the
             # scan shows the boundary again (a deflection, a face ending, a start that grazed)
             near, mode = kept, SEARCH
-        elif edge and kept.r < near.r - (0.005 if near.kappa == POINT_KAPPA else g.bridge):
+        elif kept.r < near.r - (0.005 if near.kappa == POINT_KAPPA else g.bridge) \
+                and _unseen(z, kept):
             # the point turned around (a vertex, the near side of a thin pole) is at the edge
             # of the ladar's field of view or beyond it: the faces it still sees are farther.
             # (A fitted face must be farther by the bridge margin: its estimate is sound.)
@@ -377,6 +377,23 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
 def _point_of(ray: Ray) -> complex:
     """Return the law-frame point a nearest-point ray stands for (bearing ``beta - pi/2``)."""
     return ray.r * complex(math.sin(ray.beta), -math.cos(ray.beta))
+
+
+def _unseen(z: "np.ndarray", kept: Ray) -> bool:
+    """Tell whether the scan leaves a remembered point standing (it may be out of view).
+
+    True when the point lies at or beyond the ladar's -90 deg edge (within
+    :data:`FOV_EDGE`), or when the beams at its bearing (within 1 deg) returned a point no
+    farther than it (by 5 cm): the scan did not see through it.
+    """
+    import numpy as np
+
+    bearing = kept.beta - math.pi / 2.0
+    if wrap(bearing) < -math.pi / 2.0 + FOV_EDGE:
+        return True
+    ang = np.angle(z)
+    at = z[abs(ang - bearing) < math.radians(1.0)]
+    return at.shape[0] > 0 and float(abs(at).min()) <= kept.r + 0.05
 
 
 def _remembered(mem: Memory, x: float, y: float, theta: float) -> Ray:
