@@ -67,6 +67,9 @@ FIT_RADIUS = 0.5
 #: The nearest point counts up to this many ``rc`` away (the two-ray law's front gate):
 #: anything the safety layer can swerve for is within it.
 REACH = 3.0
+#: A point is the nearest of its face when no beam within this many on either side is nearer
+#: (the doubling in :func:`next_nearest` is written for 10).
+WINDOW = 10
 #: The curvature of a point (a vertex, a tip, a pole seen by one beam): a circle of 1 cm.
 POINT_KAPPA = -100.0
 #: A fit whose residuals exceed this fraction of the range (plus 5 mm) is no circle: the
@@ -77,15 +80,13 @@ FIT_TOLERANCE = 0.02
 FOV_EDGE = math.radians(2.0)
 
 
-def nearest_point(z: "np.ndarray", reach: float, radius: float) -> Ray:
+def nearest_point(z: "np.ndarray", radius: float) -> Ray:
     """Return the nearest boundary point on the right of ``z`` as a :class:`Ray`.
 
     Parameters
     ----------
     z : complex array (M,)
         Scan points ``x + iy`` in the law's frame (right-hand; the caller mirrors for left).
-    reach : float, m
-        Points farther than this do not count (a miss).
     radius : float, m
         The points within this distance of the nearest one are fitted.
 
@@ -94,7 +95,7 @@ def nearest_point(z: "np.ndarray", reach: float, radius: float) -> Ray:
     Ray
         ``r`` the distance to the fitted boundary, ``beta`` its tangent's angle from the
         heading, ``kappa`` its curvature there (convex negative); :data:`MISS` when no
-        point on the right lies within ``reach``.
+        point lies on the right.
 
     A circle (or a line) ``h = a + b s + c (s^2 + h^2)`` is fitted by least squares in the
     frame of the nearest point ``q`` (``s`` perpendicular to the line of sight, ``h`` towards
@@ -112,38 +113,41 @@ def nearest_point(z: "np.ndarray", reach: float, radius: float) -> Ray:
     >>> import numpy as np
     >>> s = np.linspace(-0.3, 0.3, 31)
     >>> wall = s - 0.5j                       # a wall 0.5 m to the right, along the heading
-    >>> ray = nearest_point(wall, 1.5, 0.25)
+    >>> ray = nearest_point(wall, 0.25)
     >>> round(ray.r, 6), round(ray.beta, 6), round(ray.kappa, 6)
     (0.5, 0.0, 0.0)
     """
-    import numpy as np
-
-    if z.shape[0] == 0:
-        return MISS
     x, y = z.real, z.imag
     d2 = x * x
     d2 += y * y
-    d2 = np.where(y < 0.0, d2, math.inf)  # the followed (right) side only
-    k = int(d2.argmin())
+    return _nearest(z, d2, radius)[0]
+
+
+def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float) -> tuple[Ray, "np.ndarray | None"]:
+    """Return :func:`nearest_point` given the squared ranges, and the fitted points' mask."""
+    import numpy as np
+
+    if z.shape[0] == 0:
+        return MISS, None
+    # the followed (right) side only; squared ranges (a square root costs as much as a call)
+    k = int(np.where(z.imag < 0.0, d2, math.inf).argmin())
     r2 = float(d2[k])
-    if not r2 <= reach * reach:
-        return MISS
+    if not 0.0 < r2 < math.inf:
+        return MISS, None
     q = complex(z[k])
     rq = math.sqrt(r2)
-    if rq <= 0.0:
-        return MISS
     n = q / rq  # unit line of sight, robot -> q
     t = complex(-n.imag, n.real)  # the tangent, obstacle on its right: i n
-    point = _ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)
-    near = z[abs(z - q) < radius]
+    sel = abs(z - q) < radius
+    near = z[sel]
     for _ in range(3):
         # a window across a vertex or a cusp is no circle: halve it, then take the point
         ray = _fit(near, q, rq, t, radius)
         if ray is not None:
-            return ray
+            return ray, sel
         radius *= 0.5
         near = near[abs(near - q) < radius]
-    return point
+    return _ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA), sel
 
 
 def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -> Ray | None:
@@ -157,15 +161,13 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     if m < 3:
         return None
     w = (near - q) * t.conjugate()  # s + i h: s along t, h along i t = -n (towards the robot)
-    s = w.real
-    uu = w.real * w.real
-    uu += w.imag * w.imag  # s^2 + h^2
+    uu = (w * w.conjugate()).real  # s^2 + h^2
     s1h0 = complex(np.add.reduce(w))  # sum s + i sum h
-    s2h1 = complex(np.dot(s, w))  # sum s^2 + i sum s h
+    s2h1 = complex(np.dot(w.real, w))  # sum s^2 + i sum s h
     suuh = complex(np.dot(uu, w))  # sum s u + i sum u h
     u1 = float(np.add.reduce(uu))
     u2 = float(np.dot(uu, uu))
-    h2 = float(np.dot(w.imag, w.imag))
+    h2 = u1 - s2h1.real  # sum h^2
     fit = _solve3(float(m), s1h0.real, u1, s2h1.real, suuh.real, u2,
                   s1h0.imag, s2h1.imag, suuh.imag)
     if fit is None:
@@ -197,36 +199,38 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     return _ray(True, r, beta, kappa)
 
 
-def next_nearest(z: "np.ndarray", q: complex, radius: float, window: int) -> Ray:
-    """Return the nearest point of another face or object than the one near ``q``, as a point.
+def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray:
+    """Return the nearest point of another face or object than the one followed, as a point.
 
-    A point of the scan is the nearest of its face when its range is the least of the
-    ``window`` beams on either side (a local minimum of the distance to the robot: the line
-    of sight is perpendicular to the boundary there). The nearest such point farther than
-    ``radius`` from ``q`` and less than 45 deg left of the heading is the next face the
-    robot will meet: the next pillar of a row, the far disc of a cusp, the far wall of a
-    concave corner. Returned with the tangent perpendicular to the line of sight and the
-    curvature of a point; :data:`MISS` when there is none.
+    ``d2`` holds the points' squared ranges, ``fitted`` marks the points around the
+    nearest one (:func:`nearest_point`'s fit). A point is the nearest of its face when its
+    range is the least of the :data:`WINDOW` beams on either side (a local minimum of the
+    distance to the robot: the line of sight is perpendicular to the boundary there). The
+    nearest such point outside ``fitted`` and less than 45 deg left of the heading is the
+    next face the robot will meet: the next pillar of a row, the far disc of a cusp, the far
+    wall of a concave corner. Returned with the tangent perpendicular to the line of sight
+    and the curvature of a point; :data:`MISS` when there is none.
     """
     import numpy as np
-    from numpy.lib.stride_tricks import sliding_window_view
 
     m = z.shape[0]
     if m == 0:
         return MISS
-    x, y = z.real, z.imag
-    d2 = x * x
-    d2 += y * y
-    pad = np.full(m + 2 * window, math.inf)
-    pad[window:window + m] = d2
-    low = sliding_window_view(pad, 2 * window + 1).min(axis=1)
+    w = WINDOW
+    pad = np.full(m + 2 * w, math.inf)
+    pad[w:w + m] = d2
+    # the least of 2 w + 1 neighbours by doubling: windows of 2, 4, 8, 16, then 21 beams
+    low = np.minimum(pad[:-1], pad[1:])
+    low = np.minimum(low[:-2], low[2:])
+    low = np.minimum(low[:-4], low[4:])
+    low = np.minimum(low[:-8], low[8:])
+    low = np.minimum(low[:-5], low[5:])
     ok = d2 <= low
-    ok &= y < x  # less than 45 deg left of the heading
-    ok &= abs(z - q) > radius
-    d2 = np.where(ok, d2, math.inf)
-    k = int(d2.argmin())
+    ok &= z.imag < z.real  # less than 45 deg left of the heading
+    ok = np.greater(ok, fitted)  # and not the face followed (ok and not fitted)
+    k = int(np.where(ok, d2, math.inf).argmin())
     r2 = float(d2[k])
-    if not (0.0 < r2 < math.inf):
+    if not (ok[k] and 0.0 < r2 < math.inf):
         return MISS
     p = complex(z[k])
     return _ray(True, math.sqrt(r2), math.atan2(p.real, -p.imag), POINT_KAPPA)
@@ -327,7 +331,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     umax = g.umax if umax is None else umax
     x, y, theta = pose
     front = _valid_front(front, rc, g)
-    near = nearest_point(z, math.inf, FIT_RADIUS * rc)
+    d2 = z.real * z.real  # squared ranges, shared by the nearest point and the next face
+    d2 += z.imag * z.imag
+    near, fitted = _nearest(z, d2, FIT_RADIUS * rc)
     kept = _remembered(mem, x, y, theta)
     mode = FOLLOW
     if kept.hit:
@@ -361,7 +367,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         mem.near = foot
         mem.seen, mem.seen_at = foot, t
     u = closest_rate(near.r, near.beta, k, v, rc, g, umax)
-    ahead = next_nearest(z, _point_of(near), FIT_RADIUS * rc, 10)
+    if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
+        fitted = abs(z - _point_of(near)) < FIT_RADIUS * rc
+    ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
     if ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)

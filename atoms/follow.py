@@ -117,19 +117,18 @@ def scan_points_complex(ctx: Context) -> Any:
     return z
 
 
+#: With ``model = scan`` the side fields describe the nearest boundary point the law followed.
+_NEAREST = {"front": "", "side": " (model = scan: the nearest boundary point followed)"}
 #: What ``follow_boundary`` records each tick (``ctx.cache["trace"]``), with units.
 REPORTS = {
     **{f"{ray}_{key}": report for ray in ("front", "side") for key, report in (
-        ("hit", Report(flag=True, doc=f"the {ray} ray sees the boundary")),
-        ("range", Report(LENGTH, f"distance along the {ray} ray (0 without a hit)")),
+        ("hit", Report(flag=True, doc=f"the {ray} ray sees the boundary" + _NEAREST[ray])),
+        ("range", Report(LENGTH, f"distance along the {ray} ray (0 without a hit)"
+                                 + _NEAREST[ray])),
         ("tangent", Report(ANGLE, f"boundary direction at the {ray} hit")),
         ("curvature", Report(CURVATURE, f"boundary curvature at the {ray} hit")))},
-    "side_bearing": Report(ANGLE, "where the side ray looks (the followed side)"),
-    "near_hit": Report(flag=True, doc="the whole-scan model sees a boundary point to follow"),
-    "near_range": Report(LENGTH, "distance to the nearest boundary point followed (0: none)"),
-    "near_tangent": Report(ANGLE, "boundary direction at the nearest point followed"),
-    "near_curvature": Report(CURVATURE, "boundary curvature at the nearest point followed"),
-    "near_bearing": Report(ANGLE, "where the nearest point followed lies"),
+    "side_bearing": Report(ANGLE, "where the side ray looks (the followed side), or where "
+                           "the nearest point followed lies (model = scan)"),
     "rc": Report(LENGTH, "the distance kept from the boundary"),
     "mode": Report(codes=tuple(_MODE_CODES), doc="what the law is doing"),
     "lost": Report(TIME, "how long the boundary has been lost"),
@@ -172,7 +171,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     g = state.gains
     v = float(args["v"])
     rc = float(args["rc"])
-    view = cached_view(ctx, state.side)
+    # the whole-scan model reads the side from every scan point: the side ray's fit is skipped
+    view = cached_view(ctx, state.side, with_side=not state.scan_model)
     obs = ctx.obs
     pose = obs.pose
     left = state.side is Side.LEFT
@@ -210,7 +210,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                                                 side=1 if left else -1)
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
-    f, s = view.front, view.side  # the trace shows what the two rays measured
+    f = view.front  # the trace shows what was measured (the side: what the law followed)
+    s = side if state.scan_model else view.side
     if f.hit:
         fh, fr, fb, fk = 1.0, f.r, sgn * f.beta, sgn * f.kappa
     else:
@@ -223,8 +224,9 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     ctx.cache["trace"] = {
         "front_hit": fh, "front_range": fr, "front_tangent": fb, "front_curvature": fk,
         "side_hit": sh, "side_range": sr, "side_tangent": sb, "side_curvature": sk,
-        "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
-        **_near_trace(side if state.scan_model else steering.MISS, sgn),
+        # where the side ray looks (the followed side), or where the nearest point lies
+        "side_bearing": sgn * (steering.wrap(s.beta - math.pi / 2) if state.scan_model and s.hit
+                               else -math.pi / 2),
         "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
         "mode": _MODE_CODES[mem.mode],
         "lost": mem.lost_for(ctx.t),
@@ -236,16 +238,6 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
 
 
 _command = builder(Command)
-
-
-def _near_trace(near: steering.Ray, sgn: float) -> dict[str, float]:
-    """Return the trace's fields of the nearest boundary point the law followed (law frame in)."""
-    if not near.hit:
-        return {"near_hit": 0.0, "near_range": 0.0, "near_tangent": 0.0, "near_curvature": 0.0,
-                "near_bearing": 0.0}
-    return {"near_hit": 1.0, "near_range": near.r, "near_tangent": sgn * near.beta,
-            "near_curvature": sgn * near.kappa,
-            "near_bearing": sgn * steering.wrap(near.beta - math.pi / 2)}
 
 
 def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:
