@@ -64,17 +64,19 @@ _ray = builder(Ray)
 #: Points within this many ``rc`` of the nearest point are fitted (0.25 m at rc 0.5: about
 #: as much wall as the two-ray law's 30-degree side window, and no more than one pole).
 FIT_RADIUS = 0.5
-#: The nearest point counts up to this many ``rc`` away (the two-ray law's front gate):
-#: anything the safety layer can swerve for is within it.
+#: With nothing on the followed side, a point on the other side counts up to this many
+#: ``rc`` away (the two-ray law's front gate): anything the safety layer can swerve for.
 REACH = 3.0
 #: A point is the nearest of its face when no beam within this many on either side is nearer
 #: (the doubling in :func:`next_nearest` is written for 10).
 WINDOW = 10
+#: Neighbouring points farther apart than this lie on different surfaces (m).
+JUMP = 0.2
 #: The curvature of a point (a vertex, a tip, a pole seen by one beam): a circle of 1 cm.
 POINT_KAPPA = -100.0
-#: A fit whose residuals exceed this fraction of the range (plus 5 mm) is no circle: the
-#: nearest point is taken as a point (about 2.5 times the LMS-200's 0.8 % range noise).
-FIT_TOLERANCE = 0.02
+#: A fit whose residuals exceed this fraction of the range (plus 3 mm) is no circle: the
+#: nearest point is taken as a point (1.5 times the LMS-200's 0.8 % range noise).
+FIT_TOLERANCE = 0.012
 #: A remembered point counts once it is within this of the ladar's -90 deg edge or beyond
 #: it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind it.
 FOV_EDGE = math.radians(2.0)
@@ -123,16 +125,29 @@ def nearest_point(z: "np.ndarray", radius: float) -> Ray:
     return _nearest(z, d2, radius)[0]
 
 
-def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float) -> tuple[Ray, "np.ndarray | None"]:
-    """Return :func:`nearest_point` given the squared ranges, and the fitted points' mask."""
+def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float = 0.0
+             ) -> tuple[Ray, "np.ndarray | None"]:
+    """Return :func:`nearest_point` given the squared ranges, and the fitted points' mask.
+
+    With nothing on the right, the nearest point on the left counts if it lies within
+    :data:`REACH` x ``reach_rc``.
+    """
     import numpy as np
 
     if z.shape[0] == 0:
         return MISS, None
     # the followed (right) side only; squared ranges (a square root costs as much as a call)
-    k = int(np.where(z.imag < 0.0, d2, math.inf).argmin())
-    r2 = float(d2[k])
-    if not 0.0 < r2 < math.inf:
+    right = np.where(z.imag < 0.0, d2, math.inf)
+    k = int(right.argmin())
+    r2 = float(right[k])
+    if not r2 < math.inf:
+        # nothing on the followed side: something seen near on the other side is followed
+        # too (the law turns to put it on the followed side), up to the reach
+        k = int(d2.argmin())
+        r2 = float(d2[k])
+        if not r2 < (REACH * reach_rc) ** 2:
+            return MISS, None
+    if not r2 > 0.0:
         return MISS, None
     q = complex(z[k])
     rq = math.sqrt(r2)
@@ -140,7 +155,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float) -> tuple[Ray, "np
     t = complex(-n.imag, n.real)  # the tangent, obstacle on its right: i n
     sel = abs(z - q) < radius
     near = z[sel]
-    for _ in range(3):
+    for _ in range(2):
         # a window across a vertex or a cusp is no circle: halve it, then take the point
         ray = _fit(near, q, rq, t, radius)
         if ray is not None:
@@ -176,7 +191,7 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     # residual sum of squares from the normal equations: a vertex or a cusp is no circle,
     # and a tip is what the robot turns around as a point
     rss = h2 - a * s1h0.imag - b * s2h1.imag - c * suuh.imag
-    tol = FIT_TOLERANCE * rq + 0.005
+    tol = FIT_TOLERANCE * rq + 0.003
     if rss > m * tol * tol:
         return None
     # the robot is at s = 0, h = rq
@@ -226,6 +241,12 @@ def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray
     low = np.minimum(low[:-8], low[8:])
     low = np.minimum(low[:-5], low[5:])
     ok = d2 <= low
+    # points of other surfaces (beyond a depth jump) count too: in the list of valid points
+    # a surface's neighbours across a gap in the scan can hide its local minimum
+    seg = np.empty(m, dtype=np.intp)
+    seg[0] = 0
+    np.cumsum(abs(z[1:] - z[:-1]) > JUMP, out=seg[1:])
+    ok |= seg != seg[int(fitted.argmax())]  # the surface of the face followed
     ok &= z.imag < z.real  # less than 45 deg left of the heading
     ok = np.greater(ok, fitted)  # and not the face followed (ok and not fitted)
     k = int(np.where(ok, d2, math.inf).argmin())
@@ -333,7 +354,7 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     front = _valid_front(front, rc, g)
     d2 = z.real * z.real  # squared ranges, shared by the nearest point and the next face
     d2 += z.imag * z.imag
-    near, fitted = _nearest(z, d2, FIT_RADIUS * rc)
+    near, fitted = _nearest(z, d2, FIT_RADIUS * rc, rc)
     kept = _remembered(mem, x, y, theta)
     mode = FOLLOW
     if kept.hit:
