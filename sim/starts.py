@@ -199,14 +199,15 @@ def blind_side_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
 
 
 def tangential_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
-                      side: str = "right") -> list[Start]:
+                      side: str = "right", ladar: float = 0.0) -> list[Start]:
     """Draw ``n`` seeded starts passing an outermost point of the obstacles tangentially.
 
     A direction ``e`` is drawn uniformly; the obstacles' outermost point ``P`` that way (the
     vertex of their outline furthest along ``e``: a spike's tip, a pole, a plate's end face)
     is passed at a lateral distance drawn in :data:`PASS`, heading square to ``e`` with
     ``P`` on the followed side (on the right for ``side="right"``). Half the starts have
-    ``P`` exactly abeam, the others start 0.5-3 m before it. Nothing else may be nearer
+    ``P`` exactly abeam of the ladar (``ladar`` metres ahead of the robot's centre: ``P`` at
+    its -90 deg beam), the others start 0.5-3 m before that. Nothing else may be nearer
     than 0.4 m. ``gap`` records the lateral distance, ``incidence`` is NaN (a pass, not an
     approach), ``distance`` the distance to the nearest boundary.
 
@@ -231,7 +232,7 @@ def tangential_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
         gap = rng.uniform(PASS[0], PASS[1], _BATCH)
         before = np.where(rng.uniform(size=_BATCH) < 0.5, 0.0,
                           rng.uniform(0.5, 3.0, _BATCH))
-        xy = tip + gap[:, None] * e - before[:, None] * h
+        xy = tip + gap[:, None] * e - (before + ladar)[:, None] * h
         dist = np.asarray(world.nearest_boundary(xy).distance)
         ok = (dist >= 0.4) & ~np.asarray(world.inside(xy))
         for i in np.flatnonzero(ok):

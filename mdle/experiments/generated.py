@@ -157,6 +157,7 @@ def study_specs(config: StudyConfig) -> list[RunSpec]:
     ``(seed, i, 2)`` (blind side): the same shapes and starts whatever the law.
     """
     from mdle.sim.generated import generate_shape
+    from mdle.sim.profiles import robot_profile
     from mdle.sim.starts import blind_side_starts, collision_starts, tangential_starts
 
     if config.suite not in ("paper", "lab"):
@@ -169,7 +170,8 @@ def study_specs(config: StudyConfig) -> list[RunSpec]:
                                                 config.side))]
         if config.tangential:
             kinds.append(("tangential", tangential_starts(
-                world, config.tangential, (config.seed, index, 3), config.side)))
+                world, config.tangential, (config.seed, index, 3), config.side,
+                ladar=robot_profile(config.robot).ladar_mount[0])))
         if config.blind:
             kinds.append(("blind", blind_side_starts(world, config.starts,
                                                      (config.seed, index, 2), config.side)))
