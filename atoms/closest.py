@@ -77,8 +77,8 @@ POINT_KAPPA = -100.0
 #: A fit whose residuals exceed this fraction of the range (plus 3 mm) is no circle: the
 #: nearest point is taken as a point (1.5 times the LMS-200's 0.8 % range noise).
 FIT_TOLERANCE = 0.012
-#: A remembered point counts once it is within this of the ladar's -90 deg edge or beyond
-#: it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind it.
+#: A remembered point counts once it is within this of an edge of the ladar's 180 degrees or
+#: beyond it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind.
 FOV_EDGE = math.radians(2.0)
 
 
@@ -411,14 +411,15 @@ def _point_of(ray: Ray) -> complex:
 def _unseen(z: "np.ndarray", kept: Ray) -> bool:
     """Tell whether the scan leaves a remembered point standing (it may be out of view).
 
-    True when the point lies at or beyond the ladar's -90 deg edge (within
-    :data:`FOV_EDGE`), or when the beams at its bearing (within 1 deg) returned a point no
-    farther than it (by 5 cm): the scan did not see through it.
+    True when the point lies at or beyond an edge of the ladar's 180 degrees (within
+    :data:`FOV_EDGE`: behind the robot, on either side), or when the beams at its bearing
+    (within 1 deg) returned a point no farther than it (by 5 cm): the scan did not see
+    through it.
     """
     import numpy as np
 
-    bearing = kept.beta - math.pi / 2.0
-    if wrap(bearing) < -math.pi / 2.0 + FOV_EDGE:
+    bearing = wrap(kept.beta - math.pi / 2.0)
+    if abs(bearing) > math.pi / 2.0 - FOV_EDGE:  # at the edge of the field of view or behind
         return True
     ang = np.angle(z)
     at = z[abs(ang - bearing) < math.radians(1.0)]
