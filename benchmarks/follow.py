@@ -5,7 +5,9 @@
 The observations of a real 20 s run (the ideal unicycle following the hexagon at 1 m/s,
 noisy LMS-200 scan, 50 Hz) are recorded once; then the atom's step is replayed over them
 with a fresh tick context each time (so nothing is cached across ticks), and so are its
-parts: the boundary view alone and the scan points the safety layer reads. The law, the
+parts: the boundary view alone and the scan points the safety layer reads, and the same
+step on the paper's two rays (``model = rays``, the previous release's law), in alternating
+rounds: the ratio of the two is the whole-scan model's cost. The law, the
 latency bookkeeping and the safety layer are the difference. Each figure is the best of
 ``--repeat`` rounds, in microseconds per tick; the shares are ratios within the process,
 which stay meaningful on a loaded machine. Last, a whole controlled tick is timed
