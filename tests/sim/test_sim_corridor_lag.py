@@ -26,8 +26,8 @@ def _corridor(robot: str, latency: str, clock: RunClock | None = None,
               damping: str = "scaled") -> list[Sample]:
     """Run the paper's corridor plan, its law's latency prediction set to ``latency``."""
     path = PLANS / "fig6-corridor.mdle"
-    text = path.read_text().replace("kf = 2,", f"kf = 2, latency = {latency}, "
-                                               f"damping = {damping},")
+    text = path.read_text().replace("kf = 2)", f"kf = 2, latency = {latency}, "
+                                               f"damping = {damping})")
     assert "latency" in text
     program = load_text(text, file=str(path))
     backend = SimBackend(load_world(PLANS / "fig6-corridor.world.yaml"), robot=robot,
