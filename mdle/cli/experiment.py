@@ -152,7 +152,8 @@ def _run(tasks: list[Any], args: argparse.Namespace, out: Path | None) -> list[A
 
 
 #: Options that only the generated study reads.
-_GENERATED_ONLY = ("shapes", "starts", "robot", "rc", "kf", "csv", "tolerance")
+_GENERATED_ONLY = ("shapes", "starts", "robot", "rc", "kf", "csv", "tolerance", "suite",
+                   "tangential")
 
 
 def _misplaced(args: argparse.Namespace) -> str:
