@@ -291,6 +291,7 @@ class DimensionChecks(CheckerState):
         if key in self._cache:
             self._replay(key)
             return self._cache[key]
+        self._expand(d, call)
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
         self._use_stack.append([])
