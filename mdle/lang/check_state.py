@@ -123,7 +123,9 @@ class CheckerState(ABC):
         self._too_deep = False
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
-        self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
+        self._pools: dict[tuple[Any, ...], dict[int | str, list[str]]] = {}  # _closest's indexes
+        self._readable: list[str] | None = None  # the names any condition may read
+        self._element_pools: dict[bool, list[str]] = {}  # element names (True: and laws)
         self._spec_slots: dict[int, list[_Slot]] = {}  # by id of a law or sensor function
         self._def_slots: dict[int, list[_Slot]] = {}  # by id of a definition
         #: Names defined by statements that did not parse: uses of them are not errors
@@ -247,7 +249,8 @@ class CheckerState(ABC):
         """Record the channels and robots a call names (:mod:`~mdle.lang.check_names`)."""
 
     @abstractmethod
-    def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
+    def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str],
+                 shared: list[str] | None = None) -> None:
         """Report an unknown name (:mod:`~mdle.lang.check_names`)."""
 
     @abstractmethod
