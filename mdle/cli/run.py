@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
+from mdle.cli.clobber import refuse_clobbering, run_inputs, run_outputs
 from mdle.cli.options import (
     DEFAULT_RATE,
     add_simulation_options,
@@ -257,6 +258,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
                           f"`mdle run PLAN.mdle --world {args.plan}`") from None
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
+    refuse_clobbering(run_outputs(args), run_inputs(args, program.sources))
     element = element_of(program, args.element)
     parts.header["program"].update(element=element.label, entry=program.entry)
     if args.overrides:
