@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.cli import generated_study, output
+from mdle.cli.options import hertz
 
 __all__ = ["add_parser", "run"]
 
@@ -50,7 +51,7 @@ def add_parser(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]"
                    help="random-starts (paper shapes): runs per shape (default 50)")
     p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
                    help="following/random-starts: length of each run")
-    p.add_argument("--rate", type=float, default=None, metavar="HZ",
+    p.add_argument("--rate", type=hertz, default=None, metavar="HZ",
                    help="random-starts: control rate (default: 50 Hz scan, 100 Hz exact; "
                         "--generated: 10 Hz)")
     p.add_argument("--v", type=float, default=None, metavar="M/S",

@@ -26,12 +26,14 @@ from mdle.cli.clobber import refuse_clobbering, run_inputs, run_outputs
 from mdle.cli.options import (
     DEFAULT_RATE,
     add_simulation_options,
+    hertz,
     known_robot,
     seconds,
     world_beside,
     writable_output,
 )
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
+from mdle.ranges import COORDINATE
 
 if TYPE_CHECKING:
     from mdle.live import LiveView
@@ -80,7 +82,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--realtime", action="store_true",
                    help="pace the simulation to the wall clock")
     # default None: a team file's `rate:` applies unless --rate is given (even --rate 10)
-    p.add_argument("--rate", type=_hertz, default=None, metavar="HZ",
+    p.add_argument("--rate", type=hertz, default=None, metavar="HZ",
                    help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle; with a "
                         "team, the team file's rate:)")
     p.add_argument("--trace", metavar="FILE.jsonl", help="write the run's trace (JSON lines)")
@@ -102,16 +104,6 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
     add_simulation_options(p)
     p.set_defaults(handler=run, own_signals=True)
-
-
-def _hertz(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a rate in Hz, got {text!r}") from None
-    if not 0 < value <= 1000:
-        raise argparse.ArgumentTypeError(f"the rate must be in (0, 1000] Hz, got {text!r}")
-    return value
 
 
 def start_pose(text: str) -> tuple[float, float, float]:
@@ -152,6 +144,9 @@ def start_pose(text: str) -> tuple[float, float, float]:
         value = float(m.group(1)) * factor
         if not math.isfinite(value):
             raise argparse.ArgumentTypeError(f"{name} of --start must be finite")
+        problem = COORDINATE.problem(value, part.strip()) if dim == LENGTH else None
+        if problem is not None:
+            raise argparse.ArgumentTypeError(f"{name} of --start: {problem}")
         out.append(value)
     return out[0], out[1], out[2]
 

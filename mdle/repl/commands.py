@@ -35,6 +35,7 @@ from mdle.backend import Pose
 from mdle.cli.output import print_diagnostics
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
+from mdle.ranges import COORDINATE
 from mdle.repl import views
 from mdle.repl.reports import RunReport
 from mdle.repl.session import ReplError, Session
@@ -337,8 +338,8 @@ class Repl:
             if len(args) not in (2, 3):
                 raise ReplError(":reset takes no argument (the world's start) or X Y [THETA] "
                                 "(metres, metres, degrees)")
-            x = _finite(args[0], "x")
-            y = _finite(args[1], "y")
+            x = _coordinate(args[0], "x")
+            y = _coordinate(args[1], "y")
             th = math.radians(_finite(args[2], "theta")) if len(args) == 3 else 0.0
             pose = Pose(x, y, th)
         here = self.session.reset(pose)
@@ -503,6 +504,14 @@ def _number(text: str, what: str) -> float:
         raise ReplError(f"{what} must be a number, got `{text}`") from None
     if math.isnan(value):
         raise ReplError(f"{what} must be a number, got `{text}`")
+    return value
+
+
+def _coordinate(text: str, what: str) -> float:
+    value = _finite(text, what)
+    problem = COORDINATE.problem(value, text)
+    if problem is not None:
+        raise ReplError(f"{what}: {problem}")
     return value
 
 
