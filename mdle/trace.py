@@ -33,7 +33,7 @@ from typing import IO, TYPE_CHECKING, Any
 from mdle.backend import Scan
 from mdle.errors import Diagnostic, MdleError, Span
 from mdle.runtime.events import Collision, Event, RunResult, Sample
-from mdle.userfile import UserFileError, open_user_file
+from mdle.userfile import UserFileError, open_user_file, os_reason
 
 if TYPE_CHECKING:
     import numpy as np
@@ -711,8 +711,12 @@ def _records(path: str) -> Iterator[tuple[int, bytes]]:
         raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: {err.reason}")) \
             from None
     with raw as f:
-        for n, line in enumerate(f, 1):
-            yield n, line
+        try:
+            for n, line in enumerate(f, 1):
+                yield n, line
+        except OSError as err:
+            raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: "
+                                              f"{os_reason(err)}")) from None
 
 
 def _decode(line: bytes) -> tuple[str | None, str]:

@@ -97,7 +97,12 @@ def read_user_file(path: str | os.PathLike[str], limit: int = MAX_FILE_BYTES) ->
         As :func:`open_user_file`, or the file grew past ``limit`` while being read.
     """
     with open_user_file(path, limit) as f:
-        data = f.read(limit + 1)
+        try:
+            data = f.read(limit + 1)
+        except OSError as err:  # EIO from a failing disk, a file vanished from a share
+            name = os.fspath(path)
+            raise UserFileError(name if isinstance(name, str) else repr(name),
+                                os_reason(err)) from None
     if len(data) > limit:
         raise UserFileError(os.fspath(path) if isinstance(os.fspath(path), str) else repr(path),
                             f"it grew past {_size(limit)} while being read")

@@ -113,11 +113,18 @@ def _sweep(args: argparse.Namespace) -> int:
         executor = LocalExecutor(args.jobs)
         where = f"{executor.jobs} local processes" + (
             "" if args.jobs else f" (all {default_jobs()} cores)")
+    from mdle.errors import MdleError
+    from mdle.userfile import UserFileError, read_user_file
+
+    try:  # read again for the results folder's copy: the file may have gone meanwhile
+        spec_text = read_user_file(spec_path).decode("utf-8", "replace")
+    except UserFileError as err:
+        raise MdleError(str(err)) from None
     progress = _RichProgress(where)
     old = signal.signal(signal.SIGTERM, _as_interrupt)
     try:
         summary = run_sweep(study, out, executor=executor, progress=progress,
-                            spec_text=spec_path.read_text(encoding="utf-8"))
+                            spec_text=spec_text)
     finally:
         signal.signal(signal.SIGTERM, old)
     tail = f"; Parquet: {summary.parquet}" if summary.parquet else ""

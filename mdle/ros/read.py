@@ -53,12 +53,18 @@ def read_recording(path: str | os.PathLike[str]) -> Trace:
         if found is None:
             raise _error(path, "no .mcap file in this rosbag2 folder")
         source = found
-    try:
-        f = open(source, "rb")
-    except OSError as exc:
-        raise TraceError(Diagnostic(None, f"cannot read `{source}`: {exc.strerror}")) from None
+    from mdle.userfile import UserFileError, open_user_file, os_reason
+
+    try:  # a regular file only: a FIFO or a device is refused, not read until it ends
+        f = open_user_file(source)
+    except UserFileError as exc:
+        raise TraceError(Diagnostic(None, f"cannot read `{source}`: {exc.reason}")) from None
     with f:
-        return _read(path, f)
+        try:
+            return _read(path, f)
+        except OSError as exc:
+            raise TraceError(Diagnostic(None, f"cannot read `{source}`: "
+                                              f"{os_reason(exc)}")) from None
 
 
 def _read(path: str, f: Any) -> Trace:
