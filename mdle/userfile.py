@@ -22,7 +22,8 @@ from collections.abc import Iterator
 from typing import BinaryIO
 
 __all__ = ["MAX_FILE_BYTES", "UserFileError", "open_user_file", "read_user_file", "same_file",
-           "os_reason", "write_user_file", "replacing"]
+           "os_reason", "write_user_file", "replacing", "writable_folder", "file_fault",
+           "file_fault_words"]
 
 #: Largest file mdle reads (64 MB): plans, worlds and traces are far smaller.
 MAX_FILE_BYTES = 64 * 1024 * 1024
@@ -206,3 +207,47 @@ def write_user_file(path: str | os.PathLike[str], data: bytes | str) -> None:
             f.write(raw)
             f.flush()
             os.fsync(f.fileno())
+
+
+def writable_folder(path: str | os.PathLike[str]) -> None:
+    """Make the folder ``path`` (and its parents) and prove a file can be written in it.
+
+    Called before long work whose results go there, so a read-only disk or a missing
+    permission is said at once rather than after the computing. A small file is created
+    and removed: permission bits alone do not tell (root ignores them; a read-only
+    mount does not).
+
+    Raises
+    ------
+    UserFileError
+        The folder cannot be made or written; the words say why.
+    """
+    name = os.fspath(path)
+    try:
+        os.makedirs(name, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=name, prefix=".mdle-probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except FileExistsError:
+        raise UserFileError(name, "it is a file, not a folder", "write in") from None
+    except OSError as err:
+        raise UserFileError(name, os_reason(err), "write in") from None
+
+
+#: What the machine, not mdle, got wrong reading or writing a file: these OSErrors end a
+#: command with a message and EXIT_IO wherever they surface (a full disk under a results
+#: table, a read-only folder); any other OSError is still a bug (exit 70).
+_FILE_FAULTS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EROFS, errno.EACCES,
+                          errno.EPERM, errno.ENOENT, errno.EISDIR, errno.ENOTDIR,
+                          errno.ENAMETOOLONG, errno.EFBIG, errno.ESTALE})
+
+
+def file_fault(exc: OSError) -> bool:
+    """Return True for an OSError that is a fault of the machine's files, not of mdle."""
+    return exc.errno in _FILE_FAULTS
+
+
+def file_fault_words(exc: OSError) -> str:
+    """Return the fault in words, naming the file when the error does."""
+    where = f" `{exc.filename}`" if exc.filename else ""
+    return f"cannot read or write the file{where}: {os_reason(exc)}"

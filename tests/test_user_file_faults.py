@@ -120,3 +120,67 @@ def test_the_robot_profile_is_read_as_every_user_file_is(
     # `--robot /dev/zero` read until memory ran out
     assert main(["run", "p.mdle", "-q", "--robot", "/dev/zero"]) == 1
     assert "it is a character device, not a regular file" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------- writing outputs
+
+
+@pytest.fixture
+def read_only(monkeypatch: pytest.MonkeyPatch) -> Callable[[Path], None]:
+    """Make one folder refuse new files as a read-only mount does (root ignores chmod)."""
+    import tempfile
+
+    real = tempfile.mkstemp
+    folders: list[str] = []
+
+    def mkstemp(*args: Any, **kwargs: Any) -> Any:
+        if os.path.realpath(kwargs.get("dir") or ".") in folders:
+            raise OSError(errno.EROFS, "Read-only file system")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(tempfile, "mkstemp", mkstemp)
+    return lambda path: folders.append(os.path.realpath(path))
+
+
+def test_a_read_only_results_folder_is_refused_before_any_run(
+        files: Path, read_only: Callable[[Path], None], monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    import mdle.sweep
+
+    ran: list[object] = []
+    monkeypatch.setattr(mdle.sweep, "run_sweep", lambda *a, **k: ran.append(a))
+    (files / "o").mkdir()
+    read_only(files / "o")
+    assert main(["sweep", "s.yaml", "--out", "o", "--jobs", "1"]) == 1
+    err = capsys.readouterr().err
+    assert "--out: cannot write in `o`: the file system is read-only" in err
+    assert ran == []
+
+
+def test_a_read_only_experiment_folder_is_refused_before_the_computing(
+        files: Path, read_only: Callable[[Path], None], monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    import mdle.experiments.curvature
+
+    monkeypatch.setattr(mdle.experiments.curvature, "run_table",
+                        lambda *a, **k: pytest.fail("computed before checking --out"))
+    (files / "figs").mkdir()
+    read_only(files / "figs")
+    assert main(["experiment", "curvature", "--out", "figs", "--draws", "1"]) == 1
+    assert "--out: cannot write in `figs`: the file system is read-only" in \
+        capsys.readouterr().err
+
+
+def test_a_full_disk_under_the_results_table_is_a_message(
+        files: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    from mdle.sweep.table import ResultsTable
+
+    def full(self: ResultsTable, cells: Any) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(ResultsTable, "_write_line", full)
+    code = main(["sweep", "s.yaml", "--out", "o", "--jobs", "1"])
+    err = capsys.readouterr().err
+    assert code == 74, err
+    assert "the disk is full" in err and "internal error" not in err

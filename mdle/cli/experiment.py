@@ -74,6 +74,14 @@ def run(args: argparse.Namespace) -> int:
     if misplaced:
         print(f"mdle experiment {args.name}: {misplaced}", file=sys.stderr)
         return output.EXIT_USAGE
+    if args.name == "curvature" or getattr(args, "resume", False):
+        from mdle.errors import MdleError
+        from mdle.userfile import UserFileError, writable_folder
+
+        try:  # before the computing: its results go there
+            writable_folder(args.out)
+        except UserFileError as err:
+            raise MdleError(f"--out: {err}") from None
     if args.generated:
         return generated_study.run(args)
     if args.name == "curvature":

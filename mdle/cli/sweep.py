@@ -114,12 +114,13 @@ def _sweep(args: argparse.Namespace) -> int:
         where = f"{executor.jobs} local processes" + (
             "" if args.jobs else f" (all {default_jobs()} cores)")
     from mdle.errors import MdleError
-    from mdle.userfile import UserFileError, read_user_file
+    from mdle.userfile import UserFileError, read_user_file, writable_folder
 
     try:  # read again for the results folder's copy: the file may have gone meanwhile
         spec_text = read_user_file(spec_path).decode("utf-8", "replace")
+        writable_folder(out)  # before the runs, not after them
     except UserFileError as err:
-        raise MdleError(str(err)) from None
+        raise MdleError(f"--out: {err}" if err.path == str(out) else str(err)) from None
     progress = _RichProgress(where)
     old = signal.signal(signal.SIGTERM, _as_interrupt)
     try:
@@ -235,6 +236,12 @@ def _report(args: argparse.Namespace) -> int:
                                     if isinstance(v, (int, float)) and not isinstance(v, bool)))
     base = Path(args.results)
     folder = args.plots or ((base if base.is_dir() else base.parent) / "plots")
+    from mdle.userfile import UserFileError, writable_folder
+
+    try:
+        writable_folder(folder)
+    except UserFileError as err:
+        raise MdleError(f"--plots: {err}") from None
     group = None
     if args.group:
         group = args.group if args.group in rows[0] else f"param_{args.group}"

@@ -41,6 +41,7 @@ from mdle.repl.reports import RunReport
 from mdle.repl.session import ReplError, Session
 from mdle.runtime import Observer
 from mdle.runtime.events import ended_how
+from mdle.userfile import file_fault, file_fault_words
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 
@@ -191,15 +192,24 @@ class Repl:
                 raise
             self.complain("interrupted")
             ok = False
+        except BrokenPipeError:
+            raise  # standard output is gone: the front end ends the session quietly
         except Exception as exc:  # noqa: BLE001 (an mdle bug: report it, keep the session)
+            if isinstance(exc, OSError) and file_fault(exc):  # a full disk, a read-only folder
+                self.complain(file_fault_words(exc))
+                return self._failed()
             if self.debug:
                 traceback.print_exc(file=self.err)
             self.complain(f"internal error: {type(exc).__name__}: {exc}",
                           hint="this is a bug in mdle; the session is intact")
             ok = False
         if not ok:
-            self.failures += 1
+            return self._failed()
         return ok
+
+    def _failed(self) -> bool:
+        self.failures += 1
+        return False
 
     def _dispatch(self, text: str) -> bool:
         kind = classify(text)
