@@ -13,7 +13,6 @@ rerun the same command to resume).
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -122,25 +121,20 @@ def _sweep(args: argparse.Namespace) -> int:
     except UserFileError as err:
         raise MdleError(f"--out: {err}" if err.path == str(out) else str(err)) from None
     progress = _RichProgress(where)
-    old = signal.signal(signal.SIGTERM, _as_interrupt)
-    try:
-        summary = run_sweep(study, out, executor=executor, progress=progress,
-                            spec_text=spec_text)
-    finally:
-        signal.signal(signal.SIGTERM, old)
+    # SIGINT, SIGTERM and SIGHUP reach the sweep as the command line's signal guard's
+    # interruption: run_sweep stops its workers and keeps every finished row
+    summary = run_sweep(study, out, executor=executor, progress=progress, spec_text=spec_text)
     tail = f"; Parquet: {summary.parquet}" if summary.parquet else ""
     print(f"{summary.done} runs done ({summary.failed} failed), {summary.skipped} already in "
           f"the table; table: {summary.table}{tail}", file=sys.stderr)
     if summary.interrupted:
         print(f"interrupted: every finished run is in {summary.table}; run the same command "
               "again to resume", file=sys.stderr)
-        return output.EXIT_INTERRUPTED
+        guard = getattr(args, "signals", None)  # 143 for SIGTERM, 129 for SIGHUP
+        return guard.exit_code if guard is not None and guard.received is not None \
+            else output.EXIT_INTERRUPTED
     print(f"summary: mdle sweep report {out}", file=sys.stderr)
     return output.EXIT_OK
-
-
-def _as_interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
 
 
 class _RichProgress:

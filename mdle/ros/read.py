@@ -110,8 +110,8 @@ def _read(path: str, f: Any) -> Trace:
                     continue
                 dec = decoders.get(ch.id)
                 if dec is None:
-                    dec = decoders[ch.id] = factory.decoder_for(ch.message_encoding,
-                                                                schemas.get(ch.schema_id))
+                    dec = decoders[ch.id] = _decoder(factory, ch.message_encoding,
+                                                     schemas.get(ch.schema_id))
                 if dec is None:
                     continue
                 msg = dec(record.data)
@@ -169,3 +169,16 @@ def _read(path: str, f: Any) -> Trace:
               **{k: v for k, v in header.items() if k not in ("type", "format")}}
     return Trace(path, header, tuple(events), tuple(samples), end, truncated, tuple(extra),
                  tuple(lasers), tuple(scans))
+
+
+def _decoder(factory: Any, encoding: str, schema: Any) -> Any:
+    """Return the library's decoder for a channel, keeping its words off standard error.
+
+    The ROS 2 message parser prints ``Error processing ...`` on standard error before it
+    raises on a damaged schema; the raise becomes mdle's own message, the print is dropped.
+    """
+    import contextlib
+    import io
+
+    with contextlib.redirect_stderr(io.StringIO()):
+        return factory.decoder_for(encoding, schema)

@@ -237,3 +237,26 @@ def test_export_never_replaces_a_device(trace: Path, target: str,
     assert main(["export", str(trace), "-o", target]) == 1
     assert f"cannot write `{target}`: it is a character device" in capsys.readouterr().err
     assert Path(target).is_char_device()
+
+
+def test_a_damaged_schema_prints_only_mdles_message(tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    from mcap.writer import Writer
+
+    from mdle.cli import main
+
+    path = tmp_path / "bad.mcap"
+    with path.open("wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2", library="test")
+        sid = w.register_schema(name="std_msgs/msg/String", encoding="ros2msg",
+                                data=b"strin$g data\n")
+        cid = w.register_channel(topic="/mdle/state", message_encoding="cdr", schema_id=sid)
+        w.add_message(channel_id=cid, log_time=0, publish_time=0,
+                      data=b"\x00\x01\x00\x00\x02\x00\x00\x00a\x00")
+        w.finish()
+    assert main(["plot", str(path), "-o", str(tmp_path / "b.png")]) == 1
+    err = capsys.readouterr().err
+    # the library printed "Error processing 'strin$g data' ..." before mdle's own line
+    assert err.startswith(f"{path}:1:1: error: not a readable MCAP file"), err
+    assert "Error processing" not in err and len(err.strip().splitlines()) == 1
