@@ -86,6 +86,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if argv is not None:
             guard.restore()
+        else:
+            _hold_signals_to_the_end()
+
+
+def _hold_signals_to_the_end() -> None:
+    """Ignore SIGINT, SIGTERM and SIGHUP from the command's end to the process's exit.
+
+    The command has said everything; Python then puts the default handlers back while it
+    shuts down (60 to 260 ms), and a signal in that window killed mdle with no message
+    and a code that was not the command's. Python leaves an ignored signal ignored (it
+    resets only the handlers it installed), and ignoring is process-wide, whichever
+    thread a signal lands on.
+    """
+    import signal
+
+    from mdle.cli.signals import SIGNALS
+
+    for sig in SIGNALS:
+        try:
+            signal.signal(sig, signal.SIG_IGN)
+        except (ValueError, OSError):  # not the main thread
+            return
 
 
 def _closed_streams_to_null() -> None:
