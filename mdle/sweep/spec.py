@@ -58,6 +58,9 @@ _RANDOM_PARAMS = ("count", "seed", "ranges")
 SAMPLE_FIELDS = ("x", "y", "theta", "v", "omega", "cmd_v", "cmd_omega", "lateness",
                  "scan_age", "clearance", "true_x", "true_y", "true_theta")
 _MAX_RUNS = 10_000_000
+#: Largest count one axis may list (seeds, generated worlds, random parameter sets): each
+#: is made when the spec is read, before the runs are counted.
+MAX_AXIS = 100_000
 #: Largest seed in a study: the results table stores seeds as 64-bit signed integers.
 MAX_STUDY_SEED = 2 ** 63 - 1
 
@@ -238,9 +241,11 @@ def _parse(doc: _Doc, base: Path, default_name: str) -> Study:
     if not isinstance(keep, bool):
         raise _fail(doc, "keep_traces", f"expected true or false, got {_show(keep)}")
     for path, v in (("seeds", seeds), ("worlds", worlds)):
+        seen: set[Any] = set()  # a set: 100,000 generated worlds compared pairwise took hours
         for i, item in enumerate(v):
-            if item in v[:i]:
+            if item in seen:
                 raise _fail(doc, f"{path}[{i}]", "repeats an earlier entry")
+            seen.add(item)
     study = Study(name=name, plan_label=plan_label, plan_text=plan_text,
                   plan_files=plan_files, entry=entry, worlds=worlds, robots=robots,
                   sensing=sensing, rates=rates, seeds=seeds, duration=duration, starts=starts,
@@ -317,6 +322,8 @@ def _worlds(doc: _Doc, path: str, base: Path, v: Any) -> list[WorldChoice]:
     if not isinstance(v, dict):
         return [_world(doc, path, base, v)]
     _mapping(doc, path, v, ("generated",), "a world name, a file, or {generated: ..}")
+    if "generated" not in v:  # `worlds: [{}]`
+        raise _fail(doc, path, "expected a world name, a file, or {generated: ..}")
     from mdle.sim.generated import FAMILIES
     from mdle.sweep.worlds import generated_text
 
@@ -334,7 +341,7 @@ def _worlds(doc: _Doc, path: str, base: Path, v: Any) -> list[WorldChoice]:
     else:
         # bounded before the list is made: `count: 1e40` would allocate up front
         count = _integer(doc, f"{gpath}.count", g.get("count", 1), minimum=1,
-                         maximum=_MAX_RUNS)
+                         maximum=MAX_AXIS)
         first = _integer(doc, f"{gpath}.first", g.get("first", 0), maximum=MAX_STUDY_SEED)
         indices = list(range(first, first + count))
     out = []
@@ -433,7 +440,7 @@ def _seeds(doc: _Doc, v: Any) -> tuple[int, ...]:
         if "count" not in m:
             raise _fail(doc, "seeds", "missing key `count`")
         # bounded before the seeds are made: `count: 2**31` would take 16 GiB up front
-        n = _integer(doc, "seeds.count", m["count"], minimum=1, maximum=_MAX_RUNS)
+        n = _integer(doc, "seeds.count", m["count"], minimum=1, maximum=MAX_AXIS)
         first = _integer(doc, "seeds.first", m.get("first", 0),
                          maximum=MAX_STUDY_SEED - n + 1)
         return tuple(range(first, first + n))
@@ -544,7 +551,7 @@ def _parameters(doc: _Doc, v: Any) -> tuple[tuple[str, ...], tuple[tuple[tuple[s
     r = _mapping(doc, path, m["random"], _RANDOM_PARAMS, "count, seed and ranges")
     if "count" not in r or "ranges" not in r:
         raise _fail(doc, path, "needs `count` and `ranges`")
-    count = _integer(doc, f"{path}.count", r["count"], minimum=1, maximum=_MAX_RUNS)
+    count = _integer(doc, f"{path}.count", r["count"], minimum=1, maximum=MAX_AXIS)
     seed = _integer(doc, f"{path}.seed", r.get("seed", 0), maximum=MAX_STUDY_SEED)
     ranges = r["ranges"]
     if not isinstance(ranges, dict) or not ranges:
