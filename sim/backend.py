@@ -569,8 +569,9 @@ class SimBackend:
                 else:
                     r = self._collider.sweep(x, y, th, piece, clear)
                     x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
-                    if r.contact:
+                    if r.contact:  # the event's time is the contact's, inside the piece
                         contact = True
+                        t += r.tau
                         break
                 t += piece[0]           # its duration
                 if not scanned and t >= scan_at - 1e-12:

@@ -203,12 +203,16 @@ def parse_robot(text: str, file: str = "<string>", default_name: str = "robot",
 
 def read_robot(path: str | os.PathLike[str]) -> RobotProfile:
     """Read and validate a robot profile file (WorldError if unreadable or invalid)."""
+    from mdle.userfile import UserFileError, read_user_file
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise WorldError(f"robot profile file not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as err:
+    try:  # a regular file of bounded size: `--robot /dev/zero` would read until memory ran out
+        text = read_user_file(p).decode("utf-8")
+    except UserFileError as err:
+        if err.reason == "no such file":
+            raise WorldError(f"robot profile file not found: {p}") from None
+        raise WorldError(f"cannot read robot profile file {p}: {err.reason}") from None
+    except UnicodeDecodeError as err:
         raise WorldError(f"cannot read robot profile file {p}: {err}") from None
     return parse_robot(text, file=str(path), default_name=p.stem)
 

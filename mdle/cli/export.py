@@ -41,9 +41,12 @@ def run(args: argparse.Namespace) -> int:
     from mdle.ros import require
 
     require("mdle export")
+    from mdle.cli.clobber import refuse_clobbering
     from mdle.ros.export import export_trace
 
     target = args.output or args.rosbag
+    refuse_clobbering([("-o", args.output), ("--rosbag", args.rosbag)],
+                      [("the trace", args.trace), ("the world", args.world)])
     report = export_trace(args.trace, target, rosbag=args.rosbag is not None,
                           world=args.world)
     for w in report.warnings:

@@ -95,12 +95,14 @@ def _show(args: argparse.Namespace) -> int:
 
 
 def _fit(args: argparse.Namespace) -> int:
+    from mdle.cli.clobber import refuse_clobbering
     from mdle.errors import MdleError
     from mdle.sim.fit import fit_profile
     from mdle.sim.profiles import robot_profile
     from mdle.sim.recording import read_recording
     from mdle.sim.robot_yaml import dump_robot
 
+    refuse_clobbering([("-o", args.output)], [("the recording", r) for r in args.recordings])
     for key in ("sip_cycle", "scan_period"):
         value = getattr(args, key)
         if not (math.isfinite(value) and 0 < value <= 10):
@@ -126,11 +128,12 @@ def _fit(args: argparse.Namespace) -> int:
                f"`{base.name}`.")
     text = dump_robot(profile, comment)
     if args.output:
+        from mdle.userfile import UserFileError, write_user_file
+
         try:
-            with open(args.output, "w", encoding="utf-8") as f:
-                f.write(text)
-        except OSError as err:
-            raise MdleError(f"cannot write {args.output}: {err.strerror}") from None
+            write_user_file(args.output, text)
+        except UserFileError as err:
+            raise MdleError(str(err)) from None
         print(f"profile `{args.name}` written to {args.output}")
     else:
         print(text, end="")

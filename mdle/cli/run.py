@@ -25,9 +25,11 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
+from mdle.cli.clobber import refuse_clobbering, run_inputs, run_outputs
 from mdle.cli.options import (
     DEFAULT_RATE,
     add_simulation_options,
+    hertz,
     known_robot,
     seconds,
     world_beside,
@@ -35,6 +37,7 @@ from mdle.cli.options import (
 )
 from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
+from mdle.ranges import COORDINATE
 
 if TYPE_CHECKING:
     from mdle.live import LiveView
@@ -83,7 +86,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--realtime", action="store_true",
                    help="pace the simulation to the wall clock")
     # default None: a team file's `rate:` applies unless --rate is given (even --rate 10)
-    p.add_argument("--rate", type=_hertz, default=None, metavar="HZ",
+    p.add_argument("--rate", type=hertz, default=None, metavar="HZ",
                    help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle; with a "
                         "team, the team file's rate:)")
     p.add_argument("--trace", metavar="FILE.jsonl", help="write the run's trace (JSON lines)")
@@ -106,16 +109,6 @@ def add_parser(subparsers: Any) -> None:
     add_simulation_options(p)
     add_ros2_options(p)
     p.set_defaults(handler=run, own_signals=True)
-
-
-def _hertz(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a rate in Hz, got {text!r}") from None
-    if not 0 < value <= 1000:
-        raise argparse.ArgumentTypeError(f"the rate must be in (0, 1000] Hz, got {text!r}")
-    return value
 
 
 def start_pose(text: str) -> tuple[float, float, float]:
@@ -156,6 +149,9 @@ def start_pose(text: str) -> tuple[float, float, float]:
         value = float(m.group(1)) * factor
         if not math.isfinite(value):
             raise argparse.ArgumentTypeError(f"{name} of --start must be finite")
+        problem = COORDINATE.problem(value, part.strip()) if dim == LENGTH else None
+        if problem is not None:
+            raise argparse.ArgumentTypeError(f"{name} of --start: {problem}")
         out.append(value)
     return out[0], out[1], out[2]
 
@@ -263,6 +259,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
                           f"`mdle run PLAN.mdle --world {args.plan}`") from None
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
+    refuse_clobbering(run_outputs(args), run_inputs(args, program.sources))
     element = element_of(program, args.element)
     parts.header["program"].update(element=element.label, entry=program.entry)
     if args.overrides:

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.cli import output
+from mdle.cli.clobber import refuse_clobbering, run_inputs
 from mdle.cli.options import DEFAULT_RATE, writable_output
 from mdle.cli.signals import SignalGuard, signal_name
 from mdle.errors import Diagnostic, MdleError
@@ -72,6 +73,9 @@ def run_team(args: argparse.Namespace) -> int:
         spec.rate if spec.rate is not None else DEFAULT_RATE)
     until = args.until if args.until is not None else spec.until
     names = [r.name for r in world.robots]
+    traces = trace_paths(args.trace, names) if args.trace else {}
+    refuse_clobbering([("--plot", args.plot), *(("--trace", t) for t in traces.values())],
+                      run_inputs(args, [s for p in programs.values() for s in p.sources]))
     writers: dict[str, Any] = {}
     tmp = None
     trace = args.trace

@@ -106,8 +106,10 @@ def _show(args: argparse.Namespace) -> int:
     import os
 
     from mdle import sim
+    from mdle.cli.clobber import refuse_clobbering
     from mdle.figure_output import save_figure, show_or_write
 
+    refuse_clobbering([("-o", args.output)], [("the world", args.world)])
     if args.output is not None:
         ext = os.path.splitext(args.output)[1].lower().lstrip(".")
         if ext not in ("png", "svg", "pdf"):
