@@ -152,6 +152,8 @@ def _summary(name: str, result: Any) -> str:
 def _header(args: argparse.Namespace, spec: Any, world: Any, seed: int, rate: float,
             until: float | None, name: str, plan: str, program: Any, element: str
             ) -> dict[str, Any]:
+    from mdle.ros.topics import profile_header  # the body and odometry noise, for recordings
+
     r = next(r for r in world.robots if r.name == name)
     return {"program": {"file": os.path.abspath(plan),
                         "element": element, "entry": program.entry},
@@ -160,7 +162,8 @@ def _header(args: argparse.Namespace, spec: Any, world: Any, seed: int, rate: fl
             "seed": seed, "robot": r.profile.name, "sensing": args.sensing,
             "team": {"robot": name, "robots": [x.name for x in world.robots],
                      "file": spec.source},
-            "start": {"x": r.start.x, "y": r.start.y, "theta": r.start.theta}}
+            "start": {"x": r.start.x, "y": r.start.y, "theta": r.start.theta},
+            **profile_header(r.profile)}
 
 
 def _say(text: str) -> None:

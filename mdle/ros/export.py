@@ -159,7 +159,7 @@ def export_trace(trace_path: str | os.PathLike[str], target: str | os.PathLike[s
         finally:
             rec.finish()
     span = rec.out.time_range
-    return ExportReport(rec.path, rec.counts(), n, stopped, truncated, state.ended,
+    return ExportReport(rec.path or "", rec.counts(), n, stopped, truncated, state.ended,
                         (span[0] / 1e9, span[1] / 1e9) if span else None, tuple(warnings))
 
 
@@ -213,7 +213,8 @@ class _Export:
                          _number(rec, "true_theta"))
             r.sample(text, t, _number(rec, "x"), _number(rec, "y"), _number(rec, "theta"),
                      _number(rec, "v"), _number(rec, "omega"), _number(rec, "cmd_v"),
-                     _number(rec, "cmd_omega"), truth)
+                     _number(rec, "cmd_omega"), truth, path=str(rec.get("path") or ""),
+                     diag=rec.get("diag") if isinstance(rec.get("diag"), dict) else None)
             self._last_t = t
         elif kind == "scan":
             t = _time(rec)

@@ -156,17 +156,20 @@ class McapRecorder:
         self._batch = []
         laser, recording = self._laser, self.recording
         line_and_numbers = self._format.line_and_numbers
+        diagnostics = recording.diagnostics
         times: list[float] = []
         lines: list[str] = []
         values: list[tuple[float, ...]] = []
         scans: list[tuple[int, Any]] = []  # (the tick it comes before, the scan)
+        paths: list[str] = []
+        diags: list[np.ndarray] = []
         for sample in batch:
             scan = sample.scan
             if scan is not None and scan is not laser.last:
                 record = laser.changed(scan)
                 if record is not None:
-                    _publish(recording, times, lines, values, scans)
-                    times, lines, values, scans = [], [], [], []
+                    _publish(recording, times, lines, values, scans, paths, diags)
+                    times, lines, values, scans, paths, diags = [], [], [], [], [], []
                     recording.laser(sample.time, record)
                 scans.append((len(times), scan))
             line, numbers = line_and_numbers(sample)
@@ -174,7 +177,9 @@ class McapRecorder:
             lines.append(line)
             values.append(numbers if numbers is not None and len(numbers) == 10
                           else sample_values(sample, numbers))
-        _publish(recording, times, lines, values, scans)
+            paths.append(sample.path)
+            diags.append(diagnostics(sample.diag))
+        _publish(recording, times, lines, values, scans, paths, diags)
 
     def on_end(self, result: RunResult) -> None:
         """Publish the ``end`` record and finish the file (never raises: the run is over)."""
@@ -199,7 +204,8 @@ class McapRecorder:
 
 
 def _publish(recording: RosRecording, times: list[float], lines: list[str],
-             values: list[tuple[float, ...]], scans: list[tuple[int, Any]]) -> None:
+             values: list[tuple[float, ...]], scans: list[tuple[int, Any]],
+             paths: list[str], diags: list[np.ndarray]) -> None:
     """Publish ticks and scans taken from samples (nothing when there are none)."""
     if not (times or scans):
         return
@@ -207,6 +213,8 @@ def _publish(recording: RosRecording, times: list[float], lines: list[str],
     k = len(times)
     numbers = np.fromiter(chain.from_iterable(values), np.float64, 10 * k).reshape(k, 10)
     ticks = Ticks(times_ns(times), round9(numbers), lines)
+    ticks.paths = paths
+    ticks.diag = round9(np.array(diags, np.float64).reshape(k, len(recording.diag_names)))
     if scans:
         m = len(scans)
         ticks.scan_at = [at for at, _ in scans]

@@ -1,0 +1,150 @@
+"""``mdle run --foxglove [HOST:]PORT``: a live view of the run in Foxglove, over WebSocket.
+
+A :class:`FoxgloveSink` serves the run's ROS 2 messages (the very bytes a recording
+holds: :mod:`mdle.ros.outlet`) with the foxglove-sdk's WebSocket server (the
+``foxglove.websocket.v1`` protocol), each topic a channel of ``cdr`` messages with its
+``ros2msg`` schema, so the Foxglove app decodes them as it decodes the MCAP file.
+
+The server has a context of its own (no global state), binds to 127.0.0.1 unless told
+otherwise, and stops when the run ends. Topics published once (``/map``,
+``/obstacles``, ``/tf_static``: latched in ROS terms) are sent again to a client that
+subscribes later, at the run's next batch of ticks, as a ROS 2 transient-local
+publisher would.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+from mdle.errors import Diagnostic, MdleError
+
+try:  # the optional extra: without it, FoxgloveSink says how to install it
+    from foxglove.websocket import ServerListener
+except ImportError:  # pragma: no cover - the class is only made with the SDK
+    ServerListener = object  # type: ignore[assignment,misc]
+
+__all__ = ["DEFAULT_PORT", "FoxgloveSink", "parse_address"]
+
+#: Foxglove's usual WebSocket port.
+DEFAULT_PORT = 8765
+
+
+def parse_address(text: str) -> tuple[str, int]:
+    """Read ``[HOST:]PORT`` (``8765``, ``127.0.0.1:8765``, ``0.0.0.0:9000``).
+
+    Port 0 picks a free port. Raises MdleError naming the option and the problem.
+    """
+    host, sep, port = text.rpartition(":")
+    if not sep:
+        host = "127.0.0.1"
+    host = host.strip("[]") or "127.0.0.1"
+    try:
+        number = int(port)
+    except ValueError:
+        raise MdleError(Diagnostic(None, f"--foxglove `{text}`: expected [HOST:]PORT, "
+                                         f"a port number, got `{port}`",
+                                   hint=f"e.g. --foxglove {DEFAULT_PORT} or "
+                                        f"--foxglove 127.0.0.1:{DEFAULT_PORT}")) from None
+    if not 0 <= number <= 65535:
+        raise MdleError(Diagnostic(None, f"--foxglove `{text}`: the port must be 0-65535"))
+    return host, number
+
+
+class FoxgloveSink:
+    """Serve messages live to Foxglove (a :class:`~mdle.ros.outlet.LiveSink`).
+
+    Parameters
+    ----------
+    host, port : str, int
+        Where to listen (port 0: a free one, see :attr:`port`).
+    name : str
+        The server's name, shown by Foxglove.
+
+    Raises
+    ------
+    MdleError
+        The foxglove-sdk is not installed, or the server cannot listen there.
+    """
+
+    def __init__(self, host: str = "127.0.0.1", port: int = DEFAULT_PORT,
+                 name: str = "mdle") -> None:
+        try:
+            import foxglove
+        except ImportError:
+            raise MdleError(Diagnostic(None, "--foxglove needs the foxglove-sdk",
+                                       hint="pip install 'mdle[foxglove]'")) from None
+        self._foxglove = foxglove
+        self._context = foxglove.Context()
+        self._channels: dict[int, Any] = {}
+        self._by_server_id: dict[int, int] = {}
+        self._latched: dict[int, tuple[bytes, int]] = {}
+        self._latched_ids: set[int] = set()
+        self._resend: set[int] = set()
+        self._lock = threading.Lock()
+        try:
+            self.server = foxglove.start_server(
+                name=name, host=host, port=port, context=self._context,
+                server_listener=_Listener(self))
+        except Exception as exc:  # noqa: BLE001 - the SDK raises its own error types
+            raise MdleError(Diagnostic(None, f"--foxglove: cannot listen on {host}:{port} "
+                                             f"({exc})")) from None
+        self.host = host
+
+    @property
+    def port(self) -> int:
+        """The port the server listens on."""
+        return int(self.server.port)
+
+    def channel(self, channel_id: int, topic: str, schema_name: str, schema_data: bytes,
+                latched: bool) -> None:
+        """Advertise a topic of CDR messages with its ``ros2msg`` schema."""
+        fg = self._foxglove
+        ch = fg.Channel(topic, message_encoding="cdr", context=self._context,
+                        schema=fg.Schema(name=schema_name, encoding="ros2msg",
+                                         data=schema_data))
+        self._channels[channel_id] = ch
+        self._by_server_id[int(ch.id())] = channel_id
+        if latched:
+            self._latched_ids.add(channel_id)
+
+    def add(self, channel_id: int, ns: int, data: bytes) -> None:
+        """Send a message to the clients subscribed to its topic."""
+        self._channels[channel_id].log(data, log_time=ns)
+        if channel_id in self._latched_ids:
+            self._latched[channel_id] = (data, ns)
+
+    def subscribed(self, server_channel_id: int) -> None:
+        """Note a subscription (the server's thread): a latched topic's message goes again."""
+        channel_id = self._by_server_id.get(server_channel_id)
+        if channel_id in self._latched_ids:
+            with self._lock:
+                self._resend.add(channel_id)
+
+    def tick(self) -> None:
+        """Send latched messages again to clients that subscribed since the last call."""
+        if not self._resend:
+            return
+        with self._lock:
+            resend, self._resend = self._resend, set()
+        for channel_id in sorted(resend):
+            kept = self._latched.get(channel_id)
+            if kept is not None:
+                self._channels[channel_id].log(kept[0], log_time=kept[1])
+
+    def close(self) -> None:
+        """Stop the server (clients see it close)."""
+        for ch in self._channels.values():
+            ch.close()
+        self.server.stop()
+
+
+class _Listener(ServerListener):
+    """The server's callbacks: note subscriptions (they come on the server's thread)."""
+
+    def __init__(self, sink: FoxgloveSink) -> None:
+        self._sink = sink
+
+    def on_subscribe(self, client: Any, channel: Any) -> None:
+        """Take a client's subscription to ``channel``."""
+        self._sink.subscribed(int(channel.id))
