@@ -91,6 +91,10 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--record-compression", choices=("none", "lz4"), default="none",
                    help="compression of the recording's chunks (default: none, the "
                         "cheapest to write; lz4: about a third smaller)")
+    p.add_argument("--foxglove", metavar="[HOST:]PORT",
+                   help="a live view for Foxglove: a WebSocket server on PORT (127.0.0.1 "
+                        "unless HOST is given) with the recording's messages; needs pip "
+                        "install 'mdle[foxglove]'")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
     p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
@@ -422,19 +426,39 @@ def _print(text: str) -> None:
 
 
 def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> list[Any]:
-    """Return the MCAP recorders ``--record`` and ``--rosbag`` ask for."""
-    if not (args.record or args.rosbag):
+    """Return the MCAP recorders ``--record`` and ``--rosbag`` ask for, and the live view.
+
+    ``--foxglove`` shows the first recording's messages (or, alone, a recorder's
+    without a file).
+    """
+    if not (args.record or args.rosbag or args.foxglove):
         return []
     from mdle.ros.recorder import McapRecorder
 
     out = []
+    live = _live_view(args) if args.foxglove else []
     compression = "" if args.record_compression == "none" else args.record_compression
     if args.record:
-        out.append(McapRecorder(args.record, header, world, compression=compression))
+        out.append(McapRecorder(args.record, header, world, compression=compression,
+                                live=live))
+        live = []
     if args.rosbag:
         out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
-                                compression=compression))
+                                compression=compression, live=live))
+        live = []
+    if live:
+        out.append(McapRecorder(None, header, world, live=live))
     return out
+
+
+def _live_view(args: argparse.Namespace) -> list[Any]:
+    """Start ``--foxglove``'s server; returns its sink (a list of one)."""
+    from mdle.ros.live import FoxgloveServer, FoxgloveSink, parse_address
+
+    server = FoxgloveServer(*parse_address(args.foxglove))
+    if not args.quiet:
+        _print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)")
+    return [FoxgloveSink(server, owns_server=True)]
 
 
 def _t0(result: Any) -> float:

@@ -1,6 +1,7 @@
 """``mdle run --foxglove [HOST:]PORT``: a live view of the run in Foxglove, over WebSocket.
 
-A :class:`FoxgloveSink` serves the run's ROS 2 messages (the very bytes a recording
+A :class:`FoxgloveServer` serves, through a :class:`FoxgloveSink` per run, the run's ROS 2
+messages (the very bytes a recording
 holds: :mod:`mdle.ros.outlet`) with the foxglove-sdk's WebSocket server (the
 ``foxglove.websocket.v1`` protocol), each topic a channel of ``cdr`` messages with its
 ``ros2msg`` schema, so the Foxglove app decodes them as it decodes the MCAP file.
@@ -24,7 +25,7 @@ try:  # the optional extra: without it, FoxgloveSink says how to install it
 except ImportError:  # pragma: no cover - the class is only made with the SDK
     ServerListener = object  # type: ignore[assignment,misc]
 
-__all__ = ["DEFAULT_PORT", "FoxgloveSink", "parse_address"]
+__all__ = ["DEFAULT_PORT", "FoxgloveServer", "FoxgloveSink", "parse_address"]
 
 #: Foxglove's usual WebSocket port.
 DEFAULT_PORT = 8765
@@ -51,8 +52,8 @@ def parse_address(text: str) -> tuple[str, int]:
     return host, number
 
 
-class FoxgloveSink:
-    """Serve messages live to Foxglove (a :class:`~mdle.ros.outlet.LiveSink`).
+class FoxgloveServer:
+    """A foxglove-sdk WebSocket server with a context of its own.
 
     Parameters
     ----------
@@ -60,6 +61,10 @@ class FoxgloveSink:
         Where to listen (port 0: a free one, see :attr:`port`).
     name : str
         The server's name, shown by Foxglove.
+
+    Runs come and go (the REPL's): each run's :class:`FoxgloveSink` advertises its
+    channels on the server and closes them when the run ends; :meth:`stop` ends the
+    server.
 
     Raises
     ------
@@ -74,33 +79,60 @@ class FoxgloveSink:
         except ImportError:
             raise MdleError(Diagnostic(None, "--foxglove needs the foxglove-sdk",
                                        hint="pip install 'mdle[foxglove]'")) from None
-        self._foxglove = foxglove
-        self._context = foxglove.Context()
-        self._channels: dict[int, Any] = {}
-        self._by_server_id: dict[int, int] = {}
-        self._latched: dict[int, tuple[bytes, int]] = {}
-        self._latched_ids: set[int] = set()
-        self._resend: set[int] = set()
-        self._lock = threading.Lock()
+        self.foxglove = foxglove
+        self.context = foxglove.Context()
+        self.sink: FoxgloveSink | None = None  # the run being shown
         try:
             self.server = foxglove.start_server(
-                name=name, host=host, port=port, context=self._context,
+                name=name, host=host, port=port, context=self.context,
                 server_listener=_Listener(self))
         except Exception as exc:  # noqa: BLE001 - the SDK raises its own error types
             raise MdleError(Diagnostic(None, f"--foxglove: cannot listen on {host}:{port} "
                                              f"({exc})")) from None
         self.host = host
+        self.stopped = False
 
     @property
     def port(self) -> int:
         """The port the server listens on."""
         return int(self.server.port)
 
+    def subscribed(self, server_channel_id: int) -> None:
+        """Note a subscription (the server's thread) for the run being shown."""
+        sink = self.sink
+        if sink is not None:
+            sink.subscribed(server_channel_id)
+
+    def stop(self) -> None:
+        """Stop the server (clients see it close); safe to repeat."""
+        if not self.stopped:
+            self.stopped = True
+            self.server.stop()
+
+
+class FoxgloveSink:
+    """One run's messages, served live (a :class:`~mdle.ros.outlet.LiveSink`).
+
+    ``server`` is the :class:`FoxgloveServer`; with ``owns_server`` (``mdle run``)
+    closing the sink stops it, otherwise (the REPL) only this run's channels close.
+    """
+
+    def __init__(self, server: FoxgloveServer, owns_server: bool = False) -> None:
+        self._server = server
+        self._owns = owns_server
+        self._channels: dict[int, Any] = {}
+        self._by_server_id: dict[int, int] = {}
+        self._latched: dict[int, tuple[bytes, int]] = {}
+        self._latched_ids: set[int] = set()
+        self._resend: set[int] = set()
+        self._lock = threading.Lock()
+        server.sink = self
+
     def channel(self, channel_id: int, topic: str, schema_name: str, schema_data: bytes,
                 latched: bool) -> None:
         """Advertise a topic of CDR messages with its ``ros2msg`` schema."""
-        fg = self._foxglove
-        ch = fg.Channel(topic, message_encoding="cdr", context=self._context,
+        fg = self._server.foxglove
+        ch = fg.Channel(topic, message_encoding="cdr", context=self._server.context,
                         schema=fg.Schema(name=schema_name, encoding="ros2msg",
                                          data=schema_data))
         self._channels[channel_id] = ch
@@ -133,18 +165,22 @@ class FoxgloveSink:
                 self._channels[channel_id].log(kept[0], log_time=kept[1])
 
     def close(self) -> None:
-        """Stop the server (clients see it close)."""
-        for ch in self._channels.values():
+        """Close this run's channels (and the server, if this sink owns it)."""
+        if self._server.sink is self:
+            self._server.sink = None
+        channels, self._channels = self._channels, {}
+        for ch in channels.values():
             ch.close()
-        self.server.stop()
+        if self._owns:
+            self._server.stop()
 
 
 class _Listener(ServerListener):
     """The server's callbacks: note subscriptions (they come on the server's thread)."""
 
-    def __init__(self, sink: FoxgloveSink) -> None:
-        self._sink = sink
+    def __init__(self, server: FoxgloveServer) -> None:
+        self._server = server
 
     def on_subscribe(self, client: Any, channel: Any) -> None:
         """Take a client's subscription to ``channel``."""
-        self._sink.subscribed(int(channel.id))
+        self._server.subscribed(int(channel.id))

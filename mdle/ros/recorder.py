@@ -44,13 +44,16 @@ from mdle.trace import (
 if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
 
-__all__ = ["BATCH_AGE", "BATCH_TICKS", "McapRecorder", "RecordingError"]
+__all__ = ["BATCH_AGE", "BATCH_TICKS", "LIVE_BATCH_AGE", "McapRecorder", "RecordingError"]
 
 #: Ticks held before they are encoded together.
 BATCH_TICKS = 32
 
 #: Longest wall time (s) a tick waits to be encoded (a paced run, hardware at 10 Hz).
 BATCH_AGE = 0.5
+
+#: The same with a live view (``--foxglove``): what it shows lags the robot this much at most.
+LIVE_BATCH_AGE = 0.1
 
 
 class RecordingError(MdleError):
@@ -62,8 +65,8 @@ class McapRecorder:
 
     Parameters
     ----------
-    target : str or path-like
-        The ``.mcap`` file, or with ``rosbag`` the folder.
+    target : str or path-like or None
+        The ``.mcap`` file, or with ``rosbag`` the folder; None for a live view alone.
     header : mapping
         The run's trace header (what ``mdle run`` writes).
     world : sim.World or None
@@ -76,7 +79,9 @@ class McapRecorder:
         Wall clock (injectable for tests).
     **options
         ``chunk_size``, ``max_age``, ``compression`` for the MCAP file (``compression``
-        ``""``, none, unless given: ``"lz4"``).
+        ``""``, none, unless given: ``"lz4"``); ``live`` (live views, batches of
+        :data:`LIVE_BATCH_AGE` at most), ``outlet`` and ``robot`` (a team's robot in a
+        shared file) as :class:`~mdle.ros.topics.RosRecording` takes them.
 
     Raises
     ------
@@ -84,13 +89,15 @@ class McapRecorder:
         The file cannot be created.
     """
 
-    def __init__(self, target: str | os.PathLike[str], header: Mapping[str, Any],
+    def __init__(self, target: str | os.PathLike[str] | None, header: Mapping[str, Any],
                  world: Any = None, *, rosbag: bool = False, batch_ticks: int = BATCH_TICKS,
                  batch_age: float = BATCH_AGE, clock: Callable[[], float] = time.monotonic,
                  **options: Any) -> None:
-        self.target = os.fspath(target)
+        self.target = os.fspath(target) if target is not None else "the live view"
         # chunks not compressed unless asked: the cheapest to write while a run goes
         options.setdefault("compression", "")
+        if options.get("live"):  # a live view: ticks reach it within a tenth of a second
+            batch_age = min(batch_age, LIVE_BATCH_AGE)
         try:
             self.recording = RosRecording(target, header, world, rosbag=rosbag, **options)
         except OSError as exc:
