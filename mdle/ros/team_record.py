@@ -20,7 +20,7 @@ from mdle.errors import Diagnostic
 from mdle.ros.mcap_file import McapFile
 from mdle.ros.outlet import LiveSink, Outlet
 from mdle.ros.recorder import McapRecorder, RecordingError
-from mdle.ros.topics import library_name, qos_yaml
+from mdle.ros.topics import library_name
 
 __all__ = ["TeamRecording"]
 
@@ -105,7 +105,7 @@ class TeamRecording:
                     topics += r.recording.topics
                     counts.update(r.recording.counts())
                 write_metadata(self.target, os.path.basename(self.path), topics, counts,
-                               self.outlet.time_range or (0, 0), qos_yaml)
+                               self.outlet.time_range or (0, 0))
         except OSError as exc:
             self.outlet.close()
             raise RecordingError(Diagnostic(None, f"cannot write the recording "

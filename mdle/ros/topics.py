@@ -452,7 +452,7 @@ class RosRecording:
 
             span = self.out.time_range or (0, 0)
             write_metadata(self.target, os.path.basename(self.path), self.topics,
-                           self.counts(), span, qos_yaml)
+                           self.counts(), span)
 
     def abandon(self) -> None:
         """Close the file as it stands (after a failure: nothing more can be written)."""

@@ -317,7 +317,8 @@ def test_rosbag_folder_reads_as_ros2_bag_record_writes_it(run: dict[str, Any],
     bag = run["dir"] / "bag"
     assert sorted(p.name for p in bag.iterdir()) == ["bag_0.mcap", "metadata.yaml"]
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    assert info["version"] == 5 and info["storage_identifier"] == "mcap"
+    assert info["version"] == 9 and info["storage_identifier"] == "mcap"
+    assert info["ros_distro"] == "jazzy" and info["custom_data"] == {}
     assert info["relative_file_paths"] == ["bag_0.mcap"]
     direct = rosbags_read(run["dir"] / "r.mcap")
     with Reader(bag) as reader:
