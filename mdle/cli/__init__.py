@@ -22,8 +22,8 @@ if TYPE_CHECKING:
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Subcommand modules under ``mdle.cli``, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "worlds",
-                             "robots", "repl", "experiment", "sweep")
+COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "recover",
+                             "worlds", "robots", "repl", "experiment", "sweep")
 
 
 def build_parser() -> argparse.ArgumentParser:
