@@ -52,7 +52,9 @@ def test_a_killed_recording_is_recovered(tmp_path: Path, doctor: Any,
 
     mcap, bag = _killed(tmp_path)
     assert not (bag / "metadata.yaml").exists()
-    with pytest.raises(Exception):  # as the kill left it, the readers refuse it
+    from rosbags.rosbag2 import ReaderError
+
+    with pytest.raises(ReaderError):  # as the kill left it, the reader refuses it
         rosbags_read(mcap)
     fixed = tmp_path / "fixed.mcap"
     done = subprocess.run([*_mdle(), "recover", str(mcap), "-o", str(fixed)],
