@@ -30,6 +30,7 @@ from mdle.cli.options import (
     world_beside,
     writable_output,
 )
+from mdle.cli.recorders import recorders
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 
 if TYPE_CHECKING:
@@ -288,7 +289,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
             parts.writer = _open_trace(parts.trace_path, parts.header)
             parts.observers.append(parts.writer)
         try:
-            parts.recorders = _recorders(args, parts.header, parts.world)
+            parts.recorders = recorders(args, parts.header, parts.world)
         except MdleError as err:  # cannot be created: a bad option (exit 1), not a full disk
             raise MdleError(err.diagnostics) from None
         parts.observers += parts.recorders
@@ -423,42 +424,6 @@ def _print(text: str) -> None:
         print(text)
     except BrokenPipeError:
         output.output_closed()
-
-
-def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> list[Any]:
-    """Return the MCAP recorders ``--record`` and ``--rosbag`` ask for, and the live view.
-
-    ``--foxglove`` shows the first recording's messages (or, alone, a recorder's
-    without a file).
-    """
-    if not (args.record or args.rosbag or args.foxglove):
-        return []
-    from mdle.ros.recorder import McapRecorder
-
-    out = []
-    live = _live_view(args) if args.foxglove else []
-    compression = "" if args.record_compression == "none" else args.record_compression
-    if args.record:
-        out.append(McapRecorder(args.record, header, world, compression=compression,
-                                live=live))
-        live = []
-    if args.rosbag:
-        out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
-                                compression=compression, live=live))
-        live = []
-    if live:
-        out.append(McapRecorder(None, header, world, live=live))
-    return out
-
-
-def _live_view(args: argparse.Namespace) -> list[Any]:
-    """Start ``--foxglove``'s server; returns its sink (a list of one)."""
-    from mdle.ros.live import FoxgloveServer, FoxgloveSink, parse_address
-
-    server = FoxgloveServer(*parse_address(args.foxglove))
-    if not args.quiet:
-        _print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)")
-    return [FoxgloveSink(server, owns_server=True)]
 
 
 def _t0(result: Any) -> float:

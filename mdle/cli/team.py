@@ -156,16 +156,10 @@ def _recordings(args: argparse.Namespace, headers: dict[str, dict[str, Any]],
     """
     if not (args.record or args.rosbag or args.foxglove):
         return []
+    from mdle.cli.recorders import live_view
     from mdle.ros.team_record import TeamRecording
 
-    live: list[Any] = []
-    if args.foxglove:
-        from mdle.ros.live import FoxgloveServer, FoxgloveSink, parse_address
-
-        server = FoxgloveServer(*parse_address(args.foxglove))
-        if not args.quiet:
-            print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)")
-        live = [FoxgloveSink(server, owns_server=True)]
+    live = live_view(args) if args.foxglove else []
     compression = "" if args.record_compression == "none" else args.record_compression
     out = []
     for target, rosbag in ((args.record, False), (args.rosbag, True)):

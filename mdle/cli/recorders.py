@@ -1,0 +1,44 @@
+"""The recorders and live view ``mdle run`` makes (``--record``, ``--rosbag``, ``--foxglove``)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+__all__ = ["live_view", "recorders"]
+
+
+def recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> list[Any]:
+    """Return the MCAP recorders ``--record`` and ``--rosbag`` ask for, and the live view.
+
+    ``--foxglove`` shows the first recording's messages (or, alone, a recorder's
+    without a file).
+    """
+    if not (args.record or args.rosbag or args.foxglove):
+        return []
+    from mdle.ros.recorder import McapRecorder
+
+    out = []
+    live = live_view(args) if args.foxglove else []
+    compression = "" if args.record_compression == "none" else args.record_compression
+    if args.record:
+        out.append(McapRecorder(args.record, header, world, compression=compression,
+                                live=live))
+        live = []
+    if args.rosbag:
+        out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
+                                compression=compression, live=live))
+        live = []
+    if live:
+        out.append(McapRecorder(None, header, world, live=live))
+    return out
+
+
+def live_view(args: argparse.Namespace) -> list[Any]:
+    """Start ``--foxglove``'s server; returns its sink (a list of one)."""
+    from mdle.ros.live import FoxgloveServer, FoxgloveSink, parse_address
+
+    server = FoxgloveServer(*parse_address(args.foxglove))
+    if not args.quiet:
+        print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)")
+    return [FoxgloveSink(server, owns_server=True)]
