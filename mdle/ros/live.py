@@ -149,7 +149,8 @@ class FoxgloveSink:
     def subscribed(self, server_channel_id: int) -> None:
         """Note a subscription (the server's thread): a latched topic's message goes again."""
         channel_id = self._by_server_id.get(server_channel_id)
-        if channel_id in self._latched_ids:
+        # only a message sent before the subscription: a later one reaches the client
+        if channel_id is not None and channel_id in self._latched:
             with self._lock:
                 self._resend.add(channel_id)
 
