@@ -101,7 +101,8 @@ def run_team(args: argparse.Namespace) -> int:
             for rec in recordings:
                 for name, recorder in rec.recorders.items():
                     observers.setdefault(name, []).append(recorder)
-            run = TeamRun(sim_team, elements, rate, until, observers)
+            run = TeamRun(sim_team, elements, rate, until, observers,
+                          realtime=args.realtime)
         with guard.stopping(run):
             results = run.run()
     except KeyboardInterrupt:

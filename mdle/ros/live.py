@@ -25,7 +25,7 @@ try:  # the optional extra: without it, FoxgloveSink says how to install it
 except ImportError:  # pragma: no cover - the class is only made with the SDK
     ServerListener = object  # type: ignore[assignment,misc]
 
-__all__ = ["DEFAULT_PORT", "FoxgloveServer", "FoxgloveSink", "parse_address"]
+__all__ = ["DEFAULT_PORT", "FoxgloveServer", "FoxgloveSink", "LiveRuns", "parse_address"]
 
 #: Foxglove's usual WebSocket port.
 DEFAULT_PORT = 8765
@@ -185,3 +185,54 @@ class _Listener(ServerListener):
     def on_subscribe(self, client: Any, channel: Any) -> None:
         """Take a client's subscription to ``channel``."""
         self._server.subscribed(int(channel.id))
+
+
+class LiveRuns:
+    """An observer that shows every run of a session live (``mdle repl --foxglove``).
+
+    Each run gets a recorder without a file (:class:`~mdle.ros.recorder.McapRecorder`)
+    whose messages go to ``server`` through a sink of its own: the run's channels are
+    advertised when it starts and closed when it ends; the server stays up for the
+    next run until :meth:`close`.
+    """
+
+    def __init__(self, server: FoxgloveServer) -> None:
+        self.server = server
+        self._run: Any = None  # the current run's recorder
+
+    def on_start(self, scheduler: Any) -> None:
+        """Advertise the run's topics and start recording it."""
+        from mdle.ros.recorder import McapRecorder
+        from mdle.ros.topics import body_header
+
+        backend = scheduler.backend
+        world = getattr(backend, "world", None)
+        header: dict[str, Any] = {"backend": "sim" if world is not None else "robot",
+                                  "rate": scheduler.rate, **body_header(backend)}
+        if world is not None:
+            header["world"] = {"name": getattr(world, "name", "")}
+        self._run = McapRecorder(None, header, world, live=[FoxgloveSink(self.server)])
+        self._run.on_start(scheduler)
+
+    def on_event(self, event: Any) -> None:
+        """Pass an element's start or end on."""
+        if self._run is not None:
+            self._run.on_event(event)
+
+    def on_tick(self, sample: Any) -> None:
+        """Pass a tick on."""
+        if self._run is not None:
+            self._run.on_tick(sample)
+
+    def on_end(self, result: Any) -> None:
+        """End the run: its last messages, then its channels close."""
+        run, self._run = self._run, None
+        if run is not None:
+            run.on_end(result)
+
+    def close(self) -> None:
+        """Stop the server (after the session)."""
+        run, self._run = self._run, None
+        if run is not None:
+            run.close()
+        self.server.stop()

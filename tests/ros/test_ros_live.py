@@ -144,3 +144,87 @@ def test_bad_addresses_are_refused_with_a_message(tmp_path: Path) -> None:
         proc = subprocess.run([*_mdle(), "run", str(plan), "--until", "1", "--foxglove", bad],
                               capture_output=True, text=True, timeout=60, cwd=tmp_path)
         assert proc.returncode == 1 and words in proc.stderr and "Traceback" not in proc.stderr
+
+
+async def _watch_topics(url: str, wanted: tuple[str, ...], until: Any) -> dict[str, list[Any]]:
+    """Subscribe to ``wanted`` on every advertisement; decode until ``until()`` is true."""
+    from mcap.records import Schema
+    from mcap_ros2.decoder import DecoderFactory
+
+    factory = DecoderFactory()
+    got: dict[str, list[Any]] = {t: [] for t in wanted}
+    async with websockets.connect(url, subprotocols=[PROTOCOL], proxy=None) as ws:
+        subscribed: dict[int, tuple[str, Any]] = {}
+        loop = asyncio.get_running_loop()
+        end = loop.time() + 60
+        while loop.time() < end and not until(got):
+            try:
+                frame = await asyncio.wait_for(ws.recv(), timeout=1.0)
+            except asyncio.TimeoutError:
+                continue
+            if isinstance(frame, str):
+                op = json.loads(frame)
+                if op.get("op") != "advertise":
+                    continue
+                subs = []
+                for ch in op["channels"]:
+                    if ch["topic"] in wanted:
+                        sub = len(subscribed) + 1
+                        schema = Schema(id=sub, name=ch["schemaName"],
+                                        encoding=ch["schemaEncoding"],
+                                        data=ch["schema"].encode())
+                        subscribed[sub] = (ch["topic"],
+                                           factory.decoder_for(ch["encoding"], schema))
+                        subs.append({"id": sub, "channelId": ch["id"]})
+                if subs:
+                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
+            else:
+                opcode, sub, _ = struct.unpack_from("<BIQ", frame)
+                if opcode == 1 and sub in subscribed:
+                    topic, decode = subscribed[sub]
+                    got[topic].append(decode(frame[13:]))
+    return got
+
+
+def test_a_team_and_a_repl_session_are_shown_live(tmp_path: Path) -> None:
+    team = Path(__file__).resolve().parents[2] / "plans" / "team" / "pair.team.yaml"
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    # a team: every robot's topics under its name, on one server
+    proc = subprocess.Popen(
+        [*_mdle(), "run", "--team", str(team), "--realtime", "--until", "4",
+         "--foxglove", "0"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        env=env, cwd=tmp_path)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert line.startswith("live view: ws://127.0.0.1:"), line
+        wanted = ("/leader/footprint", "/follower/footprint", "/leader/scan",
+                  "/follower/mdle/active")
+        got = asyncio.run(_watch_topics(line.split()[2], wanted,
+                                        lambda g: all(len(g[t]) >= 3 for t in wanted[:3])))
+    finally:
+        proc.communicate(timeout=60)
+    assert proc.returncode == 0
+    assert {m.header.frame_id for m in got["/leader/footprint"]} == {"leader/base_link"}
+    assert {m.header.frame_id for m in got["/follower/footprint"]} == {"follower/base_link"}
+    assert {m.header.frame_id for m in got["/leader/scan"]} == {"leader/laser"}
+    # a REPL session: each run advertises its topics, and its element is the state
+    repl = subprocess.Popen(
+        [*_mdle(), "repl", "--plain", "--realtime", "--foxglove", "0"], stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
+    try:
+        assert repl.stdout is not None and repl.stdin is not None
+        line = repl.stdout.readline()
+        while line and not line.startswith("live view:"):
+            line = repl.stdout.readline()
+        assert line.startswith("live view: ws://127.0.0.1:"), line
+        repl.stdin.write("atom cruise = (go(0.2 m/s), never, 2 s)\n"
+                         "atom spin = (turn(20 deg/s), never, 2 s)\ncruise\nspin\n")
+        repl.stdin.flush()
+        got = asyncio.run(_watch_topics(line.split()[2], ("/mdle/active", "/scan"),
+                                        lambda g: len(g["/mdle/active"]) >= 4))
+    finally:
+        repl.communicate("", timeout=60)
+    assert repl.returncode == 0
+    assert [m.data for m in got["/mdle/active"]][:4] == ["cruise", "", "spin", ""]
+    assert got["/scan"]
