@@ -17,6 +17,7 @@ and index; :meth:`McapRecorder.close` does it if the run never ended.
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Callable, Mapping
@@ -163,13 +164,14 @@ class McapRecorder:
         self._batch = []
         laser, recording = self._laser, self.recording
         line_and_numbers = self._format.line_and_numbers
-        diagnostics = recording.diagnostics
+        names = recording.diag_names
+        none = (math.nan,) * len(names)  # no law recording diagnostics this tick
         times: list[float] = []
         lines: list[str] = []
         values: list[tuple[float, ...]] = []
         scans: list[tuple[int, Any]] = []  # (the tick it comes before, the scan)
         paths: list[str] = []
-        diags: list[np.ndarray] = []
+        diags: list[tuple[Any, ...]] = []
         for sample in batch:
             scan = sample.scan
             if scan is not None and scan is not laser.last:
@@ -185,7 +187,8 @@ class McapRecorder:
             values.append(numbers if numbers is not None and len(numbers) == 10
                           else sample_values(sample, numbers))
             paths.append(sample.path)
-            diags.append(diagnostics(sample.diag))
+            diag = sample.diag
+            diags.append(tuple([diag.get(n, math.nan) for n in names]) if diag else none)
         _publish(recording, times, lines, values, scans, paths, diags)
 
     def on_end(self, result: RunResult) -> None:
@@ -212,7 +215,7 @@ class McapRecorder:
 
 def _publish(recording: RosRecording, times: list[float], lines: list[str],
              values: list[tuple[float, ...]], scans: list[tuple[int, Any]],
-             paths: list[str], diags: list[np.ndarray]) -> None:
+             paths: list[str], diags: list[tuple[Any, ...]]) -> None:
     """Publish ticks and scans taken from samples (nothing when there are none)."""
     if not (times or scans):
         return
@@ -221,7 +224,12 @@ def _publish(recording: RosRecording, times: list[float], lines: list[str],
     numbers = np.fromiter(chain.from_iterable(values), np.float64, 10 * k).reshape(k, 10)
     ticks = Ticks(times_ns(times), round9(numbers), lines)
     ticks.paths = paths
-    ticks.diag = round9(np.array(diags, np.float64).reshape(k, len(recording.diag_names)))
+    try:  # numbers and flags (bools) as the law recorded them
+        diag = np.array(diags, np.float64).reshape(k, len(recording.diag_names))
+    except (TypeError, ValueError):  # anything else: NaN, as the export reads it
+        diag = np.array([recording.diagnostics(dict(zip(recording.diag_names, d,
+                                                        strict=True))) for d in diags])
+    ticks.diag = round9(diag.reshape(k, len(recording.diag_names)))
     if scans:
         m = len(scans)
         ticks.scan_at = [at for at, _ in scans]

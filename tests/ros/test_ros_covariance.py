@@ -60,6 +60,7 @@ def test_the_predicted_spread_matches_the_simulated_one() -> None:
         rec = Recorder()
         run(element, backend, rate=10.0, observers=[rec])
         s = rec.samples[-1]
+        assert s.true_x is not None and s.true_y is not None and s.true_theta is not None
         # the true pose in the frame odometry counts in (the start pose)
         dx, dy = s.true_x - start.x, s.true_y - start.y
         errors.append((s.x - dx, s.y - dy, math.remainder(s.theta - s.true_theta, math.tau)))

@@ -33,10 +33,12 @@ def _killed(tmp_path: Path) -> tuple[Path, Path]:
          "-q", "--record", str(mcap), "--rosbag", str(bag)],
         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, cwd=tmp_path)
     try:
-        # chunks close every second of wall time: wait for a few
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline and (not mcap.exists()
-                                               or mcap.stat().st_size < 150_000):
+        # chunks close every second of wall time: wait for a few in both files (the
+        # first holds the world's occupancy grid, some 50 kB)
+        inner = bag / "bag_0.mcap"
+        deadline = time.monotonic() + 90
+        while time.monotonic() < deadline and not all(
+                p.exists() and p.stat().st_size > 250_000 for p in (mcap, inner)):
             time.sleep(0.1)
         assert proc.poll() is None, proc.stderr.read() if proc.stderr else ""
     finally:
