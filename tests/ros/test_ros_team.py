@@ -92,3 +92,11 @@ def test_each_robot_header_is_in_the_file(team: Path) -> None:
     assert set(meta) == {"mdle/leader", "mdle/follower"}
     assert meta["mdle/leader"]["team"]["robot"] == "leader"
     assert meta["mdle/follower"]["radius"] > 0
+
+
+def test_mdle_plot_says_what_a_team_recording_is(team: Path) -> None:
+    proc = subprocess.run([*_mdle(), "plot", str(team / "r.mcap"), "-o",
+                           str(team / "p.png")], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr
+    assert "a team's recording (robots follower, leader)" in proc.stderr
+    assert "--trace run.jsonl gives run.NAME.jsonl" in proc.stderr
