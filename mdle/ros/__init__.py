@@ -2,7 +2,7 @@
 
 The trace's records (:mod:`mdle.trace`) become ROS 2 messages on the usual topics
 (``/scan``, ``/odom``, ``/tf``, ``/tf_static``, ``/cmd_vel``, ``/ground_truth``,
-``/footprint``, ``/map``, ``/obstacles``, ``/mdle/events``, ``/mdle/active``,
+``/footprint``, ``/path``, ``/map``, ``/obstacles``, ``/mdle/events``, ``/mdle/active``,
 ``/mdle/diagnostics``, ``/mdle/state``; ``docs/trace.md`` lists them), CDR-encoded, in a
 chunked, indexed MCAP file. The same mapping serves a live run (:class:`McapRecorder`,
 ``mdle run --record``) and a trace read back (:func:`export_trace`, ``mdle export``), so

@@ -24,6 +24,7 @@ import numpy as np
 
 from mdle.ros import cdr
 from mdle.ros.covariance import OdometryCovariance
+from mdle.ros.markers import path_marker
 from mdle.ros.mcap_file import McapFile
 from mdle.ros.msgdefs import DIAGNOSTICS, diagnostics_definition, schema_text
 from mdle.ros.outlet import LiveSink, Outlet
@@ -69,6 +70,8 @@ TOPICS: tuple[Topic, ...] = (
           what="true pose each tick, frame map"),
     Topic("/footprint", "geometry_msgs/msg/PolygonStamped", footprint=True,
           what="the body's outline each tick, frame base_link"),
+    Topic("/path", "visualization_msgs/msg/Marker",
+          what="the odometry path, a piece every 10 ticks, frame odom"),
     Topic("/map", "nav_msgs/msg/OccupancyGrid", latched=True, simulation=True, shared=True,
           what="the obstacles as an occupancy grid, frame map (once)"),
     Topic("/obstacles", "visualization_msgs/msg/MarkerArray", latched=True, simulation=True,
@@ -81,6 +84,9 @@ TOPICS: tuple[Topic, ...] = (
           what="the control law's diagnostics each tick, a float64 field each"),
     Topic("/mdle/state", "std_msgs/msg/String", what="the trace's sample record each tick"),
 )
+
+#: Ticks in a piece of ``/path``.
+PATH_TICKS = 10
 
 #: Corners of the polygon drawn for a disc-shaped body.
 FOOTPRINT_SIDES = 24
@@ -275,6 +281,10 @@ class RosRecording:
         self._scan_ch = ch["/scan"]
         self._static_ch, self._events_ch = ch["/tf_static"], ch["/mdle/events"]
         self._active_ch = ch["/mdle/active"]
+        self._path_ch = ch["/path"]
+        self._path: list[tuple[float, float]] = []  # the piece of path not yet published
+        self._path_ns = 0                           # the time of its last point
+        self._path_pieces = 0
         self._ticks = TickEncoder(outlet, ch["/odom"], ch["/tf"], ch["/cmd_vel"],
                                   ch["/mdle/state"], ch.get("/ground_truth", 0), self._scan_ch,
                                   (self.frames["map"], self.frames["odom"], self.frames["base"]),
@@ -421,7 +431,33 @@ class RosRecording:
         if len(ticks.ns):
             ticks.covariance = self._covariance.batch(ticks.values[:, 0:3])
         self._ticks.write(ticks)
+        self._add_path(ticks)
         self.out.tick()
+
+    def _add_path(self, ticks: Ticks) -> None:
+        """Publish ``/path`` pieces of :data:`PATH_TICKS` ticks (after their ticks).
+
+        The pieces are counted in ticks, so the recording and the export of its trace
+        (batched differently) publish the same ones.
+        """
+        xy = ticks.values[:, 0:2].tolist()
+        ns = ticks.ns.tolist()
+        for i, (x, y) in enumerate(xy):
+            if not (math.isfinite(x) and math.isfinite(y)):
+                continue
+            self._path.append((x, y))
+            self._path_ns = ns[i]
+            if len(self._path) > PATH_TICKS:
+                self._publish_path()
+
+    def _publish_path(self) -> None:
+        """Publish the piece waiting (it goes on from its last point)."""
+        if len(self._path) > 1:
+            self.out.add(self._path_ch, self._path_ns,
+                         path_marker(self._path_ns, self.frames["odom"], self._path_pieces,
+                                     self._path))
+            self._path_pieces += 1
+            self._path = self._path[-1:]
 
     def end(self, t: float, line: str) -> None:
         """Publish the ``end`` record."""
@@ -443,6 +479,7 @@ class RosRecording:
         if self.finished:
             return
         self.flush()
+        self._publish_path()  # the last piece, however short
         self.finished = True
         if not self._owns:
             return

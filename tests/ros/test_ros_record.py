@@ -114,7 +114,8 @@ def test_topic_counts_match_the_trace(run: dict[str, Any], rosbags_read: Any) ->
     changes = sum(1 for i, s in enumerate(tr.samples)
                   if i == 0 or s["path"] != tr.samples[i - 1]["path"])
     assert counts == {"/scan": len(tr.scans), "/odom": n, "/tf": n, "/tf_static": 1,
-                      "/cmd_vel": n, "/ground_truth": n, "/footprint": n, "/map": 1,
+                      "/cmd_vel": n, "/ground_truth": n, "/footprint": n,
+                      "/path": math.ceil((n - 1) / 10), "/map": 1,
                       "/obstacles": 1, "/mdle/events": len(tr.events) + len(starts) + 1,
                       "/mdle/active": changes, "/mdle/diagnostics": n, "/mdle/state": n}
     assert changes == 3  # main/hug, main/wait, "" at the end
@@ -254,6 +255,26 @@ def test_diagnostics_active_element_and_footprint(run: dict[str, Any], rosbags_r
     assert np.all(r < 0.26)
 
 
+def test_the_path_in_pieces(run: dict[str, Any], rosbags_read: Any) -> None:
+    tr: Trace = run["trace"]
+    pieces = [m for m in rosbags_read(run["dir"] / "r.mcap") if m.topic == "/path"]
+    assert pieces[0].msgtype == "visualization_msgs/msg/Marker"
+    points: list[tuple[float, float]] = []
+    for k, m in enumerate(pieces):
+        marker = m.msg
+        assert (marker.header.frame_id, marker.ns, marker.id, marker.type) == (
+            "odom", "path", k, 4)
+        pts = [(p.x, p.y) for p in marker.points]
+        if points:  # a piece goes on from the last point of the one before
+            assert pts[0] == points[-1]
+            pts = pts[1:]
+        points += pts
+        assert m.log_time == _stamp(marker.header)
+    # every tick's odometry position, in order
+    assert points == [(s["x"], s["y"]) for s in tr.samples]
+    assert pieces[-1].log_time == _ns(tr.samples[-1]["t"])
+
+
 def test_static_transform_map_and_events(run: dict[str, Any], rosbags_read: Any,
                                          store: str) -> None:
     tr: Trace = run["trace"]
@@ -298,14 +319,17 @@ def test_export_writes_the_same_messages(run: dict[str, Any]) -> None:
     from mcap.reader import make_reader
 
     def messages(p: Path) -> list[tuple[str, int, int, bytes]]:
+        # each topic's messages in the file's order (a /path piece goes after the batch
+        # of ticks that completes it, and the two batch their ticks differently)
         with open(p, "rb") as f:
-            return [(c.topic, m.log_time, m.sequence, m.data)
-                    for _, c, m in make_reader(f).iter_messages(log_time_order=False)]
+            found = [(c.topic, m.log_time, m.sequence, m.data)
+                     for _, c, m in make_reader(f).iter_messages(log_time_order=False)]
+        return sorted(found, key=lambda m: (m[0], m[2]))
 
     recorded = messages(run["dir"] / "r.mcap")
     assert messages(run["dir"] / "e.mcap") == recorded
     assert messages(run["dir"] / "bag" / "bag_0.mcap") == recorded
-    assert f"{len(recorded)} messages on 13 topics" in run["export_out"]
+    assert f"{len(recorded)} messages on 14 topics" in run["export_out"]
 
 
 def test_rosbag_folder_reads_as_ros2_bag_record_writes_it(run: dict[str, Any],
