@@ -18,19 +18,26 @@ def recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> l
         return []
     from mdle.ros.recorder import McapRecorder
 
-    out = []
+    out: list[Any] = []
     live = live_view(args) if args.foxglove else []
     compression = "" if args.record_compression == "none" else args.record_compression
-    if args.record:
-        out.append(McapRecorder(args.record, header, world, compression=compression,
-                                live=live))
-        live = []
-    if args.rosbag:
-        out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
-                                compression=compression, live=live))
-        live = []
-    if live:
-        out.append(McapRecorder(None, header, world, live=live))
+    try:
+        if args.record:
+            out.append(McapRecorder(args.record, header, world, compression=compression,
+                                    live=live))
+            live = []
+        if args.rosbag:
+            out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
+                                    compression=compression, live=live))
+            live = []
+        if live:
+            out.append(McapRecorder(None, header, world, live=live))
+    except BaseException:  # one could not be made: close what was (files, the server)
+        for r in out:
+            r.close()
+        for sink in live:
+            sink.close()
+        raise
     return out
 
 
@@ -40,5 +47,8 @@ def live_view(args: argparse.Namespace) -> list[Any]:
 
     server = FoxgloveServer(*parse_address(args.foxglove))
     if not args.quiet:
-        print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)")
+        try:
+            print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)")
+        except BrokenPipeError:  # standard output closed: the run itself says so later
+            pass
     return [FoxgloveSink(server, owns_server=True)]
