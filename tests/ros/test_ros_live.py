@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import math
 import os
 import struct
 import subprocess
@@ -34,7 +35,8 @@ run main
 #: The subprotocol foxglove-sdk 0.30 serves: foxglove.websocket.v1's ops and frames, renamed.
 PROTOCOL = "foxglove.sdk.v1"
 
-WANTED = ("/scan", "/footprint", "/mdle/active", "/mdle/state", "/mdle/diagnostics", "/map")
+WANTED = ("/scan", "/footprint", "/mdle/active", "/mdle/state", "/mdle/diagnostics", "/map",
+          "/mdle/events")
 
 
 def _mdle() -> list[str]:
@@ -130,6 +132,12 @@ def test_a_client_subscribes_and_decodes_a_live_run(tmp_path: Path) -> None:
     assert active and set(active) <= {"main/cruise", "main/hug", ""}
     assert {s["path"] for s in states} <= {"main/cruise", "main/hug", ""}
     assert len(got["/mdle/diagnostics"]) == len(states)
+    # the events: cruise's timer ends it at 2 s and hug starts, a second after we came
+    events = [json.loads(m.data) for m in got["/mdle/events"]]
+    assert {(e["kind"], e["path"], e["cause"]) for e in events if e["type"] == "event"} >= {
+        ("end", "main/cruise", "timer"), ("start", "main/hug", None)}
+    diag = got["/mdle/diagnostics"][-1]  # hug's law records its numbers
+    assert diag.rc == 0.6 and math.isfinite(diag.side_range)
     # /map was published once, at the first tick, before the client came (it connected
     # a second into the run): it is sent again when the client subscribes
     (grid,) = got["/map"]
