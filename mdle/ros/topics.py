@@ -24,7 +24,7 @@ import numpy as np
 
 from mdle.ros import cdr
 from mdle.ros.covariance import OdometryCovariance
-from mdle.ros.markers import path_marker
+from mdle.ros.markers import PathPieces
 from mdle.ros.mcap_file import McapFile
 from mdle.ros.msgdefs import DIAGNOSTICS, diagnostics_definition, schema_text
 from mdle.ros.outlet import LiveSink, Outlet
@@ -283,8 +283,9 @@ class RosRecording:
         self._active_ch = ch["/mdle/active"]
         self._path_ch = ch["/path"]
         self._path: list[tuple[float, float]] = []  # the piece of path not yet published
-        self._path_ns = 0                           # the time of its last point
+        self._path_ns: list[int] = []               # the times of its points
         self._path_pieces = 0
+        self._pieces = PathPieces(self.frames["odom"])
         self._ticks = TickEncoder(outlet, ch["/odom"], ch["/tf"], ch["/cmd_vel"],
                                   ch["/mdle/state"], ch.get("/ground_truth", 0), self._scan_ch,
                                   (self.frames["map"], self.frames["odom"], self.frames["base"]),
@@ -440,24 +441,26 @@ class RosRecording:
         The pieces are counted in ticks, so the recording and the export of its trace
         (batched differently) publish the same ones.
         """
-        xy = ticks.values[:, 0:2].tolist()
-        ns = ticks.ns.tolist()
-        for i, (x, y) in enumerate(xy):
-            if not (math.isfinite(x) and math.isfinite(y)):
-                continue
-            self._path.append((x, y))
-            self._path_ns = ns[i]
-            if len(self._path) > PATH_TICKS:
-                self._publish_path()
+        xy = ticks.values[:, 0:2]
+        known = np.isfinite(xy).all(axis=1)
+        self._path.extend(map(tuple, xy[known].tolist()))
+        self._path_ns.extend(ticks.ns[known].tolist())
+        while len(self._path) > PATH_TICKS:
+            self._publish_path(PATH_TICKS + 1)
 
-    def _publish_path(self) -> None:
-        """Publish the piece waiting (it goes on from its last point)."""
-        if len(self._path) > 1:
-            self.out.add(self._path_ch, self._path_ns,
-                         path_marker(self._path_ns, self.frames["odom"], self._path_pieces,
-                                     self._path))
+    def _publish_path(self, size: int | None = None) -> None:
+        """Publish the first ``size`` points waiting (all: None) as a piece.
+
+        The next piece starts at this one's last point.
+        """
+        n = len(self._path) if size is None else size
+        if n > 1:
+            ns = self._path_ns[n - 1]
+            self.out.add(self._path_ch, ns,
+                         self._pieces.piece(ns, self._path_pieces, np.array(self._path[:n])))
             self._path_pieces += 1
-            self._path = self._path[-1:]
+            del self._path[:n - 1]
+            del self._path_ns[:n - 1]
 
     def end(self, t: float, line: str) -> None:
         """Publish the ``end`` record."""
