@@ -267,7 +267,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.overrides:
         parts.header["overrides"] = list(args.overrides)
     parts.backend, parts.world = _open_backend(args, parts.header)
-    from mdle.ros.topics import body_header  # the body and odometry noise, for recordings
+    from mdle.ros.describe import body_header  # the body and odometry noise, for recordings
 
     parts.header.update(body_header(parts.backend))
     from mdle.frames import FRAME_NOTE, reads_pose

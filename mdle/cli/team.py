@@ -194,7 +194,7 @@ def _summary(name: str, result: Any) -> str:
 def _header(args: argparse.Namespace, spec: Any, world: Any, seed: int, rate: float,
             until: float | None, name: str, plan: str, program: Any, element: str
             ) -> dict[str, Any]:
-    from mdle.ros.topics import profile_header  # the body and odometry noise, for recordings
+    from mdle.ros.describe import profile_header  # the body and odometry noise, for recordings
 
     r = next(r for r in world.robots if r.name == name)
     return {"program": {"file": os.path.abspath(plan),

@@ -202,8 +202,8 @@ class LiveRuns:
 
     def on_start(self, scheduler: Any) -> None:
         """Advertise the run's topics and start recording it."""
+        from mdle.ros.describe import body_header
         from mdle.ros.recorder import McapRecorder
-        from mdle.ros.topics import body_header
 
         backend = scheduler.backend
         world = getattr(backend, "world", None)

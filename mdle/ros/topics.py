@@ -24,14 +24,14 @@ import numpy as np
 
 from mdle.ros import cdr
 from mdle.ros.covariance import OdometryCovariance
+from mdle.ros.describe import diagnostic_names, footprint
 from mdle.ros.markers import PathPieces
 from mdle.ros.mcap_file import McapFile
 from mdle.ros.msgdefs import DIAGNOSTICS, diagnostics_definition, schema_text
 from mdle.ros.outlet import LiveSink, Outlet
 from mdle.ros.tick import TickEncoder, Ticks, times_ns
 
-__all__ = ["BATCH", "FRAMES", "TOPICS", "Topic", "RosRecording", "body_header",
-           "diagnostic_names", "profile_header",
+__all__ = ["BATCH", "FRAMES", "TOPICS", "Topic", "RosRecording",
            "footprint", "library_name", "sample_values", "to_ns"]
 
 #: Frame names (REP-105).
@@ -87,59 +87,6 @@ TOPICS: tuple[Topic, ...] = (
 
 #: Ticks in a piece of ``/path``.
 PATH_TICKS = 10
-
-#: Corners of the polygon drawn for a disc-shaped body.
-FOOTPRINT_SIDES = 24
-
-
-def footprint(radius: float) -> list[tuple[float, float]]:
-    """Return the outline of a disc of ``radius`` (m) about base_link's origin.
-
-    A polygon of :data:`FOOTPRINT_SIDES` corners around the disc (its sides touch it), so
-    the drawn body is never smaller than the simulated one.
-    """
-    r = radius / math.cos(math.pi / FOOTPRINT_SIDES)
-    return [(r * math.cos(2 * math.pi * i / FOOTPRINT_SIDES),
-             r * math.sin(2 * math.pi * i / FOOTPRINT_SIDES)) for i in range(FOOTPRINT_SIDES)]
-
-
-def body_header(backend: Any) -> dict[str, Any]:
-    """Return the trace header's ``radius`` and (simulation) ``odometry`` of a backend.
-
-    The body's radius (m) draws ``/footprint``; the simulator's odometry noise model
-    (``distance``, ``turn``, ``drift``) sets ``/odom``'s covariances
-    (:mod:`mdle.ros.covariance`). A robot's unknown noise is left out.
-    """
-    profile = getattr(backend, "profile", None)
-    if profile is not None:
-        return profile_header(profile)
-    limits = getattr(backend, "limits", None)
-    radius = getattr(limits, "radius", 0.0)
-    if isinstance(radius, (int, float)) and math.isfinite(radius) and radius > 0:
-        return {"radius": float(radius)}
-    return {}
-
-
-def profile_header(profile: Any) -> dict[str, Any]:
-    """Return the header's ``radius`` and ``odometry`` of a simulated robot's profile."""
-    out: dict[str, Any] = {}
-    if math.isfinite(profile.radius) and profile.radius > 0:
-        out["radius"] = float(profile.radius)
-    noise = profile.odometry
-    out["odometry"] = {"distance": float(noise.distance), "turn": float(noise.turn),
-                       "drift": float(noise.drift)}
-    return out
-
-
-def diagnostic_names() -> tuple[str, ...]:
-    """Return every diagnostic a built-in control law records, each once, in order."""
-    from mdle.atoms import default_registry
-
-    names: dict[str, None] = {}
-    for law in default_registry().laws.values():
-        names.update(dict.fromkeys(law.reports))
-    return tuple(names)
-
 
 def qos_yaml(latched: bool) -> str:
     """Return ``offered_qos_profiles`` as ``ros2 bag record`` (Humble) writes it."""

@@ -223,7 +223,7 @@ def test_odometry_transforms_command_truth(run: dict[str, Any], rosbags_read: An
 
 def test_diagnostics_active_element_and_footprint(run: dict[str, Any], rosbags_read: Any,
                                                   store: str) -> None:
-    from mdle.ros.topics import diagnostic_names
+    from mdle.ros.describe import diagnostic_names
 
     tr: Trace = run["trace"]
     msgs = rosbags_read(run["dir"] / "r.mcap", store)
