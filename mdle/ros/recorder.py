@@ -22,6 +22,7 @@ import os
 import time
 from collections.abc import Callable, Mapping
 from itertools import chain
+from operator import itemgetter
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -166,6 +167,7 @@ class McapRecorder:
         line_and_numbers = self._format.line_and_numbers
         names = recording.diag_names
         none = (math.nan,) * len(names)  # no law recording diagnostics this tick
+        every = itemgetter(*names) if len(names) > 1 else None  # a law recording them all
         times: list[float] = []
         lines: list[str] = []
         values: list[tuple[float, ...]] = []
@@ -188,7 +190,15 @@ class McapRecorder:
                           else sample_values(sample, numbers))
             paths.append(sample.path)
             diag = sample.diag
-            diags.append(tuple([diag.get(n, math.nan) for n in names]) if diag else none)
+            if not diag:
+                diags.append(none)
+            elif every is not None and len(diag) == len(names):
+                try:
+                    diags.append(every(diag))
+                except KeyError:  # other names: those it has
+                    diags.append(tuple([diag.get(n, math.nan) for n in names]))
+            else:
+                diags.append(tuple([diag.get(n, math.nan) for n in names]))
         _publish(recording, times, lines, values, scans, paths, diags)
 
     def on_end(self, result: RunResult) -> None:
