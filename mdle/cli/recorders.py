@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 __all__ = ["live_view", "recorders"]
@@ -46,9 +47,9 @@ def live_view(args: argparse.Namespace) -> list[Any]:
     from mdle.ros.live import FoxgloveServer, FoxgloveSink, parse_address
 
     server = FoxgloveServer(*parse_address(args.foxglove))
-    if not args.quiet:
-        try:
-            print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)")
-        except BrokenPipeError:  # standard output closed: the run itself says so later
-            pass
+    try:  # where to connect (port 0 picks one): on standard error with -q
+        print(f"live view: ws://{server.host}:{server.port} (Foxglove: Open connection)",
+              file=sys.stderr if args.quiet else sys.stdout)
+    except BrokenPipeError:  # standard output closed: the run itself says so later
+        pass
     return [FoxgloveSink(server, owns_server=True)]
