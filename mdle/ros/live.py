@@ -7,10 +7,10 @@ holds: :mod:`mdle.ros.outlet`) with the foxglove-sdk's WebSocket server (the
 ``ros2msg`` schema, so the Foxglove app decodes them as it decodes the MCAP file.
 
 The server has a context of its own (no global state), binds to 127.0.0.1 unless told
-otherwise, and stops when the run ends. Topics published once (``/map``,
-``/obstacles``, ``/tf_static``: latched in ROS terms) are sent again to a client that
-subscribes later, at the run's next batch of ticks, as a ROS 2 transient-local
-publisher would.
+otherwise, and stops when the run ends. Latched topics (``/map``, ``/obstacles``,
+``/tf_static`` published once, ``/mdle/active`` the current state) are sent again to a
+client that subscribes later, at the run's next batch of ticks, as a ROS 2
+transient-local publisher would.
 """
 
 from __future__ import annotations
@@ -142,9 +142,9 @@ class FoxgloveSink:
 
     def add(self, channel_id: int, ns: int, data: bytes) -> None:
         """Send a message to the clients subscribed to its topic."""
-        self._channels[channel_id].log(data, log_time=ns)
-        if channel_id in self._latched_ids:
+        if channel_id in self._latched_ids:  # kept first: a subscriber never misses it
             self._latched[channel_id] = (data, ns)
+        self._channels[channel_id].log(data, log_time=ns)
 
     def subscribed(self, server_channel_id: int) -> None:
         """Note a subscription (the server's thread): a latched topic's message goes again."""

@@ -353,7 +353,7 @@ def test_rosbag_folder_reads_as_ros2_bag_record_writes_it(run: dict[str, Any],
         latched = {t for t, c in topics.items()
                    if getattr(c.ext, "offered_qos_profiles")[0].durability  # noqa: B009
                    == QosDurability.TRANSIENT_LOCAL}
-        assert latched == {"/tf_static", "/map", "/obstacles"}
+        assert latched == {"/tf_static", "/map", "/obstacles", "/mdle/active"}
     assert [(m.topic, m.log_time) for m in rosbags_read(bag)] == [
         (m.topic, m.log_time) for m in direct]
 
