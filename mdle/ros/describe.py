@@ -37,7 +37,7 @@ def body_header(backend: Any) -> dict[str, Any]:
     (:mod:`mdle.ros.covariance`). A robot's unknown noise is left out.
     """
     profile = getattr(backend, "profile", None)
-    if profile is not None:
+    if hasattr(profile, "radius") and hasattr(profile, "odometry"):  # a simulated robot
         return profile_header(profile)
     limits = getattr(backend, "limits", None)
     radius = getattr(limits, "radius", 0.0)
