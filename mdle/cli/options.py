@@ -28,8 +28,9 @@ def add_simulation_options(p: Any) -> None:
                                              "(default: the world's)")
     p.add_argument("--robot", metavar="PROFILE",
                    help="robot profile in simulation: a name (`mdle robots` lists them) or "
-                        "a profile YAML file (default: the world's); with `mdle run` on a "
-                        "robot, the profile whose ladar mount and scan period recordings use")
+                        "a profile YAML file (default: the world's); on a robot, the "
+                        "profile whose latency laws predict over (default 0.15 s) and whose "
+                        "ladar mount and scan period recordings use")
     p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
                    help="simulated ladar: a noisy scan (default) or exact oracle geometry")
 

@@ -79,8 +79,10 @@ def _timing(robot: Any) -> str:
                 f"{robot.effective_latency * 1e3:.0f} ms on average until they show)")
     else:
         acts = f"commands act after {robot.command_latency * 1e3:.0f} ms"
+    half = robot.scan_half_rate
     return (f"timing: {acts}, reports every {robot.sip_cycle * 1e3:.1f} ms, scans {period} "
-            f"readable after {robot.scan_latency.describe()}")
+            f"readable after {robot.scan_latency.describe()}"
+            + (f", at half rate {half.describe()}" if half.enabled else ""))
 
 
 def _show(args: argparse.Namespace) -> int:
@@ -115,7 +117,8 @@ def _fit(args: argparse.Namespace) -> int:
     description = args.description or f"fitted to {', '.join(args.recordings)}"
     fitted = "server loop" if fit.control_cycle else "command latency"
     profile = fit.profile(base, args.name, description=description,
-                          source=f"mdle robots fit ({fitted}, ramps, scan latency); "
+                          source=f"mdle robots fit ({fitted}, ramps, scan latency"
+                                 f"{', half-rate scans' if fit.scan_half_rate.enabled else ''}); "
                                  f"the rest from {base.name}")
     comment = (f"Written by `{command}`.\n"
                f"Fit: RMS error v {fit.v.rms:.4f} m/s, omega {fit.omega.rms:.4f} rad/s over "

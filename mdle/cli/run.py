@@ -1,5 +1,8 @@
 """``mdle run``: run a plan in the embedded simulator or on a robot.
 
+Over 500 lines: one command, whose options, backends (simulator, Pioneer, ROS 2) and
+outputs share one run's parts and its clean end from wherever it is interrupted.
+
 Exit codes: 0 the program ran to its end (or to ``--until``), 1 plan or world errors
 (shown as ``mdle check`` shows them) and robot or connection faults, 3 the robot
 collided or stalled fatally, 74 the trace or a recording could not be written (disk
@@ -31,6 +34,7 @@ from mdle.cli.options import (
     writable_output,
 )
 from mdle.cli.recorders import recorders
+from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 
 if TYPE_CHECKING:
@@ -98,13 +102,14 @@ def add_parser(subparsers: Any) -> None:
                         "install 'mdle[foxglove]'")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
-    p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
-                   help="where to run (default: sim)")
+    p.add_argument("--backend", choices=("sim", "pioneer", "ros2"), default="sim",
+                   help="where to run (default: sim; ros2: a ROS 2 robot, docs/ros2.md)")
     p.add_argument("--connect", metavar="URL",
                    help="robot connection for --backend pioneer (tcp://host:port, "
                         "serial:///dev/ttyS0)")
     p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
     add_simulation_options(p)
+    add_ros2_options(p)
     p.set_defaults(handler=run, own_signals=True)
 
 
@@ -251,8 +256,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.start is not None and args.backend != "sim":
         raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
                                          "starts where it stands"))
+    check_ros2_options(args)
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
-        else known_robot(None)
+        else known_robot(None, None, args.robot if args.backend == "ros2" else None)
     try:
         program = load_program(args.plan, settings=args.overrides, robot=robot)
     except MdleError as err:
@@ -438,6 +444,8 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     """
     from mdle.errors import Diagnostic, MdleError
 
+    if args.backend == "ros2":  # mdle/cli/ros2.py
+        return open_ros2_backend(args, args.rate, header), None
     if args.backend == "pioneer":
         if not args.connect:
             raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
@@ -462,11 +470,10 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         from mdle.drivers.pioneer import PioneerBackend
 
         if profile is not None and isinstance(backend, PioneerBackend):
-            # the recording's base_link -> laser and scan period
-            x, y, th = profile.ladar_mount
-            backend.laser_mount = (float(x), float(y), float(th))
-            if profile.scan_period is not None:
-                backend.laser_timing = (profile.scan_period, 0.0)
+            # the law's latency, the recording's base_link -> laser and scan period
+            from mdle.drivers.profile import apply_robot_profile
+
+            apply_robot_profile(backend, profile)
         return backend, None
     from mdle import sim
 
