@@ -23,8 +23,8 @@ if TYPE_CHECKING:
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Subcommand modules under ``mdle.cli``, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "worlds",
-                             "robots", "repl", "experiment", "sweep", "sim")
+COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "recover",
+                             "worlds", "robots", "repl", "experiment", "sweep", "sim")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -21,7 +21,8 @@ def add_parser(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "export", help="write a trace as MCAP (ROS 2 messages) for Foxglove, PlotJuggler, ros2",
         description="Write the run in a JSON lines trace as an MCAP file of ROS 2 messages "
-                    "(/scan, /odom, /tf, /cmd_vel, /ground_truth, /map, /mdle/events, "
+                    "(/scan, /odom, /tf, /cmd_vel, /ground_truth, /footprint, /path, /map, "
+                    "/obstacles, /mdle/events, /mdle/active, /mdle/diagnostics, "
                     "/mdle/state), the messages `mdle run --record` writes. Needs the "
                     "extra: pip install 'mdle[mcap]'.",
         epilog="Exit codes: 0 written, 1 not a trace or stopped at a damaged record (the "

@@ -54,6 +54,9 @@ def add_parser(subparsers: Any) -> None:
                         "a robot; default 600; `inf`: no limit)")
     p.add_argument("--realtime", action="store_true",
                    help="pace runs to the wall clock (default: as fast as the simulator goes)")
+    p.add_argument("--foxglove", metavar="[HOST:]PORT",
+                   help="show every run live in Foxglove: a WebSocket server on PORT "
+                        "(127.0.0.1 unless HOST); needs pip install 'mdle[foxglove]'")
     p.add_argument("--plain", action="store_true",
                    help="read input plainly even on a terminal (no line editing)")
     p.add_argument("--echo", action="store_true",
@@ -90,7 +93,15 @@ def run(args: argparse.Namespace) -> int:
         session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
                           sensing=args.sensing, realtime=args.realtime)
     repl = Repl(session, debug=getattr(args, "debug", False))
+    live = None
     try:
+        if args.foxglove:
+            from mdle.ros.live import FoxgloveServer, LiveRuns, parse_address
+
+            live = LiveRuns(FoxgloveServer(*parse_address(args.foxglove)))
+            repl.run_observers.append(live)
+            print(f"live view: ws://{live.server.host}:{live.server.port} "
+                  "(Foxglove: Open connection)")
         if args.file:
             repl.handle(f":load {_quote(args.file)}")
             if repl.failures and not interactive:
@@ -106,6 +117,8 @@ def run(args: argparse.Namespace) -> int:
             stdin.reconfigure(errors="surrogateescape")
         return run_plain(repl, stdin, echo=args.echo)
     finally:
+        if live is not None:
+            live.close()
         _close(session, repl)
 
 

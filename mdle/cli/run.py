@@ -35,6 +35,7 @@ from mdle.cli.options import (
     world_beside,
     writable_output,
 )
+from mdle.cli.recorders import recorders
 from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
 from mdle.ranges import COORDINATE
@@ -98,6 +99,10 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--record-compression", choices=("none", "lz4"), default="none",
                    help="compression of the recording's chunks (default: none, the "
                         "cheapest to write; lz4: about a third smaller)")
+    p.add_argument("--foxglove", metavar="[HOST:]PORT",
+                   help="a live view for Foxglove: a WebSocket server on PORT (127.0.0.1 "
+                        "unless HOST is given) with the recording's messages; needs pip "
+                        "install 'mdle[foxglove]'")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
     p.add_argument("--backend", choices=("sim", "pioneer", "ros2"), default="sim",
@@ -265,6 +270,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.overrides:
         parts.header["overrides"] = list(args.overrides)
     parts.backend, parts.world = _open_backend(args, parts.header)
+    from mdle.ros.describe import body_header  # the body and odometry noise, for recordings
+
+    parts.header.update(body_header(parts.backend))
     from mdle.frames import FRAME_NOTE, reads_pose
 
     if not args.quiet and reads_pose(program):
@@ -284,7 +292,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
             parts.writer = _open_trace(parts.trace_path, parts.header)
             parts.observers.append(parts.writer)
         try:
-            parts.recorders = _recorders(args, parts.header, parts.world)
+            parts.recorders = recorders(args, parts.header, parts.world)
         except MdleError as err:  # cannot be created: a bad option (exit 1), not a full disk
             raise MdleError(err.diagnostics) from None
         parts.observers += parts.recorders
@@ -419,22 +427,6 @@ def _print(text: str) -> None:
         print(text)
     except BrokenPipeError:
         output.output_closed()
-
-
-def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> list[Any]:
-    """Return the MCAP recorders ``--record`` and ``--rosbag`` ask for."""
-    if not (args.record or args.rosbag):
-        return []
-    from mdle.ros.recorder import McapRecorder
-
-    out = []
-    compression = "" if args.record_compression == "none" else args.record_compression
-    if args.record:
-        out.append(McapRecorder(args.record, header, world, compression=compression))
-    if args.rosbag:
-        out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
-                                compression=compression))
-    return out
 
 
 def _t0(result: Any) -> float:

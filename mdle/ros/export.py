@@ -205,7 +205,7 @@ def _export(f: Any, path: str, target: str | os.PathLike[str], header: Mapping[s
         raise MdleError(Diagnostic(None, f"cannot export `{path}` to `{os.fspath(target)}`: "
                                          f"{os_reason(exc)}")) from None
     span = rec.out.time_range
-    return ExportReport(rec.path, rec.counts(), n, stopped, truncated, state.ended,
+    return ExportReport(rec.path or "", rec.counts(), n, stopped, truncated, state.ended,
                         (span[0] / 1e9, span[1] / 1e9) if span else None, tuple(warnings))
 
 
@@ -261,7 +261,8 @@ class _Export:
                          _number(rec, "true_theta"))
             r.sample(text, t, _number(rec, "x"), _number(rec, "y"), _number(rec, "theta"),
                      _number(rec, "v"), _number(rec, "omega"), _number(rec, "cmd_v"),
-                     _number(rec, "cmd_omega"), truth)
+                     _number(rec, "cmd_omega"), truth, path=str(rec.get("path") or ""),
+                     diag=rec.get("diag") if isinstance(rec.get("diag"), dict) else None)
             self._last_t = t
         elif kind == "scan":
             t = _time(rec)

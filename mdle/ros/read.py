@@ -159,6 +159,13 @@ def _read(path: str, f: Any) -> Trace:
             raise _error(path, f"not a readable MCAP file ({type(exc).__name__}: {exc})"
                          ) from None
         truncated = True
+    robots = sorted(c.topic[1:-len("/mdle/state")] for c in channels.values()
+                    if c.topic.endswith("/mdle/state") and c.topic != "/mdle/state")
+    if not has_state and robots:
+        raise _error(path, f"a team's recording (robots {', '.join(robots)}): it is read "
+                           "robot by robot in Foxglove, PlotJuggler or rosbags",
+                     hint="for mdle plot, write the team's traces: mdle run --team ... "
+                          "--trace run.jsonl gives run.NAME.jsonl")
     if not has_state:
         raise _error(path, "not an mdle recording: no /mdle/state topic",
                      hint="mdle reads the MCAP files `mdle run --record` and `mdle export` "

@@ -45,7 +45,7 @@ def test_a_whole_trace(trace: Path, tmp_path: Path, capsys: pytest.CaptureFixtur
     n = len(read_trace(trace).samples)
     counts = doctor(mcap)
     assert counts["/odom"] == counts["/mdle/state"] == n
-    assert f"wrote {mcap}: {sum(counts.values())} messages on 9 topics" in out
+    assert f"wrote {mcap}: {sum(counts.values())} messages on 13 topics" in out
 
 
 @pytest.mark.parametrize("cut", [0.3, 0.61, 0.97])
