@@ -62,6 +62,37 @@ typedef struct {
     cplx f;
 } face;
 
+/* Face j of the world rows z (end, conj(start), kappa start, edge; m faces a row) seen
+ * in one scan's fan frame: its bearing interval, widened by eps, and f, with
+ * 1/t = Im(conj(d) f) for a beam d. Returns 0 for a back face (or the origin on its
+ * line), and then leaves *f as it was. Both face loops call this: the same numbers. */
+static inline int face_in_fan(const cplx *z, const double *front_min, Py_ssize_t m,
+                              Py_ssize_t j, cplx rot, cplx rot_c, cplx c, cplx kc,
+                              double eps, int fused, face *f)
+{
+    cplx q = cmul(z[j], rot, fused);
+    cplx pc = cmul(z[m + j], rot_c, fused);
+    q.re -= c.re;
+    q.im -= c.im;
+    pc.re -= c.re;
+    pc.im -= -c.im;
+    cplx w = cmul(pc, q, fused); /* conj(p) q = (p . q) + i cross(p, e) */
+    if (!(w.im > front_min[j]))
+        return 0;
+    cplx kp = cmul(z[2 * m + j], rot, fused);
+    kp.re -= kc.re;
+    kp.im -= kc.im;
+    cplx e = cmul(z[3 * m + j], rot, fused);
+    double lo = atan2(kp.im, kp.re);
+    double hi = atan2(w.im, w.re) + lo;
+    double s = 1.0 / w.im;
+    f->hi = hi + eps;
+    f->lo = lo + -eps;
+    f->f.re = e.re * s;
+    f->f.im = e.im * s;
+    return 1;
+}
+
 /* Raise best[k] (1/t) to each front face's hit. Returns 0, or -1 when out of memory. */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 /* A clone with the FMA instruction where the CPU has it; fma() is a libm call elsewhere. */
@@ -81,27 +112,10 @@ cast_faces(const double *zw, const double *front_min, Py_ssize_t m, double *best
     if (fs == NULL)
         return -1;
     for (Py_ssize_t j = 0; j < m; j++) {
-        cplx q = cmul(z[j], rot, fused);
-        cplx pc = cmul(z[m + j], rot_c, fused);
-        q.re -= c.re;
-        q.im -= c.im;
-        pc.re -= c.re;
-        pc.im -= -c.im;
-        cplx w = cmul(pc, q, fused); /* conj(p) q = (p . q) + i cross(p, e) */
-        if (!(w.im > front_min[j]))
-            continue; /* a back face, or the origin on its line */
-        cplx kp = cmul(z[2 * m + j], rot, fused);
-        kp.re -= kc.re;
-        kp.im -= kc.im;
-        cplx e = cmul(z[3 * m + j], rot, fused);
-        double lo = atan2(kp.im, kp.re);
-        double hi = atan2(w.im, w.re) + lo;
-        double s = 1.0 / w.im;
-        face *f = &fs[nf++];
-        f->hi = hi + eps;
-        f->lo = lo + -eps;
-        f->f.re = e.re * s;
-        f->f.im = e.im * s;
+        face *f = &fs[nf];
+        if (!face_in_fan(z, front_min, m, j, rot, rot_c, c, kc, eps, fused, f))
+            continue;
+        nf++;
         if (f->hi > top)
             top = f->hi;
     }
@@ -122,6 +136,109 @@ cast_faces(const double *zw, const double *front_min, Py_ssize_t m, double *best
     }
     free(fs);
     return 0;
+}
+
+/* A uniform grid over the faces (sim/faceindex.py, FaceGrid): cell (ix, iy) spans
+ * [x0 + ix h, x0 + (ix + 1) h) x [y0 + iy h, ...) and holds the faces cell_faces[start[i] ..
+ * start[i + 1]) (i = iy nx + ix); a face is listed in every cell within `pad` of it. */
+typedef struct {
+    double x0, y0, h;
+    Py_ssize_t nx, ny, n_faces;
+    const Py_ssize_t *start, *faces;
+} face_grid;
+
+/* The faces' loop of one scan, walking each beam through the grid (Amanatides and Woo's
+ * DDA) and stopping at the first cell whose far side lies beyond the nearest hit found:
+ * the cost follows what the beam crosses, not the size of the world. Each face met is
+ * turned into the fan frame once a scan (face_in_fan, kept in memo under stamp == scan)
+ * and each (beam, face) pair is tested as cast_faces tests it (inside the widened
+ * interval, or its copy one turn down when the interval reaches wrap_hi), so a beam's
+ * 1/t is the same number wherever the faces met are the same. t_lim: the farthest a hit
+ * may lie (beyond max_range nothing counts); tol: the margin of the stopping test, far
+ * above rounding and below the grid's pad. */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("fma", "default")))
+#endif
+static void
+grid_cast(const double *zw, const double *front_min, Py_ssize_t m, double *best,
+          const double *rel_s, const double *dconj, Py_ssize_t n, cplx rot, cplx c, cplx kc,
+          double eps, double wrap_hi, int may_wrap, int fused, const face_grid *g, double ox,
+          double oy, double t_lim, double tol, Py_ssize_t *stamp, face *memo,
+          Py_ssize_t scan)
+{
+    const cplx *z = (const cplx *)zw;
+    const cplx *d = (const cplx *)dconj;
+    cplx rot_c = {rot.re, -rot.im};
+    double h = g->h, x1 = g->x0 + h * (double)g->nx, y1 = g->y0 + h * (double)g->ny;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        /* The beam's world direction, conj(dconj[k] rot): only steers the walk. */
+        double dx = d[k].re * rot.re - d[k].im * rot.im;
+        double dy = -(d[k].re * rot.im + d[k].im * rot.re);
+        /* Where the beam is inside the grid's box: [t0, t1], clipped to t_lim. */
+        double t0 = 0.0, t1 = t_lim;
+        if (dx != 0.0) {
+            double ta = (g->x0 - ox) / dx, tb = (x1 - ox) / dx;
+            t0 = fmax(t0, fmin(ta, tb));
+            t1 = fmin(t1, fmax(ta, tb));
+        } else if (!(ox >= g->x0 && ox <= x1)) {
+            continue;
+        }
+        if (dy != 0.0) {
+            double ta = (g->y0 - oy) / dy, tb = (y1 - oy) / dy;
+            t0 = fmax(t0, fmin(ta, tb));
+            t1 = fmin(t1, fmax(ta, tb));
+        } else if (!(oy >= g->y0 && oy <= y1)) {
+            continue;
+        }
+        if (!(t0 <= t1))
+            continue; /* misses the box (or NaN) */
+        double fx = floor((ox + t0 * dx - g->x0) / h), fy = floor((oy + t0 * dy - g->y0) / h);
+        /* Clamped before any conversion (NaN lands in cell 0): every step moves one cell,
+         * so a walk ends within nx + ny steps whatever the numbers. */
+        Py_ssize_t ix = fx >= 0.0 ? (fx < (double)g->nx ? (Py_ssize_t)fx : g->nx - 1) : 0;
+        Py_ssize_t iy = fy >= 0.0 ? (fy < (double)g->ny ? (Py_ssize_t)fy : g->ny - 1) : 0;
+        Py_ssize_t sx = dx > 0.0 ? 1 : dx < 0.0 ? -1 : 0;
+        Py_ssize_t sy = dy > 0.0 ? 1 : dy < 0.0 ? -1 : 0;
+        double next_x = sx ? (g->x0 + h * (double)(ix + (sx > 0)) - ox) / dx : INFINITY;
+        double next_y = sy ? (g->y0 + h * (double)(iy + (sy > 0)) - oy) / dy : INFINITY;
+        double step_x = sx ? h / fabs(dx) : INFINITY, step_y = sy ? h / fabs(dy) : INFINITY;
+        double r = rel_s[k];
+        for (;;) {
+            Py_ssize_t cell = iy * g->nx + ix;
+            Py_ssize_t end = g->start[cell + 1] < g->n_faces ? g->start[cell + 1] : g->n_faces;
+            for (Py_ssize_t p = g->start[cell] > 0 ? g->start[cell] : 0; p < end; p++) {
+                Py_ssize_t j = g->faces[p];
+                if (j < 0 || j >= m)
+                    continue; /* not a face: a broken grid never reads outside the arrays */
+                face *f = &memo[j];
+                if (stamp[j] != scan) {
+                    stamp[j] = scan;
+                    if (!face_in_fan(z, front_min, m, j, rot, rot_c, c, kc, eps, fused, f))
+                        f->hi = f->lo = NAN; /* a back face: no beam is inside */
+                }
+                int inside = r >= f->lo && r < f->hi;
+                if (!inside && may_wrap && f->hi >= wrap_hi)
+                    inside = r >= f->lo - TAU && r < f->hi - TAU;
+                if (inside) {
+                    double inv = cmul(d[k], f->f, fused).im;
+                    if (inv > best[k])
+                        best[k] = inv;
+                }
+            }
+            double t_next = fmin(next_x, next_y);
+            if (!(t_next < t1) || 1.0 / best[k] <= t_next - tol)
+                break; /* out of the box or of range, or the nearest hit is found */
+            if (next_x < next_y) {
+                ix += sx;
+                next_x += step_x;
+            } else {
+                iy += sy;
+                next_y += step_y;
+            }
+            if (ix < 0 || ix >= g->nx || iy < 0 || iy >= g->ny)
+                break;
+        }
+    }
 }
 
 typedef struct {
@@ -334,6 +451,91 @@ fail:
     return NULL;
 }
 
+PyDoc_STRVAR(grid_faces_doc,
+"grid_faces(zw, front_min, best, rel_s, dconj, rot, c, kc, eps, wrap_hi, may_wrap, fused,\n"
+"           box, start, faces, ox, oy, t_lim, tol, stamp, memo, scan)\n"
+"--\n\n"
+"faces for one scan, walking each beam through a grid of the faces (FaceGrid).\n"
+"The first twelve as faces takes them (one scan). box: (x0, y0, h, nx, ny) float;\n"
+"start: (nx ny + 1,) intp; faces: intp; ox, oy: the origin (world frame); t_lim, tol:\n"
+"floats; stamp: (m,) intp and memo: (m, 4) float, the scan's per-face scratch, marked\n"
+"with the int scan.");
+
+static PyObject *grid_faces(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 22) {
+        PyErr_Format(PyExc_TypeError, "grid_faces() takes 22 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    double eps = PyFloat_AsDouble(args[8]);
+    double wrap_hi = PyFloat_AsDouble(args[9]);
+    int may_wrap = PyObject_IsTrue(args[10]);
+    int fused = PyObject_IsTrue(args[11]);
+    double ox = PyFloat_AsDouble(args[15]);
+    double oy = PyFloat_AsDouble(args[16]);
+    double t_lim = PyFloat_AsDouble(args[17]);
+    double tol = PyFloat_AsDouble(args[18]);
+    Py_ssize_t scan = PyLong_AsSsize_t(args[21]);
+    cplx rc[3];
+    if (PyErr_Occurred() || may_wrap < 0 || fused < 0)
+        return NULL;
+    for (int i = 0; i < 3; i++)
+        if (get_complex(args[5 + i], &rc[i]) < 0)
+            return NULL;
+    Py_buffer v[10];
+    Py_ssize_t m, n, n_start, n_faces;
+    int got = 0;
+    if (get_buf(args[1], &v[got++], 'd', -1, &m, 0, "front_min") < 0)
+        goto fail_one;
+    if (get_buf(args[0], &v[got++], 'Z', 8 * m, NULL, 0, "zw") < 0)
+        goto fail_one;
+    if (get_buf(args[3], &v[got++], 'd', -1, &n, 0, "rel_s") < 0)
+        goto fail_one;
+    if (get_buf(args[4], &v[got++], 'Z', 2 * n, NULL, 0, "dconj") < 0)
+        goto fail_one;
+    if (get_buf(args[2], &v[got++], 'd', n, NULL, 1, "best") < 0)
+        goto fail_one;
+    if (get_buf(args[12], &v[got++], 'd', 5, NULL, 0, "box") < 0)
+        goto fail_one;
+    if (get_buf(args[13], &v[got++], 'n', -1, &n_start, 0, "start") < 0)
+        goto fail_one;
+    if (get_buf(args[14], &v[got++], 'n', -1, &n_faces, 0, "faces") < 0)
+        goto fail_one;
+    if (get_buf(args[19], &v[got++], 'n', m, NULL, 1, "stamp") < 0)
+        goto fail_one;
+    if (get_buf(args[20], &v[got++], 'd', 4 * m, NULL, 1, "memo") < 0)
+        goto fail_one;
+    const double *box = v[5].buf;
+    face_grid g;
+    /* The box must fit the cells (checked here, in constant time); a cell's run of faces
+     * and each face index are checked where the walk reads them. */
+    if (!(box[2] > 0.0 && box[3] >= 1.0 && box[4] >= 1.0 && box[3] * box[4] + 1.0 ==
+          (double)n_start)) {
+        PyErr_SetString(PyExc_ValueError, "grid_faces: the grid's box and cells do not fit "
+                        "together");
+        goto fail;
+    }
+    g.x0 = box[0];
+    g.y0 = box[1];
+    g.h = box[2];
+    g.nx = (Py_ssize_t)box[3];
+    g.ny = (Py_ssize_t)box[4];
+    g.start = v[6].buf;
+    g.faces = v[7].buf;
+    g.n_faces = n_faces;
+    grid_cast(v[1].buf, v[0].buf, m, v[4].buf, v[2].buf, v[3].buf, n, rc[0], rc[1], rc[2],
+              eps, wrap_hi, may_wrap, fused, &g, ox, oy, t_lim, tol, v[8].buf,
+              (face *)v[9].buf, scan);
+    release_all(v, got);
+    Py_RETURN_NONE;
+fail_one:
+    got--; /* the buffer that failed was released by get_buf */
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
 PyDoc_STRVAR(occlusions_doc,
 "occlusions(ox, oy, first, step, beams, max_range, skip, cx, cy, r, scan, beam, t)\n"
 "--\n\n"
@@ -436,6 +638,7 @@ static PyObject *occlude(PyObject *self, PyObject *const *args, Py_ssize_t nargs
 
 static PyMethodDef methods[] = {
     {"faces", (PyCFunction)(void (*)(void))faces, METH_FASTCALL, faces_doc},
+    {"grid_faces", (PyCFunction)(void (*)(void))grid_faces, METH_FASTCALL, grid_faces_doc},
     {"occlusions", (PyCFunction)(void (*)(void))occlusions, METH_FASTCALL, occlusions_doc},
     {"occlude", (PyCFunction)(void (*)(void))occlude, METH_FASTCALL, occlude_doc},
     {NULL, NULL, 0, NULL},

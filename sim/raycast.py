@@ -36,9 +36,11 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
+from mdle.sim.faceindex import FaceGrid
 from mdle.sim.shapes import Parts
 
 __all__ = ["COMPILED", "MAX_RANGE_SLACK", "FanCaster", "RayCaster", "RayHits"]
@@ -50,6 +52,9 @@ _CULL_ABOVE = 256    # bounding-box culling pays off only in larger worlds
 #: A hit at ``max_range`` counts, give or take this relative rounding (a few ulps), so
 #: that a hit exactly at the limit counts in every code path, however it was rounded.
 MAX_RANGE_SLACK = 1e-15
+#: Metres: the grid walk stops at a cell whose far side lies this much beyond the nearest
+#: hit found (far above rounding, below :data:`sim.faceindex.PAD`).
+_GRID_TOL = 1e-9
 
 
 def _compiled_faces() -> Callable[..., None] | None:
@@ -87,7 +92,17 @@ def _numpy_complex_rounding() -> bool | None:
     return verdicts.pop() if len(verdicts) == 1 else None
 
 
+def _compiled_grid_faces() -> Callable[..., None] | None:
+    """Return the grid walk's face loop in C, or None where it was not built."""
+    try:
+        from mdle.sim._kernels import grid_faces
+    except ImportError:
+        return None
+    return grid_faces
+
+
 _KERNEL = _compiled_faces()
+_GRID_KERNEL = _compiled_grid_faces()
 _FUSED = _numpy_complex_rounding() if _KERNEL is not None else None
 #: Whether scans use the compiled face loop (False: the numpy path, the same numbers).
 COMPILED = _FUSED is not None
@@ -152,13 +167,23 @@ class RayCaster:
         # A face whose line passes within _T_MIN of the origin is never hit (t <= _T_MIN).
         self._front_min = _T_MIN * np.abs(self._ze)
 
-    def fan(self, rel: np.ndarray, max_range: float, compiled: bool | None = None
-            ) -> FanCaster:
+    @cached_property
+    def grid(self) -> FaceGrid | None:
+        """The faces' grid (:class:`sim.faceindex.FaceGrid`), built on first use; None: no faces.
+
+        One per world, shared by every :class:`FanCaster` of it.
+        """
+        if self._s0.shape[0] == 0:
+            return None
+        return FaceGrid.build(self._s0, self._s0 + self._edge)
+
+    def fan(self, rel: np.ndarray, max_range: float, compiled: bool | None = None,
+            indexed: bool | None = None) -> FanCaster:
         """Make a :class:`FanCaster` for a fixed fan of beams (a ladar's), with its buffers.
 
-        ``compiled``: as :class:`FanCaster` takes it.
+        ``compiled``, ``indexed``: as :class:`FanCaster` takes them.
         """
-        return FanCaster(self, rel, max_range, compiled)
+        return FanCaster(self, rel, max_range, compiled, indexed)
 
     # ------------------------------------------------------------------ public
     def cast(self, origin: np.ndarray, angles: np.ndarray, max_range: float = math.inf,
@@ -443,6 +468,11 @@ class FanCaster:
         Cast the faces with the compiled loop (True), with numpy (False), or the compiled
         loop where this install has it (None, the default; see :data:`COMPILED`). Both
         give the same numbers.
+    indexed : bool, optional
+        With the compiled loop, in a world of more than 256 faces: walk each beam through
+        the caster's :attr:`RayCaster.grid` (True, or None, the default) or cull the faces
+        by bounding box and test every one within range (False). The same numbers where
+        the faces met are the same; the walk reads only the faces along the beams.
 
     Raises
     ------
@@ -452,7 +482,7 @@ class FanCaster:
     """
 
     def __init__(self, caster: RayCaster, rel: np.ndarray, max_range: float,
-                 compiled: bool | None = None) -> None:
+                 compiled: bool | None = None, indexed: bool | None = None) -> None:
         rel = np.asarray(rel, dtype=float).reshape(-1)
         if rel.shape[0] == 0 or rel[0] != 0.0 or bool((np.diff(rel) < 0).any()):
             raise ValueError("a fan's relative angles must start at 0 and ascend")
@@ -519,6 +549,17 @@ class FanCaster:
         self._ell_turn = np.empty((2, 1), dtype=complex)
         self._ell_coef = np.empty_like(self._ell_k)
         self._dd = np.column_stack([self._dirs, self._dirs.conjugate()])
+        # The grid walk (compiled only): the world's grid, and this fan's per-face scratch
+        # (each face's numbers for the scan whose count its stamp holds).
+        self._grid: FaceGrid | None = None
+        if (self._kernel is not None and _GRID_KERNEL is not None and indexed is not False
+                and m > _CULL_ABOVE):
+            self._grid = caster.grid
+        if self._grid is not None:
+            self._grid_box = self._grid.box
+            self._stamp = np.full(m, -1, dtype=np.intp)
+            self._memo = np.zeros((m, 4))
+            self._scans = 0
 
     def cast(self, ox: float, oy: float, first: float) -> tuple[np.ndarray, np.ndarray]:
         """Cast the fan from ``(ox, oy)`` (m) with its first beam at world angle ``first``.
@@ -604,6 +645,9 @@ class FanCaster:
         caster = self.caster
         zw, front_min = self._zw, caster._front_min
         n_seg = front_min.shape[0]
+        if self._grid is not None:
+            self._walk(ox, oy, rot, best)
+            return
         if n_seg > _CULL_ABOVE:
             # Large worlds: only the faces whose bounding box comes within range.
             r = self.max_range
@@ -631,6 +675,17 @@ class FanCaster:
         z = np.multiply(zw, rv, out=self._z if zw is self._zw else None)
         np.subtract(z, off, z)                      # rows: q, conj(p), kappa p, e
         self._faces(z, front_min, best, 0, 0)
+
+    def _walk(self, ox: float, oy: float, rot: complex, best: np.ndarray) -> None:
+        """:meth:`_segments` through the world's grid: each beam meets the faces it crosses."""
+        assert _GRID_KERNEL is not None and self._grid is not None
+        grid = self._grid
+        c = complex(ox, oy) * rot
+        self._scans += 1
+        _GRID_KERNEL(self._zw, self.caster._front_min, best, self._rel_s, self._dconj, rot, c,
+                     self._kappa * c, _EPS_ANGLE, self._wrap_hi, self._may_wrap, _FUSED,
+                     self._grid_box, grid.start, grid.faces, ox, oy, self._t_hit + _GRID_TOL,
+                     _GRID_TOL, self._stamp, self._memo, self._scans)
 
     def _compiled(self, zw: np.ndarray, front_min: np.ndarray, best: np.ndarray,
                   rot: complex | np.ndarray, c: complex | np.ndarray,
