@@ -13,9 +13,9 @@ lists the cells its padded bounding box covers (at most 3 x 3), and one sort gro
 >>> import numpy as np
 >>> s0 = np.array([[0.0, 0.0], [0.0, 4.0]])
 >>> s1 = np.array([[4.0, 0.0], [4.0, 4.0]])
->>> g = FaceGrid.build(s0, s1, cell=1.0)
+>>> g = FaceGrid.build(s0, s1, cell=1.0)   # the box is padded: 4 m take 5 cells
 >>> (g.nx, g.ny), g.faces_in(0, 0).tolist(), g.faces_in(2, 2).tolist()
-((4, 4), [0], [])
+((5, 5), [0], [])
 """
 
 from __future__ import annotations
