@@ -249,18 +249,21 @@ def building(cells: int) -> None:
     from mdle.lang import load_text
     from mdle.runtime import Scheduler
     from mdle.sim.backend import SimBackend
-    from mdle.sim.importers import import_map
+    from mdle.sim.catalog import load_world
 
     with tempfile.TemporaryDirectory() as tmp:
         path = write_map(Path(tmp), building_grid(cells), "building")
+        (Path(tmp) / "world.yaml").write_text(
+            f"name: building\nmap: {path.name}\nstart: {{x: 1.0, y: 1.0, theta: 0}}\n")
         before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
         t0 = time.perf_counter()
-        world = import_map(path)
+        world = load_world(str(Path(tmp) / "world.yaml"))
         world.caster.grid                      # noqa: B018 (built on first use: count it)
         dt = time.perf_counter() - t0
         grown = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
-    print(f"a {cells} x {cells} map_server map: imported (outlines, world, caster, grid) in "
-          f"{dt:.2f} s, peak memory +{grown:.0f} MB; {world.parts.n_segments} segments")
+    print(f"a {cells} x {cells} map_server map as a world's `map:`: loaded (image, outlines, "
+          f"faces, start check, caster, grid) in {dt:.2f} s, peak memory +{grown:.0f} MB; "
+          f"{world.parts.n_segments} segments")
     text = ("atom f = (follow_boundary(side = right, rc = 0.6 m, v = 0.3 m/s), never, inf)\n"
             "plan main = ((f), never, inf)\n")
     backend = SimBackend(world, seed=1, robot="pioneer2dx")

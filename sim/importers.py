@@ -83,9 +83,7 @@ def import_map(path: str | os.PathLike[str], tolerance: float | None = None,
     frame = affinity.rotate(affinity.translate(frame, info.origin[0], info.origin[1]),
                             info.origin[2], origin=(info.origin[0], info.origin[1]),
                             use_radians=True)
-    free = frame.difference(plan.geom)
-    pieces = sorted(shapely.get_parts(free), key=lambda g: g.area)
-    start = polylabel(pieces[-1], tolerance=info.resolution) if pieces else None
+    start = polylabel(_largest_room(plan.geom, frame), tolerance=info.resolution)
     polygons = tuple(Polygon(tuple(map(tuple, g.exterior.coords[:-1])), "",
                              tuple(tuple(map(tuple, r.coords[:-1])) for r in g.interiors))
                      for g in shapely.get_parts(plan.geom))
@@ -96,6 +94,23 @@ def import_map(path: str | os.PathLike[str], tolerance: float | None = None,
                  description=f"{stem}: imported from the map_server map {Path(path).name} "
                              f"({cols} x {rows} cells of {info.resolution:g} m)",
                  extent=(x0, y0, x1, y1))
+
+
+def _largest_room(geom: Any, frame: Any) -> Any:
+    """Return the largest free region: the largest hole of the outlines less what stands in it.
+
+    A map without holes (no closed room) has the map's box less the outlines instead.
+    """
+    import shapely
+
+    polys = shapely.get_parts(geom)
+    holes = [shapely.Polygon(r) for p in polys for r in p.interiors]
+    if not holes:
+        return max(shapely.get_parts(frame.difference(geom)), key=lambda g: g.area)
+    room = max(holes, key=lambda g: g.area)
+    inside = polys[shapely.contains(room, shapely.point_on_surface(polys))]
+    free = room.difference(shapely.union_all(inside)) if inside.shape[0] else room
+    return max(shapely.get_parts(free), key=lambda g: g.area)
 
 
 def import_irsim(path: str | os.PathLike[str], name: str | None = None) -> Any:

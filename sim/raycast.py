@@ -37,6 +37,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 
@@ -92,17 +93,17 @@ def _numpy_complex_rounding() -> bool | None:
     return verdicts.pop() if len(verdicts) == 1 else None
 
 
-def _compiled_grid_faces() -> Callable[..., None] | None:
-    """Return the grid walk's face loop in C, or None where it was not built."""
+def _compiled_grid_walk() -> Callable[..., Any] | None:
+    """Return the grid walk's type in C (``GridWalk``), or None where it was not built."""
     try:
-        from mdle.sim._kernels import grid_faces
+        from mdle.sim._kernels import GridWalk
     except ImportError:
         return None
-    return grid_faces
+    return GridWalk
 
 
 _KERNEL = _compiled_faces()
-_GRID_KERNEL = _compiled_grid_faces()
+_GRID_WALK = _compiled_grid_walk()
 _FUSED = _numpy_complex_rounding() if _KERNEL is not None else None
 #: Whether scans use the compiled face loop (False: the numpy path, the same numbers).
 COMPILED = _FUSED is not None
@@ -549,17 +550,22 @@ class FanCaster:
         self._ell_turn = np.empty((2, 1), dtype=complex)
         self._ell_coef = np.empty_like(self._ell_k)
         self._dd = np.column_stack([self._dirs, self._dirs.conjugate()])
-        # The grid walk (compiled only): the world's grid, and this fan's per-face scratch
-        # (each face's numbers for the scan whose count its stamp holds).
+        # The grid walk (compiled only): the world's grid, and this fan's walker, which
+        # holds the arrays above and its own per-face scratch.
         self._grid: FaceGrid | None = None
-        if (self._kernel is not None and _GRID_KERNEL is not None and indexed is not False
+        self._walker: Any = None
+        straight = not (len(caster.parts.arc_radius) or len(caster.parts.ell_angle))
+        if (self._kernel is not None and _GRID_WALK is not None and indexed is not False
                 and m > _CULL_ABOVE):
             self._grid = caster.grid
-        if self._grid is not None:
-            self._grid_box = self._grid.box
-            self._stamp = np.full(m, -1, dtype=np.intp)
-            self._memo = np.zeros((m, 4))
-            self._scans = 0
+        if self._grid is not None and _GRID_WALK is not None:
+            g = self._grid
+            self._ranges, self._hit = np.empty(n), np.empty(n, dtype=bool)
+            self._walker = _GRID_WALK(
+                self._zw, caster._front_min, self._dconj, g.box, g.start, g.faces, self._best,
+                self._ranges, self._hit, _EPS_ANGLE, bool(_FUSED), self._t_hit + _GRID_TOL,
+                _GRID_TOL, self._inv_none, self._inv_hit, self.max_range)
+        self._straight_walk = self._walker is not None and straight
 
     def cast(self, ox: float, oy: float, first: float) -> tuple[np.ndarray, np.ndarray]:
         """Cast the fan from ``(ox, oy)`` (m) with its first beam at world angle ``first``.
@@ -571,10 +577,14 @@ class FanCaster:
         hit : (B,) bool array (a new array)
             True where a boundary was hit closer than ``max_range``.
         """
-        caster = self.caster
-        P = caster.parts
         phi = first + self._half                    # world angle of the fan's middle
         rot = complex(math.cos(phi), -math.sin(phi))
+        if self._straight_walk:
+            # Straight faces only, through the grid: the whole scan in one compiled call.
+            self._walker.scan(ox, oy, rot, complex(ox, oy) * rot)
+            return self._ranges.copy(), self._hit.copy()
+        caster = self.caster
+        P = caster.parts
         best = self._best
         best.fill(self._inv_none)
         if caster._s0.shape[0]:
@@ -645,8 +655,8 @@ class FanCaster:
         caster = self.caster
         zw, front_min = self._zw, caster._front_min
         n_seg = front_min.shape[0]
-        if self._grid is not None:
-            self._walk(ox, oy, rot, best)
+        if self._walker is not None:     # best is the walker's own buffer
+            self._walker.faces(ox, oy, rot, complex(ox, oy) * rot)
             return
         if n_seg > _CULL_ABOVE:
             # Large worlds: only the faces whose bounding box comes within range.
@@ -675,17 +685,6 @@ class FanCaster:
         z = np.multiply(zw, rv, out=self._z if zw is self._zw else None)
         np.subtract(z, off, z)                      # rows: q, conj(p), kappa p, e
         self._faces(z, front_min, best, 0, 0)
-
-    def _walk(self, ox: float, oy: float, rot: complex, best: np.ndarray) -> None:
-        """:meth:`_segments` through the world's grid: each beam meets the faces it crosses."""
-        assert _GRID_KERNEL is not None and self._grid is not None
-        grid = self._grid
-        c = complex(ox, oy) * rot
-        self._scans += 1
-        _GRID_KERNEL(self._zw, self.caster._front_min, best, self._rel_s, self._dconj, rot, c,
-                     self._kappa * c, _EPS_ANGLE, self._wrap_hi, self._may_wrap, _FUSED,
-                     self._grid_box, grid.start, grid.faces, ox, oy, self._t_hit + _GRID_TOL,
-                     _GRID_TOL, self._stamp, self._memo, self._scans)
 
     def _compiled(self, zw: np.ndarray, front_min: np.ndarray, best: np.ndarray,
                   rot: complex | np.ndarray, c: complex | np.ndarray,

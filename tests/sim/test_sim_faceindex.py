@@ -20,7 +20,7 @@ from mdle.sim.raycast import COMPILED, FanCaster
 from mdle.sim.shapes import Polygon, Rectangle, Wall
 from mdle.sim.world import World
 
-needs_walk = pytest.mark.skipif(not COMPILED or raycast._GRID_KERNEL is None,
+needs_walk = pytest.mark.skipif(not COMPILED or raycast._GRID_WALK is None,
                                 reason="this install has no compiled fan cast")
 
 
@@ -125,13 +125,15 @@ def test_a_scan_reads_the_faces_along_its_beams_not_the_whole_map() -> None:
     for world in (small, large):
         fan = world.caster.fan(np.linspace(0.0, math.pi, 181), 8.0, True)
         p = world.start_pose
+        met = []
         for k in range(8):
             fan.cast(p.x, p.y, k * 0.8)
-        read.append(int((fan._stamp > 0).sum()))   # faces met in any of the 8 scans
+            met.append(fan._walker.met)
+        read.append(sum(met))
     n_large = large.caster._s0.shape[0]
     assert n_large > 20_000
     # The same rooms around the robot: the same faces met, in a world 56 times larger.
-    assert read[1] <= 1.2 * read[0] and read[1] < 0.01 * n_large, (read, n_large)
+    assert 0 < read[1] <= 1.2 * read[0] and read[1] < 0.01 * 8 * n_large, (read, n_large)
 
 
 @needs_walk
@@ -168,27 +170,39 @@ def test_hostile_origins_never_take_the_walk_outside_its_arrays() -> None:
 
 
 @needs_walk
-def test_the_walk_refuses_a_grid_whose_box_does_not_fit_its_cells() -> None:
+def test_the_walk_refuses_arrays_that_do_not_fit() -> None:
     world = _rooms(3)
     fan = world.caster.fan(np.linspace(0.0, math.pi, 181), 8.0, True)
     grid = world.caster.grid
-    assert grid is not None
-    kernel = raycast._GRID_KERNEL
-    assert kernel is not None
-    args = [fan._zw, world.caster._front_min, fan._best, fan._rel_s, fan._dconj, 1 + 0j, 0j,
-            0j, 1e-10, fan._wrap_hi, fan._may_wrap, bool(raycast._FUSED),
-            np.array([grid.x0, grid.y0, grid.cell, grid.nx + 1.0, float(grid.ny)]),
-            grid.start, grid.faces, 7.5, 7.5, 8.0, 1e-9, fan._stamp, fan._memo, 1]
+    walk = raycast._GRID_WALK
+    assert grid is not None and walk is not None
+    best, ranges, hit = np.zeros(181), np.zeros(181), np.zeros(181, dtype=bool)
+
+    def make(**change: object) -> object:
+        args = {"zw": fan._zw, "front_min": world.caster._front_min, "dconj": fan._dconj,
+                "box": grid.box, "start": grid.start, "faces": grid.faces, "best": best,
+                "ranges": ranges, "hit": hit}
+        args.update(change)
+        return walk(*args.values(), 1e-10, True, 8.0, 1e-9, fan._inv_none, fan._inv_hit, 8.0)
+
     with pytest.raises(ValueError, match="box and cells do not fit"):
-        kernel(*args)
-    args[12] = grid.box
-    args[14] = np.full_like(grid.faces, 10**9)     # faces the world lacks: skipped
-    fan._best.fill(0.0)
-    kernel(*args)
-    assert (fan._best == 0.0).all()
-    args[19] = np.zeros(3, dtype=np.intp)
-    with pytest.raises(ValueError, match="stamp"):
-        kernel(*args)
+        make(box=np.array([grid.x0, grid.y0, grid.cell, grid.nx + 1.0, float(grid.ny)]))
+    with pytest.raises(ValueError, match="zw: expected"):
+        make(zw=fan._zw[:, :-1].copy())
+    with pytest.raises(ValueError, match="best: expected 180"):
+        make(dconj=fan._dconj[:-1].copy())
+    with pytest.raises(ValueError, match="start: expected intp"):
+        make(start=grid.start.astype(np.int32))
+    with pytest.raises(ValueError, match="hit: expected"):
+        make(hit=np.zeros(181))
+    with pytest.raises(ValueError, match="not C-contiguous"):
+        make(best=np.zeros(181)[::-1])
+    # Faces the world lacks are skipped, never read.
+    w = make(faces=np.full_like(grid.faces, 10**9))
+    w.faces(7.5, 7.5, 1 + 0j, 7.5 + 7.5j)      # type: ignore[attr-defined]
+    assert (best == 0.0).all()
+    with pytest.raises(TypeError, match="takes 4 arguments"):
+        w.scan(7.5, 7.5, 1 + 0j)                # type: ignore[attr-defined]
 
 
 def test_without_the_compiled_loop_the_fan_casts_as_before() -> None:
