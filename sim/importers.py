@@ -16,7 +16,8 @@ IR-SIM worlds (its YAML configuration, SI units and radians as there):
   centred), ``polygon`` (``vertices`` in the body frame) and ``linestring``
   (``vertices``: a wall of :data:`LINE_THICKNESS`).
   A ``random`` or ``circle`` distribution places objects with IR-SIM's own random
-  draws, which cannot be reproduced: such an entry is refused, naming it.
+  draws, which cannot be reproduced: such an entry is refused, naming it, and so is a
+  ``world.obstacle_map`` (an image scaled by IR-SIM's settings).
 """
 
 from __future__ import annotations
@@ -131,6 +132,10 @@ def _irsim(doc: Any, data: Any, name: str) -> Any:
     if not isinstance(world, dict):
         raise doc.fail("world", f"expected the world's settings (width, height, offset), "
                        f"got {_show(world)}")
+    if "obstacle_map" in world:
+        raise doc.fail("world.obstacle_map", "an IR-SIM image map is not imported (its "
+                       "scale comes from IR-SIM's own settings): save it as a map_server map "
+                       "(an image and its YAML) and import that, or remove the key")
     extent = None
     if "width" in world or "height" in world:
         w = _number(doc, "world.width", world.get("width", 10), size=True)

@@ -46,10 +46,10 @@ from mdle.errors import WorldError
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
-    from mdle.sim.shapes import FloorPlan
+    from mdle.sim.shapes import Parts
 
-__all__ = ["MAP_MODES", "MAX_MAP_CELLS", "MapInfo", "load_map", "occupied_cells", "outline",
-           "read_image", "read_map_info"]
+__all__ = ["MAP_MODES", "MAX_MAP_CELLS", "FloorPlan", "MapInfo", "load_map", "occupied_cells",
+           "outline", "outline_parts", "read_image", "read_map_info"]
 
 #: How a map's pixels are read (``map_server``'s ``mode``).
 MAP_MODES = ("trinary", "scale", "raw")
@@ -57,6 +57,27 @@ MAP_MODES = ("trinary", "scale", "raw")
 MAX_MAP_CELLS = 100_000_000
 _MAP_KEYS = ("image", "resolution", "origin", "occupied_thresh", "free_thresh", "negate",
              "mode")
+
+
+@dataclass(frozen=True, eq=False)
+class FloorPlan:
+    """Solid polygons with holes as one obstacle (a shape of :mod:`sim.shapes`): a map.
+
+    ``geom`` is a shapely MultiPolygon, metres; ``source`` the file it came from.
+    """
+
+    geom: BaseGeometry
+    name: str = ""
+    source: str = ""
+    kind = "floorplan"
+
+    def geometry(self) -> BaseGeometry:
+        """Return the shapely MultiPolygon."""
+        return self.geom
+
+    def parts(self) -> Parts:
+        """Return every ring's faces at once (:func:`outline_parts`)."""
+        return outline_parts(self.geom)
 
 
 @dataclass(frozen=True)
@@ -279,7 +300,7 @@ def outline(occupied: np.ndarray, resolution: float, origin: tuple[float, float,
 
 def load_map(path: str | os.PathLike[str], tolerance: float | None = None,
              name: str = "") -> FloorPlan:
-    """Read a ``map_server`` map into one :class:`sim.shapes.FloorPlan` obstacle.
+    """Read a ``map_server`` map into one :class:`FloorPlan` obstacle.
 
     Raises
     ------
@@ -287,8 +308,6 @@ def load_map(path: str | os.PathLike[str], tolerance: float | None = None,
         A bad YAML file or image (:func:`read_map_info`, :func:`read_image`), or a map
         with no occupied cell.
     """
-    from mdle.sim.shapes import FloorPlan
-
     info = read_map_info(path)
     shades = read_image(info.image)
     occupied = occupied_cells(shades, info)
@@ -299,3 +318,31 @@ def load_map(path: str | os.PathLike[str], tolerance: float | None = None,
                          f"{info.mode}): nothing to make obstacles of")
     return FloorPlan(geom, name or Path(path).stem, str(path))
 
+
+
+def outline_parts(geom: BaseGeometry) -> Parts:
+    """Return the faces of every ring of a (Multi)Polygon at once, solid on the right.
+
+    Exteriors run clockwise and holes counter-clockwise (the solid is then on the right),
+    as :func:`sim.shapes.polygon_parts` orients them, with array operations over all the
+    rings instead of a loop over polygons; the faces are flat (curvature 0): a map's
+    outline is a simplified staircase, not a sampled curve.
+    """
+    import shapely
+
+    from mdle.sim.shapes import Parts
+
+    polys = shapely.get_parts(geom)
+    if polys.shape[0] == 0:
+        return Parts.make()
+    rings = shapely.get_rings(polys)
+    # get_rings lists each polygon's exterior, then its holes.
+    per = shapely.get_num_interior_rings(polys) + 1
+    exterior = np.zeros(rings.shape[0], dtype=bool)
+    exterior[np.cumsum(per) - per] = True
+    flip = shapely.is_ccw(rings) == exterior
+    xy, ring = shapely.get_coordinates(rings, return_index=True)
+    same = ring[1:] == ring[:-1]               # a ring's last point closes it: no wrap
+    s0, s1 = xy[:-1][same], xy[1:][same]
+    turn = flip[ring[:-1][same]][:, None]
+    return Parts.make((np.where(turn, s1, s0), np.where(turn, s0, s1), np.zeros(s0.shape[0])))

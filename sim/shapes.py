@@ -24,19 +24,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Union
 
 import numpy as np
 
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
+    from mdle.sim.maps import FloorPlan
+
 __all__ = [
     "Arc",
     "Circle",
     "Curve",
     "Ellipse",
-    "FloorPlan",
     "Parts",
     "Polygon",
     "Rectangle",
@@ -199,10 +200,7 @@ def _rot(angle: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Polygon:
-    """A solid simple polygon given by its vertices (either winding), metres.
-
-    ``holes``: rings of vertices cut out of it (a room inside a building's walls).
-    """
+    """A solid simple polygon (vertices in either winding, metres), less its ``holes`` (rings)."""
 
     points: tuple[Point, ...]
     name: str = ""
@@ -483,44 +481,5 @@ class Curve:
         return Parts.make((ring, nxt, k))
 
 
-@dataclass(frozen=True, eq=False)
-class FloorPlan:
-    """Many solid polygons with holes as one obstacle: an imported map (:mod:`sim.maps`).
-
-    ``geom`` is a shapely MultiPolygon, metres; ``source`` the file it came from. Its
-    faces are built with array operations over every ring at once (no Python object per
-    polygon) and are flat (curvature 0): a map's outline is a simplified staircase.
-    """
-
-    geom: BaseGeometry
-    name: str = ""
-    source: str = ""
-    kind = "floorplan"
-
-    def geometry(self) -> BaseGeometry:
-        """Return the shapely MultiPolygon."""
-        return self.geom
-
-    def parts(self) -> Parts:
-        """Return every ring's segments, solid on the right: exteriors clockwise, holes not."""
-        import shapely
-
-        polys = shapely.get_parts(self.geom)
-        if polys.shape[0] == 0:
-            return Parts.make()
-        rings = shapely.get_rings(polys)
-        # get_rings lists each polygon's exterior, then its holes.
-        per = shapely.get_num_interior_rings(polys) + 1
-        exterior = np.zeros(rings.shape[0], dtype=bool)
-        exterior[np.cumsum(per) - per] = True
-        # Exteriors run clockwise and holes counter-clockwise: the solid is then on the right.
-        flip = shapely.is_ccw(rings) == exterior
-        xy, ring = shapely.get_coordinates(rings, return_index=True)
-        same = ring[1:] == ring[:-1]               # a ring's last point closes it: no wrap
-        s0, s1 = xy[:-1][same], xy[1:][same]
-        turn = flip[ring[:-1][same]][:, None]
-        return Parts.make((np.where(turn, s1, s0), np.where(turn, s0, s1),
-                           np.zeros(s0.shape[0])))
-
-
-Shape = Polygon | Rectangle | Circle | Ellipse | Wall | Arc | Curve | FloorPlan
+# An imported map's obstacle (sim/maps.py) is one too: named, not imported, here.
+Shape = Union[Polygon, Rectangle, Circle, Ellipse, Wall, Arc, Curve, "FloorPlan"]

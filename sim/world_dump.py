@@ -23,17 +23,8 @@ import json
 import math
 from collections.abc import Iterable
 
-from mdle.sim.shapes import (
-    Arc,
-    Circle,
-    Curve,
-    Ellipse,
-    FloorPlan,
-    Polygon,
-    Rectangle,
-    Shape,
-    Wall,
-)
+from mdle.sim.maps import FloorPlan
+from mdle.sim.shapes import Arc, Circle, Curve, Ellipse, Polygon, Rectangle, Shape, Wall
 from mdle.sim.world import World
 
 __all__ = ["world_to_yaml"]

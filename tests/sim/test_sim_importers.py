@@ -114,6 +114,14 @@ def test_what_mdle_cannot_import_is_named(tmp_path: Path, entry: str, problem: s
     assert "bad.yaml:" in str(err.value)
 
 
+def test_an_irsim_image_map_is_refused_in_words(tmp_path: Path) -> None:
+    path = tmp_path / "m.yaml"
+    path.write_text("world:\n  width: 10\n  height: 10\n  obstacle_map: 'cave.png'\n")
+    with pytest.raises(WorldError, match=r"m.yaml:4:\d+: error: world.obstacle_map: an "
+                                         "IR-SIM image map is not imported"):
+        import_irsim(path)
+
+
 def test_a_file_of_neither_kind_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "x.yaml"
     path.write_text("name: a world of mdle's own\nobstacles: []\n")

@@ -16,8 +16,15 @@ import shapely
 
 from mdle.errors import WorldError
 from mdle.sim.catalog import load_world
-from mdle.sim.maps import load_map, occupied_cells, outline, read_image, read_map_info
-from mdle.sim.shapes import FloorPlan, Parts, polygon_parts
+from mdle.sim.maps import (
+    FloorPlan,
+    load_map,
+    occupied_cells,
+    outline,
+    read_image,
+    read_map_info,
+)
+from mdle.sim.shapes import Parts, polygon_parts
 from mdle.sim.world import World
 
 FREE, OCCUPIED, UNKNOWN = 254, 0, 205
