@@ -200,7 +200,7 @@ def test_a_world_files_bad_map_names_the_world_file_and_the_key(tmp_path: Path) 
         load_world(str(tmp_path / "v.yaml"))
 
 
-def test_a_large_building_map_loads_fast_and_small(tmp_path: Path) -> None:
+def test_a_building_map_loads_as_one_obstacle_that_casts(tmp_path: Path) -> None:
     # 1000 x 1000 cells (a 50 m building at 5 cm): rooms of 4 m with doors, and pillars.
     img = np.full((1000, 1000), FREE, dtype=np.uint8)
     for k in range(0, 1000, 80):
@@ -210,8 +210,17 @@ def test_a_large_building_map_loads_fast_and_small(tmp_path: Path) -> None:
     img[40::80, 40::80] = OCCUPIED
     plan = load_map(_save(tmp_path, img))
     world = World("building", (plan,))
-    assert world.parts.n_segments > 400
+    assert world.parts.n_segments > 400 and len(world.obstacles) == 1
     assert np.isfinite(world.cast((2.0, 2.0), [0.3]).ranges[0])
+    # A ladar's scans there: through the faces' grid, the plain cast's numbers.
+    rel = np.linspace(0.0, math.pi, 181)
+    walk = world.caster.fan(rel, 8.0, None, True)
+    plain = world.caster.fan(rel, 8.0, None, False)
+    rng = np.random.default_rng(2)
+    for _ in range(30):
+        x, y, first = rng.uniform(0.5, 49.5), rng.uniform(0.5, 49.5), rng.uniform(-4, 4)
+        (r1, h1), (r2, h2) = walk.cast(x, y, first), plain.cast(x, y, first)
+        assert np.array_equal(r1, r2) and np.array_equal(h1, h2)
 
 
 def test_mdle_worlds_import_writes_a_world_a_plan_runs_in(
