@@ -117,12 +117,18 @@ def read_map_info(path: str | os.PathLike[str]) -> MapInfo:
     WorldError
         Unreadable, not YAML, a missing or unknown key, or a bad value (file, line, key).
     """
-    from mdle.sim.world_yaml import _world_text
     from mdle.sim.yaml_doc import _Doc, _yaml_value
     from mdle.sim.yaml_values import _mapping, _number, _show, _string
+    from mdle.userfile import UserFileError, read_user_file
 
     file = str(path)
-    doc = _Doc(file, _world_text(path))
+    try:
+        text = read_user_file(path).decode("utf-8")
+    except UserFileError as err:
+        raise WorldError(f"cannot read map file {file}: {err.reason}") from None
+    except UnicodeDecodeError:
+        raise WorldError(f"cannot read map file {file}: not UTF-8 text") from None
+    doc = _Doc(file, text)
     data = _yaml_value(doc)
     top = _mapping(doc, "", {} if data is None else data, _MAP_KEYS, "a map_server map")
     for key in ("image", "resolution", "origin"):
