@@ -17,7 +17,10 @@ of what a scan of a small world costs; the rest is mostly the arctan2 and the bi
 searches of the faces' intervals). Where the install built ``sim/_kernels.c`` (an
 optional build; :data:`COMPILED`), the faces go through one compiled call instead, which
 gives the same numbers bit for bit. At 100 segments (benchmarks/sim.py's world) a scan
-costs about 64,000 instructions compiled and 224,000 in numpy.
+costs about 64,000 instructions compiled and 224,000 in numpy. In a world of more than
+256 faces the compiled fan walks each beam through a grid of the faces
+(:mod:`sim.faceindex`, the C ``GridWalk``) up to its first hit, so a scan's cost follows
+what the ladar sees, not the size of the map (docs/performance.md).
 
 All angles are in the world frame (radians, counter-clockwise); ranges in metres.
 
