@@ -1,6 +1,7 @@
-/* The simulator's two per-tick loops, compiled: the fan cast's faces (sim/raycast.py,
- * FanCaster._faces) and a team's occlusions of the scans by the robots' discs
- * (sim/crowd.py, occlusions).
+/* The simulator's per-tick loops, compiled: the fan cast's faces (sim/raycast.py,
+ * FanCaster._faces), the same walked through a grid of the faces in big worlds
+ * (GridWalk, over sim/faceindex.py's FaceGrid), and a team's occlusions of the scans by
+ * the robots' discs (sim/crowd.py, occlusions).
  *
  * The numpy paths spend most of their time on the fixed cost of ~25-40 calls on arrays of
  * a few hundred numbers; these do the same arithmetic in one call each. They are an
