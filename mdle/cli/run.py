@@ -189,15 +189,8 @@ def run(args: argparse.Namespace) -> int:
     while the plan and world load, deferred while the trace and scheduler are made and
     while everything closes, and stops the scheduler while it ticks.
     """
-    from mdle.errors import MdleError
+    from mdle.ros.recorder import RecordingError  # imports none of the mcap extra
     from mdle.trace import TraceWriteError
-
-    # The ROS recorder only for a run that records: its modules cost start-up time.
-    write_errors: tuple[type[MdleError], ...] = (TraceWriteError,)
-    if args.record or args.rosbag:
-        from mdle.ros.recorder import RecordingError  # imports none of the mcap extra
-
-        write_errors += (RecordingError,)
 
     if args.team or args.robot_plan:
         from mdle.cli.team import run_team
@@ -228,7 +221,7 @@ def run(args: argparse.Namespace) -> int:
         _say(f"mdle run: interrupted by {signal_name(signum)}"
              + (f": robot stopped{where}" if stopped else f" before the run started{where}"))
         return 128 + signum
-    except write_errors as err:
+    except (TraceWriteError, RecordingError) as err:
         with guard.deferring():
             output.print_diagnostics(err.diagnostics)
         return output.EXIT_IO
