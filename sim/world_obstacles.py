@@ -17,7 +17,7 @@ from mdle.sim.yaml_values import (
     _string,
 )
 
-__all__ = ["OBSTACLE_TYPES"]
+__all__ = ["MAX_OBSTACLES", "OBSTACLE_TYPES"]
 
 #: Keys each obstacle type requires and allows (besides ``type`` and ``name``).
 OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -30,6 +30,9 @@ OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "curve": (("points",), ("thickness", "closed", "spacing")),
 }
 _DEFAULT_WALL_THICKNESS = 0.1
+#: Most obstacles one world file may list, checked before any is built: the start check
+#: unions their outlines, which grows faster than their number (docs/limits.md).
+MAX_OBSTACLES = 20_000
 _MAX_CURVE_SAMPLES = 100_000
 
 
