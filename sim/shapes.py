@@ -114,8 +114,12 @@ class Parts:
         )
 
     @staticmethod
-    def concat(parts: list[Parts]) -> Parts:
-        """Concatenate the parts of several shapes, recording which shape owns what."""
+    def concat(parts: list[Parts], index: np.ndarray | None = None) -> Parts:
+        """Concatenate the parts of several shapes, recording which shape owns what.
+
+        The owner of ``parts[k]``'s primitives is ``k``, or ``index[k]`` when given.
+        """
+        shape_of = np.arange(len(parts), dtype=np.intp) if index is None else index
         def cat(name: str, width: int | None = None) -> np.ndarray:
             arrays = [getattr(p, name) for p in parts]
             if not arrays:
@@ -124,7 +128,7 @@ class Parts:
 
         def owners(name: str) -> np.ndarray:
             counts = [len(getattr(p, name)) for p in parts]
-            return np.repeat(np.arange(len(parts), dtype=np.intp), counts)
+            return np.repeat(shape_of, counts).astype(np.intp, copy=False)
 
         return Parts(
             seg_start=cat("seg_start", 2), seg_end=cat("seg_end", 2), seg_kappa=cat("seg_kappa"),

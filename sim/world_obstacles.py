@@ -17,7 +17,7 @@ from mdle.sim.yaml_values import (
     _string,
 )
 
-__all__ = ["MAX_OBSTACLES", "OBSTACLE_TYPES"]
+__all__ = ["MAX_OBSTACLES", "MAX_SHAPES", "OBSTACLE_TYPES"]
 
 #: Keys each obstacle type requires and allows (besides ``type`` and ``name``).
 OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -30,10 +30,25 @@ OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "curve": (("points",), ("thickness", "closed", "spacing")),
 }
 _DEFAULT_WALL_THICKNESS = 0.1
-#: Most obstacles one world file may list, checked before any is built: the start check
-#: unions their outlines, which grows faster than their number (docs/limits.md).
-MAX_OBSTACLES = 20_000
+#: Most obstacles one world file may list, checked before any is built (docs/limits.md):
+#: 200,000 circles load in about 7 s of CPU and 0.6 GB (benchmarks/circles.py).
+MAX_OBSTACLES = 250_000
+#: Most obstacles other than circles: each is a shapely geometry, and the start check
+#: unions them, which grows faster than their number (20,000 rectangles: about 3 s).
+MAX_SHAPES = 20_000
 _MAX_CURVE_SAMPLES = 100_000
+
+
+def _check_budget(doc: _Doc, obstacles: list[Any]) -> None:
+    """Refuse, at ``obstacles``, a list past :data:`MAX_OBSTACLES` or :data:`MAX_SHAPES`."""
+    hint = "join small ones into polygons, or give a `map`"
+    if len(obstacles) > MAX_OBSTACLES:
+        raise doc.fail("obstacles", f"lists {len(obstacles):,} obstacles; a world holds at most "
+                       f"{MAX_OBSTACLES:,} ({hint})")
+    shapes = sum(1 for o in obstacles if not (isinstance(o, dict) and o.get("type") == "circle"))
+    if shapes > MAX_SHAPES:
+        raise doc.fail("obstacles", f"lists {shapes:,} obstacles other than circles; a world "
+                       f"holds at most {MAX_SHAPES:,} ({hint})")
 
 
 def _obstacle(doc: _Doc, path: str, v: Any) -> Any:

@@ -33,7 +33,7 @@ from typing import Any
 
 from mdle.backend import Pose
 from mdle.errors import WorldError
-from mdle.sim.world_obstacles import MAX_OBSTACLES, OBSTACLE_TYPES, _obstacle
+from mdle.sim.world_obstacles import OBSTACLE_TYPES, _check_budget, _obstacle
 from mdle.sim.world_robots import _ladar, _robot, _start
 from mdle.sim.yaml_doc import MAX_YAML_DEPTH, _Doc, _yaml_value
 from mdle.sim.yaml_values import _integer, _mapping, _number, _show, _string
@@ -95,9 +95,7 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
         obs_raw = []
     if not isinstance(obs_raw, list):
         raise doc.fail("obstacles", f"expected a list of obstacles, got {_show(obs_raw)}")
-    if len(obs_raw) > MAX_OBSTACLES:   # refused before any is built: see docs/limits.md
-        raise doc.fail("obstacles", f"lists {len(obs_raw):,} obstacles; a world holds at most "
-                       f"{MAX_OBSTACLES:,} (join small ones into polygons, or give a `map`)")
+    _check_budget(doc, obs_raw)   # before any obstacle is built: see docs/limits.md
     obstacles = tuple(_obstacle(doc, f"obstacles[{i}]", o) for i, o in enumerate(obs_raw))
     if "map" in top:   # after the listed obstacles, which keep their indices
         obstacles += (_map(doc, top["map"]),)

@@ -42,7 +42,8 @@ def test_every_exit_code_of_the_command_line_is_in_the_table() -> None:
     ("within 1,000,000,000 s", "mdle.ros.export:MAX_TIME"),
     ("A trace keeps 16 KiB free", "mdle.trace:RESERVE_BYTES"),
     ("At most **64 MB** per file", "mdle.userfile:MAX_FILE_BYTES"),
-    ("| obstacles listed in one world | 20,000", "mdle.sim.world_obstacles:MAX_OBSTACLES"),
+    ("| obstacles listed in one world | 250,000", "mdle.sim.world_obstacles:MAX_OBSTACLES"),
+    ("| obstacles other than circles | 20,000", "mdle.sim.world_obstacles:MAX_SHAPES"),
 ])
 def test_each_budget_on_the_page_is_the_code_s(text: str, value: str) -> None:
     import importlib
@@ -53,7 +54,8 @@ def test_each_budget_on_the_page_is_the_code_s(text: str, value: str) -> None:
     expected = {
         "MAX_EXPANSION": 20_000, "MAX_AXIS": 100_000, "_MAX_RUNS": 10_000_000,
         "MAX_STUDY_SEED": 2**63 - 1, "MAX_TIME": 1e9, "RESERVE_BYTES": 16 * 1024,
-        "MAX_FILE_BYTES": 64 * 1024 * 1024, "MAX_OBSTACLES": 20_000,
+        "MAX_FILE_BYTES": 64 * 1024 * 1024, "MAX_OBSTACLES": 250_000,
+        "MAX_SHAPES": 20_000,
     }
     if name == "RATE":
         assert (constant.low, constant.high, constant.unit) == (0.001, 1000.0, "Hz")

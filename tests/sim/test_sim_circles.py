@@ -1,42 +1,135 @@
-"""Worlds of many obstacles: the budget on their number (issues 26 and 27)."""
+"""Worlds of many circles (issues 26 and 27): the obstacle budgets, circles as arrays.
+
+Circles are kept as arrays of centres and radii: :attr:`World.parts` must be the very
+arrays one concatenation of every shape's parts gives, :meth:`World.inside` tests them
+in closed form (no union of polygons), and :attr:`World.bounds` reads them directly.
+The load times are measured in ``benchmarks/circles.py``, not here.
+"""
 
 from __future__ import annotations
 
+import gc
+
+import numpy as np
 import pytest
+import yaml
 
 from mdle.errors import WorldError
-from mdle.sim import world_yaml
-from mdle.sim.world_obstacles import MAX_OBSTACLES
+from mdle.sim import world_obstacles, world_yaml
+from mdle.sim.shapes import Arc, Circle, Curve, Ellipse, Parts, Rectangle
+from mdle.sim.world import World
 from mdle.sim.world_yaml import parse_world
+from mdle.sim.yaml_doc import _Doc, _yaml_value
+
+_CIRCLE = "{type: circle, center: [5, 5], radius: 1}"
+_BOX = "{type: rectangle, center: [-5, 5], size: [1, 1]}"
 
 
-def _world(n: int) -> str:
-    """A world of ``n`` circles, each an alias of the first (cheap to parse)."""
-    rest = ", *c" * (n - 1)
-    return ("name: many\n"
-            "obstacles: [&c {type: circle, center: [5, 5], radius: 1}" + rest + "]\n")
+def _world(*entries: str) -> str:
+    return "name: many\nobstacles: [" + ", ".join(entries) + "]\n"
 
 
-def test_a_world_past_the_budget_is_refused_at_its_obstacles_before_any_is_built(
+def _never(*_: object) -> None:
+    raise AssertionError("an obstacle was built")
+
+
+@pytest.fixture
+def small_budgets(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(world_obstacles, "MAX_OBSTACLES", 5)
+    monkeypatch.setattr(world_obstacles, "MAX_SHAPES", 2)
+
+
+@pytest.mark.usefixtures("small_budgets")
+def test_too_many_obstacles_are_refused_at_their_key_before_any_is_built(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    def never(*_: object) -> None:
-        raise AssertionError("an obstacle was built")
-
-    monkeypatch.setattr(world_yaml, "_obstacle", never)
+    monkeypatch.setattr(world_yaml, "_obstacle", _never)
     with pytest.raises(WorldError) as err:
-        parse_world(_world(MAX_OBSTACLES + 1), file="many.yaml")
-    msg = str(err.value)
-    assert msg.startswith("many.yaml:2:12: error: obstacles: ")
-    assert f"lists {MAX_OBSTACLES + 1:,} obstacles; a world holds at most {MAX_OBSTACLES:,}" in msg
+        parse_world(_world(*[_CIRCLE] * 6), file="many.yaml")
+    assert str(err.value).startswith(
+        "many.yaml:2:12: error: obstacles: lists 6 obstacles; a world holds at most 5 (")
 
 
-def test_a_world_at_the_budget_passes_it(monkeypatch: pytest.MonkeyPatch) -> None:
-    class Built(Exception):
-        pass
+@pytest.mark.usefixtures("small_budgets")
+def test_too_many_obstacles_other_than_circles_are_refused(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(world_yaml, "_obstacle", _never)
+    with pytest.raises(WorldError) as err:
+        parse_world(_world(_CIRCLE, _BOX, _CIRCLE, _BOX, _BOX), file="many.yaml")
+    assert ("many.yaml:2:12: error: obstacles: lists 3 obstacles other than circles; a world "
+            "holds at most 2 (") in str(err.value)
 
-    def first(*_: object) -> None:
-        raise Built
 
-    monkeypatch.setattr(world_yaml, "_obstacle", first)
-    with pytest.raises(Built):
-        parse_world(_world(MAX_OBSTACLES))
+@pytest.mark.usefixtures("small_budgets")
+def test_a_world_at_both_budgets_loads() -> None:
+    w = parse_world(_world(_CIRCLE, _BOX, "{type: circle, center: [9, 0], radius: 1}", _BOX,
+                           "{type: circle, center: [0, -9], radius: 2}"))
+    assert len(w.obstacles) == 5
+
+
+def _mixed() -> tuple[object, ...]:
+    return (Rectangle((0.0, 5.0), (1.0, 1.0)), Circle((3.0, 0.0), 1.0),
+            Arc((0.0, 0.0), 10.0, 0.0, 1.0, 0.2), Circle((-3.0, 0.0), 0.5),
+            Ellipse((0.0, -6.0), (2.0, 1.0), 0.3),
+            Curve(((5.0, 5.0), (7.0, 6.0), (9.0, 5.0)), 0.2), Circle((0.0, 20.0), 2.0))
+
+
+def test_circles_as_arrays_make_the_parts_one_concatenation_makes() -> None:
+    obstacles = _mixed()
+    w = World("mixed", obstacles=obstacles)  # type: ignore[arg-type]
+    fast = w.parts
+    plain = Parts.concat([o.parts() for o in obstacles])  # type: ignore[attr-defined]
+    for name in Parts.__dataclass_fields__:
+        a, b = getattr(fast, name), getattr(plain, name)
+        assert a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a, b), name
+
+
+def test_inside_a_circle_is_exact_and_nothing_is_unioned_for_circles_alone() -> None:
+    w = World("discs", obstacles=(Circle((0.0, 0.0), 1.0), Circle((3.0, 0.0), 1.0)))
+    pts = np.array([[0.0, 0.0], [1.0 - 1e-9, 0.0], [1.0, 0.0], [2.0, 0.0],
+                    # between the circle and a 256-sided polygon inscribed in it
+                    [np.cos(np.pi / 256) * (1.0 - 1e-6), np.sin(np.pi / 256) * (1.0 - 1e-6)],
+                    [3.0, 0.999]])
+    assert np.asarray(w.inside(pts)).tolist() == [True, True, False, False, True, True]
+    assert w._prepared is None
+    assert float(w.clearance((0.0, 0.0))) == -1.0
+
+
+def test_inside_a_mixed_world_matches_the_union_of_its_shapes() -> None:
+    import shapely
+
+    obstacles = _mixed()
+    w = World("mixed", obstacles=obstacles)  # type: ignore[arg-type]
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(-12.0, 22.0, size=(4000, 2))
+    union = shapely.union_all([o.geometry() for o in obstacles])  # type: ignore[attr-defined]
+    expect = shapely.contains_xy(union, pts[:, 0], pts[:, 1])
+    got = np.asarray(w.inside(pts))
+    # only a point between a circle and its polygon could differ: none is drawn here
+    assert np.array_equal(got, expect)
+
+
+def test_bounds_of_circles_come_from_their_arrays() -> None:
+    w = World("mixed", obstacles=_mixed())  # type: ignore[arg-type]
+    x0, y0, x1, y1 = w.geometry.bounds
+    assert w.bounds == (x0 - 1.0, y0 - 1.0, x1 + 1.0, y1 + 1.0)
+
+
+def test_plain_text_is_read_as_yaml_reads_it() -> None:
+    text = ("a: circle\nb: yes\nc: null\nd: ~\ne: 0x1f\nf: 1e3\ng: 2001-12-14\nh: .inf\n"
+            "i: 'quoted'\nj: !!str 12\nk: [x, 'y', No, 3.5]\nl: 1_000\n")
+    assert _yaml_value(_Doc("t.yaml", text)) == yaml.safe_load(text)
+
+
+def test_the_cycle_collector_is_back_as_it_was_after_a_document() -> None:
+    assert gc.isenabled()
+    _yaml_value(_Doc("t.yaml", "a: [1, 2]\n"))
+    assert gc.isenabled()
+    with pytest.raises(WorldError):
+        _yaml_value(_Doc("t.yaml", "a: [1, 2\n"))
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        _yaml_value(_Doc("t.yaml", "a: [1, 2]\n"))
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
