@@ -216,7 +216,7 @@ def parse_world_robot(text: str, file: str = "<string>") -> Any:
     from mdle.sim.profiles import DEFAULT_ROBOT, robot_profile
 
     doc = _Doc(file, text)
-    data = _yaml_value(doc)
+    data = _yaml_value(doc, only=frozenset({"robot"}))
     top = _mapping(doc, "", {} if data is None else data, _TOP_KEYS, "a world")
     return _robot(doc, "robot", top["robot"]) if "robot" in top else robot_profile(DEFAULT_ROBOT)
 

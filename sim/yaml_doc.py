@@ -73,10 +73,13 @@ class _Builder:
     resolved and constructed by PyYAML's safe loader, as ``yaml.safe_load`` would.
     """
 
-    def __init__(self, doc: _Doc) -> None:
+    def __init__(self, doc: _Doc, only: frozenset[str] | None = None) -> None:
         import yaml
 
         self.doc = doc
+        # top-level keys whose values are built (None: all); the others are only parsed
+        self.only = only
+        self.skipped: set[str] = set()   # anchors inside values not built
         self.resolver = yaml.SafeLoader("")
         self.anchors: dict[str, Any] = {}
         self.open: set[str] = set()
@@ -119,6 +122,7 @@ class _Builder:
         result: Any = None
         done = False
         scalar_event = yaml.ScalarEvent
+        events = iter(events)
         for ev in events:
             # the common case first: a number in a list (the points of a polygon)
             if type(ev) is scalar_event and stack and ev.anchor is None \
@@ -152,6 +156,11 @@ class _Builder:
                 continue
             # a node: where does it go?
             top = stack[-1] if stack else None
+            if self.only is not None and len(stack) == 1 and top is not None \
+                    and top[4] is not _NO_KEY and top[4] not in self.only:
+                self._skip(ev, events)
+                self._place(stack, None, f"{top[4]}")
+                continue
             if top is None:
                 path = ""
             elif isinstance(top[0], list):
@@ -166,6 +175,8 @@ class _Builder:
                                             1))
                     raise doc.fail(path, f"the alias `*{ev.anchor}` refers to itself (it "
                                          "stands inside its own anchor)")
+                if ev.anchor in self.skipped:
+                    raise _Unskip
                 if ev.anchor not in self.anchors:
                     raise self.fail_at(ev.start_mark, f"not valid YAML: unknown alias "
                                                       f"`*{ev.anchor}`")
@@ -196,6 +207,29 @@ class _Builder:
             if not stack:
                 result, done = value, True
         return result
+
+    def _skip(self, ev: Any, events: Any) -> None:
+        """Read past one top-level value (``ev`` its first event) without building it.
+
+        Its YAML is still parsed and its nesting still limited.
+        """
+        import yaml
+
+        level = 0
+        while True:
+            if not isinstance(ev, yaml.AliasEvent) and getattr(ev, "anchor", None) is not None:
+                self.skipped.add(ev.anchor)
+            if isinstance(ev, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+                level += 1
+                if 1 + level > MAX_YAML_DEPTH:
+                    raise self.fail_at(ev.start_mark, f"the YAML nests more than "
+                                                      f"{MAX_YAML_DEPTH} levels deep here; a "
+                                                      "world needs a handful")
+            elif isinstance(ev, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+                level -= 1
+            if level == 0:
+                return
+            ev = next(events)
 
     def _key(self, top: list[Any], key: Any, km: tuple[int, int]) -> None:
         import reprlib
@@ -231,6 +265,10 @@ class _Builder:
 _NO_KEY = object()
 
 
+class _Unskip(Exception):
+    """A built value refers to an anchor inside a value that was not built."""
+
+
 @contextlib.contextmanager
 def _no_cycle_collection() -> Iterator[None]:
     """Pause Python's cycle collector while a document is built.
@@ -248,16 +286,21 @@ def _no_cycle_collection() -> Iterator[None]:
             gc.enable()
 
 
-def _yaml_value(doc: _Doc) -> Any:
+def _yaml_value(doc: _Doc, only: frozenset[str] | None = None) -> Any:
     """Return the value of a YAML document (None if empty); WorldError on bad YAML.
 
-    Also used by other YAML inputs (study specs), so they get the same limits.
+    Also used by other YAML inputs (study specs), so they get the same limits. With
+    ``only``, a top-level mapping's other keys hold None: their values are parsed but not
+    built (reading a world's robot need not build 200,000 obstacles).
     """
     import yaml
 
     try:
         with _no_cycle_collection():
-            data = _Builder(doc).build(_events(doc.text))
+            try:
+                data = _Builder(doc, only).build(_events(doc.text))
+            except _Unskip:   # an alias into a value skipped: build everything
+                data = _Builder(doc).build(_events(doc.text))
     except yaml.MarkedYAMLError as fast:
         # libyaml words some errors differently: the pure-Python parser's words are the
         # documented ones (the parse is redone only on this error path)

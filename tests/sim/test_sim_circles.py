@@ -133,3 +133,27 @@ def test_the_cycle_collector_is_back_as_it_was_after_a_document() -> None:
         assert not gc.isenabled()
     finally:
         gc.enable()
+
+
+def test_reading_a_world_s_robot_parses_but_does_not_build_the_other_keys() -> None:
+    text = "robot: pioneer2dx\nobstacles: [{type: circle, center: [1, 2], radius: 1}]\n"
+    assert _yaml_value(_Doc("w.yaml", text), only=frozenset({"robot"})) == {
+        "robot": "pioneer2dx", "obstacles": None}
+    assert world_yaml.parse_world_robot(text).name == "pioneer2dx"
+
+
+def test_a_robot_that_is_an_alias_into_a_value_not_built_is_still_read() -> None:
+    text = "description: &p pioneer2dx\nobstacles: [&q {a: 1}]\nrobot: *p\n"
+    assert world_yaml.parse_world_robot(text).name == "pioneer2dx"
+
+
+@pytest.mark.parametrize(("text", "where", "words"), [
+    ("obstacles: [{type: circle, center: [1, 2}]\nrobot: pioneer2dx\n", "w.yaml:1:",
+     "not valid YAML"),
+    ("obstacles: " + "[" * 70 + "]" * 70 + "\n", "w.yaml:1:", "nests more than 64 levels"),
+    ("robot: pioneer2dx\nobstacles: []\nrobot: pioneer2dx\n", "w.yaml:3:", "key given twice"),
+])
+def test_the_values_not_built_are_still_checked_as_yaml(text: str, where: str, words: str) -> None:
+    with pytest.raises(WorldError) as err:
+        world_yaml.parse_world_robot(text, file="w.yaml")
+    assert str(err.value).startswith(where) and words in str(err.value)
