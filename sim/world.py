@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 __all__ = ["Nearest", "RobotPlace", "World"]
 
 _TAU = 2.0 * math.pi
-_DISC_BLOCK = 1 << 22   # point-disc pairs per block of :func:`_in_discs` (32 MB of floats)
+_DISC_BLOCK = 1 << 22   # point-disc pairs per block of :func:`_in_discs` (32 MB a temporary)
 
 
 def _in_discs(pts: np.ndarray, centers: np.ndarray, radii: np.ndarray) -> np.ndarray:
