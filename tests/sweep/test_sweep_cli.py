@@ -122,8 +122,11 @@ def test_a_sweep_ends_with_the_code_of_its_signal_and_no_library_traceback(
         code: int) -> None:
     # 130 for every signal once; and a worker still starting when the pool let go of its
     # queues printed multiprocessing's traceback (SemLock._rebuild): signals come at
-    # several moments from the workers' start on
-    spec = _study(tmp_path, follow_plan)
+    # several moments from the workers' start on. Runs of 2 min (not the fixture's 4 s): on a
+    # quiet machine the 48 short runs ended before the last signal went out
+    plan = follow_plan.replace("never, 4 s)", "never, 2 min)")
+    assert plan != follow_plan
+    spec = _study(tmp_path, plan)
     for delay in (0.0, 0.3, 0.8, 1.5):
         out = tmp_path / f"out-{delay}"
         proc = subprocess.Popen([*mdle_command, "sweep", str(spec), "--out", str(out),
@@ -134,6 +137,7 @@ def test_a_sweep_ends_with_the_code_of_its_signal_and_no_library_traceback(
             while not (out / "results.csv").exists() and time.monotonic() < deadline:
                 time.sleep(0.01)  # the table exists just before the workers start
             time.sleep(delay)
+            assert proc.poll() is None, ("the sweep ended before the signal", delay)
             proc.send_signal(sig)
             _, err = proc.communicate(timeout=60)
         finally:
