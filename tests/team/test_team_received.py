@@ -41,10 +41,15 @@ def _run(tmp_path: Path, red: str, blue: str) -> dict[str, Recorder]:
     return recorders
 
 
+def _hold_ends(rec: Recorder) -> list[tuple[str, str, float]]:
+    """(path, cause, time) of every end of a `hold`."""
+    return [(e.path, e.cause.value, round(e.time, 6)) for e in rec.events
+            if e.kind.value == "end" and e.cause is not None and e.path.startswith("main/hold")]
+
+
 def test_one_message_ends_one_wait_and_the_next_waits_for_a_new_one(tmp_path: Path) -> None:
     rec = _run(tmp_path, ONCE, WAITS)
-    ends = [(e.path, e.cause.value, round(e.time, 6)) for e in rec["blue"].events
-            if e.kind.value == "end" and e.path.startswith("main/hold")]
+    ends = _hold_ends(rec["blue"])
     # sent at tick 0 (t = 0), arrived at tick 1: the first wait ends then, by its
     # interrupt; the two after it started at that tick and see no newer message
     assert ends == [("main/hold", "interrupt", 0.1), ("main/hold#2", "timer", 2.1),
@@ -55,7 +60,6 @@ def test_a_message_each_tick_ends_each_wait_a_tick_apart(tmp_path: Path) -> None
     often = ("atom tell = (stop, never, 1 s, send(go, 1))\n"
              "plan main = ((tell, (stop, never, 8 s)), never, 10 s)\n")
     rec = _run(tmp_path, often, WAITS)
-    ends = [(e.path, e.cause.value, round(e.time, 6)) for e in rec["blue"].events
-            if e.kind.value == "end" and e.path.startswith("main/hold")]
+    ends = _hold_ends(rec["blue"])
     assert ends == [("main/hold", "interrupt", 0.1), ("main/hold#2", "interrupt", 0.2),
                     ("main/hold#3", "interrupt", 0.3)]
