@@ -10,17 +10,22 @@ from __future__ import annotations
 
 import math
 
-from mdle.atoms.registry import BOOL, Args, Context, Param, sensor
+from mdle.atoms.registry import BOOL, Args, Bounds, Context, Param, sensor
 from mdle.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
 
 __all__ = ["range_", "min_range", "x", "y", "theta", "speed", "turn_rate", "t", "stalled",
            "dist_to"]
 
 _NO_SCAN_RANGE = math.inf
+#: theta is wrapped to [-pi, pi] (the simulator reports [-pi, pi), a Pioneer's driver
+#: either end): `theta > 200 deg` can never hold (a checker warning)
+_HEADINGS = Bounds(-math.pi, math.pi)
+#: ranges and distances are never negative
+_DISTANCES = Bounds(0.0, math.inf)
 
 
 @sensor(Param("angle", ANGLE, doc="bearing from the heading, counter-clockwise positive"),
-        result=LENGTH, name="range")
+        result=LENGTH, name="range", bounds=_DISTANCES)
 def range_(args: Args, ctx: Context) -> float:
     """Return the range of the ladar beam nearest the bearing ``angle`` (max range: no return)."""
     import numpy as np
@@ -33,7 +38,8 @@ def range_(args: Args, ctx: Context) -> float:
 
 
 @sensor(Param("start", ANGLE, doc="one end of the sector"),
-        Param("end", ANGLE, doc="the other end of the sector"), result=LENGTH)
+        Param("end", ANGLE, doc="the other end of the sector"), result=LENGTH,
+        bounds=_DISTANCES)
 def min_range(args: Args, ctx: Context) -> float:
     """Return the smallest valid range over the beams with bearings in the sector [start, end]."""
     import numpy as np
@@ -58,9 +64,9 @@ def y(args: Args, ctx: Context) -> float:
     return ctx.obs.pose.y
 
 
-@sensor(result=ANGLE)
+@sensor(result=ANGLE, bounds=_HEADINGS)
 def theta(args: Args, ctx: Context) -> float:
-    """Return the odometry heading, radians in (-pi, pi] (0 at the run's start)."""
+    """Return the odometry heading, radians in [-pi, pi] (0 at the run's start)."""
     return ctx.obs.pose.theta
 
 
@@ -88,7 +94,7 @@ def stalled(args: Args, ctx: Context) -> bool:
     return ctx.obs.stalled
 
 
-@sensor(Param("x", LENGTH), Param("y", LENGTH), result=LENGTH)
+@sensor(Param("x", LENGTH), Param("y", LENGTH), result=LENGTH, bounds=_DISTANCES)
 def dist_to(args: Args, ctx: Context) -> float:
     """Return the distance from the robot to the point (x, y) of the odometry frame, metres."""
     p = ctx.obs.pose

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from types import MappingProxyType
+from typing import Any
 
 from mdle.atoms.registry import BOOL, LawSpec, SensorSpec
 from mdle.errors import Diagnostic, Severity, Span
@@ -72,6 +73,8 @@ class DimensionChecks(CheckerState):
             if expr.name in env:
                 return env[expr.name]
             target = self._lookup(expr.name)
+            if target is not None and expr.name in self.refused:
+                raise _Abort  # its definition was refused, with the reason
             if target is not None:
                 self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
                            f"{_kind_name(target)}",
@@ -230,6 +233,8 @@ class DimensionChecks(CheckerState):
                 raise _Abort
             if self._messages:
                 self._note_message_dim(a, b)
+            if self._bounded:
+                self._never_holds(expr, a, b)
             return cond.compare(op, a, b)
         if op in ("+", "-"):
             if not _same_dim(a, b):
@@ -255,10 +260,14 @@ class DimensionChecks(CheckerState):
                 raise _Abort
             return cond.constant(None if v.zero else v.dim, v.value)
         target = self._lookup(name)
+        if name in self.refused:
+            raise _Abort  # meant as the refused definition: that refusal says it all
         if isinstance(target, SensorSpec):
             bound = self.bind(name, self._slots_of_spec(target), args, env, expr.span)
             self._note_names(target, bound, expr.span)
             t = cond.sensor_reading(target, MappingProxyType(self._plain(bound)))
+            if target.bounds is not None:
+                self._bounded[id(t.node)] = (target.bounds, name)
             if target.result is None and "channel" in bound:
                 channel = bound["channel"]
                 if isinstance(channel, Symbol):
@@ -332,6 +341,20 @@ class DimensionChecks(CheckerState):
 
         return cond.to_interrupt(t, source)
 
+    def _never_holds(self, expr: st.Binary, a: cond.Typed, b: cond.Typed) -> None:
+        """Warn about a comparison of a bounded reading that can never hold (`theta > 200 deg`)."""
+        for reading, other, left in ((a, b, True), (b, a, False)):
+            hit = self._bounded.get(id(reading.node)) if reading.node is not None else None
+            if hit is None or not other.is_const or not isinstance(other.const, (int, float)):
+                continue
+            bounds, name = hit
+            if bounds.holds_somewhere(expr.op, float(other.const), left):
+                continue
+            self.warn(expr.span, f"`{_short(expr)}` can never hold: `{name}` lies in "
+                      f"{_interval(bounds, reading.dim)}",
+                      hint="this comparison is always false",
+                      in_use=True)
+
     def _note_message_dim(self, a: cond.Typed, b: cond.Typed) -> None:
         """Record the dimension a `message(channel)` is used with (known from the other side)."""
         for m, other in ((a, b), (b, a)):
@@ -364,10 +387,15 @@ class DimensionChecks(CheckerState):
             where = span or (arg.span if arg is not None else call.span)
             value = show_value(Quantity(v.value * factor, p.dim))
             scaled = f" (scaled by {factor:g})" if span is not None else ""
-            self.warn(where, f"`{p.name}` of `{law.name}` is {value}{scaled}, more than the "
-                      f"robot can do: {why}", hint="the robot clamps the command to its "
-                      "limit, so the plan does not move as written; use a value within the "
-                      "limit, or name the robot meant (--robot, --world)", in_use=True)
+            message = (f"`{p.name}` of `{law.name}` is {value}{scaled}, more than the "
+                       f"robot can do: {why}")
+            hint = ("the robot clamps the command to its limit, so the plan does not move "
+                    "as written; use a value within the limit, or name the robot meant "
+                    "(--robot, --world)")
+            if self._deferring is not None and span is None:
+                self._deferring.append((where, message, hint))  # known once every use is
+            else:
+                self.warn(where, message, hint=hint, in_use=True)
 
 
 def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
@@ -383,3 +411,11 @@ def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
                 return f"add a unit: `{side.text} {unit}`"
     return None
 
+
+
+def _interval(b: Any, dim: Any) -> str:
+    """``(-180 deg, 180 deg]``: bounds in the unit a plan writes them in."""
+    def show(v: float) -> str:
+        return "inf" if math.isinf(v) else show_value(Quantity(v, dim))
+    return (f"{'(' if b.low_open else '['}{show(b.low)}, {show(b.high)}"
+            f"{')' if b.high_open or math.isinf(b.high) else ']'}")

@@ -116,6 +116,17 @@ class CheckerState(ABC):
         #: Names defined by statements that did not parse: uses of them are not errors
         #: of their own (the syntax error is reported)
         self.unparsed: frozenset[str] = frozenset()
+        #: Names of definitions refused (a control law's or sensor function's name): a
+        #: use that does not fit what the name really is, is not an error of its own
+        self.refused: frozenset[str] = frozenset()
+        #: For each definition used as an element: whether each use was scaled, and the
+        #: robot-limit warnings of atoms checked on their own, held until every use is
+        #: known (an atom used only scaled down is not too fast)
+        self.scaled_uses: dict[str, set[bool]] = {}
+        self._deferring: list[tuple[Span | None, str, str]] | None = None
+        self.deferred: dict[str, list[tuple[Span | None, str, str]]] = {}
+        #: id of each reading of a sensor function with declared bounds: (bounds, name)
+        self._bounded: dict[int, tuple[Any, str]] = {}
         #: True while a definition is checked with its required parameters unknown (NaN):
         #: a NaN is then no error (each use with arguments is checked again)
         self._partial = False
