@@ -104,6 +104,9 @@ class Param:
     #: constant exceeds the robot's limits. False for a ceiling the law keeps within the
     #: robot's own limit (``umax`` of ``follow_boundary``).
     commanded: bool = True
+    #: For a sensor function's parameter: its argument must be a fixed value (by default
+    #: a sensor function's numeric arguments may read other sensor functions each tick).
+    fixed: bool = False
     any_name: str = ""
     """What an open name argument names (``channel``, ``robot``): any name is taken, and
     the checker records it so that a team can check its channels and robots."""
@@ -158,10 +161,11 @@ class Context:
     The runtime owns the context and sets ``t`` before each evaluation. ``atom`` is the
     per-atom state of the innermost running atom (what its law's ``start`` made; None when
     none runs or it has none), so that a sensor function can report on the running law
-    (``lost``: how long ``follow_boundary`` has lost its boundary).
+    (``lost``: how long ``follow_boundary`` has lost its boundary). ``memory`` holds what
+    the element being tested remembered when it started (``at_start(...)``).
     """
 
-    __slots__ = ("obs", "t", "dt", "limits", "cache", "atom")
+    __slots__ = ("obs", "t", "dt", "limits", "cache", "atom", "memory")
 
     def __init__(self, obs: Observation, t: float, dt: float, limits: RobotLimits,
                  cache: dict[Any, Any] | None = None, atom: Any = None) -> None:
@@ -171,7 +175,12 @@ class Context:
         self.limits = limits
         self.cache: dict[Any, Any] = {} if cache is None else cache
         self.atom = atom
+        #: the values the element being tested remembered when it started (at_start)
+        self.memory: Mapping[Any, Any] = _NO_MEMORY
 
+
+#: The memory of an element that remembers nothing.
+_NO_MEMORY: Mapping[Any, Any] = MappingProxyType({})
 
 #: ``step(args, ctx, state) -> Command``: the control law, called once per tick.
 StepFn = Callable[[Args, Context, Any], Command]

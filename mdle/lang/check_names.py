@@ -143,6 +143,9 @@ class NameChecks(CheckerState):
         if (slot.param is not None and slot.param.any_name and isinstance(expr, st.Name)
                 and expr.name not in env):
             return Symbol(expr.name)  # a channel or robot: any name
+        live = self.live_argument(callee, slot, expr, env)
+        if live is not None:
+            return live  # read each tick: typed and kept aside
         v = self.value(expr, env)
         if slot.choices:
             if not isinstance(v, Symbol) or v.name not in slot.choices:

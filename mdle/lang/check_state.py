@@ -125,6 +125,11 @@ class CheckerState(ABC):
         self.scaled_uses: dict[str, set[bool]] = {}
         self._deferring: list[tuple[Span | None, str, str]] | None = None
         self.deferred: dict[str, list[tuple[Span | None, str, str]]] = {}
+        #: While the arguments of a sensor function are bound: those read each tick
+        #: (``range(-theta)``), by parameter (None: every argument must be fixed)
+        self._live_args: dict[str, Any] | None = None
+        #: True inside ``at_start(...)``
+        self._remembering = False
         #: id of each reading of a sensor function with declared bounds: (bounds, name)
         self._bounded: dict[int, tuple[Any, str]] = {}
         #: True while a definition is checked with its required parameters unknown (NaN):
@@ -218,6 +223,10 @@ class CheckerState(ABC):
     def bind(self, callee: str, slots: Sequence[_Slot], args: Sequence[st.Argument],
              env: Env, span: Span) -> dict[str, Value]:
         """Bind call arguments to parameters (:mod:`~mdle.lang.check_names`)."""
+
+    @abstractmethod
+    def live_argument(self, callee: str, slot: _Slot, expr: st.Expr, env: Env) -> Value | None:
+        """Type an argument read each tick (:mod:`~mdle.lang.check_dimensions`)."""
 
     @abstractmethod
     def slots_of(self, d: st.Definition) -> list[_Slot]:
