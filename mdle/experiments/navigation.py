@@ -175,7 +175,7 @@ def run_study(seeds: Sequence[int], robots: Sequence[str] = ROBOTS, plan: Path =
 
 def summary_rows(runs: Sequence[NavRun]) -> list[tuple[str, ...]]:
     """One row per robot: runs, reached %, collisions, path / straight line, time, clearance."""
-    rows = []
+    rows: list[tuple[str, ...]] = []
     for robot in dict.fromkeys(r.robot for r in runs):
         mine = [r for r in runs if r.robot == robot]
         ok = [r for r in mine if r.reached]

@@ -434,12 +434,20 @@ class DimensionChecks(CheckerState):
         if isinstance(expr, st.Never):
             return cond.to_interrupt(t, "never")
 
-        def source() -> str:  # the text `show` and traces print, made when first read
-            shown = {k: show_value(v) for k, v in env.items()
-                     if not (isinstance(v, Quantity) and math.isnan(v.value))}
-            return format_expr(expr, shown)
+        shown: dict[str, str] = {}
 
-        return cond.to_interrupt(t, source)
+        def text(part: st.Expr) -> Callable[[], str]:
+            def made() -> str:  # the text `show` and traces print, made when first read
+                if not shown:
+                    shown.update({k: show_value(v) for k, v in env.items()
+                                  if not (isinstance(v, Quantity) and math.isnan(v.value))})
+                return format_expr(part, shown)
+            return made
+
+        disjuncts = _disjuncts(expr)
+        parts = tuple((text(d), self.condition(d, env)) for d in disjuncts) \
+            if len(disjuncts) > 1 else ()
+        return cond.to_interrupt(t, text(expr), parts)
 
     def _never_holds(self, expr: st.Binary, a: cond.Typed, b: cond.Typed) -> None:
         """Warn about a comparison of a bounded reading that can never hold (`theta > 200 deg`)."""
@@ -532,3 +540,12 @@ def _overload(spec: SensorSpec, args: tuple[st.Argument, ...] | list[st.Argument
         if names <= params and needed <= len(args) <= len(candidate.params):
             return candidate
     return spec
+
+
+def _disjuncts(expr: st.Expr) -> list[st.Expr]:
+    """Return the conditions a top-level ``or`` joins (``a or (b or c)``: a, b, c)."""
+    while isinstance(expr, st.Group) and len(expr.items) == 1 and not expr.repeat:
+        expr = expr.items[0]
+    if isinstance(expr, st.Binary) and expr.op == "or":
+        return _disjuncts(expr.left) + _disjuncts(expr.right)
+    return [expr]

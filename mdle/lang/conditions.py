@@ -381,10 +381,12 @@ def _code(source: str) -> CodeType:
     return compile(source, "<interrupt>", "exec")
 
 
-def to_interrupt(t: Typed, source: str | Callable[[], str]) -> Interrupt:
+def to_interrupt(t: Typed, source: str | Callable[[], str],
+                 parts: tuple[tuple[Callable[[], str], Typed], ...] = ()) -> Interrupt:
     """Return the runtime's :class:`~mdle.lang.program.Interrupt` for a checked condition.
 
-    ``source`` is the interrupt's text, or a function making it when first read.
+    ``source`` is the interrupt's text, or a function making it when first read;
+    ``parts`` the conditions of a top-level ``or``, each with a function making its text.
     """
     if t.is_const:
         text = source if isinstance(source, str) else source()
@@ -392,7 +394,11 @@ def to_interrupt(t: Typed, source: str | Callable[[], str]) -> Interrupt:
             return NEVER if text == "never" else Interrupt(NEVER.test, text, never=True)
         return Interrupt(lambda ctx: True, text)
     assert t.node is not None
-    return _Deferred(t.node, source)
+    return _Deferred(t.node, source, parts)
+
+
+def _always(ctx: Context) -> bool:
+    return True
 
 
 class _Deferred(Interrupt):
@@ -403,11 +409,24 @@ class _Deferred(Interrupt):
     gets the compiled function itself (no wrapper per call).
     """
 
-    def __init__(self, node: Node, source: str | Callable[[], str]) -> None:
+    def __init__(self, node: Node, source: str | Callable[[], str],
+                 parts: tuple[tuple[Callable[[], str], Typed], ...] = ()) -> None:
         fields = self.__dict__  # as object.__setattr__ would, one call fewer each
         fields["never"] = False
         fields["_node"] = node
         fields["_source"] = source
+        fields["_parts"] = parts
+
+    @functools.cached_property
+    def parts(self) -> tuple[tuple[str, Fn], ...]:
+        """The conditions of a top-level ``or``, each with its text and test (compiled now)."""
+        out = []
+        for text, t in self.__dict__["_parts"]:
+            if t.node is not None:
+                out.append((text(), _compile(t.node, as_bool=True)))
+            elif t.const:
+                out.append((text(), _always))
+        return tuple(out)
 
     @functools.cached_property
     def test(self) -> Fn:

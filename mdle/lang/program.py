@@ -53,6 +53,9 @@ class Interrupt:
     source: str
     never: bool = False
     remember: tuple[tuple[Any, Callable[[Context], Any]], ...] = ()
+    #: The conditions joined by a top-level ``or`` (``at_goal or stalled``): each one's
+    #: text and test, so that the runtime can say which fired. Empty for one condition.
+    parts: tuple[tuple[str, Callable[[Context], bool]], ...] = ()
 
 
 def _never(ctx: Context) -> bool:

@@ -510,7 +510,8 @@ class Scheduler:
                 raise _failure(f"interrupt `{checked.source}` of `{checked.path}` failed at "
                                f"t = {t:.3f} s", checked.span, exc) from exc
             if fired >= 0:
-                self._end_from(fired, cause, now)
+                why = self._which(checked, ctx) if cause is Cause.INTERRUPT else None
+                self._end_from(fired, cause, now, fired_by=why)
                 level = self._next_child(now, ctx)
                 continue
             # Every active element has been tested and none fired.
@@ -590,8 +591,20 @@ class Scheduler:
                                "remember its start values", slot.span, exc) from exc
         return memory
 
-    def _end_from(self, level: int, cause: Cause, now: float, all_levels: bool = False
-                  ) -> None:
+    @staticmethod
+    def _which(slot: _Slot | None, ctx: Context) -> str | None:
+        """Say which conditions of ``slot``'s interrupt hold (it has just fired)."""
+        if slot is None:
+            return None
+        interrupt = slot.node.interrupt
+        try:
+            held = [text for text, test in interrupt.parts if test(ctx)]
+        except Exception:  # the interrupt itself evaluated: its parts will; never fail here
+            held = []
+        return " and ".join(held) if held else interrupt.source
+
+    def _end_from(self, level: int, cause: Cause, now: float, all_levels: bool = False,
+                  fired_by: str | None = None) -> None:
         """End the frames at ``level`` and below, innermost first (rule 3).
 
         The frame at ``level`` ends with ``cause``, those inside it are ended by their
@@ -605,9 +618,10 @@ class Scheduler:
             c = cause if all_levels or len(stack) == level else Cause.ENDED_BY_PARENT
             frame.state = None  # per-atom state is dropped with the atom
             slot.release()
-            self._terminations.append(Termination(slot.path, slot.level, c, now))
+            why = fired_by if c is cause and len(stack) == level else None
+            self._terminations.append(Termination(slot.path, slot.level, c, now, why))
             self._emit(Event(now, EventKind.END, slot.path, slot.level, slot.kind,
-                             self._pose, c))
+                             self._pose, c, why))
 
     def _emit(self, event: Event) -> None:
         self._events.append(event)
