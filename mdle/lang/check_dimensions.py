@@ -12,27 +12,24 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
-from typing import Any
 
-from mdle.atoms.registry import BOOL, REQUIRED, LawSpec, SensorSpec
+from mdle.atoms.registry import BOOL, LawSpec, SensorSpec
 from mdle.errors import Diagnostic, Severity, Span
 from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
+from mdle.lang.check_expressions import ExpressionChecks, disjuncts, overload
 from mdle.lang.check_state import (
     MAX_NESTING,
-    CheckerState,
     Env,
     _Abort,
     _freeze,
     _kind_name,
     _short,
-    _Slot,
 )
 from mdle.lang.dimensions import (
     Quantity,
     Symbol,
     Value,
-    dim_example,
     dim_words,
     fits,
     same_kind,
@@ -45,15 +42,11 @@ from mdle.lang.treebuild import builder
 from mdle.motion_limits import excess
 from mdle.units import NONE, TIME, TURN_RATE
 
-#: The functions of numbers a condition may call (besides ``at_start``)
-_NUMBER_FUNCTIONS: Mapping[str, Callable[..., Any]] = MappingProxyType(
-    {"abs": abs, "min": min, "max": max})
-
 #: Quantity(value, dim, bare) without the frozen __init__ (see builder)
 _new_quantity = builder(Quantity)
 
 
-class DimensionChecks(CheckerState):
+class DimensionChecks(ExpressionChecks):
     """Dimensions: values, timers, conditions and interrupts."""
 
     def value(self, expr: st.Expr, env: Env) -> Value:
@@ -271,7 +264,7 @@ class DimensionChecks(CheckerState):
         if name in self.refused:
             raise _Abort  # meant as the refused definition: that refusal says it all
         if isinstance(target, SensorSpec):
-            target = _overload(target, args)
+            target = overload(target, args)
             read: dict[str, cond.Typed] = {}  # the arguments read each tick
             outer, self._live_args = self._live_args, (
                 read if any(self._is_live(a.value, env) for a in args) else None)
@@ -311,88 +304,6 @@ class DimensionChecks(CheckerState):
                          "interrupt and timer: `((a, b), never, inf)`")
                    if isinstance(target, st.Definition) else None)
         raise _Abort
-
-    def _is_live(self, expr: st.Expr, env: Env) -> bool:
-        """Tell whether ``expr`` reads a sensor function (or a start value): not fixed."""
-        if isinstance(expr, st.Name):
-            return expr.name not in env and isinstance(self._lookup(expr.name), SensorSpec)
-        if isinstance(expr, st.Call):
-            if expr.name in cond.BUILTINS and expr.name not in env:
-                return expr.name == "at_start" or any(self._is_live(a.value, env)
-                                                      for a in expr.args)
-            return isinstance(self._lookup(expr.name), SensorSpec)
-        if isinstance(expr, st.Binary):
-            return self._is_live(expr.left, env) or self._is_live(expr.right, env)
-        if isinstance(expr, st.Unary):
-            return self._is_live(expr.operand, env)
-        if isinstance(expr, st.Group):
-            return any(self._is_live(e, env) for e in expr.items)
-        return False
-
-    def live_argument(self, callee: str, slot: _Slot, expr: st.Expr, env: Env) -> Value | None:
-        """Type an argument of a sensor function read each tick (``range(-theta)``).
-
-        Returns a placeholder value for the binder (the expression is kept aside), or
-        None when the argument is fixed and is bound as usual.
-        """
-        read = self._live_args
-        if read is None or slot.symbol or not self._is_live(expr, env):
-            return None
-        p = slot.param
-        if p is not None and p.fixed:
-            self.error(expr.span, f"`{slot.name}` of `{callee}` is a fixed value, but this "
-                       "reads a sensor function", hint="give it a number with its unit, or a "
-                       "parameter; sensor readings are not taken here")
-            raise _Abort
-        t = self.condition(expr, env)
-        if t.is_bool:
-            self.error(expr.span, f"`{slot.name}` of `{callee}` is {dim_example(slot.dim)}, "
-                       "found a condition")
-            raise _Abort
-        if t.dim is not None and slot.dim is not None and not same_kind(t.dim, slot.dim):
-            self.error(expr.span, f"`{slot.name}` of `{callee}` is {dim_example(slot.dim)}, "
-                       f"found {dim_words(t.dim)} (`{_short(expr)}`)")
-            raise _Abort
-        read[slot.name] = t
-        return Quantity(math.nan, slot.dim)
-
-    def _builtin(self, expr: st.Call, env: Env) -> cond.Typed:
-        """``abs(e)``, ``min(a, b, ...)``, ``max(a, b, ...)`` and ``at_start(e)``."""
-        name = expr.name
-        low, high = cond.BUILTINS[name]
-        named = [a for a in expr.args if a.name is not None]
-        if named:
-            self.error(named[0].span, f"`{name}` takes no keyword arguments")
-            raise _Abort
-        n = len(expr.args)
-        if not low <= n <= high:
-            takes = ("one value" if high == 1 else "two values or more")
-            self.error(expr.span, f"`{name}` takes {takes}, found {n}")
-            raise _Abort
-        if name == "at_start":
-            if self._remembering:
-                self.error(expr.span, "`at_start` inside `at_start`: the inner one adds "
-                           "nothing", hint=f"write `{_short(expr.args[0].value)}`")
-                raise _Abort
-            self._remembering = True
-            try:
-                t = self.condition(expr.args[0].value, env)
-            finally:
-                self._remembering = False
-            return cond.remembered(t)
-        parts = [self.condition(a.value, env) for a in expr.args]
-        for a, t in zip(expr.args, parts, strict=True):
-            if t.is_bool:
-                self.error(a.span, f"`{name}` needs numbers, found a condition")
-                raise _Abort
-        dim = next((t.dim for t in parts if t.dim is not None), None)
-        for a, t in zip(expr.args, parts, strict=True):
-            if not _same_dim(t, parts[0]) or (dim is not None and t.dim is not None
-                                               and not same_kind(t.dim, dim)):
-                self.error(a.span, f"`{name}` needs values of one kind: found "
-                           f"{dim_words(t.dim)} beside {dim_words(dim)}")
-                raise _Abort
-        return cond.apply(_NUMBER_FUNCTIONS[name], parts, dim)
 
     def _interrupt_body(self, d: st.Definition, bound: Mapping[str, Value],
                         call: Span | None) -> cond.Typed:
@@ -444,24 +355,10 @@ class DimensionChecks(CheckerState):
                 return format_expr(part, shown)
             return made
 
-        disjuncts = _disjuncts(expr)
-        parts = tuple((text(d), self.condition(d, env)) for d in disjuncts) \
-            if len(disjuncts) > 1 else ()
+        parts_of = disjuncts(expr)
+        parts = tuple((text(d), self.condition(d, env)) for d in parts_of) \
+            if len(parts_of) > 1 else ()
         return cond.to_interrupt(t, text(expr), parts)
-
-    def _never_holds(self, expr: st.Binary, a: cond.Typed, b: cond.Typed) -> None:
-        """Warn about a comparison of a bounded reading that can never hold (`theta > 200 deg`)."""
-        for reading, other, left in ((a, b, True), (b, a, False)):
-            hit = self._bounded.get(id(reading.node)) if reading.node is not None else None
-            if hit is None or not other.is_const or not isinstance(other.const, (int, float)):
-                continue
-            bounds, name = hit
-            if bounds.holds_somewhere(expr.op, float(other.const), left):
-                continue
-            self.warn(expr.span, f"`{_short(expr)}` can never hold: `{name}` lies in "
-                      f"{_interval(bounds, reading.dim)}",
-                      hint="this comparison is always false",
-                      in_use=True)
 
     def _note_message_dim(self, a: cond.Typed, b: cond.Typed) -> None:
         """Record the dimension a `message(channel)` is used with (known from the other side)."""
@@ -518,34 +415,3 @@ def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
             if unit:
                 return f"add a unit: `{side.text} {unit}`"
     return None
-
-
-
-def _interval(b: Any, dim: Any) -> str:
-    """``(-180 deg, 180 deg]``: bounds in the unit a plan writes them in."""
-    def show(v: float) -> str:
-        return "inf" if math.isinf(v) else show_value(Quantity(v, dim))
-    return (f"{'(' if b.low_open else '['}{show(b.low)}, {show(b.high)}"
-            f"{')' if b.high_open or math.isinf(b.high) else ']'}")
-
-
-def _overload(spec: SensorSpec, args: tuple[st.Argument, ...] | list[st.Argument]) -> SensorSpec:
-    """Pick the sensor function of that name whose parameters the call's arguments fit."""
-    if not spec.overloads:
-        return spec
-    names = {a.name for a in args if a.name is not None}
-    for candidate in (spec, *spec.overloads):
-        params = {p.name for p in candidate.params}
-        needed = sum(1 for p in candidate.params if p.default is REQUIRED)
-        if names <= params and needed <= len(args) <= len(candidate.params):
-            return candidate
-    return spec
-
-
-def _disjuncts(expr: st.Expr) -> list[st.Expr]:
-    """Return the conditions a top-level ``or`` joins (``a or (b or c)``: a, b, c)."""
-    while isinstance(expr, st.Group) and len(expr.items) == 1 and not expr.repeat:
-        expr = expr.items[0]
-    if isinstance(expr, st.Binary) and expr.op == "or":
-        return _disjuncts(expr.left) + _disjuncts(expr.right)
-    return [expr]
