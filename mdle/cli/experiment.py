@@ -59,7 +59,7 @@ def add_parser(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]"
                    help="following/random-starts: keep each run's row in OUT/NAME/results.csv "
                         "and skip the runs already there")
     p.add_argument("--nav-plan", type=Path, default=None, metavar="FILE",
-                   help="navigation: the plan to run (default plans/nav/bug2.mdle)")
+                   help="navigation: the plan to run (default plans/nav/bug2.mdle, here)")
     generated_study.add_arguments(p)
     p.set_defaults(handler=run)
 

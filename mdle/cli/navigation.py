@@ -2,7 +2,8 @@
 
 ``--runs N`` worlds (default 200) from seed ``--seed`` on, each run with the ideal unicycle
 and the Pioneer 3-DX profile (``--robot NAME`` for one), ``--jobs N`` processes,
-``--nav-plan FILE`` for another plan of ``plans/nav/`` shape (default Bug2), ``--csv FILE``
+``--nav-plan FILE`` for another plan of ``plans/nav/`` shape (default ``plans/nav/bug2.mdle``
+in the current folder), ``--csv FILE``
 for one row per run. Prints success rate, path length against the straight line, time and
 collisions per robot (:mod:`mdle.experiments.navigation`); exit 3 if any run collided.
 """
@@ -29,7 +30,11 @@ def run_navigation_study(args: argparse.Namespace) -> int:
     robots = ROBOTS if args.robot is None else (args.robot,)
     plan = args.nav_plan if args.nav_plan is not None else PLAN
     if not plan.is_file():
-        print(f"mdle experiment navigation: --nav-plan {plan}: no such file", file=sys.stderr)
+        where = ("" if args.nav_plan is not None else
+                 " (the default is read from the repository's top folder: run there, or "
+                 "give --nav-plan)")
+        print(f"mdle experiment navigation: --nav-plan {plan}: no such file{where}",
+              file=sys.stderr)
         return output.EXIT_INPUT
     seeds = range(args.seed, args.seed + worlds)
     with steps("navigation", worlds * len(robots)) as step:

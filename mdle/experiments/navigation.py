@@ -26,8 +26,9 @@ import numpy as np
 __all__ = ["NavRun", "generate_world", "run_navigation", "run_study", "summary_rows",
            "PLAN", "ROBOTS"]
 
-#: The plan the experiment runs by default: Bug2 with follow_boundary.
-PLAN = Path(__file__).resolve().parents[2] / "plans" / "nav" / "bug2.mdle"
+#: The plan the experiment runs by default: Bug2 with follow_boundary, from the
+#: repository's top folder (the plans are not part of the installed package)
+PLAN = Path("plans") / "nav" / "bug2.mdle"
 #: The robots it runs on: the paper's ideal unicycle and the Pioneer 3-DX's timing.
 ROBOTS = ("ideal", "pioneer-p3dx")
 #: Least gap between two obstacles (their bounding discs), m: a Pioneer (0.5 m wide)

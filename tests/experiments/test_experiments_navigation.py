@@ -69,7 +69,7 @@ def test_worlds_are_seeded_cluttered_and_leave_the_way_open() -> None:
 
 
 def test_a_run_reports_reached_path_and_time() -> None:
-    run = run_navigation(3, "ideal")
+    run = run_navigation(3, "ideal", NAV / "bug2.mdle")
     assert run.reached and not run.collided and run.obstacles >= 3
     assert 0.9 < run.path / run.straight < 2.0 and 20.0 < run.time < 120.0
 
@@ -78,9 +78,10 @@ def test_the_experiment_from_the_command_line(capsys: pytest.CaptureFixture[str]
                                               tmp_path: Path) -> None:
     csv = tmp_path / "runs.csv"
     assert main(["experiment", "navigation", "--runs", "2", "--robot", "ideal",
-                 "--csv", str(csv)]) == 0
+                 "--nav-plan", str(NAV / "bug2.mdle"), "--csv", str(csv)]) == 0
     out = capsys.readouterr().out
     assert "navigation: bug2.mdle over 2 seeded cluttered worlds" in out
     assert re.search(r"ideal\s*│\s*2\s*│\s*100\.0\s*│\s*0", out)
     assert csv.read_text().splitlines()[0].startswith("seed,robot,obstacles,reached")
     assert main(["experiment", "navigation", "--nav-plan", str(tmp_path / "no.mdle")]) == 1
+    assert "no.mdle: no such file" in capsys.readouterr().err
