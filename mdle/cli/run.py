@@ -64,6 +64,8 @@ def add_parser(subparsers: Any) -> None:
                         "PLAN.world.yaml or PLAN.yaml beside the plan, else the default world)")
     p.add_argument("--plan", dest="element", metavar="NAME",
                    help="element to run (default: the file's `run` target, else `main`)")
+    p.add_argument("--laws", metavar="FILE.py",
+                   help="a Python file of your own control laws and sensor functions")
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="NAME=VALUE",
                    help="override a parameter's default, with units as in a plan: "
@@ -249,7 +251,10 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
         else known_robot(None)
     try:
-        program = load_program(args.plan, settings=args.overrides, robot=robot)
+        from mdle.userlaws import load_laws
+
+        registry = load_laws(args.laws) if args.laws else None
+        program = load_program(args.plan, registry, settings=args.overrides, robot=robot)
     except MdleError as err:
         from mdle.lang import yaml_as_plan
 
