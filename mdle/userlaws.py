@@ -18,7 +18,7 @@ from mdle.atoms.registry import REQUIRED, LawSpec, Registry, SensorSpec
 from mdle.errors import Diagnostic, MdleError, Span
 from mdle.units import Dim
 
-__all__ = ["load_laws"]
+__all__ = ["load_laws", "laws_option"]
 
 
 def load_laws(path: str | os.PathLike[str]) -> Registry:
@@ -66,6 +66,11 @@ def load_laws(path: str | os.PathLike[str]) -> Registry:
                       f"{'control law' if n in shipped.laws else 'sensor function'}",
                 hint=f"give it another name, such as `my_{n}` (`name=` in its decorator)"))
     return shipped.merged(user)
+
+
+def laws_option(path: str | None) -> Registry | None:
+    """Return the registry for ``--laws`` (None, the shipped one, when it is not given)."""
+    return None if path is None else load_laws(path)
 
 
 def _check_spec(spec: LawSpec | SensorSpec, name: str) -> None:

@@ -83,11 +83,11 @@ def run(args: argparse.Namespace) -> int:
     if args.backend == "pioneer":
         session = _robot_session(args, until)
     else:
-        from mdle.userlaws import load_laws
+        from mdle.userlaws import laws_option
 
         session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
                           sensing=args.sensing, realtime=args.realtime,
-                          registry=load_laws(args.laws) if args.laws else None)
+                          registry=laws_option(args.laws))
     repl = Repl(session, debug=getattr(args, "debug", False))
     try:
         if args.file:

@@ -1,5 +1,8 @@
 """``mdle run``: run a plan in the embedded simulator or on a robot.
 
+Over 500 lines: one command, whose options, backends (simulator, Pioneer, ROS 2) and
+outputs share one run's parts and its clean end from wherever it is interrupted.
+
 Exit codes: 0 the program ran to its end (or to ``--until``), 1 plan or world errors
 (shown as ``mdle check`` shows them) and robot or connection faults, 3 the robot
 collided or stalled fatally, 74 the trace or a recording could not be written (disk
@@ -236,6 +239,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     from mdle.errors import Diagnostic, MdleError
     from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
+    from mdle.userlaws import laws_option
 
     if args.plot:
         writable_output(args.plot, "--plot", (".png", ".svg", ".pdf"))
@@ -251,10 +255,8 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
         else known_robot(None)
     try:
-        from mdle.userlaws import load_laws
-
-        registry = load_laws(args.laws) if args.laws else None
-        program = load_program(args.plan, registry, settings=args.overrides, robot=robot)
+        program = load_program(args.plan, laws_option(args.laws), settings=args.overrides,
+                               robot=robot)
     except MdleError as err:
         from mdle.lang import yaml_as_plan
 
