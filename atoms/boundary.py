@@ -223,8 +223,12 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
 
 
 def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span: float,
-             ctx: Context | None) -> BoundaryView:
-    """Compute :func:`boundary_view`; the scan's :func:`cached_beams` of ``ctx`` if given."""
+             ctx: Context | None, with_side: bool = True) -> BoundaryView:
+    """Compute :func:`boundary_view`; the scan's :func:`cached_beams` of ``ctx`` if given.
+
+    ``with_side`` False: the front ray only (the side is a miss), for a law that reads the
+    side from the whole scan (:mod:`atoms.closest`).
+    """
     import numpy as np
 
     if scan is None or scan.ranges.size == 0:
@@ -246,7 +250,7 @@ def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span:
     ns, cl = lay.n_side, lay.cl
     r0 = r.item(0) if ns else math.nan
     rc = r.item(cl) if lay.c_ok else math.nan
-    side_hit, front_hit = math.isfinite(r0), math.isfinite(rc)
+    side_hit, front_hit = with_side and math.isfinite(r0), math.isfinite(rc)
     side_ray = front = MISS
     if not (side_hit or front_hit):  # neither ray's own beam saw a surface: nothing to read
         return _view(front, side_ray, False, scan.max_range)
@@ -358,13 +362,16 @@ def _front_full(ranges: "np.ndarray", bearings: "np.ndarray", valid: "np.ndarray
 
 
 def cached_view(ctx: Context, side: Side | str, windows: Sequence[int] = (7, 8, 9),
-                side_span: float = math.radians(30.0)) -> BoundaryView:
-    """Return :func:`boundary_view` of this tick's scan, computed once per tick and side."""
+                side_span: float = math.radians(30.0), with_side: bool = True) -> BoundaryView:
+    """Return :func:`boundary_view` of this tick's scan, computed once per tick and side.
+
+    ``with_side`` False: the front ray only (the side ray is a miss, its fit skipped).
+    """
     left = parse_side(side) is Side.LEFT
-    key = ("boundary", left, tuple(windows), side_span)  # no Enum.__hash__
+    key = ("boundary", left, tuple(windows), side_span, with_side)  # no Enum.__hash__
     view = ctx.cache.get(key)
     if view is None:
-        view = _view_of(ctx.obs.scan, left, windows, side_span, ctx)
+        view = _view_of(ctx.obs.scan, left, windows, side_span, ctx, with_side)
         ctx.cache[key] = view
     return view
 

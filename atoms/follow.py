@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from mdle.atoms import safety, steering
+from mdle.atoms import closest, safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
 from mdle.atoms.latency import STILL, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
@@ -52,6 +52,9 @@ class FollowState:
     latency: float | None = None
     """Command latency predicted over (s); None: no prediction (``latency = 0 s``)."""
     predictor: "Predictor | None" = None
+    scan_model: bool = True
+    """Follow the nearest boundary point of the whole scan (:mod:`atoms.closest`); False: the
+    paper's two rays."""
 
 
 def start_follow(args: Args, ctx: Context) -> FollowState:
@@ -71,7 +74,8 @@ def start_follow(args: Args, ctx: Context) -> FollowState:
         latency = ctx.limits.command_latency
     predict = float(args["latency"]) != 0.0
     return FollowState(parse_side(args["side"]), gains, Memory(), ctx.obs.time - ctx.t,
-                       latency if predict else None, Predictor() if predict else None)
+                       latency if predict else None, Predictor() if predict else None,
+                       str(args.get("model", "scan")) == "scan")
 
 
 def scan_points_cached(ctx: Context) -> Any:
@@ -113,14 +117,18 @@ def scan_points_complex(ctx: Context) -> Any:
     return z
 
 
+#: With ``model = scan`` the side fields describe the nearest boundary point the law followed.
+_NEAREST = {"front": "", "side": " (model = scan: the nearest boundary point followed)"}
 #: What ``follow_boundary`` records each tick (``ctx.cache["trace"]``), with units.
 REPORTS = {
     **{f"{ray}_{key}": report for ray in ("front", "side") for key, report in (
-        ("hit", Report(flag=True, doc=f"the {ray} ray sees the boundary")),
-        ("range", Report(LENGTH, f"distance along the {ray} ray (0 without a hit)")),
+        ("hit", Report(flag=True, doc=f"the {ray} ray sees the boundary" + _NEAREST[ray])),
+        ("range", Report(LENGTH, f"distance along the {ray} ray (0 without a hit)"
+                                 + _NEAREST[ray])),
         ("tangent", Report(ANGLE, f"boundary direction at the {ray} hit")),
         ("curvature", Report(CURVATURE, f"boundary curvature at the {ray} hit")))},
-    "side_bearing": Report(ANGLE, "where the side ray looks (the followed side)"),
+    "side_bearing": Report(ANGLE, "where the side ray looks (the followed side), or where "
+                           "the nearest point followed lies (model = scan)"),
     "rc": Report(LENGTH, "the distance kept from the boundary"),
     "mode": Report(codes=tuple(_MODE_CODES), doc="what the law is doing"),
     "lost": Report(TIME, "how long the boundary has been lost"),
@@ -143,6 +151,8 @@ REPORTS = {
           low_open=True, finite=False, commanded=False),
     Param("damping", default="scaled", choices=("scaled", "paper"),
           doc="scaled: quicker return to rc on curves and from far away; paper: as derived"),
+    Param("model", default="scan", choices=("scan", "rays"),
+          doc="scan: the nearest boundary point of the whole scan; rays: the paper's two rays"),
     Param("tau", TIME, 0.2, doc="low-pass time constant of estimated curvature (0: none)",
           low=0.0),
     Param("margin", LENGTH, 0.15, doc="clearance the safety layer keeps ahead (0: off)",
@@ -161,7 +171,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     g = state.gains
     v = float(args["v"])
     rc = float(args["rc"])
-    view = cached_view(ctx, state.side)
+    # the whole-scan model reads the side from every scan point: the side ray's fit is skipped
+    view = cached_view(ctx, state.side, with_side=not state.scan_model)
     obs = ctx.obs
     pose = obs.pose
     left = state.side is Side.LEFT
@@ -182,9 +193,13 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     z = scan_points_complex(ctx)  # the safety layer and the corner search read complex points
     if moved != STILL:
         z = _into(z, moved[0], sgn * moved[1], sgn * moved[2])
-    u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
-                      g.umax, filter_kappa=not view.exact,
-                      near=lambda: _nearest_on_side(z, sgn))
+    if state.scan_model:
+        u, side = closest.step(front, z if sgn > 0 else z.conjugate(), law_pose, ctx.t, ctx.dt,
+                               state.memory, v, rc, g, g.umax, filter_kappa=not view.exact)
+    else:
+        u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
+                          g.umax, filter_kappa=not view.exact,
+                          near=lambda: _nearest_on_side(z, sgn))
     u *= sgn
     u_law, v_law = u, v
     clearance = math.inf
@@ -195,7 +210,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                                                 side=1 if left else -1)
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
-    f, s = view.front, view.side  # the trace shows what was measured
+    f = view.front  # the trace shows what was measured (the side: what the law followed)
+    s = side if state.scan_model else view.side
     if f.hit:
         fh, fr, fb, fk = 1.0, f.r, sgn * f.beta, sgn * f.kappa
     else:
@@ -208,7 +224,9 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     ctx.cache["trace"] = {
         "front_hit": fh, "front_range": fr, "front_tangent": fb, "front_curvature": fk,
         "side_hit": sh, "side_range": sr, "side_tangent": sb, "side_curvature": sk,
-        "side_bearing": sgn * -math.pi / 2,  # where the side ray looks: the followed side
+        # where the side ray looks (the followed side), or where the nearest point lies
+        "side_bearing": sgn * (steering.wrap(s.beta - math.pi / 2) if state.scan_model and s.hit
+                               else -math.pi / 2),
         "rc": rc,  # the distance it keeps: plots draw |d - rc| from the trace alone
         "mode": _MODE_CODES[mem.mode],
         "lost": mem.lost_for(ctx.t),

@@ -193,6 +193,8 @@ class Memory:
     """The boundary point a valid ray saw last (odometry frame, m); None: never seen."""
     seen_at: float = math.nan
     """Local time (s) at which a valid ray last saw the boundary (NaN: never)."""
+    near: tuple[float, float] | None = None
+    """The whole-scan model's nearest boundary point last seen (odometry frame, m)."""
 
     def lost_for(self, t: float) -> float:
         """Return how long (s) the boundary has been lost at local time ``t``.

@@ -5,7 +5,9 @@
 The observations of a real 20 s run (the ideal unicycle following the hexagon at 1 m/s,
 noisy LMS-200 scan, 50 Hz) are recorded once; then the atom's step is replayed over them
 with a fresh tick context each time (so nothing is cached across ticks), and so are its
-parts: the boundary view alone and the scan points the safety layer reads. The law, the
+parts: the boundary view alone and the scan points the safety layer reads, and the same
+step on the paper's two rays (``model = rays``, the previous release's law), in alternating
+rounds: the ratio of the two is the whole-scan model's cost. The law, the
 latency bookkeeping and the safety layer are the difference. Each figure is the best of
 ``--repeat`` rounds, in microseconds per tick; the shares are ratios within the process,
 which stay meaningful on a loaded machine. Last, a whole controlled tick is timed
@@ -83,6 +85,8 @@ from mdle.sim.raycast import COMPILED  # noqa: E402 (after the sys.path fix)
 ARGS: dict[str, Any] = {"side": "right", "rc": 0.5, "v": 1.0, "zeta": 1.0, "kf": 0.5,
                         "umax": math.inf, "tau": 0.2, "margin": 0.15, "lookahead": 0.8,
                         "latency": math.inf}
+#: The same atom on the seed paper's two rays (``model = rays``: the previous release's law).
+RAYS: dict[str, Any] = {**ARGS, "model": "rays"}
 DT = 0.02
 #: The controlled tick's part name, and its control period (s).
 CONTROLLED = "controlled tick (sim + follow_boundary + scheduler, 100 segments)"
@@ -123,8 +127,8 @@ def _observations() -> tuple[list[Observation], sim.SimBackend]:
 
 
 def _per_tick(obs: list[Observation], backend: sim.SimBackend,
-              part: Callable[[Context, Any], object]) -> float:
-    state = start_follow(ARGS, Context(obs[0], 0.0, DT, backend.limits))
+              part: Callable[[Context, Any], object], args: dict[str, Any] = ARGS) -> float:
+    state = start_follow(args, Context(obs[0], 0.0, DT, backend.limits))
     t0 = time.perf_counter()
     for i, o in enumerate(obs):
         part(Context(o, i * DT, DT, backend.limits), state)
@@ -157,8 +161,10 @@ def _controlled_ticks(sch: Scheduler, ticks: int) -> None:
             raise SystemExit(f"the controlled run ended early: {sch.result}")
 
 
+TWO_RAYS = "the same, two rays (model = rays)"
 PARTS: dict[str, Callable[[Context, Any], object]] = {
     "follow_boundary (whole step)": lambda c, s: follow_boundary(ARGS, c, s),
+    TWO_RAYS: lambda c, s: follow_boundary(RAYS, c, s),
     "boundary view alone": lambda c, s: cached_view(c, "right"),
     "scan points alone": lambda c, s: scan_points_cached(c),
     # the step reads both, and they share the tick's masked points (atoms.boundary.cached_beams)
@@ -178,9 +184,10 @@ def _replay(saved: str, part: str, rounds: int) -> None:
         obs, limits = pickle.load(fh)
     obs = _fixed_bearings(obs)
     fn = PARTS[part]
-    fn(Context(obs[0], 0.0, DT, limits), start_follow(ARGS, Context(obs[0], 0.0, DT, limits)))
+    args = RAYS if part == TWO_RAYS else ARGS
+    fn(Context(obs[0], 0.0, DT, limits), start_follow(args, Context(obs[0], 0.0, DT, limits)))
     for _ in range(rounds):  # the first call above made every import and cache
-        state = start_follow(ARGS, Context(obs[0], 0.0, DT, limits))
+        state = start_follow(args, Context(obs[0], 0.0, DT, limits))
         for i, o in enumerate(obs):
             fn(Context(o, i * DT, DT, limits), state)
 
@@ -235,7 +242,7 @@ def _count(obs: list[Observation], backend: sim.SimBackend, rounds: int,
     print(f"whole step: {whole / BASELINE_INSTRUCTIONS:.2f}x the "
           f"{BASELINE_INSTRUCTIONS / 1e3:.1f}k of {BASELINE_US:.0f} us; "
           f"about {whole / BASELINE_INSTRUCTIONS * BASELINE_US:.0f} us on a quiet machine "
-          f"(target: 60 us)")
+          f"(target: 60 us); {whole / per[TWO_RAYS]:.2f}x the two rays' step (target 1.3x)")
     if controlled:
         print(f"{CONTROLLED}: {tick / 1e3:.1f} k instructions/tick over {controlled} ticks")
 
@@ -329,8 +336,13 @@ def main() -> None:
         _count(obs, backend, a.rounds, a.controlled)
         return
     parts = PARTS
-    best = {name: min(_per_tick(obs, backend, fn) for _ in range(a.repeat))
-            for name, fn in parts.items()}
+    # rounds alternate between the parts, so that their ratios are taken under one load
+    per_round: dict[str, list[float]] = {name: [] for name in parts}
+    for _ in range(a.repeat):
+        for name, fn in parts.items():
+            per_round[name].append(_per_tick(obs, backend, fn,
+                                             RAYS if name == TWO_RAYS else ARGS))
+    best = {name: min(t) for name, t in per_round.items()}
     print(f"{len(obs)} ticks of a hexagon run, 181 beams; best of {a.repeat} rounds; "
           f"load average {os.getloadavg()[0]:.2f}")
     for name, us in best.items():
@@ -338,7 +350,8 @@ def main() -> None:
     whole = best["follow_boundary (whole step)"]
     rest = whole - best["view + scan points"]
     print(f"  law + latency + safety layer   {rest:7.1f} us/tick")
-    print(f"whole step: {whole / 60.0:.2f}x the 60 us target")
+    print(f"whole step: {whole / 60.0:.2f}x the 60 us target, "
+          f"{whole / best[TWO_RAYS]:.2f}x the two rays' step (target 1.3x)")
     if a.controlled:
         # Rounds alternate between the install's fan cast and numpy's (the same numbers),
         # so that the ratio of the two is taken under the same load.

@@ -24,6 +24,7 @@ from typing import Any
 from mdle.backend import Pose
 from mdle.errors import Diagnostic, MdleError, Severity, WorldError
 from mdle.messages import DeliveryRules
+from mdle.ranges import RATE
 
 __all__ = ["MemberSpec", "TeamSpec", "LoadedTeam", "parse_team", "read_team", "robot_plan",
            "load_team"]
@@ -117,6 +118,8 @@ def _parse(text: str, file: str) -> TeamSpec:
         world = near(w) if w.endswith((".yaml", ".yml")) else w
     seed = _integer(doc, "seed", top["seed"], maximum=2 ** 64 - 1) if "seed" in top else None
     rate = _number(doc, "rate", top["rate"], positive=True) if "rate" in top else None
+    if rate is not None and (problem := RATE.problem(rate, str(top["rate"]))) is not None:
+        raise doc.fail("rate", problem)
     until = _number(doc, "until", top["until"], nonneg=True) if "until" in top else None
     rules = DeliveryRules()
     if "messages" in top:

@@ -19,6 +19,7 @@ from mdle.lang import Element
 from mdle.messages import Message
 from mdle.runtime import RunResult, Scheduler
 from mdle.runtime.events import Observer
+from mdle.runtime.pacing import Pacer
 
 __all__ = ["TeamRun", "message_record"]
 
@@ -49,6 +50,8 @@ class TeamRun:
     until: float | None = None
     observers: Mapping[str, Sequence[Observer]] | None = None
     pose_records: bool = False
+    #: pace the ticks to the wall clock (``--realtime``: a live view to watch)
+    realtime: bool = False
 
     def __post_init__(self) -> None:
         obs = self.observers or {}
@@ -103,8 +106,12 @@ class TeamRun:
         """Run to the end; returns each robot's result."""
         for s in self.schedulers.values():
             s.start()
+        pacer = Pacer() if self.realtime else None
+        ticks = 0
         while self.tick():
-            pass
+            ticks += 1
+            if pacer is not None:
+                pacer.wait(ticks / self.rate)
         return self.results
 
     def _route_messages(self) -> None:

@@ -33,7 +33,7 @@ from typing import IO, TYPE_CHECKING, Any
 from mdle.backend import Scan
 from mdle.errors import Diagnostic, MdleError, Span
 from mdle.runtime.events import Collision, Event, RunResult, Sample
-from mdle.userfile import UserFileError, open_user_file
+from mdle.userfile import UserFileError, open_user_file, os_reason
 
 if TYPE_CHECKING:
     import numpy as np
@@ -146,6 +146,38 @@ def end_record(result: RunResult) -> dict[str, Any]:
                          for x in result.terminations]}
 
 
+#: Bytes kept free beside a trace for its end record (a file removed when the end record
+#: is written): a disk that fills during a run, by the trace or by anything else, still
+#: takes the record that says how the run ended.
+RESERVE_BYTES = 16 * 1024
+
+
+def _make_reserve(path: str) -> str | None:
+    """Create the reserve file beside ``path``; None when it cannot be made (no matter)."""
+    folder, name = os.path.split(os.path.abspath(path))
+    reserve = os.path.join(folder, f".{name}.reserve")
+    try:
+        fd = os.open(reserve, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except OSError:  # already there (another run's), or no room: run without one
+        return None
+    try:
+        os.write(fd, bytes(RESERVE_BYTES))
+    except OSError:
+        os.close(fd)
+        _drop_reserve(reserve)
+        return None
+    os.close(fd)
+    return reserve
+
+
+def _drop_reserve(reserve: str | None) -> None:
+    if reserve is not None:
+        try:
+            os.unlink(reserve)
+        except OSError:
+            pass
+
+
 class TraceWriter:
     """Write a run's trace as JSON lines, flushing events at once and samples in batches.
 
@@ -203,6 +235,7 @@ class TraceWriter:
         self.error: TraceWriteError | None = None
         #: True once the end record is in the file.
         self.ended = False
+        self._reserve = _make_reserve(self.path)
         head: dict[str, Any] = {"type": "header", "format": TRACE_FORMAT,
                                 "version": TRACE_VERSION, "versions": versions()}
         head.update(header or {})
@@ -312,9 +345,15 @@ class TraceWriter:
         line = _dumps(record)
         try:
             if self.error is None:
-                self._write(line)
-                self.ended = self._file is not None
-            elif self._file is not None:
+                try:
+                    self._write(line)
+                    self.ended = self._file is not None
+                except TraceWriteError:
+                    pass
+            if not self.ended and self._file is not None:
+                # the reserve beside the trace makes room on a full disk for this record
+                _drop_reserve(self._reserve)
+                self._reserve = None
                 self._pending.clear()
                 self._write_whole((line + "\n").encode(), 1)
                 self.ended = True
@@ -340,6 +379,8 @@ class TraceWriter:
                     pass
                 self._file = None
         self._pending.clear()
+        _drop_reserve(getattr(self, "_reserve", None))  # absent if __init__ failed early
+        self._reserve = None
 
     def __del__(self) -> None:
         # a writer dropped without close() still writes what it queued
@@ -715,8 +756,12 @@ def _records(path: str) -> Iterator[tuple[int, bytes]]:
         raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: {err.reason}")) \
             from None
     with raw as f:
-        for n, line in enumerate(f, 1):
-            yield n, line
+        try:
+            for n, line in enumerate(f, 1):
+                yield n, line
+        except OSError as err:
+            raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: "
+                                              f"{os_reason(err)}")) from None
 
 
 def _decode(line: bytes) -> tuple[str | None, str]:

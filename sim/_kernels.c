@@ -1,6 +1,7 @@
-/* The simulator's two per-tick loops, compiled: the fan cast's faces (sim/raycast.py,
- * FanCaster._faces) and a team's occlusions of the scans by the robots' discs
- * (sim/crowd.py, occlusions).
+/* The simulator's per-tick loops, compiled: the fan cast's faces (sim/raycast.py,
+ * FanCaster._faces), the same walked through a grid of the faces in big worlds
+ * (GridWalk, over sim/faceindex.py's FaceGrid), and a team's occlusions of the scans by
+ * the robots' discs (sim/crowd.py, occlusions).
  *
  * The numpy paths spend most of their time on the fixed cost of ~25-40 calls on arrays of
  * a few hundred numbers; these do the same arithmetic in one call each. They are an
@@ -20,6 +21,7 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <structmember.h>
 #include <math.h>
 #include <stdlib.h>
 
@@ -62,6 +64,57 @@ typedef struct {
     cplx f;
 } face;
 
+/* Face j of the world rows z (end, conj(start), kappa start, edge; m faces a row) seen
+ * in one scan's fan frame: its ends q and conj(p), w = conj(p) q, and f, with
+ * 1/t = Im(conj(d) f) for a beam d. Returns 0 for a back face (or the origin on its
+ * line). Both face loops call this: the same numbers. */
+static inline int face_turned(const cplx *z, const double *front_min, Py_ssize_t m,
+                              Py_ssize_t j, cplx rot, cplx rot_c, cplx c, int fused, cplx *q,
+                              cplx *pc, cplx *w, cplx *f)
+{
+    *q = cmul(z[j], rot, fused);
+    *pc = cmul(z[m + j], rot_c, fused);
+    q->re -= c.re;
+    q->im -= c.im;
+    pc->re -= c.re;
+    pc->im -= -c.im;
+    *w = cmul(*pc, *q, fused); /* conj(p) q = (p . q) + i cross(p, e) */
+    if (!(w->im > front_min[j]))
+        return 0;
+    cplx e = cmul(z[3 * m + j], rot, fused);
+    double s = 1.0 / w->im;
+    f->re = e.re * s;
+    f->im = e.im * s;
+    return 1;
+}
+
+/* face_turned, and the face's bearing interval from psi, widened by eps (cast_faces's). */
+static inline int face_in_fan(const cplx *z, const double *front_min, Py_ssize_t m,
+                              Py_ssize_t j, cplx rot, cplx rot_c, cplx c, cplx kc,
+                              double eps, int fused, face *f)
+{
+    cplx q, pc, w;
+    if (!face_turned(z, front_min, m, j, rot, rot_c, c, fused, &q, &pc, &w, &f->f))
+        return 0;
+    cplx kp = cmul(z[2 * m + j], rot, fused);
+    kp.re -= kc.re;
+    kp.im -= kc.im;
+    double lo = atan2(kp.im, kp.re);
+    double hi = atan2(w.im, w.re) + lo;
+    f->hi = hi + eps;
+    f->lo = lo + -eps;
+    return 1;
+}
+
+/* A face as the grid walk keeps it for a scan: f, and the directions of its ends turned
+ * outwards by eps (lo from p clockwise, hi from q counter-clockwise), fan frame; and the
+ * scan it was turned for (one cache line a face). */
+typedef struct {
+    cplx f, lo, hi;
+    Py_ssize_t scan;
+    double pad;
+} walk_face;
+
 /* Raise best[k] (1/t) to each front face's hit. Returns 0, or -1 when out of memory. */
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 /* A clone with the FMA instruction where the CPU has it; fma() is a libm call elsewhere. */
@@ -81,27 +134,10 @@ cast_faces(const double *zw, const double *front_min, Py_ssize_t m, double *best
     if (fs == NULL)
         return -1;
     for (Py_ssize_t j = 0; j < m; j++) {
-        cplx q = cmul(z[j], rot, fused);
-        cplx pc = cmul(z[m + j], rot_c, fused);
-        q.re -= c.re;
-        q.im -= c.im;
-        pc.re -= c.re;
-        pc.im -= -c.im;
-        cplx w = cmul(pc, q, fused); /* conj(p) q = (p . q) + i cross(p, e) */
-        if (!(w.im > front_min[j]))
-            continue; /* a back face, or the origin on its line */
-        cplx kp = cmul(z[2 * m + j], rot, fused);
-        kp.re -= kc.re;
-        kp.im -= kc.im;
-        cplx e = cmul(z[3 * m + j], rot, fused);
-        double lo = atan2(kp.im, kp.re);
-        double hi = atan2(w.im, w.re) + lo;
-        double s = 1.0 / w.im;
-        face *f = &fs[nf++];
-        f->hi = hi + eps;
-        f->lo = lo + -eps;
-        f->f.re = e.re * s;
-        f->f.im = e.im * s;
+        face *f = &fs[nf];
+        if (!face_in_fan(z, front_min, m, j, rot, rot_c, c, kc, eps, fused, f))
+            continue;
+        nf++;
         if (f->hi > top)
             top = f->hi;
     }
@@ -122,6 +158,130 @@ cast_faces(const double *zw, const double *front_min, Py_ssize_t m, double *best
     }
     free(fs);
     return 0;
+}
+
+/* A uniform grid over the faces (sim/faceindex.py, FaceGrid): cell (ix, iy) spans
+ * [x0 + ix h, x0 + (ix + 1) h) x [y0 + iy h, ...) and holds the faces cell_faces[start[i] ..
+ * start[i + 1]) (i = iy nx + ix); a face is listed in every cell within `pad` of it. */
+typedef struct {
+    double x0, y0, h;
+    Py_ssize_t nx, ny, n_faces;
+    const Py_ssize_t *start, *faces;
+} face_grid;
+
+/* The faces' loop of one scan, walking each beam through the grid (Amanatides and Woo's
+ * DDA) and stopping at the first cell whose far side lies beyond the nearest hit found:
+ * the cost follows what the beam crosses, not the size of the world. Each face met is
+ * turned into the fan frame once a scan (face_turned, kept in memo, marked with the scan),
+ * and a beam meets it when it lies between the face's ends widened by eps, told by two
+ * cross products where cast_faces compares bearings (two atan2 a face, the dearest part
+ * of a scan): the same interval, so the tests differ only for a beam within rounding of
+ * a widened end, 1e-10 rad beyond a vertex. 1/t is f's very product, so a beam's range
+ * is the same number wherever the faces met are the same. t_lim: the farthest a hit may
+ * lie (beyond max_range nothing counts); tol: the margin of the stopping test, far above
+ * rounding and below the grid's pad. Returns how many faces the scan met. */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("fma", "default")))
+#endif
+static Py_ssize_t
+grid_cast(const double *zw, const double *front_min, Py_ssize_t m, double *best,
+          const double *dconj, Py_ssize_t n, cplx rot, cplx c, double eps, int fused,
+          const face_grid *g, double ox, double oy, double t_lim, double tol,
+          walk_face *memo, Py_ssize_t scan)
+{
+    const cplx *z = (const cplx *)zw;
+    const cplx *d = (const cplx *)dconj;
+    cplx rot_c = {rot.re, -rot.im};
+    double ce = cos(eps), se = sin(eps);
+    double h = g->h, x1 = g->x0 + h * (double)g->nx, y1 = g->y0 + h * (double)g->ny;
+    int inside_box = ox >= g->x0 && ox <= x1 && oy >= g->y0 && oy <= y1;
+    Py_ssize_t met = 0;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        /* The beam's world direction, conj(dconj[k] rot): only steers the walk. */
+        double dx = d[k].re * rot.re - d[k].im * rot.im;
+        double dy = -(d[k].re * rot.im + d[k].im * rot.re);
+        double idx = 1.0 / dx, idy = 1.0 / dy; /* inf for an axis-parallel beam */
+        /* Where the beam is inside the grid's box: [t0, t1], clipped to t_lim. From
+         * inside the box (the usual case) the walk ends where it leaves the cells. */
+        double t0 = 0.0, t1 = t_lim;
+        if (!inside_box) {
+            if (dx != 0.0) {
+                double ta = (g->x0 - ox) * idx, tb = (x1 - ox) * idx;
+                t0 = fmax(t0, fmin(ta, tb));
+                t1 = fmin(t1, fmax(ta, tb));
+            } else if (!(ox >= g->x0 && ox <= x1)) {
+                continue;
+            }
+            if (dy != 0.0) {
+                double ta = (g->y0 - oy) * idy, tb = (y1 - oy) * idy;
+                t0 = fmax(t0, fmin(ta, tb));
+                t1 = fmin(t1, fmax(ta, tb));
+            } else if (!(oy >= g->y0 && oy <= y1)) {
+                continue;
+            }
+            if (!(t0 <= t1))
+                continue; /* misses the box (or NaN) */
+        }
+        double fx = floor((ox + t0 * dx - g->x0) / h), fy = floor((oy + t0 * dy - g->y0) / h);
+        /* Clamped before any conversion (NaN lands in cell 0): every step moves one cell,
+         * so a walk ends within nx + ny steps whatever the numbers. */
+        Py_ssize_t ix = fx >= 0.0 ? (fx < (double)g->nx ? (Py_ssize_t)fx : g->nx - 1) : 0;
+        Py_ssize_t iy = fy >= 0.0 ? (fy < (double)g->ny ? (Py_ssize_t)fy : g->ny - 1) : 0;
+        Py_ssize_t sx = dx > 0.0 ? 1 : dx < 0.0 ? -1 : 0;
+        Py_ssize_t sy = dy > 0.0 ? 1 : dy < 0.0 ? -1 : 0;
+        double next_x = sx ? (g->x0 + h * (double)(ix + (sx > 0)) - ox) * idx : INFINITY;
+        double next_y = sy ? (g->y0 + h * (double)(iy + (sy > 0)) - oy) * idy : INFINITY;
+        double step_x = sx ? h * fabs(idx) : INFINITY, step_y = sy ? h * fabs(idy) : INFINITY;
+        double bx = d[k].re, by = -d[k].im; /* the beam's direction, fan frame */
+        double inv_seen = NAN, t_seen = INFINITY;  /* best[k], and 1 / best[k] */
+        for (;;) {
+            Py_ssize_t cell = iy * g->nx + ix;
+            Py_ssize_t end = g->start[cell + 1] < g->n_faces ? g->start[cell + 1] : g->n_faces;
+            for (Py_ssize_t p = g->start[cell] > 0 ? g->start[cell] : 0; p < end; p++) {
+                Py_ssize_t j = g->faces[p];
+                if (j < 0 || j >= m)
+                    continue; /* not a face: a broken grid never reads outside the arrays */
+                walk_face *f = &memo[j];
+                if (f->scan != scan) {
+                    cplx q, pc, w;
+                    f->scan = scan;
+                    met++;
+                    if (face_turned(z, front_min, m, j, rot, rot_c, c, fused, &q, &pc, &w,
+                                    &f->f)) {
+                        f->lo.re = pc.re * ce - pc.im * se; /* p turned by -eps */
+                        f->lo.im = -pc.im * ce - pc.re * se;
+                        f->hi.re = q.re * ce - q.im * se; /* q turned by +eps */
+                        f->hi.im = q.im * ce + q.re * se;
+                    } else {
+                        f->lo.re = f->lo.im = NAN; /* a back face: no beam is inside */
+                    }
+                }
+                /* Inside [lo, hi): lo at or clockwise of the beam, hi strictly beyond. */
+                if (f->lo.re * by - f->lo.im * bx >= 0.0 && bx * f->hi.im - by * f->hi.re > 0.0) {
+                    double inv = cmul(d[k], f->f, fused).im;
+                    if (inv > best[k])
+                        best[k] = inv;
+                }
+            }
+            double t_next = next_x < next_y ? next_x : next_y; /* (fmin: a libm call) */
+            if (best[k] != inv_seen) { /* a nearer hit: its distance, once */
+                inv_seen = best[k];
+                t_seen = 1.0 / inv_seen;
+            }
+            if (!(t_next < t1) || t_seen <= t_next - tol)
+                break; /* out of the box or of range, or the nearest hit is found */
+            if (next_x < next_y) {
+                ix += sx;
+                next_x += step_x;
+            } else {
+                iy += sy;
+                next_y += step_y;
+            }
+            if (ix < 0 || ix >= g->nx || iy < 0 || iy >= g->ny)
+                break;
+        }
+    }
+    return met;
 }
 
 typedef struct {
@@ -334,6 +494,189 @@ fail:
     return NULL;
 }
 
+/* A fan's walk through a world's grid, with every array it reads or writes held (their
+ * buffers taken once, not on every scan) and its per-face scratch. */
+typedef struct {
+    PyObject_HEAD
+    Py_buffer v[9]; /* zw, front_min, dconj, box, start, faces; best, ranges, hit */
+    int got;
+    face_grid g;
+    Py_ssize_t m, n, scan, met;
+    double eps, t_lim, tol, inv_none, inv_hit, max_range;
+    int fused;
+    walk_face *memo;
+} grid_walk;
+
+static void grid_walk_dealloc(grid_walk *self)
+{
+    release_all(self->v, self->got);
+    free(self->memo);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+PyDoc_STRVAR(grid_walk_doc,
+"GridWalk(zw, front_min, dconj, box, start, faces, best, ranges, hit, eps, fused, t_lim,\n"
+"         tol, inv_none, inv_hit, max_range)\n"
+"--\n\n"
+"One fan's scans through a world's grid of faces (FanCaster with a FaceGrid).\n"
+"zw: (4, m) complex world rows; front_min: (m,); dconj: (n,) complex, the beams;\n"
+"box: (x0, y0, cell, nx, ny) float; start: (nx ny + 1,) intp; faces: intp (FaceGrid);\n"
+"best, ranges: (n,) float and hit: (n,) bool, written by each scan; then FanCaster's\n"
+"constants. The arrays are held, and must not be resized, while it lives.");
+
+static int grid_walk_init(grid_walk *self, PyObject *args, PyObject *kwds)
+{
+    PyObject *a[9];
+    if (kwds != NULL && PyDict_GET_SIZE(kwds) > 0) {
+        PyErr_SetString(PyExc_TypeError, "GridWalk() takes no keyword arguments");
+        return -1;
+    }
+    if (self->got > 0) {
+        PyErr_SetString(PyExc_TypeError, "GridWalk() is made once");
+        return -1;
+    }
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOdpddddd", &a[0], &a[1], &a[2], &a[3], &a[4], &a[5],
+                          &a[6], &a[7], &a[8], &self->eps, &self->fused, &self->t_lim,
+                          &self->tol, &self->inv_none, &self->inv_hit, &self->max_range))
+        return -1;
+    /* front_min first (it gives m), then the rest in order; `got` counts the taken. */
+    static const int order[] = {1, 0, 2, 3, 4, 5, 6, 7, 8};
+    static const char kinds[] = "Zd" "Zdnn" "dd?";
+    static const char *const names[] = {"zw", "front_min", "dconj", "box", "start", "faces",
+                                        "best", "ranges", "hit"};
+    Py_ssize_t m = 0, n = 0, n_start = 0, n_faces = 0;
+    for (int o = 0; o < 9; o++) {
+        int i = order[o];
+        Py_ssize_t want = i == 0 ? 8 * m : i == 3 ? 5 : i >= 6 ? n : -1;
+        Py_ssize_t *out = i == 1 ? &m : i == 2 ? &n : i == 4 ? &n_start : i == 5 ? &n_faces
+                          : NULL;
+        if (get_buf(a[i], &self->v[i], kinds[i], want, out, i >= 6, names[i]) < 0) {
+            for (int k = 0; k < o; k++)
+                PyBuffer_Release(&self->v[order[k]]);
+            return -1;
+        }
+        if (i == 2)
+            n /= 2; /* complex: two doubles each */
+    }
+    self->got = 9;
+    const double *box = self->v[3].buf;
+    if (!(box[2] > 0.0 && box[3] >= 1.0 && box[4] >= 1.0 &&
+          box[3] * box[4] + 1.0 == (double)n_start)) {
+        PyErr_SetString(PyExc_ValueError, "GridWalk: the grid's box and cells do not fit "
+                        "together");
+        return -1;
+    }
+    self->g.x0 = box[0];
+    self->g.y0 = box[1];
+    self->g.h = box[2];
+    self->g.nx = (Py_ssize_t)box[3];
+    self->g.ny = (Py_ssize_t)box[4];
+    self->g.start = self->v[4].buf;
+    self->g.faces = self->v[5].buf;
+    self->g.n_faces = n_faces;
+    self->m = m;
+    self->n = n;
+    self->scan = 0;
+    self->memo = malloc((size_t)(m > 0 ? m : 1) * sizeof(walk_face));
+    if (self->memo == NULL) {
+        PyErr_NoMemory();
+        return -1;
+    }
+    for (Py_ssize_t j = 0; j < m; j++)
+        self->memo[j].scan = -1;
+    return 0;
+}
+
+/* The walk from the scan's origin and turns (ox, oy, rot, c: args[0..3]) into best. */
+static int grid_walk_run(grid_walk *self, PyObject *const *args, Py_ssize_t nargs,
+                         const char *name)
+{
+    if (nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "%s() takes 4 arguments (%zd given)", name, nargs);
+        return -1;
+    }
+    if (self->got < 9) {
+        PyErr_SetString(PyExc_ValueError, "GridWalk: not made");
+        return -1;
+    }
+    double ox = PyFloat_AsDouble(args[0]);
+    double oy = PyFloat_AsDouble(args[1]);
+    cplx rc[2];
+    if (PyErr_Occurred())
+        return -1;
+    for (int i = 0; i < 2; i++)
+        if (get_complex(args[2 + i], &rc[i]) < 0)
+            return -1;
+    self->scan++;
+    self->met = grid_cast(self->v[0].buf, self->v[1].buf, self->m, self->v[6].buf,
+                          self->v[2].buf, self->n, rc[0], rc[1], self->eps, self->fused,
+                          &self->g, ox, oy, self->t_lim, self->tol, self->memo, self->scan);
+    return 0;
+}
+
+PyDoc_STRVAR(grid_walk_faces_doc,
+"faces(ox, oy, rot, c)\n"
+"--\n\n"
+"Raise best (1/t per beam, in place) to the hits of the faces along the beams from\n"
+"(ox, oy): FanCaster._faces. rot, c: the fan's turn and c = (ox + i oy) rot, as Python's\n"
+"complex product rounds it.");
+
+static PyObject *grid_walk_faces(grid_walk *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (grid_walk_run(self, args, nargs, "faces") < 0)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+PyDoc_STRVAR(grid_walk_scan_doc,
+"scan(ox, oy, rot, c)\n"
+"--\n\n"
+"A whole scan of a world of straight faces: best filled with inv_none and raised\n"
+"(faces), then ranges = min(1 / best, max_range) and hit = best >= inv_hit, as\n"
+"FanCaster.cast finishes them.");
+
+static PyObject *grid_walk_scan(grid_walk *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    double *best = self->v[6].buf;
+    for (Py_ssize_t k = 0; self->got == 9 && k < self->n; k++)
+        best[k] = self->inv_none;
+    if (grid_walk_run(self, args, nargs, "scan") < 0)
+        return NULL;
+    double *ranges = self->v[7].buf;
+    char *hit = self->v[8].buf;
+    for (Py_ssize_t k = 0; k < self->n; k++) {
+        double t = 1.0 / best[k];
+        ranges[k] = t < self->max_range ? t : self->max_range;
+        hit[k] = best[k] >= self->inv_hit;
+    }
+    Py_RETURN_NONE;
+}
+
+static PyMethodDef grid_walk_methods[] = {
+    {"faces", (PyCFunction)(void (*)(void))grid_walk_faces, METH_FASTCALL, grid_walk_faces_doc},
+    {"scan", (PyCFunction)(void (*)(void))grid_walk_scan, METH_FASTCALL, grid_walk_scan_doc},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyMemberDef grid_walk_members[] = {
+    {"met", T_PYSSIZET, offsetof(grid_walk, met), READONLY,
+     "how many faces the last scan met (turned into its fan's frame)"},
+    {NULL, 0, 0, 0, NULL},
+};
+
+static PyTypeObject grid_walk_type = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "mdle.sim._kernels.GridWalk",
+    .tp_basicsize = sizeof(grid_walk),
+    .tp_dealloc = (destructor)grid_walk_dealloc,
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = grid_walk_doc,
+    .tp_methods = grid_walk_methods,
+    .tp_members = grid_walk_members,
+    .tp_init = (initproc)grid_walk_init,
+    .tp_new = PyType_GenericNew,
+};
+
 PyDoc_STRVAR(occlusions_doc,
 "occlusions(ox, oy, first, step, beams, max_range, skip, cx, cy, r, scan, beam, t)\n"
 "--\n\n"
@@ -441,11 +784,28 @@ static PyMethodDef methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
+static int add_types(PyObject *mod)
+{
+    if (PyType_Ready(&grid_walk_type) < 0)
+        return -1;
+    Py_INCREF(&grid_walk_type);
+    if (PyModule_AddObject(mod, "GridWalk", (PyObject *)&grid_walk_type) < 0) {
+        Py_DECREF(&grid_walk_type);
+        return -1;
+    }
+    return 0;
+}
+
+static PyModuleDef_Slot slots[] = {
+    {Py_mod_exec, (void *)add_types},
+    {0, NULL},
+};
+
 static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, "_kernels",
     "The simulator's per-tick loops, compiled (an optional build: sim/raycast.py and "
     "sim/crowd.py fall back to numpy).",
-    0, methods, NULL, NULL, NULL, NULL,
+    0, methods, slots, NULL, NULL, NULL,
 };
 
 PyMODINIT_FUNC PyInit__kernels(void)

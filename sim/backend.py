@@ -184,7 +184,8 @@ class SimBackend:
                              f"radius {self.profile.radius} m) at ({pose.x:g}, {pose.y:g}) "
                              f"overlaps obstacles[{owner}]")
         ss = np.random.SeedSequence(self.seed)
-        ladar_seq, odo_seq, timing_seq, slip_seq = ss.spawn(4)   # a 4th keeps the first 3
+        # each new stream is spawned last: the earlier ones keep their numbers
+        ladar_seq, odo_seq, timing_seq, slip_seq, half_seq = ss.spawn(5)
         self._odo_rng = np.random.default_rng(odo_seq)
         self._timing_rng = np.random.default_rng(timing_seq)
         self._slip_rng = np.random.default_rng(slip_seq)
@@ -230,6 +231,16 @@ class SimBackend:
         self._scan_phase = (float(self._timing_rng.uniform(0.0, self._period))
                             if self._timed and self._period > 0 else 0.0)
         self._scan_k = 0 if self._scan_phase == 0.0 else -1
+        # Stretches at half the scan rate (scan_half_rate): where the first one ends and
+        # whether the run begins in one, drawn from their own stream.
+        half = prof.scan_half_rate
+        self._half_rng = np.random.default_rng(half_seq)
+        self._halved = False
+        self._rate_switch = math.inf
+        if half.enabled and self._period > 0:
+            self._halved = bool(self._half_rng.random() < half.share)
+            self._rate_switch = float(self._half_rng.exponential(
+                half.length if self._halved else half.full_length))
         self._scan: Scan = self._take_scan(self._x, self._y, self._th, 0.0)
         # The server loop (control_cycle): speeds step at the motion instants, reports
         # come on their own clock, commands are read between them (see _advance_cycled).
@@ -505,6 +516,8 @@ class SimBackend:
             if k > self._scan_k:
                 scan_at = min(t1, max(t0, self._scan_phase + k * self._period))
                 self._scan_k = k
+                if self._scan_lost(k, scan_at):
+                    scan_at = math.inf  # not taken: the controller never sees it
         x0, y0, th0 = self._x, self._y, self._th
         mark, marked = -1, (0.0, 0.0, 0.0)
         if held is not None:        # the server loop's pieces, and where to note the pose
@@ -558,8 +571,9 @@ class SimBackend:
                 else:
                     r = self._collider.sweep(x, y, th, piece, clear)
                     x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
-                    if r.contact:
+                    if r.contact:  # the event's time is the contact's, inside the piece
                         contact = True
+                        t += r.tau
                         break
                 t += piece[0]           # its duration
                 if not scanned and t >= scan_at - 1e-12:
@@ -625,6 +639,21 @@ class SimBackend:
             o = self.world.obstacles[index]
             return o.name or o.kind, o.kind
         return "", ""
+
+    def _scan_lost(self, k: int, t: float) -> bool:
+        """Return True when scan ``k`` (taken at ``t``) is lost in a half-rate stretch.
+
+        The stretches (``scan_half_rate``) alternate with stretches at the full rate, each
+        of an exponential length; inside one, every odd-numbered scan is lost.
+        """
+        if self._rate_switch > t:
+            return self._halved and k % 2 == 1
+        half = self.profile.scan_half_rate
+        while self._rate_switch <= t:
+            self._halved = not self._halved
+            self._rate_switch += float(self._half_rng.exponential(
+                half.length if self._halved else half.full_length))
+        return self._halved and k % 2 == 1
 
     def _scanned(self, scan: Scan) -> None:
         """Make a new scan readable now, or after its seeded latency."""

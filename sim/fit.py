@@ -33,8 +33,9 @@ from mdle.sim.fit_cycle import (
     fit_cycled,
     run_clock,
 )
+from mdle.sim.fit_scans import fit_half_rate, half_rate_stretches, scan_stamps
 from mdle.sim.recording import Recording
-from mdle.sim.robot import RAMPS, Latency, RobotProfile, RunClock
+from mdle.sim.robot import RAMPS, HalfRate, Latency, RobotProfile, RunClock
 
 # The scales and run_clock live in fit_cycle.py (both fits use them); tests read them here.
 __all__ = ["OMEGA_SCALE", "V_SCALE", "AxisFit", "Fit", "fit_profile", "replay_axis", "run_clock"]
@@ -139,6 +140,8 @@ class Fit:
     """Each recording's clock (motion-cycle phase, report instants) for a cycled fit."""
     report_slip: Latency = Latency()
     report_slip_rate: float = 0.0
+    scan_half_rate: HalfRate = HalfRate()
+    """Stretches in which scans came at half rate (:mod:`sim.fit_scans`)."""
 
     def profile(self, base: RobotProfile, name: str, description: str = "",
                 source: str = "") -> RobotProfile:
@@ -153,7 +156,8 @@ class Fit:
             "max_turn_decel": self.omega.decel, "description": description or base.description,
             "source": source or base.source}
         if self.scan_latency is not None:
-            changes.update(scan_period=self.scan_period, scan_latency=self.scan_latency)
+            changes.update(scan_period=self.scan_period, scan_latency=self.scan_latency,
+                           scan_half_rate=self.scan_half_rate)
         return base.with_overrides(**changes)
 
     def report(self) -> str:
@@ -185,7 +189,9 @@ class Fit:
                       f"(scans every {self.scan_period:g} s)",
                       f"  scan age           recorded {lo * 1e3:.0f}-{hi * 1e3:.0f} ms, mean "
                       f"{mean * 1e3:.0f} ms, std {std * 1e3:.0f} ms; model mean "
-                      f"{(self.scan_age_model or 0.0) * 1e3:.0f} ms"]
+                      f"{(self.scan_age_model or 0.0) * 1e3:.0f} ms",
+                      "  scans at half rate " + (self.scan_half_rate.describe()
+                                                 if self.scan_half_rate.enabled else "never")]
         else:
             lines.append("  scan latency       not fitted (no scan ages recorded)")
         return "\n".join(lines)
@@ -330,15 +336,29 @@ def fit_profile(recs: Sequence[Recording], *, sip_cycle: float = 0.1,
     ages = np.concatenate([r.scan_age[np.isfinite(r.scan_age)] for r in recs])
     scan_latency: Latency | None = None
     stats = model_mean = None
+    half = HalfRate()
     if ages.size >= 10:
         n = max(len(r) for r in recs)
-        scan_latency, model_mean = _fit_scan(ages, tick, n, scan_period, seed)
+        half = fit_half_rate(recs, scan_period)
+        # the latency from the ticks at the full rate (the stretches' scans are older
+        # because scans are missing, not because they came late)
+        full = np.concatenate([_full_rate_ages(r, scan_period) for r in recs])
+        scan_latency, model_mean = _fit_scan(full if full.size >= 10 else ages, tick, n,
+                                             scan_period, seed)
         stats = (float(ages.min()), float(ages.max()), float(ages.mean()), float(ages.std()))
     return Fit(tuple(r.source for r in recs), tick, cycled.cycle if cycled else sip_cycle, lat,
                ramp, v, w, scan_period, scan_latency, stats, model_mean,
                cycled.cycle if cycled else 0.0, cycled.window if cycled else 0.0,
                cycled.clocks if cycled else (), cycled.slip if cycled else Latency(),
-               cycled.slip_rate if cycled else 0.0)
+               cycled.slip_rate if cycled else 0.0, half)
+
+
+def _full_rate_ages(rec: Recording, period: float) -> np.ndarray:
+    """Return a recording's scan ages at the ticks outside its half-rate stretches."""
+    stamps = scan_stamps(rec)
+    ok = np.isfinite(stamps)
+    inside = half_rate_stretches(rec, period).covers(stamps[ok])
+    return rec.scan_age[ok][~inside]
 
 
 def _cycled_errors(recs: Sequence[Recording], tick: float, c: CycleFit

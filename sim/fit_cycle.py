@@ -28,7 +28,9 @@ _ACC_V = np.geomspace(0.05, 5.0, 25)
 _ACC_W = np.geomspace(0.1, 10.0, 25)
 _CYCLE_STRETCH = np.arange(-2, 11) * 1e-3   # the server's cycle against the controller's
 _WINDOWS = np.array([0.0, 0.01, 0.02, 0.03, 0.04])
-_CYCLE_LATENCIES = np.array([0.0, 0.02, 0.04, 0.06])
+# up to 0.12 s: on the 2026-11-28 AMRISim session commands showed a tick later than on
+# the 2026-11-24 one (the earlier 0.06 s ceiling left its fit at the edge)
+_CYCLE_LATENCIES = np.arange(0.0, 0.1201, 0.02)
 _CLOCK_PHASES = 20
 _EPS_FIT = 1e-9   # s: instants closer than this are the same instant (as in SimBackend)
 

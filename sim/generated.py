@@ -16,6 +16,19 @@ Families (``FAMILIES``), sizes like the seed paper's (about 1-6 m across):
 * ``l-shape``, ``t-shape``, ``u-shape``: solid letters 2-6 m across, arms 0.4-1.5 m.
 * ``cluster``: 2-4 small obstacles (discs, boxes, small stars) with 0.4-2 m gaps between them.
 
+What a lab meets, and the seed paper's shapes do not contain (``LAB_FAMILIES``, drawn only
+when asked for by name: the study's ``lab`` suite):
+
+* ``pole``: one thin pole, radius 2-10 cm.
+* ``pole-row``: 3-7 poles or pillars (radius 2-15 cm) in a line, gaps 0.7-1.65 m between
+  them (0.7-1.5 x 2 rc at rc 0.5 m, 0.64-1.5 x 2 rc at 0.55 m).
+* ``spike-star``: a star polygon of 5-10 spikes whose tips are 20-40 deg sharp.
+* ``disc-chain``: 3-7 discs of mixed radii (0.15-0.8 m), each touching or overlapping the last
+  (cusps where they meet).
+* ``thin-plate``: a plate 1-4 m long and 1-3 cm thick.
+* ``table``: four legs (discs of radius 2-5 cm or square legs 4-8 cm wide) at the corners of a
+  table 0.6-1.8 m by 0.5-1.2 m.
+
 The family of shape ``index`` is ``FAMILIES[index % len(FAMILIES)]``, so any run of
 consecutive indices covers the families evenly. Everything is drawn from
 ``numpy.random.default_rng((seed, index))``: the same pair always gives the same shape.
@@ -44,12 +57,18 @@ from mdle.sim.world import World
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
-__all__ = ["FAMILIES", "FACET_TURN", "GeneratedShape", "generate_shape", "generate_shapes"]
+__all__ = ["FAMILIES", "LAB_FAMILIES", "FACET_TURN", "GeneratedShape", "generate_shape",
+           "generate_shapes"]
 
 FAMILIES: tuple[str, ...] = (
     "star", "nonconvex", "rounded-rect", "rounded-rect-facets", "superellipse",
     "superellipse-facets", "plate", "arc-wall", "sine-wall", "l-shape", "t-shape", "u-shape",
     "cluster",
+)
+
+#: Thin, sharp and clustered obstacles of a real room (drawn by name, not by index).
+LAB_FAMILIES: tuple[str, ...] = (
+    "pole", "pole-row", "spike-star", "disc-chain", "thin-plate", "table",
 )
 
 #: Turn at each vertex of the faceted (sampled) curves, radians.
@@ -118,7 +137,8 @@ def generate_shape(seed: int, index: int, family: str | None = None) -> Generate
         raise ValueError(f"seed and index must be >= 0, got seed {seed}, index {index}")
     family = FAMILIES[index % len(FAMILIES)] if family is None else family
     if family not in _BUILDERS:
-        raise ValueError(f"unknown shape family `{family}` (one of: {', '.join(FAMILIES)})")
+        raise ValueError(f"unknown shape family `{family}` (one of: "
+                         f"{', '.join(FAMILIES + LAB_FAMILIES)})")
     rng = np.random.default_rng((seed, index))
     for _ in range(_ATTEMPTS):
         obstacles = _BUILDERS[family](rng)
@@ -378,6 +398,72 @@ def _dedupe(points: np.ndarray, tol: float = 1e-9) -> np.ndarray:
     return points[keep]
 
 
+# ------------------------------------------------------------------ what a lab is made of
+def _pole(rng: np.random.Generator) -> tuple[Shape, ...]:
+    return (Circle((0.0, 0.0), rng.uniform(0.02, 0.10), name="pole"),)
+
+
+def _pole_row(rng: np.random.Generator) -> tuple[Shape, ...]:
+    count = int(rng.integers(3, 8))
+    radius = rng.uniform(0.02, 0.15)
+    heading = rng.uniform(0, math.pi)
+    direction = np.array([math.cos(heading), math.sin(heading)])
+    centres = [np.zeros(2)]
+    for _ in range(count - 1):  # each gap drawn on its own: a row is never quite regular
+        centres.append(centres[-1] + (2 * radius + rng.uniform(0.7, 1.65)) * direction)
+    middle = 0.5 * (centres[0] + centres[-1])
+    return tuple(Circle((float(c[0] - middle[0]), float(c[1] - middle[1])), radius,
+                        name="pole-row") for c in centres)
+
+
+def _spike_star(rng: np.random.Generator) -> tuple[Shape, ...]:
+    n = int(rng.integers(5, 11))
+    outer = rng.uniform(0.8, 2.0)
+    half = math.radians(rng.uniform(20.0, 40.0)) / 2  # half the tip angle
+    # the inner radius that makes the edge from a tip to the next notch meet the tip's
+    # axis at ``half``: tan(half) = r_i sin(pi/n) / (outer - r_i cos(pi/n))
+    tan = math.tan(half)
+    inner = outer * tan / (math.sin(math.pi / n) + tan * math.cos(math.pi / n))
+    turn = rng.uniform(0, 2 * math.pi)
+    angles = turn + np.pi * np.arange(2 * n) / n
+    radii = np.where(np.arange(2 * n) % 2 == 0, outer, inner)
+    pts = np.column_stack([radii * np.cos(angles), radii * np.sin(angles)])
+    return (Polygon(_tuple_points(pts), name="spike-star"),)
+
+
+def _disc_chain(rng: np.random.Generator) -> tuple[Shape, ...]:
+    count = int(rng.integers(3, 8))
+    discs = [(np.zeros(2), rng.uniform(0.15, 0.8))]
+    heading = rng.uniform(0, 2 * math.pi)
+    for _ in range(count - 1):
+        c, r = discs[-1]
+        r_new = rng.uniform(0.15, 0.8)
+        heading += rng.uniform(-1.0, 1.0)  # a winding chain
+        # touching (0.999) to overlapping by a quarter of the radii: cusps where they meet
+        step = (r + r_new) * rng.uniform(0.75, 0.999)
+        discs.append((c + step * np.array([math.cos(heading), math.sin(heading)]), r_new))
+    middle = np.mean([c for c, _ in discs], axis=0)
+    return tuple(Circle((float(c[0] - middle[0]), float(c[1] - middle[1])), float(r),
+                        name="disc-chain") for c, r in discs)
+
+
+def _thin_plate(rng: np.random.Generator) -> tuple[Shape, ...]:
+    return (Rectangle((0.0, 0.0), (rng.uniform(1.0, 4.0), rng.uniform(0.01, 0.03)),
+                      rng.uniform(0, math.pi), name="thin-plate"),)
+
+
+def _table(rng: np.random.Generator) -> tuple[Shape, ...]:
+    w, h = rng.uniform(0.6, 1.8), rng.uniform(0.5, 1.2)
+    ang = rng.uniform(0, math.pi)
+    corners = _rotate(np.array([[-w, -h], [w, -h], [w, h], [-w, h]]) / 2, ang)
+    if rng.uniform() < 0.5:
+        r = rng.uniform(0.02, 0.05)
+        return tuple(Circle((float(x), float(y)), r, name="table") for x, y in corners)
+    side = rng.uniform(0.04, 0.08)
+    return tuple(Rectangle((float(x), float(y)), (side, side), ang, name="table")
+                 for x, y in corners)
+
+
 _BUILDERS: dict[str, Callable[[np.random.Generator], tuple[Shape, ...]]] = {
     "star": _star,
     "nonconvex": _nonconvex,
@@ -392,4 +478,10 @@ _BUILDERS: dict[str, Callable[[np.random.Generator], tuple[Shape, ...]]] = {
     "t-shape": _t_shape,
     "u-shape": _u_shape,
     "cluster": _cluster,
+    "pole": _pole,
+    "pole-row": _pole_row,
+    "spike-star": _spike_star,
+    "disc-chain": _disc_chain,
+    "thin-plate": _thin_plate,
+    "table": _table,
 }

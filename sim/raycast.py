@@ -17,7 +17,10 @@ of what a scan of a small world costs; the rest is mostly the arctan2 and the bi
 searches of the faces' intervals). Where the install built ``sim/_kernels.c`` (an
 optional build; :data:`COMPILED`), the faces go through one compiled call instead, which
 gives the same numbers bit for bit. At 100 segments (benchmarks/sim.py's world) a scan
-costs about 64,000 instructions compiled and 224,000 in numpy.
+costs about 64,000 instructions compiled and 224,000 in numpy. In a world of more than
+256 faces the compiled fan walks each beam through a grid of the faces
+(:mod:`sim.faceindex`, the C ``GridWalk``) up to its first hit, so a scan's cost follows
+what the ladar sees, not the size of the map (docs/performance.md).
 
 All angles are in the world frame (radians, counter-clockwise); ranges in metres.
 
@@ -36,9 +39,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
 
 import numpy as np
 
+from mdle.sim.faceindex import FaceGrid
 from mdle.sim.shapes import Parts
 
 __all__ = ["COMPILED", "MAX_RANGE_SLACK", "FanCaster", "RayCaster", "RayHits"]
@@ -50,6 +56,9 @@ _CULL_ABOVE = 256    # bounding-box culling pays off only in larger worlds
 #: A hit at ``max_range`` counts, give or take this relative rounding (a few ulps), so
 #: that a hit exactly at the limit counts in every code path, however it was rounded.
 MAX_RANGE_SLACK = 1e-15
+#: Metres: the grid walk stops at a cell whose far side lies this much beyond the nearest
+#: hit found (far above rounding, below :data:`sim.faceindex.PAD`).
+_GRID_TOL = 1e-9
 
 
 def _compiled_faces() -> Callable[..., None] | None:
@@ -87,7 +96,17 @@ def _numpy_complex_rounding() -> bool | None:
     return verdicts.pop() if len(verdicts) == 1 else None
 
 
+def _compiled_grid_walk() -> Callable[..., Any] | None:
+    """Return the grid walk's type in C (``GridWalk``), or None where it was not built."""
+    try:
+        from mdle.sim._kernels import GridWalk
+    except ImportError:
+        return None
+    return GridWalk
+
+
 _KERNEL = _compiled_faces()
+_GRID_WALK = _compiled_grid_walk()
 _FUSED = _numpy_complex_rounding() if _KERNEL is not None else None
 #: Whether scans use the compiled face loop (False: the numpy path, the same numbers).
 COMPILED = _FUSED is not None
@@ -152,13 +171,23 @@ class RayCaster:
         # A face whose line passes within _T_MIN of the origin is never hit (t <= _T_MIN).
         self._front_min = _T_MIN * np.abs(self._ze)
 
-    def fan(self, rel: np.ndarray, max_range: float, compiled: bool | None = None
-            ) -> FanCaster:
+    @cached_property
+    def grid(self) -> FaceGrid | None:
+        """The faces' grid (:class:`sim.faceindex.FaceGrid`), built on first use; None: no faces.
+
+        One per world, shared by every :class:`FanCaster` of it.
+        """
+        if self._s0.shape[0] == 0:
+            return None
+        return FaceGrid.build(self._s0, self._s0 + self._edge)
+
+    def fan(self, rel: np.ndarray, max_range: float, compiled: bool | None = None,
+            indexed: bool | None = None) -> FanCaster:
         """Make a :class:`FanCaster` for a fixed fan of beams (a ladar's), with its buffers.
 
-        ``compiled``: as :class:`FanCaster` takes it.
+        ``compiled``, ``indexed``: as :class:`FanCaster` takes them.
         """
-        return FanCaster(self, rel, max_range, compiled)
+        return FanCaster(self, rel, max_range, compiled, indexed)
 
     # ------------------------------------------------------------------ public
     def cast(self, origin: np.ndarray, angles: np.ndarray, max_range: float = math.inf,
@@ -443,6 +472,11 @@ class FanCaster:
         Cast the faces with the compiled loop (True), with numpy (False), or the compiled
         loop where this install has it (None, the default; see :data:`COMPILED`). Both
         give the same numbers.
+    indexed : bool, optional
+        With the compiled loop, in a world of more than 256 faces: walk each beam through
+        the caster's :attr:`RayCaster.grid` (True, or None, the default) or cull the faces
+        by bounding box and test every one within range (False). The same numbers where
+        the faces met are the same; the walk reads only the faces along the beams.
 
     Raises
     ------
@@ -452,7 +486,7 @@ class FanCaster:
     """
 
     def __init__(self, caster: RayCaster, rel: np.ndarray, max_range: float,
-                 compiled: bool | None = None) -> None:
+                 compiled: bool | None = None, indexed: bool | None = None) -> None:
         rel = np.asarray(rel, dtype=float).reshape(-1)
         if rel.shape[0] == 0 or rel[0] != 0.0 or bool((np.diff(rel) < 0).any()):
             raise ValueError("a fan's relative angles must start at 0 and ascend")
@@ -519,6 +553,22 @@ class FanCaster:
         self._ell_turn = np.empty((2, 1), dtype=complex)
         self._ell_coef = np.empty_like(self._ell_k)
         self._dd = np.column_stack([self._dirs, self._dirs.conjugate()])
+        # The grid walk (compiled only): the world's grid, and this fan's walker, which
+        # holds the arrays above and its own per-face scratch.
+        self._grid: FaceGrid | None = None
+        self._walker: Any = None
+        straight = not (len(caster.parts.arc_radius) or len(caster.parts.ell_angle))
+        if (self._kernel is not None and _GRID_WALK is not None and indexed is not False
+                and m > _CULL_ABOVE):
+            self._grid = caster.grid
+        if self._grid is not None and _GRID_WALK is not None:
+            g = self._grid
+            self._ranges, self._hit = np.empty(n), np.empty(n, dtype=bool)
+            self._walker = _GRID_WALK(
+                self._zw, caster._front_min, self._dconj, g.box, g.start, g.faces, self._best,
+                self._ranges, self._hit, _EPS_ANGLE, bool(_FUSED), self._t_hit + _GRID_TOL,
+                _GRID_TOL, self._inv_none, self._inv_hit, self.max_range)
+        self._straight_walk = self._walker is not None and straight
 
     def cast(self, ox: float, oy: float, first: float) -> tuple[np.ndarray, np.ndarray]:
         """Cast the fan from ``(ox, oy)`` (m) with its first beam at world angle ``first``.
@@ -530,10 +580,14 @@ class FanCaster:
         hit : (B,) bool array (a new array)
             True where a boundary was hit closer than ``max_range``.
         """
-        caster = self.caster
-        P = caster.parts
         phi = first + self._half                    # world angle of the fan's middle
         rot = complex(math.cos(phi), -math.sin(phi))
+        if self._straight_walk:
+            # Straight faces only, through the grid: the whole scan in one compiled call.
+            self._walker.scan(ox, oy, rot, complex(ox, oy) * rot)
+            return self._ranges.copy(), self._hit.copy()
+        caster = self.caster
+        P = caster.parts
         best = self._best
         best.fill(self._inv_none)
         if caster._s0.shape[0]:
@@ -604,6 +658,9 @@ class FanCaster:
         caster = self.caster
         zw, front_min = self._zw, caster._front_min
         n_seg = front_min.shape[0]
+        if self._walker is not None:     # best is the walker's own buffer
+            self._walker.faces(ox, oy, rot, complex(ox, oy) * rot)
+            return
         if n_seg > _CULL_ABOVE:
             # Large worlds: only the faces whose bounding box comes within range.
             r = self.max_range

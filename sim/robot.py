@@ -24,6 +24,7 @@ if TYPE_CHECKING:
     import numpy as np
 
 __all__ = [
+    "HalfRate",
     "Latency",
     "RunClock",
     "OdometryNoise",
@@ -108,6 +109,36 @@ class Latency:
 
 
 @dataclass(frozen=True)
+class HalfRate:
+    """Stretches of time in which the ladar's scans come at half their rate.
+
+    AMRISim's laser, read over ARCOS, sends a scan with every report for a while, then
+    only with every other one for a while (5 Hz instead of 10 Hz), and back. The
+    stretches at half rate make up ``share`` of the time and last ``length`` seconds on
+    average; both kinds of stretch have exponential lengths (so a run may begin in
+    either). While one lasts, every other scan is lost. ``share`` 0: never.
+    """
+
+    share: float = 0.0
+    length: float = 0.0
+
+    @property
+    def enabled(self) -> bool:
+        """True when scans are ever lost."""
+        return self.share > 0 and self.length > 0
+
+    @property
+    def full_length(self) -> float:
+        """Return the mean length of a stretch at the full rate, seconds."""
+        return self.length * (1.0 - self.share) / self.share
+
+    def describe(self) -> str:
+        """Return the stretches in words."""
+        return (f"{self.share * 100:.0f} % of the time, in stretches of {self.length:.1f} s "
+                f"on average")
+
+
+@dataclass(frozen=True)
 class RunClock:
     """Where a run's robot-side clocks stand, for a cycled profile (seconds of sim time).
 
@@ -165,6 +196,8 @@ class RobotProfile:
         Time between ladar scans (None: the ladar profile's rate).
     scan_latency : Latency
         From a scan being taken until the controller can read it.
+    scan_half_rate : HalfRate
+        Stretches of time in which every other scan is lost.
     ladar_mount : (x, y, theta)
         Ladar origin in the robot frame (m, m, rad).
     odometry : OdometryNoise
@@ -190,6 +223,7 @@ class RobotProfile:
     report_slip_rate: float = 0.0
     scan_period: float | None = None
     scan_latency: Latency = field(default_factory=Latency)
+    scan_half_rate: HalfRate = field(default_factory=HalfRate)
     ladar_mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
     odometry: OdometryNoise = field(default_factory=OdometryNoise)
     description: str = ""
@@ -199,7 +233,8 @@ class RobotProfile:
     def timed(self) -> bool:
         """True when the profile delays commands, reports at a cycle or delays scans."""
         return (self.command_latency > 0 or self.sip_cycle > 0 or self.control_cycle > 0
-                or self.scan_latency.enabled or self.scan_period is not None)
+                or self.scan_latency.enabled or self.scan_period is not None
+                or self.scan_half_rate.enabled)
 
     @property
     def effective_latency(self) -> float:
@@ -214,11 +249,13 @@ class RobotProfile:
     def expected_scan_age(self, scan_period: float) -> float:
         """Return the mean age of the newest scan at an unsynchronised tick, seconds.
 
-        The scan latency's mean plus half the scan period (the mean wait for the next scan).
+        The scan latency's mean plus half the time between scans (the mean wait for the
+        next one): the scan period, twice as long in the stretches at half rate.
         """
         if not self.timed:
             return 0.0
-        return self.scan_latency.mean + 0.5 * scan_period
+        half = self.scan_half_rate.share if self.scan_half_rate.enabled else 0.0
+        return self.scan_latency.mean + 0.5 * scan_period * (1.0 + half)
 
     @property
     def limits(self) -> RobotLimits:

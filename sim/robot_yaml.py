@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.errors import WorldError
-from mdle.sim.robot import RAMPS, Latency, OdometryNoise, RobotProfile
+from mdle.sim.robot import RAMPS, HalfRate, Latency, OdometryNoise, RobotProfile
 from mdle.sim.yaml_doc import _Doc, _yaml_value
 from mdle.sim.yaml_values import _mapping, _number, _show, _string
 
@@ -44,11 +44,13 @@ __all__ = ["ROBOT_KEYS", "check_mount", "dump_robot", "parse_robot", "read_robot
 ROBOT_KEYS = ("radius", "max_speed", "max_reverse_speed", "max_turn_rate", "max_accel",
               "max_decel", "max_turn_accel", "max_turn_decel", "ramp", "command_latency",
               "sip_cycle", "control_cycle", "input_window", "report_slip",
-              "report_slip_rate", "scan_period", "scan_latency", "ladar_mount", "odometry")
+              "report_slip_rate", "scan_period", "scan_latency", "scan_half_rate",
+              "ladar_mount", "odometry")
 _FILE_KEYS = ("name", "description", "source", "profile", *ROBOT_KEYS)
 _REQUIRED = ("radius", "max_speed", "max_turn_rate")
 _ODOM_KEYS = ("distance", "turn", "drift")
 _MAX_DELAY = 10.0  # s: a longer latency or cycle is a typo (milliseconds written as seconds)
+_MAX_STRETCH = 3600.0  # s: a half-rate stretch longer than an hour is a typo
 
 
 def _seconds(doc: _Doc, path: str, v: Any, *, positive: bool = False) -> float:
@@ -75,6 +77,21 @@ def _latency(doc: _Doc, path: str, v: Any) -> Latency:
         raise doc.fail(path, "expected `min` and `max`, or `mean` and `std` (seconds)")
     return Latency("normal", _seconds(doc, f"{path}.mean", m["mean"]),
                    _seconds(doc, f"{path}.std", m.get("std", 0.0)))
+
+
+def _half_rate(doc: _Doc, path: str, v: Any) -> HalfRate:
+    m = _mapping(doc, path, v, ("share", "length"),
+                 "`share` (of the time, in [0, 1)) and `length` (seconds)")
+    if "share" not in m or "length" not in m:
+        raise doc.fail(path, "needs both `share` (of the time, in [0, 1)) and `length` "
+                             "(the stretches' mean, seconds)")
+    share = _number(doc, f"{path}.share", m["share"], nonneg=True)
+    if share >= 1:
+        raise doc.fail(f"{path}.share", f"must be a share of the time in [0, 1), got {share:g}")
+    length = _number(doc, f"{path}.length", m["length"], positive=True, unit="s")
+    if length > _MAX_STRETCH:
+        raise doc.fail(f"{path}.length", f"must be at most {_MAX_STRETCH:g} s, got {length:g}")
+    return HalfRate(share, length)
 
 
 def robot_overrides(doc: _Doc, path: str, m: dict[str, Any]) -> dict[str, Any]:
@@ -105,6 +122,8 @@ def robot_overrides(doc: _Doc, path: str, m: dict[str, Any]) -> dict[str, Any]:
         ch["scan_period"] = _seconds(doc, at("scan_period"), m["scan_period"], positive=True)
     if "scan_latency" in m:
         ch["scan_latency"] = _latency(doc, at("scan_latency"), m["scan_latency"])
+    if "scan_half_rate" in m:
+        ch["scan_half_rate"] = _half_rate(doc, at("scan_half_rate"), m["scan_half_rate"])
     if "report_slip" in m:
         ch["report_slip"] = _latency(doc, at("report_slip"), m["report_slip"])
     if "report_slip_rate" in m:
@@ -184,12 +203,16 @@ def parse_robot(text: str, file: str = "<string>", default_name: str = "robot",
 
 def read_robot(path: str | os.PathLike[str]) -> RobotProfile:
     """Read and validate a robot profile file (WorldError if unreadable or invalid)."""
+    from mdle.userfile import UserFileError, read_user_file
+
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise WorldError(f"robot profile file not found: {p}") from None
-    except (OSError, UnicodeDecodeError) as err:
+    try:  # a regular file of bounded size: `--robot /dev/zero` would read until memory ran out
+        text = read_user_file(p).decode("utf-8")
+    except UserFileError as err:
+        if err.reason == "no such file":
+            raise WorldError(f"robot profile file not found: {p}") from None
+        raise WorldError(f"cannot read robot profile file {p}: {err.reason}") from None
+    except UnicodeDecodeError as err:
         raise WorldError(f"cannot read robot profile file {p}: {err}") from None
     return parse_robot(text, file=str(path), default_name=p.stem)
 
@@ -236,6 +259,10 @@ def dump_robot(robot: RobotProfile, comment: str = "") -> str:
             lines.append(f"{key}: {{{inner}}}   # s")
             if key == "report_slip":
                 lines.append(f"report_slip_rate: {_g(robot.report_slip_rate)}")
+    half = robot.scan_half_rate
+    if half.enabled:
+        lines.append(f"scan_half_rate: {{share: {_g(half.share)}, length: {_g(half.length)}}}"
+                     "   # of the time, s")
     mx, my, mth = robot.ladar_mount
     lines.append(f"ladar_mount: [{_g(mx)}, {_g(my)}, {_g(math.degrees(mth))}]   # m, m, deg")
     o = robot.odometry

@@ -24,12 +24,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Union
 
 import numpy as np
 
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
+
+    from mdle.sim.maps import FloorPlan
 
 __all__ = [
     "Arc",
@@ -198,17 +200,18 @@ def _rot(angle: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Polygon:
-    """A solid simple polygon given by its vertices (either winding), metres."""
+    """A solid simple polygon (vertices in either winding, metres), less its ``holes`` (rings)."""
 
     points: tuple[Point, ...]
     name: str = ""
+    holes: tuple[tuple[Point, ...], ...] = ()
     kind = "polygon"
 
     def geometry(self) -> BaseGeometry:
         """Return the shapely polygon."""
         import shapely
 
-        return shapely.Polygon(self.points)
+        return shapely.Polygon(self.points, self.holes or None)
 
     def parts(self) -> Parts:
         """Return the boundary segments, clockwise (solid on the right), curvature 0."""
@@ -478,4 +481,5 @@ class Curve:
         return Parts.make((ring, nxt, k))
 
 
-Shape = Polygon | Rectangle | Circle | Ellipse | Wall | Arc | Curve
+# An imported map's obstacle (sim/maps.py) is one too: named, not imported, here.
+Shape = Union[Polygon, Rectangle, Circle, Ellipse, Wall, Arc, Curve, "FloorPlan"]

@@ -8,6 +8,10 @@
   the straight line ahead misses them by a lateral gap of 0.4-2 m, with every obstacle on
   its **non-followed** side (on the left for right-hand following, on the right for
   left-hand following): the ladar's side ray never sees them unless the robot turns.
+* :func:`tangential_starts`: the robot passing an outermost point of the obstacles (a tip, a
+  pole, a plate's end, a leg) on the followed side, heading square to the direction in which
+  that point is outermost, 0.45-1.2 m from it: half of them with the point exactly abeam
+  (at -90 deg for right-hand following), the others 0.5-3 m before it.
 
 The incidence reported for a collision course is measured at the face the straight line
 actually hits first: the angle from that face's inward normal to the heading, positive when
@@ -32,7 +36,8 @@ import numpy as np
 
 from mdle.sim.world import World
 
-__all__ = ["DISTANCE", "GAP", "INCIDENCE", "Start", "blind_side_starts", "collision_starts"]
+__all__ = ["DISTANCE", "GAP", "INCIDENCE", "PASS", "Start", "blind_side_starts",
+           "collision_starts", "tangential_starts"]
 
 #: Distance from the robot's centre to the nearest boundary at a start, metres.
 DISTANCE = (3.0, 8.0)
@@ -40,6 +45,9 @@ DISTANCE = (3.0, 8.0)
 INCIDENCE = math.radians(75.0)
 #: Lateral gap between a blind-side start's straight path and the obstacles, metres.
 GAP = (0.4, 2.0)
+
+#: Lateral distance from a tangential start's path to the point it passes, metres.
+PASS = (0.45, 1.2)
 
 _BATCH = 64          # candidates drawn at once
 _MAX_BATCHES = 200   # bounded search (a start is found in the first batch in practice)
@@ -188,3 +196,50 @@ def blind_side_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
                 return starts
     raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} blind-side "
                      "starts 3-8 m from the obstacles")
+
+
+def tangential_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
+                      side: str = "right", ladar: float = 0.0) -> list[Start]:
+    """Draw ``n`` seeded starts passing an outermost point of the obstacles tangentially.
+
+    A direction ``e`` is drawn uniformly; the obstacles' outermost point ``P`` that way (the
+    vertex of their outline furthest along ``e``: a spike's tip, a pole, a plate's end face)
+    is passed at a lateral distance drawn in :data:`PASS`, heading square to ``e`` with
+    ``P`` on the followed side (on the right for ``side="right"``). Half the starts have
+    ``P`` exactly abeam of the ladar (``ladar`` metres ahead of the robot's centre: ``P`` at
+    its -90 deg beam), the others start 0.5-3 m before that. Nothing else may be nearer
+    than 0.4 m. ``gap`` records the lateral distance, ``incidence`` is NaN (a pass, not an
+    approach), ``distance`` the distance to the nearest boundary.
+
+    Raises
+    ------
+    ValueError
+        An empty world, a bad side, or no start found.
+    """
+    sign = _check_side(side)
+    if not world.obstacles:
+        raise ValueError(f"world `{world.name}` has no obstacles to pass")
+    rng = np.random.default_rng(seed)
+    verts = np.vstack(_outline(world))
+    starts: list[Start] = []
+    for _ in range(_MAX_BATCHES):
+        out = rng.uniform(-math.pi, math.pi, _BATCH)
+        e = np.column_stack([np.cos(out), np.sin(out)])
+        tip = verts[np.argmax(verts @ e.T, axis=0)]
+        # heading square to e with the tip on the followed side: e turned -90 deg (right)
+        theta = out - sign * math.pi / 2
+        h = np.column_stack([np.cos(theta), np.sin(theta)])
+        gap = rng.uniform(PASS[0], PASS[1], _BATCH)
+        before = np.where(rng.uniform(size=_BATCH) < 0.5, 0.0,
+                          rng.uniform(0.5, 3.0, _BATCH))
+        xy = tip + gap[:, None] * e - (before + ladar)[:, None] * h
+        dist = np.asarray(world.nearest_boundary(xy).distance)
+        ok = (dist >= 0.4) & ~np.asarray(world.inside(xy))
+        for i in np.flatnonzero(ok):
+            starts.append(Start(len(starts), float(xy[i, 0]), float(xy[i, 1]),
+                                math.remainder(float(theta[i]), 2 * math.pi), False,
+                                float(dist[i]), gap=float(gap[i])))
+            if len(starts) == n:
+                return starts
+    raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} tangential "
+                     "starts")

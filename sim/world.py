@@ -121,7 +121,9 @@ class World:
     def _prepared(self) -> BaseGeometry:
         import shapely
 
-        g = shapely.union_all([o.geometry() for o in self.obstacles])
+        geoms = [o.geometry() for o in self.obstacles]
+        # One obstacle (an imported map, say) is valid already: its union would only cost.
+        g = geoms[0] if len(geoms) == 1 else shapely.union_all(geoms)
         shapely.prepare(g)
         return g
 

@@ -23,6 +23,7 @@ import json
 import math
 from collections.abc import Iterable
 
+from mdle.sim.maps import FloorPlan
 from mdle.sim.shapes import Arc, Circle, Curve, Ellipse, Polygon, Rectangle, Shape, Wall
 from mdle.sim.world import World
 
@@ -48,8 +49,12 @@ def _pts(points: Iterable[Iterable[float]]) -> str:
 
 
 def _obstacle(o: Shape) -> str:
+    if isinstance(o, FloorPlan):    # its polygons, one entry each
+        return "\n".join(_obstacle(p) for p in _floor_polygons(o))
     if isinstance(o, Polygon):
         keys = f"type: polygon, points: {_pts(o.points)}"
+        if o.holes:
+            keys += ", holes: [" + ", ".join(_pts(h) for h in o.holes) + "]"
     elif isinstance(o, Rectangle):
         keys = (f"type: rectangle, center: {_pt(o.center)}, size: {_pt(o.size)}, "
                 f"angle: {_deg(o.angle)}")
@@ -74,6 +79,18 @@ def _obstacle(o: Shape) -> str:
     if o.name:
         keys = f"name: {json.dumps(o.name)}, " + keys
     return "  - {" + keys + "}"
+
+
+def _floor_polygons(plan: FloorPlan) -> list[Polygon]:
+    """Return a floor plan's polygons as :class:`Polygon` obstacles (rings unclosed)."""
+    import shapely
+
+    out = []
+    for i, g in enumerate(shapely.get_parts(plan.geom)):
+        ext = [tuple(p) for p in g.exterior.coords[:-1]]
+        holes = tuple(tuple(tuple(p) for p in r.coords[:-1]) for r in g.interiors)
+        out.append(Polygon(tuple(ext), f"{plan.name}.{i}" if plan.name else "", holes))
+    return out
 
 
 def world_to_yaml(world: World) -> str:

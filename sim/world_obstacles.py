@@ -21,7 +21,7 @@ __all__ = ["OBSTACLE_TYPES"]
 
 #: Keys each obstacle type requires and allows (besides ``type`` and ``name``).
 OBSTACLE_TYPES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "polygon": (("points",), ()),
+    "polygon": (("points",), ("holes",)),
     "rectangle": (("center", "size"), ("angle",)),
     "circle": (("center", "radius"), ()),
     "ellipse": (("center", "axes"), ("angle",)),
@@ -59,10 +59,19 @@ def _obstacle(doc: _Doc, path: str, v: Any) -> Any:
 
     if kind == "polygon":
         pts = _points(doc, P("points"), v["points"], 3, "a polygon")
-        shape: Any = shapes.Polygon(pts, name)
+        raw_holes = v.get("holes", [])
+        if not isinstance(raw_holes, list):
+            raise doc.fail(P("holes"), f"expected a list of rings of [x, y] points, got "
+                           f"{_show(raw_holes)}")
+        holes = tuple(_points(doc, f"{P('holes')}[{i}]", h, 3, "a hole")
+                      for i, h in enumerate(raw_holes))
+        shape: Any = shapes.Polygon(pts, name, holes)
         g = shape.geometry()
         if not g.is_valid or g.area <= 0:
-            raise doc.fail(P("points"), "the polygon crosses itself or has no area")
+            raise doc.fail(P("holes" if holes else "points"),
+                           "the polygon crosses itself, or its holes cross it or each other, "
+                           "or it has no area" if holes else
+                           "the polygon crosses itself or has no area")
         return shape
     if kind in ("rectangle", "ellipse"):   # a centre, two sizes and a turn
         c = _point(doc, P("center"), v["center"])

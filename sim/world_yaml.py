@@ -43,7 +43,7 @@ __all__ = ["OBSTACLE_TYPES", "MAX_SEED", "MAX_YAML_DEPTH",
            "parse_world", "parse_world_robot", "read_world", "read_world_robot"]
 
 _TOP_KEYS = ("name", "description", "seed", "start", "robot", "ladar", "extent", "obstacles",
-             "robots")
+             "robots", "map")
 _TEAM_ROBOT_KEYS = ("name", "robot", "ladar", "start")
 _ROBOT_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 #: Largest seed (the simulator's generator takes 64-bit seeds).
@@ -96,6 +96,8 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
     if not isinstance(obs_raw, list):
         raise doc.fail("obstacles", f"expected a list of obstacles, got {_show(obs_raw)}")
     obstacles = tuple(_obstacle(doc, f"obstacles[{i}]", o) for i, o in enumerate(obs_raw))
+    if "map" in top:   # after the listed obstacles, which keep their indices
+        obstacles += (_map(doc, top["map"]),)
     world = World(name=name, obstacles=obstacles, start_pose=start, seed=seed, robot=robot,
                   ladar=ladar, description=description,
                   source=None if file.startswith("<") else file, extent=extent)
@@ -108,6 +110,26 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
             _check_start(doc, f"robots[{i}].start", world, r.profile, r.start,
                          f"robot `{r.name}`")
     return world
+
+
+def _map(doc: _Doc, v: Any) -> Any:
+    """Read ``map:``, a ``map_server`` map (its YAML file) as one floor plan obstacle."""
+    from mdle.sim.maps import load_map
+
+    m = {"file": v} if isinstance(v, str) else _mapping(doc, "map", v, ("file", "tolerance"),
+                                                          "a map: file and tolerance")
+    path = "map" if isinstance(v, str) else "map.file"
+    if "file" not in m:
+        raise doc.fail("map", "missing key `file` (the map_server YAML file)")
+    file = _string(doc, path, m["file"])
+    tol = _number(doc, "map.tolerance", m["tolerance"], nonneg=True) if "tolerance" in m else None
+    where = Path(doc.file).parent if not doc.file.startswith("<") else Path()
+    full = Path(file) if Path(file).is_absolute() else where / file
+    try:
+        return load_map(full, tol)
+    except WorldError as err:
+        why = "; ".join(d.message for d in err.diagnostics)
+        raise doc.fail(path, f"cannot load the map {file}: {why}") from None
 
 
 def _check_start(doc: _Doc, path: str, world: Any, robot: Any, start: Pose, who: str) -> None:

@@ -10,6 +10,7 @@ anything else, so a signal at any moment ends mdle with 128 + its number and a m
 from __future__ import annotations
 
 # Only what the signal handlers need is imported before they are installed.
+import os
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
@@ -22,8 +23,8 @@ if TYPE_CHECKING:
 __all__ = ["main", "build_parser", "COMMANDS"]
 
 #: Subcommand modules under ``mdle.cli``, in the order ``--help`` lists them.
-COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "worlds",
-                             "robots", "repl", "experiment", "sweep")
+COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "recover",
+                             "worlds", "robots", "repl", "experiment", "sweep", "sim")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -75,6 +76,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     Python) the previous handlers are restored on return.
     """
     guard = SignalGuard().install(deferred=True)
+    _closed_streams_to_null()
     try:
         return _main(argv, guard)
     except KeyboardInterrupt as exc:  # a signal while the command line was read
@@ -84,6 +86,49 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if argv is not None:
             guard.restore()
+        else:
+            _hold_signals_to_the_end()
+
+
+def _hold_signals_to_the_end() -> None:
+    """Ignore SIGINT, SIGTERM and SIGHUP from the command's end to the process's exit.
+
+    The command has said everything; Python then puts the default handlers back while it
+    shuts down (60 to 260 ms), and a signal in that window killed mdle with no message
+    and a code that was not the command's. Python leaves an ignored signal ignored (it
+    resets only the handlers it installed), and ignoring is process-wide, whichever
+    thread a signal lands on.
+    """
+    import signal
+
+    from mdle.cli.signals import SIGNALS
+
+    for sig in SIGNALS:
+        try:
+            signal.signal(sig, signal.SIG_IGN)
+        except (ValueError, OSError):  # not the main thread
+            return
+
+
+def _closed_streams_to_null() -> None:
+    """Give a standard stream that was closed at start (``mdle repl >&-``) /dev/null.
+
+    Python sets such a stream to None, and every print then failed as an internal error;
+    worse, the first file mdle opened took the free descriptor, so a child process would
+    have written its output into a trace. The descriptor gets /dev/null instead, and the
+    output goes nowhere, as it would have on a closed stream.
+    """
+    for fd, name, mode in ((0, "stdin", "r"), (1, "stdout", "w"), (2, "stderr", "w")):
+        if getattr(sys, name) is not None:
+            continue
+        try:
+            os.fstat(fd)
+        except OSError:  # closed: /dev/null takes its number (the lowest free one)
+            null = os.open(os.devnull, os.O_RDWR)
+            if null != fd:
+                os.dup2(null, fd)
+                os.close(null)
+        setattr(sys, name, open(fd, mode, closefd=False))
 
 
 def _main(argv: Sequence[str] | None, guard: SignalGuard) -> int:

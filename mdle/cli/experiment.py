@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.cli import generated_study, output
+from mdle.cli.options import hertz
 
 __all__ = ["add_parser", "run"]
 
@@ -50,7 +51,7 @@ def add_parser(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]"
                    help="random-starts (paper shapes): runs per shape (default 50)")
     p.add_argument("--duration", type=float, default=None, metavar="SECONDS",
                    help="following/random-starts: length of each run")
-    p.add_argument("--rate", type=float, default=None, metavar="HZ",
+    p.add_argument("--rate", type=hertz, default=None, metavar="HZ",
                    help="random-starts: control rate (default: 50 Hz scan, 100 Hz exact; "
                         "--generated: 10 Hz)")
     p.add_argument("--v", type=float, default=None, metavar="M/S",
@@ -79,6 +80,14 @@ def run(args: argparse.Namespace) -> int:
     if misplaced:
         print(f"mdle experiment {args.name}: {misplaced}", file=sys.stderr)
         return output.EXIT_USAGE
+    if args.name == "curvature" or getattr(args, "resume", False):
+        from mdle.errors import MdleError
+        from mdle.userfile import UserFileError, writable_folder
+
+        try:  # before the computing: its results go there
+            writable_folder(args.out)
+        except UserFileError as err:
+            raise MdleError(f"--out: {err}") from None
     if args.generated:
         return generated_study.run(args)
     if args.name == "curvature":
@@ -158,7 +167,8 @@ def _run(tasks: list[Any], args: argparse.Namespace, out: Path | None) -> list[A
 
 
 #: Options that only the generated study reads.
-_GENERATED_ONLY = ("shapes", "starts", "robot", "rc", "kf", "csv", "tolerance")
+_GENERATED_ONLY = ("shapes", "starts", "robot", "rc", "kf", "csv", "tolerance", "suite",
+                   "tangential")
 
 
 def _misplaced(args: argparse.Namespace) -> str:

@@ -21,7 +21,8 @@ def add_parser(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "export", help="write a trace as MCAP (ROS 2 messages) for Foxglove, PlotJuggler, ros2",
         description="Write the run in a JSON lines trace as an MCAP file of ROS 2 messages "
-                    "(/scan, /odom, /tf, /cmd_vel, /ground_truth, /map, /mdle/events, "
+                    "(/scan, /odom, /tf, /cmd_vel, /ground_truth, /footprint, /path, /map, "
+                    "/obstacles, /mdle/events, /mdle/active, /mdle/diagnostics, "
                     "/mdle/state), the messages `mdle run --record` writes. Needs the "
                     "extra: pip install 'mdle[mcap]'.",
         epilog="Exit codes: 0 written, 1 not a trace or stopped at a damaged record (the "
@@ -41,9 +42,12 @@ def run(args: argparse.Namespace) -> int:
     from mdle.ros import require
 
     require("mdle export")
+    from mdle.cli.clobber import refuse_clobbering
     from mdle.ros.export import export_trace
 
     target = args.output or args.rosbag
+    refuse_clobbering([("-o", args.output), ("--rosbag", args.rosbag)],
+                      [("the trace", args.trace), ("the world", args.world)])
     report = export_trace(args.trace, target, rosbag=args.rosbag is not None,
                           world=args.world)
     for w in report.warnings:

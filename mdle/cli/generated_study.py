@@ -36,6 +36,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="collision-course starts per shape (default 10)")
     g.add_argument("--blind-side", action="store_true",
                    help="also run as many blind-side starts per shape (reported apart)")
+    g.add_argument("--suite", choices=("paper", "lab"), default=None,
+                   help="paper: the 13 families of the paper's kind (default); lab: thin poles, "
+                        "pole rows, spike stars, disc chains, thin plates, tables")
+    g.add_argument("--tangential", type=int, default=None, metavar="N",
+                   help="also run N tangential starts per shape, passing a tip or a pole "
+                        "(reported apart)")
     g.add_argument("--robot", default=None, metavar="NAME",
                    help="robot profile (default: ideal, the paper's unicycle)")
     g.add_argument("--rc", type=float, default=None, metavar="M",
@@ -68,7 +74,9 @@ def config_from(args: argparse.Namespace) -> "StudyConfig | str":
         rate=c.rate if args.rate is None else args.rate,
         v=c.v if args.v is None else args.v,
         rc=c.rc if args.rc is None else args.rc,
-        kf=args.kf, duration=args.duration, blind=args.blind_side, tolerance=args.tolerance)
+        kf=args.kf, duration=args.duration, blind=args.blind_side, tolerance=args.tolerance,
+        suite=getattr(args, "suite", None) or c.suite,
+        tangential=getattr(args, "tangential", None) or c.tangential)
     checks = [
         (cfg.shapes >= 1, f"--shapes must be at least 1, got {cfg.shapes}"),
         (cfg.starts >= 1, f"--starts must be at least 1, got {cfg.starts}"),
@@ -83,6 +91,7 @@ def config_from(args: argparse.Namespace) -> "StudyConfig | str":
         (cfg.tolerance is None or cfg.tolerance > 0,
          f"--tolerance must be > 0 m, got {cfg.tolerance}"),
         (args.jobs is None or args.jobs >= 1, f"--jobs must be at least 1, got {args.jobs}"),
+        (cfg.tangential >= 0, f"--tangential must be >= 0, got {cfg.tangential}"),
     ]
     for ok, message in checks:
         if not ok:
@@ -137,8 +146,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def failure_name(r: Row) -> str:
-    """Name a run's replay files: ``SHAPE-start-K`` (``-blind`` for a blind-side start)."""
-    return f"{r['shape']}-start-{r['start']}{'-blind' if r['blind'] else ''}"
+    """Name a run's replay files: ``SHAPE-start-K`` (``-blind``, ``-tangential`` for those)."""
+    from mdle.experiments.generated import row_kind
+
+    kind = row_kind(r)
+    return f"{r['shape']}-start-{r['start']}{'' if kind == 'collision' else '-' + kind}"
 
 
 def save_failures(rows: Sequence[Row], folder: Path) -> int:
@@ -179,36 +191,41 @@ def _print_tables(cfg: StudyConfig, rows: Sequence[Row], stream: IO[str]) -> Non
     # off a terminal: wide enough that no header or failure line wraps (logs, pipes, notes)
     console = Console(file=stream, highlight=False, width=None if tty else 200,
                       force_terminal=tty, no_color=not tty, soft_wrap=not tty)
-    head = (f"{cfg.shapes} generated shapes (seed {cfg.seed}), {cfg.starts} starts each; "
+    head = (f"{cfg.shapes} generated shapes (seed {cfg.seed}"
+            f"{', lab suite' if cfg.suite == 'lab' else ''}), {cfg.starts} starts each"
+            f"{f' and {cfg.tangential} tangential' if cfg.tangential else ''}; "
             f"{cfg.robot} at {cfg.v:g} m/s, rc {cfg.rc:g} m, {cfg.side} side, "
             f"{cfg.sensing} sensing, {cfg.rate:g} Hz, {cfg.run_duration:g} s runs")
     console.print(head)
     summary = summarise(rows, cfg.accuracy)
-    for blind in (False, True):
-        part = [s for s in summary if s["blind"] == blind]
+    titles = {"collision": "collision-course starts",
+              "tangential": "tangential starts (passing a tip, a pole or a plate's end)",
+              "blind": "blind-side starts (the obstacle passes on the non-followed side)"}
+    for kind, title in titles.items():
+        part = [s for s in summary if s["kind"] == kind]
         if not part:
             continue
-        title = ("blind-side starts (the obstacle passes on the non-followed side)" if blind
-                 else "collision-course starts")
         t = Table(title=title, title_justify="left")
         for name, justify in (("family", "left"), ("runs", "right"), ("collisions", "right"),
                               ("engaged", "right"), ("worst clearance (m)", "right"),
                               ("median mean |d-rc| (m)", "right"),
                               ("max mean |d-rc| (m)", "right"),
-                              ("median time to engage (s)", "right"), ("failures", "right")):
+                              ("median time to engage (s)", "right"), ("drove away", "right"),
+                              ("failures", "right")):
             t.add_column(name, justify=justify)  # type: ignore[arg-type]
         for s in part:
             pct = 100.0 * s["engaged"] / s["runs"]
             t.add_row(s["family"], str(s["runs"]), str(s["collisions"]),
                       f"{s['engaged']} ({pct:.1f} %)", _fmt(s["worst_clearance"]),
                       _fmt(s["median_err"]), _fmt(s["max_err"]),
-                      _fmt(s["median_t_engage"], 1),
+                      _fmt(s["median_t_engage"], 1), str(s["away"]),
                       f"{s['failures']}" + (f" ({s['errors']} errors)" if s["errors"] else ""),
                       end_section=s["family"] == "all")
         console.print(t)
     console.print("engaged: |d - rc| <= 0.2 m with the obstacle on the followed side for 4 m "
                   "of path; mean |d-rc| over the second half of the time after engagement; "
-                  f"accurate: mean <= {cfg.accuracy:g} m")
+                  f"accurate: mean <= {cfg.accuracy:g} m; drove away: ended more than 1 m "
+                  "beyond rc from every boundary")
     bad = [r for r in rows if r["outcome"] != "ok"]
     if bad:
         console.print(f"failing runs ({len(bad)}): shape, seed, start, outcome")
@@ -220,7 +237,10 @@ def _print_tables(cfg: StudyConfig, rows: Sequence[Row], stream: IO[str]) -> Non
 
 def describe_failure(r: Row) -> str:
     """Say in one line which run failed and how (shape, seed, start, what it did)."""
-    kind = "blind-side" if r["blind"] else f"incidence {math.degrees(r['incidence']):+.0f} deg"
+    from mdle.experiments.generated import row_kind
+
+    kind = {"blind": "blind-side", "tangential": f"tangential, {r['gap']:.2f} m off"}.get(
+        row_kind(r), f"incidence {math.degrees(r['incidence']):+.0f} deg")
     what = r["outcome"]
     if what == "error":
         detail = r["error"]

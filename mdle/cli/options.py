@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from mdle.motion_limits import KnownRobot
 
-__all__ = ["DEFAULT_RATE", "add_simulation_options", "known_robot", "positive_seconds",
+__all__ = ["DEFAULT_RATE", "add_simulation_options", "hertz", "known_robot", "positive_seconds",
            "seconds", "seed", "world_beside", "writable_output"]
 
 #: Control rate (Hz) when neither ``--rate`` nor a team file gives one: the Pioneer's
@@ -28,8 +28,9 @@ def add_simulation_options(p: Any) -> None:
                                              "(default: the world's)")
     p.add_argument("--robot", metavar="PROFILE",
                    help="robot profile in simulation: a name (`mdle robots` lists them) or "
-                        "a profile YAML file (default: the world's); with `mdle run` on a "
-                        "robot, the profile whose ladar mount and scan period recordings use")
+                        "a profile YAML file (default: the world's); on a robot, the "
+                        "profile whose latency laws predict over (default 0.15 s) and whose "
+                        "ladar mount and scan period recordings use")
     p.add_argument("--sensing", choices=("scan", "exact"), default="scan",
                    help="simulated ladar: a noisy scan (default) or exact oracle geometry")
 
@@ -134,6 +135,20 @@ def seed(text: str) -> int:
     if not 0 <= value <= MAX_SEED:
         raise argparse.ArgumentTypeError(f"a seed is a whole number from 0 to {MAX_SEED}, "
                                          f"got {text!r}")
+    return value
+
+
+def hertz(text: str) -> float:
+    """Read a control rate in Hz (an argparse ``type``), in the range every input shares."""
+    from mdle.ranges import RATE
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a rate in Hz, got {text!r}") from None
+    problem = RATE.problem(value, text)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(problem)
     return value
 
 

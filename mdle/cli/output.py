@@ -98,17 +98,30 @@ def guarded(handler: Callable[[argparse.Namespace], int], args: argparse.Namespa
     except BrokenPipeError:
         output_closed()
         return EXIT_PIPE
+    except OSError as exc:
+        from mdle.userfile import file_fault, file_fault_words
+
+        if not file_fault(exc):
+            return _internal(exc, args)
+        print(f"mdle: {file_fault_words(exc)}", file=sys.stderr)
+        return EXIT_IO
     except Exception as exc:  # an mdle bug: never a raw traceback unless asked
         from mdle.cli.signals import interruption_of
 
         signal_exc = interruption_of(exc)
         if signal_exc is not None:  # a signal inside class creation, wrapped by Python
             return interrupted(signal_exc, guard)
-        if getattr(args, "debug", False):
-            raise
-        print(f"mdle: internal error: {type(exc).__name__}: {exc} (run with --debug for the "
-              "traceback)", file=sys.stderr)
-        return EXIT_INTERNAL
+        return _internal(exc, args)
+
+
+def _internal(exc: Exception, args: argparse.Namespace) -> int:
+    if getattr(args, "debug", False):
+        raise exc
+    print(f"mdle: internal error: {type(exc).__name__}: {exc} (run with --debug for the "
+          "traceback)", file=sys.stderr)
+    return EXIT_INTERNAL
+
+
 
 
 def interrupted(exc: BaseException, guard: SignalGuard | None) -> int:

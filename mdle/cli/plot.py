@@ -44,11 +44,15 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Draw, overlay or animate; returns the exit code."""
+    from mdle.cli.clobber import refuse_clobbering
     from mdle.cli.options import writable_output
     from mdle.errors import MdleError
     from mdle.figure_output import save_figure, show_or_write
     from mdle.plot import trace_and_world, trace_figure
     from mdle.team_plot import is_team_trace, team_figure
+
+    refuse_clobbering([("-o", args.output), ("--animate", args.animate)],
+                      [*(("the trace", t) for t in args.traces), ("the world", args.world)])
 
     if args.animate is not None and len(args.traces) > 1:
         return _animate_team(args)

@@ -13,6 +13,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli.options import add_simulation_options, positive_seconds
+from mdle.cli.ros2 import add_ros2_options, check_ros2_options
 
 if TYPE_CHECKING:
     from mdle.repl.robot import RobotSession
@@ -39,13 +40,15 @@ def add_parser(subparsers: Any) -> None:
                    help="simulated world: a reference world name or a YAML file "
                         "(default: the default world)")
     add_simulation_options(p)
-    p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
-                   help="what the session drives: the simulator (default) or a Pioneer")
+    p.add_argument("--backend", choices=("sim", "pioneer", "ros2"), default="sim",
+                   help="what the session drives: the simulator (default), a Pioneer or a "
+                        "ROS 2 robot")
     p.add_argument("--connect", metavar="URL",
                    help="robot connection for --backend pioneer (tcp://host:port, "
                         "serial:///dev/ttyS0?baud=9600)")
     p.add_argument("--laser", metavar="URL",
                    help="laser for --backend pioneer: sim or lms200:///dev/DEVICE?baud=38400")
+    add_ros2_options(p)
     p.add_argument("--yes", "-y", action="store_true",
                    help="on a robot, do not ask before the first motion (scripted sessions)")
     p.add_argument("--until", type=positive_seconds, metavar="SECONDS",
@@ -53,6 +56,9 @@ def add_parser(subparsers: Any) -> None:
                         "a robot; default 600; `inf`: no limit)")
     p.add_argument("--realtime", action="store_true",
                    help="pace runs to the wall clock (default: as fast as the simulator goes)")
+    p.add_argument("--foxglove", metavar="[HOST:]PORT",
+                   help="show every run live in Foxglove: a WebSocket server on PORT "
+                        "(127.0.0.1 unless HOST); needs pip install 'mdle[foxglove]'")
     p.add_argument("--plain", action="store_true",
                    help="read input plainly even on a terminal (no line editing)")
     p.add_argument("--echo", action="store_true",
@@ -71,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     until = DEFAULT_UNTIL if args.until is None else (None if math.isinf(args.until)
                                                       else args.until)
     interactive = sys.stdin.isatty() and sys.stdout.isatty() and not args.plain
-    if args.backend != "pioneer" and (args.connect or args.laser or args.yes):
+    if args.backend == "sim" and (args.connect or args.laser or args.yes):
         from mdle.errors import Diagnostic, MdleError
 
         given = next(f for f, v in (("--connect", args.connect), ("--laser", args.laser),
@@ -79,8 +85,11 @@ def run(args: argparse.Namespace) -> int:
         raise MdleError(Diagnostic(None, f"{given} drives a robot: it needs --backend pioneer",
                                    hint="e.g. mdle repl --backend pioneer --connect "
                                         "tcp://localhost:8101 --laser sim"))
+    check_ros2_options(args)
     session: Session
-    if args.backend == "pioneer":
+    if args.backend == "ros2":
+        session = _ros2_session(args, until)
+    elif args.backend == "pioneer":
         session = _robot_session(args, until)
     else:
         from mdle.userlaws import laws_option
@@ -89,7 +98,15 @@ def run(args: argparse.Namespace) -> int:
                           sensing=args.sensing, realtime=args.realtime,
                           registry=laws_option(args.laws))
     repl = Repl(session, debug=getattr(args, "debug", False))
+    live = None
     try:
+        if args.foxglove:
+            from mdle.ros.live import FoxgloveServer, LiveRuns, parse_address
+
+            live = LiveRuns(FoxgloveServer(*parse_address(args.foxglove)))
+            repl.run_observers.append(live)
+            print(f"live view: ws://{live.server.host}:{live.server.port} "
+                  "(Foxglove: Open connection)")
         if args.file:
             repl.handle(f":load {_quote(args.file)}")
             if repl.failures and not interactive:
@@ -105,6 +122,8 @@ def run(args: argparse.Namespace) -> int:
             stdin.reconfigure(errors="surrogateescape")
         return run_plain(repl, stdin, echo=args.echo)
     finally:
+        if live is not None:
+            live.close()
         _close(session, repl)
 
 
@@ -119,6 +138,11 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
         raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
                                    hint="e.g. --connect tcp://localhost:8101 or "
                                         "--connect serial:///dev/ttyS0"))
+    profile = None
+    if args.robot:  # read before connecting: a bad profile touches no robot
+        from mdle.sim.profiles import robot_profile
+
+        profile = robot_profile(args.robot)
     try:
         backend = open_backend("pioneer", args.connect, args.laser)
     except (KeyboardInterrupt, SystemExit):  # a signal while connecting: the backend
@@ -126,6 +150,10 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
         print("interrupted while connecting: robot stopped, session closed", file=sys.stderr)
         raise
     assert isinstance(backend, PioneerBackend), "open_backend('pioneer') makes a Pioneer"
+    if profile is not None:  # the law's latency and the ladar, as in `mdle run`
+        from mdle.drivers.profile import apply_robot_profile
+
+        apply_robot_profile(backend, profile)
     info = backend.info
     name = f"`{info.name or 'Pioneer'}` ({info.subtype or 'unknown model'})"
     try:
@@ -135,6 +163,23 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
         backend.close()
         raise
     if sys.stdin.isatty():  # plain input on a terminal: ask there (the prompt asks itself)
+        session.confirm = _ask_on_stdin
+    return session
+
+
+def _ros2_session(args: argparse.Namespace, until: float | None) -> RobotSession:
+    """Connect to the ROS 2 robot the options name and wrap it in a REPL session."""
+    from mdle.cli.ros2 import open_ros2_backend
+    from mdle.repl.robot import RobotSession
+
+    backend = open_ros2_backend(args, 10.0, {})
+    try:
+        session = RobotSession(backend, connect=backend.description, laser=None,
+                               until=until, armed=args.yes, name="the ROS 2 robot")
+    except BaseException:
+        backend.close()
+        raise
+    if sys.stdin.isatty():
         session.confirm = _ask_on_stdin
     return session
 

@@ -79,8 +79,10 @@ def _timing(robot: Any) -> str:
                 f"{robot.effective_latency * 1e3:.0f} ms on average until they show)")
     else:
         acts = f"commands act after {robot.command_latency * 1e3:.0f} ms"
+    half = robot.scan_half_rate
     return (f"timing: {acts}, reports every {robot.sip_cycle * 1e3:.1f} ms, scans {period} "
-            f"readable after {robot.scan_latency.describe()}")
+            f"readable after {robot.scan_latency.describe()}"
+            + (f", at half rate {half.describe()}" if half.enabled else ""))
 
 
 def _show(args: argparse.Namespace) -> int:
@@ -93,12 +95,14 @@ def _show(args: argparse.Namespace) -> int:
 
 
 def _fit(args: argparse.Namespace) -> int:
+    from mdle.cli.clobber import refuse_clobbering
     from mdle.errors import MdleError
     from mdle.sim.fit import fit_profile
     from mdle.sim.profiles import robot_profile
     from mdle.sim.recording import read_recording
     from mdle.sim.robot_yaml import dump_robot
 
+    refuse_clobbering([("-o", args.output)], [("the recording", r) for r in args.recordings])
     for key in ("sip_cycle", "scan_period"):
         value = getattr(args, key)
         if not (math.isfinite(value) and 0 < value <= 10):
@@ -115,7 +119,8 @@ def _fit(args: argparse.Namespace) -> int:
     description = args.description or f"fitted to {', '.join(args.recordings)}"
     fitted = "server loop" if fit.control_cycle else "command latency"
     profile = fit.profile(base, args.name, description=description,
-                          source=f"mdle robots fit ({fitted}, ramps, scan latency); "
+                          source=f"mdle robots fit ({fitted}, ramps, scan latency"
+                                 f"{', half-rate scans' if fit.scan_half_rate.enabled else ''}); "
                                  f"the rest from {base.name}")
     comment = (f"Written by `{command}`.\n"
                f"Fit: RMS error v {fit.v.rms:.4f} m/s, omega {fit.omega.rms:.4f} rad/s over "
@@ -123,11 +128,12 @@ def _fit(args: argparse.Namespace) -> int:
                f"`{base.name}`.")
     text = dump_robot(profile, comment)
     if args.output:
+        from mdle.userfile import UserFileError, write_user_file
+
         try:
-            with open(args.output, "w", encoding="utf-8") as f:
-                f.write(text)
-        except OSError as err:
-            raise MdleError(f"cannot write {args.output}: {err.strerror}") from None
+            write_user_file(args.output, text)
+        except UserFileError as err:
+            raise MdleError(str(err)) from None
         print(f"profile `{args.name}` written to {args.output}")
     else:
         print(text, end="")

@@ -25,15 +25,20 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli import output
+from mdle.cli.clobber import refuse_clobbering, run_inputs, run_outputs
 from mdle.cli.options import (
     DEFAULT_RATE,
     add_simulation_options,
+    hertz,
     known_robot,
     seconds,
     world_beside,
     writable_output,
 )
+from mdle.cli.recorders import recorders
+from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.cli.signals import SignalGuard, interruption_of, signal_name
+from mdle.ranges import COORDINATE
 
 if TYPE_CHECKING:
     from mdle.live import LiveView
@@ -84,7 +89,7 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--realtime", action="store_true",
                    help="pace the simulation to the wall clock")
     # default None: a team file's `rate:` applies unless --rate is given (even --rate 10)
-    p.add_argument("--rate", type=_hertz, default=None, metavar="HZ",
+    p.add_argument("--rate", type=hertz, default=None, metavar="HZ",
                    help="control rate (default: 10 Hz, the Pioneer's 100 ms cycle; with a "
                         "team, the team file's rate:)")
     p.add_argument("--trace", metavar="FILE.jsonl", help="write the run's trace (JSON lines)")
@@ -96,26 +101,21 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("--record-compression", choices=("none", "lz4"), default="none",
                    help="compression of the recording's chunks (default: none, the "
                         "cheapest to write; lz4: about a third smaller)")
+    p.add_argument("--foxglove", metavar="[HOST:]PORT",
+                   help="a live view for Foxglove: a WebSocket server on PORT (127.0.0.1 "
+                        "unless HOST is given) with the recording's messages; needs pip "
+                        "install 'mdle[foxglove]'")
     p.add_argument("--plot", metavar="FILE.png|svg", help="draw the run at the end")
     p.add_argument("--quiet", "-q", action="store_true", help="no live view or summary")
-    p.add_argument("--backend", choices=("sim", "pioneer"), default="sim",
-                   help="where to run (default: sim)")
+    p.add_argument("--backend", choices=("sim", "pioneer", "ros2"), default="sim",
+                   help="where to run (default: sim; ros2: a ROS 2 robot, docs/ros2.md)")
     p.add_argument("--connect", metavar="URL",
                    help="robot connection for --backend pioneer (tcp://host:port, "
                         "serial:///dev/ttyS0)")
     p.add_argument("--laser", metavar="URL", help="laser connection for --backend pioneer")
     add_simulation_options(p)
+    add_ros2_options(p)
     p.set_defaults(handler=run, own_signals=True)
-
-
-def _hertz(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a rate in Hz, got {text!r}") from None
-    if not 0 < value <= 1000:
-        raise argparse.ArgumentTypeError(f"the rate must be in (0, 1000] Hz, got {text!r}")
-    return value
 
 
 def start_pose(text: str) -> tuple[float, float, float]:
@@ -156,6 +156,9 @@ def start_pose(text: str) -> tuple[float, float, float]:
         value = float(m.group(1)) * factor
         if not math.isfinite(value):
             raise argparse.ArgumentTypeError(f"{name} of --start must be finite")
+        problem = COORDINATE.problem(value, part.strip()) if dim == LENGTH else None
+        if problem is not None:
+            raise argparse.ArgumentTypeError(f"{name} of --start: {problem}")
         out.append(value)
     return out[0], out[1], out[2]
 
@@ -252,8 +255,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.start is not None and args.backend != "sim":
         raise MdleError(Diagnostic(None, "--start places the simulated robot; a real robot "
                                          "starts where it stands"))
+    check_ros2_options(args)
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
-        else known_robot(None)
+        else known_robot(None, None, args.robot if args.backend == "ros2" else None)
     try:
         program = load_program(args.plan, laws_option(args.laws), settings=args.overrides,
                                robot=robot)
@@ -264,11 +268,15 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
                           f"`mdle run PLAN.mdle --world {args.plan}`") from None
     if program.warnings and not args.quiet:
         output.print_diagnostics(program.warnings, program.sources)
+    refuse_clobbering(run_outputs(args), run_inputs(args, program.sources))
     element = element_of(program, args.element)
     parts.header["program"].update(element=element.label, entry=program.entry)
     if args.overrides:
         parts.header["overrides"] = list(args.overrides)
     parts.backend, parts.world = _open_backend(args, parts.header)
+    from mdle.ros.describe import body_header  # the body and odometry noise, for recordings
+
+    parts.header.update(body_header(parts.backend))
     from mdle.frames import FRAME_NOTE, reads_pose
 
     if not args.quiet and reads_pose(program):
@@ -288,7 +296,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
             parts.writer = _open_trace(parts.trace_path, parts.header)
             parts.observers.append(parts.writer)
         try:
-            parts.recorders = _recorders(args, parts.header, parts.world)
+            parts.recorders = recorders(args, parts.header, parts.world)
         except MdleError as err:  # cannot be created: a bad option (exit 1), not a full disk
             raise MdleError(err.diagnostics) from None
         parts.observers += parts.recorders
@@ -425,22 +433,6 @@ def _print(text: str) -> None:
         output.output_closed()
 
 
-def _recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> list[Any]:
-    """Return the MCAP recorders ``--record`` and ``--rosbag`` ask for."""
-    if not (args.record or args.rosbag):
-        return []
-    from mdle.ros.recorder import McapRecorder
-
-    out = []
-    compression = "" if args.record_compression == "none" else args.record_compression
-    if args.record:
-        out.append(McapRecorder(args.record, header, world, compression=compression))
-    if args.rosbag:
-        out.append(McapRecorder(args.rosbag, header, world, rosbag=True,
-                                compression=compression))
-    return out
-
-
 def _t0(result: Any) -> float:
     """Return the time of the run's first tick (the first event's), to report run times."""
     return result.events[0].time if result.events else 0.0
@@ -453,6 +445,8 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     """
     from mdle.errors import Diagnostic, MdleError
 
+    if args.backend == "ros2":  # mdle/cli/ros2.py
+        return open_ros2_backend(args, args.rate, header), None
     if args.backend == "pioneer":
         if not args.connect:
             raise MdleError(Diagnostic(None, "--backend pioneer needs --connect URL",
@@ -477,11 +471,10 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
         from mdle.drivers.pioneer import PioneerBackend
 
         if profile is not None and isinstance(backend, PioneerBackend):
-            # the recording's base_link -> laser and scan period
-            x, y, th = profile.ladar_mount
-            backend.laser_mount = (float(x), float(y), float(th))
-            if profile.scan_period is not None:
-                backend.laser_timing = (profile.scan_period, 0.0)
+            # the law's latency, the recording's base_link -> laser and scan period
+            from mdle.drivers.profile import apply_robot_profile
+
+            apply_robot_profile(backend, profile)
         return backend, None
     from mdle import sim
 

@@ -13,7 +13,6 @@ rerun the same command to resume).
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -113,26 +112,29 @@ def _sweep(args: argparse.Namespace) -> int:
         executor = LocalExecutor(args.jobs)
         where = f"{executor.jobs} local processes" + (
             "" if args.jobs else f" (all {default_jobs()} cores)")
+    from mdle.errors import MdleError
+    from mdle.userfile import UserFileError, read_user_file, writable_folder
+
+    try:  # read again for the results folder's copy: the file may have gone meanwhile
+        spec_text = read_user_file(spec_path).decode("utf-8", "replace")
+        writable_folder(out)  # before the runs, not after them
+    except UserFileError as err:
+        raise MdleError(f"--out: {err}" if err.path == str(out) else str(err)) from None
     progress = _RichProgress(where)
-    old = signal.signal(signal.SIGTERM, _as_interrupt)
-    try:
-        summary = run_sweep(study, out, executor=executor, progress=progress,
-                            spec_text=spec_path.read_text(encoding="utf-8"))
-    finally:
-        signal.signal(signal.SIGTERM, old)
+    # SIGINT, SIGTERM and SIGHUP reach the sweep as the command line's signal guard's
+    # interruption: run_sweep stops its workers and keeps every finished row
+    summary = run_sweep(study, out, executor=executor, progress=progress, spec_text=spec_text)
     tail = f"; Parquet: {summary.parquet}" if summary.parquet else ""
     print(f"{summary.done} runs done ({summary.failed} failed), {summary.skipped} already in "
           f"the table; table: {summary.table}{tail}", file=sys.stderr)
     if summary.interrupted:
         print(f"interrupted: every finished run is in {summary.table}; run the same command "
               "again to resume", file=sys.stderr)
-        return output.EXIT_INTERRUPTED
+        guard = getattr(args, "signals", None)  # 143 for SIGTERM, 129 for SIGHUP
+        return guard.exit_code if guard is not None and guard.received is not None \
+            else output.EXIT_INTERRUPTED
     print(f"summary: mdle sweep report {out}", file=sys.stderr)
     return output.EXIT_OK
-
-
-def _as_interrupt(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
 
 
 class _RichProgress:
@@ -228,6 +230,12 @@ def _report(args: argparse.Namespace) -> int:
                                     if isinstance(v, (int, float)) and not isinstance(v, bool)))
     base = Path(args.results)
     folder = args.plots or ((base if base.is_dir() else base.parent) / "plots")
+    from mdle.userfile import UserFileError, writable_folder
+
+    try:
+        writable_folder(folder)
+    except UserFileError as err:
+        raise MdleError(f"--plots: {err}") from None
     group = None
     if args.group:
         group = args.group if args.group in rows[0] else f"param_{args.group}"

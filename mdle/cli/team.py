@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from mdle.cli import output
+from mdle.cli.clobber import refuse_clobbering, run_inputs
 from mdle.cli.options import DEFAULT_RATE, writable_output
 from mdle.cli.signals import SignalGuard, signal_name
 from mdle.errors import Diagnostic, MdleError
@@ -39,11 +40,14 @@ def run_team(args: argparse.Namespace) -> int:
     from mdle.trace import TraceWriter
 
     guard: SignalGuard = getattr(args, "signals", None) or SignalGuard()
-    if args.start is not None or args.robot or args.backend != "sim" or args.record \
-            or args.rosbag:
-        raise MdleError(Diagnostic(None, "--start, --robot, --record, --rosbag and --backend "
-                                         "are for one robot; a team's robots, profiles and "
-                                         "starts are in its world and team file"))
+    if args.start is not None or args.robot or args.backend != "sim":
+        raise MdleError(Diagnostic(None, "--start, --robot and --backend are for one robot; "
+                                         "a team's robots, profiles and starts are in its "
+                                         "world and team file"))
+    if args.record or args.rosbag:
+        from mdle.ros import require
+
+        require("--record" if args.record else "--rosbag")
     if args.plan is not None:
         raise MdleError(Diagnostic(None, f"a team run takes no PLAN ({args.plan}): each "
                                          "robot's plan is in the team file or --robot-plan"))
@@ -72,6 +76,9 @@ def run_team(args: argparse.Namespace) -> int:
         spec.rate if spec.rate is not None else DEFAULT_RATE)
     until = args.until if args.until is not None else spec.until
     names = [r.name for r in world.robots]
+    traces = trace_paths(args.trace, names) if args.trace else {}
+    refuse_clobbering([("--plot", args.plot), *(("--trace", t) for t in traces.values())],
+                      run_inputs(args, [s for p in programs.values() for s in p.sources]))
     writers: dict[str, Any] = {}
     tmp = None
     trace = args.trace
@@ -79,6 +86,7 @@ def run_team(args: argparse.Namespace) -> int:
         tmp = tempfile.TemporaryDirectory(prefix="mdle-team-")
         trace = os.path.join(tmp.name, "run.jsonl")
     run: TeamRun | None = None
+    recordings: list[Any] = []
     try:
         with guard.deferring():
             sim_team = TeamSim(world, world.robots, seed=seed, sensing=args.sensing,
@@ -89,8 +97,16 @@ def run_team(args: argparse.Namespace) -> int:
                                                               until, name, plans[name],
                                                               programs[name],
                                                               elements[name].label))
-            run = TeamRun(sim_team, elements, rate, until,
-                          {n: [w] for n, w in writers.items()})
+            observers: dict[str, list[Any]] = {n: [w] for n, w in writers.items()}
+            recordings = _recordings(args, {n: _header(args, spec, world, seed, rate, until,
+                                                       n, plans[n], programs[n],
+                                                       elements[n].label)
+                                            for n in names if n in elements}, world)
+            for rec in recordings:
+                for name, recorder in rec.recorders.items():
+                    observers.setdefault(name, []).append(recorder)
+            run = TeamRun(sim_team, elements, rate, until, observers,
+                          realtime=args.realtime)
         with guard.stopping(run):
             results = run.run()
     except KeyboardInterrupt:
@@ -105,9 +121,15 @@ def run_team(args: argparse.Namespace) -> int:
         with guard.deferring():
             for w in writers.values():
                 w.close()
+            for rec in recordings:
+                rec.close()
     for w in writers.values():
         if w.error is not None:
             raise w.error
+    for rec in recordings:
+        if rec.error is not None:
+            _say(f"mdle run: {rec.error}")
+            return output.EXIT_IO
     if args.plot:
         from mdle.team_plot import plot_team
 
@@ -131,6 +153,30 @@ def run_team(args: argparse.Namespace) -> int:
     return code
 
 
+def _recordings(args: argparse.Namespace, headers: dict[str, dict[str, Any]],
+                world: Any) -> list[Any]:
+    """Return the team recordings ``--record``, ``--rosbag`` and ``--foxglove`` ask for.
+
+    One file each, every robot in it under ``/NAME``; the live view shows the first.
+    """
+    if not (args.record or args.rosbag or args.foxglove):
+        return []
+    from mdle.cli.recorders import live_view
+    from mdle.ros.team_record import TeamRecording
+
+    live = live_view(args) if args.foxglove else []
+    compression = "" if args.record_compression == "none" else args.record_compression
+    out = []
+    for target, rosbag in ((args.record, False), (args.rosbag, True)):
+        if target:
+            out.append(TeamRecording(target, headers, world, rosbag=rosbag, live=live,
+                                     compression=compression))
+            live = []
+    if live:
+        out.append(TeamRecording(None, headers, world, live=live))
+    return out
+
+
 def _summary(name: str, result: Any) -> str:
     t0 = result.events[0].time if result.events else 0.0
     text = (f"{name}: {result.termination.path} ended ({result.termination.cause.value}) at "
@@ -152,6 +198,8 @@ def _summary(name: str, result: Any) -> str:
 def _header(args: argparse.Namespace, spec: Any, world: Any, seed: int, rate: float,
             until: float | None, name: str, plan: str, program: Any, element: str
             ) -> dict[str, Any]:
+    from mdle.ros.describe import profile_header  # the body and odometry noise, for recordings
+
     r = next(r for r in world.robots if r.name == name)
     return {"program": {"file": os.path.abspath(plan),
                         "element": element, "entry": program.entry},
@@ -160,7 +208,8 @@ def _header(args: argparse.Namespace, spec: Any, world: Any, seed: int, rate: fl
             "seed": seed, "robot": r.profile.name, "sensing": args.sensing,
             "team": {"robot": name, "robots": [x.name for x in world.robots],
                      "file": spec.source},
-            "start": {"x": r.start.x, "y": r.start.y, "theta": r.start.theta}}
+            "start": {"x": r.start.x, "y": r.start.y, "theta": r.start.theta},
+            **profile_header(r.profile)}
 
 
 def _say(text: str) -> None:

@@ -31,13 +31,34 @@ def add_parser(subparsers: Any) -> None:
                       help="the image to write: .png, .svg or .pdf (default: a window when "
                            "there is a display, else NAME.png here)")
     show.add_argument("--no-scan", action="store_true", help="do not draw the start scan")
+    _add_import(sub)
     p.set_defaults(handler=run)
+
+
+def _add_import(sub: Any) -> None:
+    imp = sub.add_parser(
+        "import", help="make a world file from a ROS map_server map or an IR-SIM world",
+        description="Read a ROS map_server map (its YAML file, with a PGM or PNG image) or an "
+                    "IR-SIM world file, and write an mdle world file: a map's occupied cells "
+                    "become polygons with holes (their outlines, simplified within "
+                    "--tolerance), an IR-SIM world's obstacles become shapes.",
+        epilog="Example: `mdle worlds import office.yaml -o office.world.yaml`, then "
+               "`mdle run plan.mdle --world office.world.yaml`.")
+    imp.add_argument("source", metavar="FILE", help="a map_server YAML file or an IR-SIM world")
+    imp.add_argument("-o", "--output", metavar="FILE",
+                     help="the world file to write (default: SOURCE_STEM.world.yaml here)")
+    imp.add_argument("--tolerance", metavar="M", type=float,
+                     help="how far a map's simplified outline may stray from the occupied "
+                          "cells, metres (default: one cell; 0 keeps every corner)")
+    imp.add_argument("--name", help="the world's name (default: the source's file name)")
 
 
 def run(args: argparse.Namespace) -> int:
     """List or draw worlds; return the exit code."""
     if getattr(args, "action", None) == "show":
         return _show(args)
+    if getattr(args, "action", None) == "import":
+        return _import(args)
     from mdle.sim.catalog import DEFAULT_WORLD, world_descriptions
 
     rows = world_descriptions()
@@ -106,8 +127,10 @@ def _show(args: argparse.Namespace) -> int:
     import os
 
     from mdle import sim
+    from mdle.cli.clobber import refuse_clobbering
     from mdle.figure_output import save_figure, show_or_write
 
+    refuse_clobbering([("-o", args.output)], [("the world", args.world)])
     if args.output is not None:
         ext = os.path.splitext(args.output)[1].lower().lstrip(".")
         if ext not in ("png", "svg", "pdf"):
@@ -123,6 +146,30 @@ def _show(args: argparse.Namespace) -> int:
         return 0
     save_figure(fig, args.output, dpi=120)
     print(f"world drawn to {args.output}")
+    return 0
+
+
+def _import(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from mdle.errors import MdleError
+    from mdle.sim.importers import import_world
+    from mdle.sim.world_dump import world_to_yaml
+
+    tol = args.tolerance
+    if tol is not None and not (math.isfinite(tol) and tol >= 0):
+        raise MdleError(f"--tolerance is a length of 0 m or more, not {tol!r}")
+    out = Path(args.output or f"{Path(args.source).stem}.world.yaml")
+    if out.resolve() == Path(args.source).resolve():
+        raise MdleError(f"the world would overwrite its source {args.source}: give -o FILE")
+    world = import_world(args.source, tol, args.name)
+    try:
+        out.write_text(world_to_yaml(world), encoding="utf-8")
+    except OSError as err:
+        raise MdleError(f"cannot write {out}: {err.strerror or err}") from None
+    segments = world.parts.n_segments
+    print(f"{out}: {len(world.obstacles)} obstacles, {segments} straight faces; start "
+          f"({world.start_pose.x:.2f}, {world.start_pose.y:.2f})")
     return 0
 
 

@@ -41,6 +41,8 @@ __all__ = [
     "run_study",
     "run_task",
     "SpecTask",
+    "row_kind",
+    "study_family",
     "study_specs",
 ]
 
@@ -73,6 +75,12 @@ class StudyConfig:
     duration: float | None = None
     blind: bool = False
     tolerance: float | None = None
+    suite: str = "paper"
+    """``paper``: the 13 families of :data:`sim.generated.FAMILIES`; ``lab``: the thin, sharp
+    and clustered ones of :data:`sim.generated.LAB_FAMILIES` (shape ``i`` of family
+    ``LAB_FAMILIES[i % 6]``)."""
+    tangential: int = 0
+    """Tangential starts per shape (:func:`sim.starts.tangential_starts`), reported apart."""
 
     @property
     def run_duration(self) -> float:
@@ -112,6 +120,14 @@ class RunSpec:
     kf: float | None
     duration: float
     sim_seed: int
+    kind: str = "collision"
+    """``collision``, ``blind`` (blind side) or ``tangential`` (passing a tip or a pole)."""
+
+
+#: The kinds of start, in the order the tables show them.
+KINDS = ("collision", "tangential", "blind")
+#: A run that ends farther than this beyond rc from every boundary drove away (m).
+AWAY = 1.0
 
 
 def plan_text(side: str, rc: float, v: float, kf: float | None, duration: float) -> str:
@@ -121,8 +137,17 @@ def plan_text(side: str, rc: float, v: float, kf: float | None, duration: float)
             f"{gains}), never, {duration:.12g} s)\n")
 
 
-def _sim_seed(seed: int, index: int, start: int, blind: bool) -> int:
-    return int(np.random.SeedSequence((seed, index, start, int(blind))).generate_state(1)[0])
+def _sim_seed(seed: int, index: int, start: int, blind: bool, kind: str = "collision") -> int:
+    key = (seed, index, start, int(blind)) if kind != "tangential" else (seed, index, start, 3)
+    return int(np.random.SeedSequence(key).generate_state(1)[0])
+
+
+def study_family(config: StudyConfig, index: int) -> str:
+    """Return the family of shape ``index`` in the study's suite."""
+    from mdle.sim.generated import FAMILIES, LAB_FAMILIES
+
+    families = LAB_FAMILIES if config.suite == "lab" else FAMILIES
+    return families[index % len(families)]
 
 
 def study_specs(config: StudyConfig) -> list[RunSpec]:
@@ -132,18 +157,26 @@ def study_specs(config: StudyConfig) -> list[RunSpec]:
     ``(seed, i, 2)`` (blind side): the same shapes and starts whatever the law.
     """
     from mdle.sim.generated import generate_shape
-    from mdle.sim.starts import blind_side_starts, collision_starts
+    from mdle.sim.profiles import robot_profile
+    from mdle.sim.starts import blind_side_starts, collision_starts, tangential_starts
 
+    if config.suite not in ("paper", "lab"):
+        raise ValueError(f"suite must be `paper` or `lab`, got `{config.suite}`")
     specs: list[RunSpec] = []
     for index in range(config.shapes):
-        shape = generate_shape(config.seed, index)
+        shape = generate_shape(config.seed, index, study_family(config, index))
         world = shape.world()
-        kinds = [(False, collision_starts(world, config.starts, (config.seed, index, 1),
-                                          config.side))]
+        kinds = [("collision", collision_starts(world, config.starts, (config.seed, index, 1),
+                                                config.side))]
+        if config.tangential:
+            kinds.append(("tangential", tangential_starts(
+                world, config.tangential, (config.seed, index, 3), config.side,
+                ladar=robot_profile(config.robot).ladar_mount[0])))
         if config.blind:
-            kinds.append((True, blind_side_starts(world, config.starts, (config.seed, index, 2),
-                                                  config.side)))
-        for blind, starts in kinds:
+            kinds.append(("blind", blind_side_starts(world, config.starts,
+                                                     (config.seed, index, 2), config.side)))
+        for kind, starts in kinds:
+            blind = kind == "blind"
             for s in starts:
                 specs.append(RunSpec(
                     family=shape.family, shape=shape.name, shape_seed=config.seed,
@@ -152,7 +185,7 @@ def study_specs(config: StudyConfig) -> list[RunSpec]:
                     gap=s.gap, side=config.side, sensing=config.sensing, robot=config.robot,
                     rate=config.rate, v=config.v, rc=config.rc, kf=config.kf,
                     duration=config.run_duration,
-                    sim_seed=_sim_seed(config.seed, index, s.index, blind)))
+                    sim_seed=_sim_seed(config.seed, index, s.index, blind, kind), kind=kind))
     return specs
 
 
@@ -169,7 +202,7 @@ def run_spec(spec: RunSpec) -> Row:
     from mdle.sim.generated import generate_shape
     from mdle.sim.profiles import robot_profile
 
-    shape = generate_shape(spec.shape_seed, spec.shape_index)
+    shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
     world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
     program = load_text(plan_text(spec.side, spec.rc, spec.v, spec.kf, spec.duration),
                         file=f"<{spec.shape}>")
@@ -223,10 +256,11 @@ def replay_files(spec: RunSpec) -> tuple[str, str]:
     from mdle.sim.profiles import robot_profile
     from mdle.sim.world_dump import world_to_yaml
 
-    shape = generate_shape(spec.shape_seed, spec.shape_index)
+    shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
     world = replace(shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot)),
                     seed=spec.sim_seed)
-    kind = "blind-side start" if spec.blind else "collision-course start"
+    kind = {"blind": "blind-side start", "tangential": "tangential start"}.get(
+        spec.kind, "collision-course start")
     plan = (f"# {spec.shape} (seed {spec.shape_seed}, index {spec.shape_index}), {kind} "
             f"{spec.start}.\n# Replay: mdle run THIS.mdle --rate {spec.rate:g} "
             f"--sensing {spec.sensing}\n"
@@ -381,16 +415,26 @@ def spec_fields() -> list[str]:
     return [f.name for f in fields(RunSpec)]
 
 
+def row_kind(row: Row) -> str:
+    """Return a row's kind of start (rows written before tangential starts have none)."""
+    kind = row.get("kind")
+    if kind in KINDS:
+        return str(kind)
+    return "blind" if row["blind"] in (True, "True") else "collision"
+
+
 def summarise(rows: Sequence[Row], tolerance: float) -> list[dict[str, Any]]:
-    """Summarise rows per (blind, family) and overall (family ``all``), collision courses first.
+    """Summarise rows per (kind, family) and overall (family ``all``), collision courses first.
 
     Each summary: runs, collisions, engaged (count), worst clearance (m), median and max of
     the second-half mean ``|d - rc|`` over engaged runs (m), median time to engage (s),
-    and the failures (runs whose outcome is not ``ok``).
+    the failures (runs whose outcome is not ``ok``) and the runs that drove away (ended
+    more than :data:`AWAY` beyond rc from every boundary).
     """
     out = []
-    for blind in (False, True):
-        group = [r for r in rows if r["blind"] == blind]
+    for kind in KINDS:
+        blind = kind == "blind"
+        group = [r for r in rows if row_kind(r) == kind]
         if not group:
             continue
         families = sorted({r["family"] for r in group}, key=_family_order)
@@ -400,7 +444,7 @@ def summarise(rows: Sequence[Row], tolerance: float) -> list[dict[str, Any]]:
             errs = np.array([r["mean_err"] for r in engaged], dtype=float)
             te = np.array([r["t_engage"] for r in engaged], dtype=float)
             out.append({
-                "blind": blind, "family": family, "runs": len(rs),
+                "blind": blind, "kind": kind, "family": family, "runs": len(rs),
                 "collisions": sum(bool(r["collided"]) for r in rs),
                 "engaged": len(engaged),
                 "worst_clearance": _nanmin([float(r["min_clearance"]) for r in rs]),
@@ -409,6 +453,8 @@ def summarise(rows: Sequence[Row], tolerance: float) -> list[dict[str, Any]]:
                 "median_t_engage": float(np.median(te)) if len(te) else math.nan,
                 "failures": sum(outcome(r, tolerance) != "ok" for r in rs),
                 "errors": sum(bool(r.get("error")) for r in rs),
+                "away": sum(float(r["final_d"]) > float(r["rc"]) + AWAY for r in rs
+                            if not r.get("error")),
             })
     return out
 
@@ -419,6 +465,7 @@ def _nanmin(values: list[float]) -> float:
 
 
 def _family_order(family: str) -> int:
-    from mdle.sim.generated import FAMILIES
+    from mdle.sim.generated import FAMILIES, LAB_FAMILIES
 
-    return FAMILIES.index(family) if family in FAMILIES else len(FAMILIES)
+    order = FAMILIES + LAB_FAMILIES
+    return order.index(family) if family in order else len(order)

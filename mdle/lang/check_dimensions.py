@@ -292,11 +292,13 @@ class DimensionChecks(ExpressionChecks):
             return self._interrupt_body(target, bound, expr.span if args else None)
         if target is None:
             # what a condition can read: numeric parameters, interrupts, sensor functions
-            pool = [*(k for k, v in env.items() if not isinstance(v, Symbol)),
-                    *(n for n, d in self.ns.definitions.items()
-                      if d.kind is st.DefKind.INTERRUPT),
-                    *self.ns.registry.sensors, "never"]
-            self._unknown(name, getattr(expr, "name_span", expr.span), "name", pool)
+            if self._readable is None:  # made once: the namespace does not change
+                self._readable = [*(n for n, d in self.ns.definitions.items()
+                                    if d.kind is st.DefKind.INTERRUPT),
+                                  *self.ns.registry.sensors, "never"]
+            params = [k for k, v in env.items() if not isinstance(v, Symbol)]
+            self._unknown(name, getattr(expr, "name_span", expr.span), "name", params,
+                          self._readable)
             raise _Abort
         self.error(expr.span, f"expected an interrupt such as `stalled` or `range(0 deg) < 1 m`; "
                    f"`{name}` is {_kind_name(target)}",
@@ -311,6 +313,7 @@ class DimensionChecks(ExpressionChecks):
         if key in self._cache:
             self._replay(key)
             return self._cache[key]
+        self._expand(d, call)
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))
         self._use_stack.append([])

@@ -47,22 +47,36 @@ class NameChecks(CheckerState):
         """
         key = (len(pool), tuple(pool[:3]), tuple(pool[-3:]))
         index = self._pools.get(key)
-        if index is None:
+        if index is None:  # by length, and by length and first letter (key "<len> <letter>")
             index = {}
             for c in dict.fromkeys(pool):
                 index.setdefault(len(c), []).append(c)
+                index.setdefault(f"{len(c)} {c[:1]}", []).append(c)
             self._pools[key] = index
         n = len(name)
-        near = [c for size in range(max(1, n // 2), 2 * n + 2) for c in index.get(size, ())]
-        if len(near) > _MAX_CANDIDATES:
-            near = ([c for c in near if c[:1] == name[:1]] + near)[:_MAX_CANDIDATES]
-        close = difflib.get_close_matches(name, near, n=1, cutoff=0.6)
+        sizes = range(max(1, n // 2), 2 * n + 2)
+        # names sharing the first letter first; the lists are walked only until enough are
+        # found, so one lookup never passes over the whole pool
+        near: dict[str, None] = {}  # ordered, without repeats
+        keys: list[int | str] = [f"{size} {name[:1]}" for size in sizes]
+        for k in [*keys, *sizes]:
+            near.update(dict.fromkeys(index.get(k, ())[:_MAX_CANDIDATES]))
+            if len(near) >= _MAX_CANDIDATES:
+                break
+        close = difflib.get_close_matches(name, list(near)[:_MAX_CANDIDATES], n=1, cutoff=0.6)
         return close[0] if close else None
 
-    def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
+    def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str],
+                 shared: list[str] | None = None) -> None:
         if name in self.unparsed:
             return  # its statement has a syntax error, reported already
         found = self._closest(name, list(pool))
+        if shared is not None:
+            # ``shared`` is the same list at every call (names the whole program offers):
+            # indexed once, so N unknown names cost N lookups, not N passes over the file
+            near = [c for c in (found, self._closest(name, shared)) if c]
+            close_all = difflib.get_close_matches(name, near, n=1, cutoff=0.6)
+            found = close_all[0] if close_all else None
         close = [found] if found else []
         self.error(span, f"unknown {what} `{name}`",
                    hint=f"did you mean `{close[0]}`?" if close else None)
@@ -265,9 +279,14 @@ class NameChecks(CheckerState):
             raise _Abort
         if name in self.unparsed:
             raise _Abort  # its statement has a syntax error, reported already
-        pool = [n for n, d in self.ns.definitions.items() if d.kind is not st.DefKind.INTERRUPT]
-        if expr is self._atom_head:  # `(g(1 m/s), never, 5 s)`: a control law fits here too
-            pool += list(self.ns.registry.laws)
+        with_laws = expr is self._atom_head  # `(g(1 m/s), never, 5 s)`: a law fits here too
+        pool = self._element_pools.get(with_laws)
+        if pool is None:  # made once per checker, so N unknown names cost N lookups
+            pool = [n for n, d in self.ns.definitions.items()
+                    if d.kind is not st.DefKind.INTERRUPT]
+            if with_laws:
+                pool += list(self.ns.registry.laws)
+            self._element_pools[with_laws] = pool
         found = self._closest(name, pool)
         close = [found] if found else []
         span = getattr(expr, "name_span", expr.span)

@@ -21,6 +21,7 @@ from mdle.errors import Diagnostic, Severity, Span
 from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
 from mdle.lang.dimensions import Quantity, Symbol, Value
+from mdle.lang.expansion import ExpansionBudget
 from mdle.lang.format import format_expr
 from mdle.lang.program import Element, Interrupt, MessageUse
 from mdle.lang.resolve import Namespace
@@ -34,6 +35,7 @@ Env = Mapping[str, Value]
 _EMPTY: Env = MappingProxyType({})
 _UNKNOWN = Quantity(math.nan, None)
 _MISSING = object()  # not in a cache (None there means: failed before)
+_NAN_KEY = "NaN"  # every NaN value's place in a cache key
 
 
 class _Abort(Exception):
@@ -63,14 +65,23 @@ def _kind_name(target: object) -> str:
     return "a parameter"
 
 
+def _frozen_value(v: Value) -> tuple[Any, ...]:
+    if isinstance(v, Symbol):
+        return (v.name,)
+    # NaN (a parameter only a call fixes, or `inf * 0`) is never equal to itself: keyed by
+    # value, every NaN would miss the cache and a chain of definitions passing one on
+    # (`iK(a) = iK-1(a) or iK-1(a + 1 deg)`) would be checked once per path, 2**K times
+    value = _NAN_KEY if v.value != v.value else v.value
+    return (value, v.dim, v.bare)
+
+
 def _freeze(bound: Mapping[str, Value]) -> tuple[tuple[str, Any], ...]:
     if not bound:
         return ()
     if len(bound) == 1:
         ((k, v),) = bound.items()
-        return ((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare)),)
-    return tuple(sorted((k, (v.name,) if isinstance(v, Symbol) else (v.value, v.dim, v.bare))
-                        for k, v in bound.items()))
+        return ((k, _frozen_value(v)),)
+    return tuple(sorted((k, _frozen_value(v)) for k, v in bound.items()))
 
 
 def _short(expr: st.Expr) -> str:
@@ -105,12 +116,16 @@ class CheckerState(ABC):
         self._notes: list[Diagnostic] = []
         self._depth = 0
         self._cache: dict[tuple[Any, ...], Any] = {}
+        #: what instances with new argument values add to the program (bounded)
+        self._expansion = ExpansionBudget()
         self.broken: set[str] = set()
         self._depths: dict[int, int] = {}
         self._too_deep = False
         self._keep: list[Element] = []
         self._never_memo: dict[int, bool] = {}  # by id: elements stay alive in _keep
-        self._pools: dict[tuple[Any, ...], dict[int, list[str]]] = {}  # _closest's indexes
+        self._pools: dict[tuple[Any, ...], dict[int | str, list[str]]] = {}  # _closest's indexes
+        self._readable: list[str] | None = None  # the names any condition may read
+        self._element_pools: dict[bool, list[str]] = {}  # element names (True: and laws)
         self._spec_slots: dict[int, list[_Slot]] = {}  # by id of a law or sensor function
         self._def_slots: dict[int, list[_Slot]] = {}  # by id of a definition
         #: Names defined by statements that did not parse: uses of them are not errors
@@ -166,6 +181,18 @@ class CheckerState(ABC):
         self._seen.add(key)
         self.errors.append(Diagnostic(span, message, Severity.ERROR, hint,
                                       tuple(notes) + tuple(self._notes[-1:])))
+
+    def _expand(self, d: st.Definition, call: Span | None) -> None:
+        """Account for a new instance of ``d`` before it is made; abort past the budget."""
+        budget = self._expansion
+        if budget.charge(d):
+            return
+        if not budget.reported:  # the first refusal says where; later ones abort quietly
+            budget.reported = True
+            self.error(call or d.name_span, budget.message(d),
+                       hint="each different set of argument values makes another copy of a "
+                            "definition; pass fewer different values")
+        raise _Abort
 
     def warn(self, span: Span | None, message: str, hint: str | None = None,
              in_use: bool = False) -> None:
@@ -242,7 +269,8 @@ class CheckerState(ABC):
         """Record the channels and robots a call names (:mod:`~mdle.lang.check_names`)."""
 
     @abstractmethod
-    def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str]) -> None:
+    def _unknown(self, name: str, span: Span, what: str, pool: Sequence[str],
+                 shared: list[str] | None = None) -> None:
         """Report an unknown name (:mod:`~mdle.lang.check_names`)."""
 
     @abstractmethod

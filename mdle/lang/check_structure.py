@@ -343,6 +343,7 @@ class StructureChecks(CheckerState):
                 raise _Abort
             self._replay(key)
             return cached
+        self._expand(d, call)
         env = MappingProxyType(dict(bound))
         if call is not None:
             self._notes.append(Diagnostic(call, f"in this use of `{d.name}`", Severity.NOTE))

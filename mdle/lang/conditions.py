@@ -349,8 +349,115 @@ class _Source:
         return code if n.op in _BOOL_NODES else f"(True if {code} else False)"
 
 
+#: Distinct nodes above which an expression is evaluated by closures rather than by
+#: generated code: Python's ``compile`` of one huge function takes seconds, cannot be
+#: interrupted and holds the tick loop meanwhile, while closures are made in a Python
+#: loop (a signal is answered between two nodes) in time linear in the nodes.
+_GENERATE_LIMIT = 1000
+
+
+def _distinct_nodes(root: Node, limit: int) -> int:
+    """Return the number of distinct non-constant nodes under ``root`` (stops past ``limit``)."""
+    seen = {id(root)}
+    stack = [root]
+    while stack and len(seen) <= limit:
+        for part in stack.pop().parts:
+            if isinstance(part, Node) and part.op != "const" and id(part) not in seen:
+                seen.add(id(part))
+                stack.append(part)
+    return len(seen)
+
+
+MFn = Callable[[Context, list[Any]], Any]  # a node's closure: (ctx, the test's memo slots)
+
+
+def _node_closure(n: Node, made: Mapping[int, MFn]) -> MFn:
+    """Return the closure of one node whose parts' closures are already ``made``."""
+    op, p = n.op, n.parts
+
+    def part(x: Any) -> MFn:
+        if isinstance(x, Node) and x.op != "const":
+            return made[id(x)]
+        value = x.parts[0] if isinstance(x, Node) else x
+        return lambda ctx, m: value
+
+    def truth(x: Any) -> MFn:  # bool(x) without a call where x is a bool already
+        f = part(x)
+        if isinstance(x, Node) and x.op in _BOOL_NODES:
+            return f
+        return lambda ctx, m: True if f(ctx, m) else False
+
+    if op == "const":
+        return part(n)
+    if op == "sensor":
+        fn, args = p
+        return lambda ctx, m: fn(args, ctx)
+    if op == "not":
+        f = part(p[0])
+        return lambda ctx, m: not f(ctx, m)
+    if op == "neg":
+        f = part(p[0])
+        return lambda ctx, m: -f(ctx, m)
+    if op == "cmp":
+        test, left, right = _COMPARE[p[0]], part(p[1]), part(p[2])
+        return lambda ctx, m: True if test(left(ctx, m), right(ctx, m)) else False
+    if op == "arith":
+        fa = _divide if p[0] == "/" else _ARITH[p[0]]
+        left, right = part(p[1]), part(p[2])
+        return lambda ctx, m: fa(left(ctx, m), right(ctx, m))
+    x, y = truth(p[0]), truth(p[1])
+    if op == "and":
+        return lambda ctx, m: x(ctx, m) and y(ctx, m)
+    if op == "or":
+        return lambda ctx, m: x(ctx, m) or y(ctx, m)
+    return lambda ctx, m: x(ctx, m) != y(ctx, m)
+
+
+def _memoised(f: MFn, slot: int) -> MFn:
+    """Return ``f`` whose value is kept in ``m[slot]`` for the rest of one test."""
+    def g(ctx: Context, m: list[Any]) -> Any:
+        v = m[slot]
+        if v is _UNSET:
+            v = m[slot] = f(ctx, m)
+        return v
+    return g
+
+
+def _interpret(root: Node, as_bool: bool) -> Fn:
+    """Return a function of ``ctx`` evaluating ``root`` through one closure per node.
+
+    It evaluates what the generated code does, in the same order, each shared node at
+    most once per test; the closures are made bottom-up without recursion.
+    """
+    shared = _shared(root)
+    slots = {key: i for i, key in enumerate(shared)}
+    made: dict[int, MFn] = {}
+    stack: list[tuple[Node, bool]] = [(root, False)]
+    while stack:
+        n, parts_made = stack.pop()
+        if id(n) in made:
+            continue
+        if not parts_made:
+            stack.append((n, True))
+            stack.extend((x, False) for x in n.parts if isinstance(x, Node) and id(x) not in made)
+            continue
+        f = _node_closure(n, made)
+        made[id(n)] = _memoised(f, slots[id(n)]) if id(n) in slots else f
+    top = made[id(root)]
+    if as_bool and root.op not in _BOOL_NODES:
+        inner = top
+        top = lambda ctx, m: True if inner(ctx, m) else False  # noqa: E731
+    count = len(slots)
+
+    def test(ctx: Context) -> Any:
+        return top(ctx, [_UNSET] * count)
+    return test
+
+
 def _compile(node: Node, as_bool: bool) -> Fn:
     """Return one function of ``ctx`` evaluating ``node`` (as a bool when ``as_bool``)."""
+    if _distinct_nodes(node, _GENERATE_LIMIT) > _GENERATE_LIMIT:
+        return _interpret(node, as_bool)
     src = _Source(_shared(node))
     body = src.truth(node) if as_bool else src.value(node)
     params = ", ".join(src.names)

@@ -35,11 +35,13 @@ from mdle.backend import Pose
 from mdle.cli.output import print_diagnostics
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
+from mdle.ranges import COORDINATE
 from mdle.repl import views
 from mdle.repl.reports import RunReport
 from mdle.repl.session import ReplError, Session
 from mdle.runtime import Observer
 from mdle.runtime.events import ended_how
+from mdle.userfile import file_fault, file_fault_words
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 
@@ -190,15 +192,24 @@ class Repl:
                 raise
             self.complain("interrupted")
             ok = False
+        except BrokenPipeError:
+            raise  # standard output is gone: the front end ends the session quietly
         except Exception as exc:  # noqa: BLE001 (an mdle bug: report it, keep the session)
+            if isinstance(exc, OSError) and file_fault(exc):  # a full disk, a read-only folder
+                self.complain(file_fault_words(exc))
+                return self._failed()
             if self.debug:
                 traceback.print_exc(file=self.err)
             self.complain(f"internal error: {type(exc).__name__}: {exc}",
                           hint="this is a bug in mdle; the session is intact")
             ok = False
         if not ok:
-            self.failures += 1
+            return self._failed()
         return ok
+
+    def _failed(self) -> bool:
+        self.failures += 1
+        return False
 
     def _dispatch(self, text: str) -> bool:
         kind = classify(text)
@@ -337,8 +348,8 @@ class Repl:
             if len(args) not in (2, 3):
                 raise ReplError(":reset takes no argument (the world's start) or X Y [THETA] "
                                 "(metres, metres, degrees)")
-            x = _finite(args[0], "x")
-            y = _finite(args[1], "y")
+            x = _coordinate(args[0], "x")
+            y = _coordinate(args[1], "y")
             th = math.radians(_finite(args[2], "theta")) if len(args) == 3 else 0.0
             pose = Pose(x, y, th)
         here = self.session.reset(pose)
@@ -505,6 +516,14 @@ def _number(text: str, what: str) -> float:
         raise ReplError(f"{what} must be a number, got `{text}`") from None
     if math.isnan(value):
         raise ReplError(f"{what} must be a number, got `{text}`")
+    return value
+
+
+def _coordinate(text: str, what: str) -> float:
+    value = _finite(text, what)
+    problem = COORDINATE.problem(value, text)
+    if problem is not None:
+        raise ReplError(f"{what}: {problem}")
     return value
 
 

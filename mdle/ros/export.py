@@ -10,6 +10,7 @@ why.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -20,6 +21,7 @@ from typing import Any
 from mdle.errors import Diagnostic, MdleError, Span
 from mdle.ros.topics import RosRecording
 from mdle.trace import TRACE_FORMAT, TRACE_VERSION, TraceError, decode_ranges
+from mdle.userfile import UserFileError, open_user_file, os_reason, replacing
 
 __all__ = ["ExportReport", "export_trace"]
 
@@ -67,17 +69,31 @@ def _missing(key: str) -> Any:
     raise _BadRecord(f"the record has no `{key}`")
 
 
+#: Latest time a trace may hold (s): ROS stamps are nanoseconds in 64 bits (584 years).
+MAX_TIME = 1e9
+
+
 def _time(rec: Mapping[str, Any], key: str = "t") -> float:
     t = _number(rec, key)
     if not math.isfinite(t):
         raise _BadRecord(f"`{key}` must be a finite number of seconds")
+    if abs(t) > MAX_TIME:
+        raise _BadRecord(f"`{key}` is {t:g} s; a ROS time holds at most {MAX_TIME:g} s")
     return t
+
+
+def _loads(text: str) -> Any:
+    """Parse one JSON record; a record nested too deeply is a bad record, not a crash."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise _BadRecord("not a trace record (JSON nested too deeply)") from None
 
 
 def _header(path: str, first: bytes) -> dict[str, Any]:
     try:
-        rec = json.loads(first.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError):
+        rec = _loads(first.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, _BadRecord):
         rec = None
     if not isinstance(rec, dict) or rec.get("type") != "header" \
             or rec.get("format") != TRACE_FORMAT:
@@ -127,24 +143,51 @@ def export_trace(trace_path: str | os.PathLike[str], target: str | os.PathLike[s
         ``world`` does not load; the output cannot be created.
     """
     path = os.fspath(trace_path)
-    try:
-        f = open(path, "rb")
-    except OSError as exc:
-        raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: {exc.strerror}")) \
+    try:  # a regular file only (a FIFO or /dev/zero is refused), of any size: it streams
+        f = open_user_file(path, limit=_NO_LIMIT)
+    except UserFileError as exc:
+        raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: {exc.reason}")) \
             from None
     with f:
-        first = f.readline()
+        first = _read_line(f, path)
         header = _header(path, first)
         world_obj, warnings = _world(header, world)
+        if rosbag:
+            return _export(f, path, target, header, world_obj, warnings, True)
         try:
-            rec = RosRecording(target, header, world_obj, rosbag=rosbag)
-        except OSError as exc:
-            raise MdleError(Diagnostic(None, f"cannot write `{os.fspath(target)}`: "
-                                             f"{exc.strerror}")) from None
-        state = _Export(rec)
-        n = 1
-        stopped: tuple[int, str] | None = None
-        truncated = False
+            with replacing(target) as part:  # the old file stays until the new one is whole
+                report = _export(f, path, part, header, world_obj, warnings, False)
+        except UserFileError as exc:
+            raise MdleError(Diagnostic(None, str(exc))) from None
+        return dataclasses.replace(report, path=os.fspath(target))
+
+
+#: No size limit on a trace exported: it is read a line at a time.
+_NO_LIMIT = 2 ** 62
+
+
+def _read_line(f: Any, path: str) -> bytes:
+    try:
+        line: bytes = f.readline()
+    except OSError as exc:
+        raise TraceError(Diagnostic(None, f"cannot read trace `{path}`: "
+                                          f"{os_reason(exc)}")) from None
+    return line
+
+
+def _export(f: Any, path: str, target: str | os.PathLike[str], header: Mapping[str, Any],
+            world_obj: Any, warnings: list[str], rosbag: bool) -> ExportReport:
+    """Export the records after the header line to ``target``; see :func:`export_trace`."""
+    try:
+        rec = RosRecording(target, header, world_obj, rosbag=rosbag)
+    except OSError as exc:
+        raise MdleError(Diagnostic(None, f"cannot write `{os.fspath(target)}`: "
+                                         f"{os_reason(exc)}")) from None
+    state = _Export(rec)
+    n = 1
+    stopped: tuple[int, str] | None = None
+    truncated = False
+    try:
         try:
             for n, raw in enumerate(f, 2):  # noqa: B007 - n is the line reached
                 try:
@@ -158,8 +201,11 @@ def export_trace(trace_path: str | os.PathLike[str], target: str | os.PathLike[s
                     break
         finally:
             rec.finish()
+    except OSError as exc:  # reading the trace or writing the recording
+        raise MdleError(Diagnostic(None, f"cannot export `{path}` to `{os.fspath(target)}`: "
+                                         f"{os_reason(exc)}")) from None
     span = rec.out.time_range
-    return ExportReport(rec.path, rec.counts(), n, stopped, truncated, state.ended,
+    return ExportReport(rec.path or "", rec.counts(), n, stopped, truncated, state.ended,
                         (span[0] / 1e9, span[1] / 1e9) if span else None, tuple(warnings))
 
 
@@ -176,9 +222,11 @@ class _Export:
     def cut(raw: bytes) -> bool:
         """Return True when ``raw`` (the last line, with no line end) is a cut-off record."""
         try:
-            json.loads(raw.decode("utf-8"))
+            _loads(raw.decode("utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError):
             return True
+        except _BadRecord:
+            return False
         return False
 
     def line(self, raw: bytes) -> None:
@@ -190,7 +238,7 @@ class _Export:
         if not text.strip():
             return
         try:
-            rec = json.loads(text)
+            rec = _loads(text)
         except json.JSONDecodeError as exc:
             raise _BadRecord(f"not JSON ({exc.msg})") from None
         if not isinstance(rec, dict) or not isinstance(rec.get("type"), str):
@@ -213,7 +261,8 @@ class _Export:
                          _number(rec, "true_theta"))
             r.sample(text, t, _number(rec, "x"), _number(rec, "y"), _number(rec, "theta"),
                      _number(rec, "v"), _number(rec, "omega"), _number(rec, "cmd_v"),
-                     _number(rec, "cmd_omega"), truth)
+                     _number(rec, "cmd_omega"), truth, path=str(rec.get("path") or ""),
+                     diag=rec.get("diag") if isinstance(rec.get("diag"), dict) else None)
             self._last_t = t
         elif kind == "scan":
             t = _time(rec)

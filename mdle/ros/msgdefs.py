@@ -9,7 +9,12 @@ are left out.
 
 from __future__ import annotations
 
-__all__ = ["DEFINITIONS", "schema_text"]
+from collections.abc import Mapping, Sequence
+
+__all__ = ["DEFINITIONS", "DIAGNOSTICS", "diagnostics_definition", "schema_text"]
+
+#: mdle's own message type for a control law's diagnostics (one float64 field each).
+DIAGNOSTICS = "mdle_msgs/msg/Diagnostics"
 
 #: Each type's own fields, by its full name (``package/msg/Type``).
 DEFINITIONS: dict[str, str] = {
@@ -22,6 +27,9 @@ DEFINITIONS: dict[str, str] = {
     "geometry_msgs/msg/Point": "float64 x\nfloat64 y\nfloat64 z\n",
     "geometry_msgs/msg/Quaternion": (
         "float64 x 0\nfloat64 y 0\nfloat64 z 0\nfloat64 w 1\n"),
+    "geometry_msgs/msg/Point32": "float32 x\nfloat32 y\nfloat32 z\n",
+    "geometry_msgs/msg/Polygon": "Point32[] points\n",
+    "geometry_msgs/msg/PolygonStamped": "std_msgs/Header header\nPolygon polygon\n",
     "geometry_msgs/msg/Pose": "Point position\nQuaternion orientation\n",
     "geometry_msgs/msg/PoseStamped": "std_msgs/Header header\nPose pose\n",
     "geometry_msgs/msg/PoseWithCovariance": "Pose pose\nfloat64[36] covariance\n",
@@ -34,6 +42,11 @@ DEFINITIONS: dict[str, str] = {
     "nav_msgs/msg/Odometry": (
         "std_msgs/Header header\nstring child_frame_id\n"
         "geometry_msgs/PoseWithCovariance pose\ngeometry_msgs/TwistWithCovariance twist\n"),
+    "nav_msgs/msg/MapMetaData": (
+        "builtin_interfaces/Time map_load_time\nfloat32 resolution\nuint32 width\n"
+        "uint32 height\ngeometry_msgs/Pose origin\n"),
+    "nav_msgs/msg/OccupancyGrid": (
+        "std_msgs/Header header\nMapMetaData info\nint8[] data\n"),
     "sensor_msgs/msg/LaserScan": (
         "std_msgs/Header header\nfloat32 angle_min\nfloat32 angle_max\n"
         "float32 angle_increment\nfloat32 time_increment\nfloat32 scan_time\n"
@@ -62,13 +75,23 @@ _PRIMITIVES = frozenset({"bool", "byte", "char", "int8", "uint8", "int16", "uint
                          "uint32", "int64", "uint64", "float32", "float64", "string"})
 
 
-def _dependencies(name: str) -> list[str]:
+def diagnostics_definition(names: Sequence[str]) -> str:
+    """Return the definition of :data:`DIAGNOSTICS` with a float64 field per name.
+
+    A header (the tick's time, frame ``base_link``), then one number per diagnostic, NaN
+    when the running law does not record it: typed fields that plotting tools (Foxglove's
+    Plot panel, PlotJuggler) show by name.
+    """
+    return "std_msgs/Header header\n" + "".join(f"float64 {n}\n" for n in names)
+
+
+def _dependencies(name: str, definitions: Mapping[str, str]) -> list[str]:
     """Every type ``name`` uses, depth first, each once (full names)."""
     seen: list[str] = []
 
     def visit(full: str) -> None:
         package = full.partition("/")[0]
-        for line in DEFINITIONS[full].splitlines():
+        for line in definitions[full].splitlines():
             words = line.split()
             if not words or "=" in line:
                 continue
@@ -85,13 +108,15 @@ def _dependencies(name: str) -> list[str]:
     return seen
 
 
-def schema_text(name: str) -> str:
+def schema_text(name: str, extra: Mapping[str, str] | None = None) -> str:
     """Return the ``ros2msg`` schema of the type ``name`` with every type it uses.
 
-    Raises KeyError for a type not in :data:`DEFINITIONS`.
+    ``extra`` adds definitions (mdle's :data:`DIAGNOSTICS`, whose fields depend on the
+    laws). Raises KeyError for a type not in :data:`DEFINITIONS` or ``extra``.
     """
-    parts = [DEFINITIONS[name]]
-    for dep in _dependencies(name):
+    definitions = {**DEFINITIONS, **extra} if extra else DEFINITIONS
+    parts = [definitions[name]]
+    for dep in _dependencies(name, definitions):
         pkg, _, typ = dep.split("/", 2)
-        parts.append("=" * 80 + f"\nMSG: {pkg}/{typ}\n" + DEFINITIONS[dep])
+        parts.append("=" * 80 + f"\nMSG: {pkg}/{typ}\n" + definitions[dep])
     return "\n".join(parts)

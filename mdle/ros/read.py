@@ -53,12 +53,18 @@ def read_recording(path: str | os.PathLike[str]) -> Trace:
         if found is None:
             raise _error(path, "no .mcap file in this rosbag2 folder")
         source = found
-    try:
-        f = open(source, "rb")
-    except OSError as exc:
-        raise TraceError(Diagnostic(None, f"cannot read `{source}`: {exc.strerror}")) from None
+    from mdle.userfile import UserFileError, open_user_file, os_reason
+
+    try:  # a regular file only: a FIFO or a device is refused, not read until it ends
+        f = open_user_file(source)
+    except UserFileError as exc:
+        raise TraceError(Diagnostic(None, f"cannot read `{source}`: {exc.reason}")) from None
     with f:
-        return _read(path, f)
+        try:
+            return _read(path, f)
+        except OSError as exc:
+            raise TraceError(Diagnostic(None, f"cannot read `{source}`: "
+                                              f"{os_reason(exc)}")) from None
 
 
 def _read(path: str, f: Any) -> Trace:
@@ -104,8 +110,8 @@ def _read(path: str, f: Any) -> Trace:
                     continue
                 dec = decoders.get(ch.id)
                 if dec is None:
-                    dec = decoders[ch.id] = factory.decoder_for(ch.message_encoding,
-                                                                schemas.get(ch.schema_id))
+                    dec = decoders[ch.id] = _decoder(factory, ch.message_encoding,
+                                                     schemas.get(ch.schema_id))
                 if dec is None:
                     continue
                 msg = dec(record.data)
@@ -153,6 +159,13 @@ def _read(path: str, f: Any) -> Trace:
             raise _error(path, f"not a readable MCAP file ({type(exc).__name__}: {exc})"
                          ) from None
         truncated = True
+    robots = sorted(c.topic[1:-len("/mdle/state")] for c in channels.values()
+                    if c.topic.endswith("/mdle/state") and c.topic != "/mdle/state")
+    if not has_state and robots:
+        raise _error(path, f"a team's recording (robots {', '.join(robots)}): it is read "
+                           "robot by robot in Foxglove, PlotJuggler or rosbags",
+                     hint="for mdle plot, write the team's traces: mdle run --team ... "
+                          "--trace run.jsonl gives run.NAME.jsonl")
     if not has_state:
         raise _error(path, "not an mdle recording: no /mdle/state topic",
                      hint="mdle reads the MCAP files `mdle run --record` and `mdle export` "
@@ -163,3 +176,16 @@ def _read(path: str, f: Any) -> Trace:
               **{k: v for k, v in header.items() if k not in ("type", "format")}}
     return Trace(path, header, tuple(events), tuple(samples), end, truncated, tuple(extra),
                  tuple(lasers), tuple(scans))
+
+
+def _decoder(factory: Any, encoding: str, schema: Any) -> Any:
+    """Return the library's decoder for a channel, keeping its words off standard error.
+
+    The ROS 2 message parser prints ``Error processing ...`` on standard error before it
+    raises on a damaged schema; the raise becomes mdle's own message, the print is dropped.
+    """
+    import contextlib
+    import io
+
+    with contextlib.redirect_stderr(io.StringIO()):
+        return factory.decoder_for(encoding, schema)

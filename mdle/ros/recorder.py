@@ -17,10 +17,12 @@ and index; :meth:`McapRecorder.close` does it if the run never ended.
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Callable, Mapping
 from itertools import chain
+from operator import itemgetter
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -44,13 +46,16 @@ from mdle.trace import (
 if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
 
-__all__ = ["BATCH_AGE", "BATCH_TICKS", "McapRecorder", "RecordingError"]
+__all__ = ["BATCH_AGE", "BATCH_TICKS", "LIVE_BATCH_AGE", "McapRecorder", "RecordingError"]
 
 #: Ticks held before they are encoded together.
 BATCH_TICKS = 32
 
 #: Longest wall time (s) a tick waits to be encoded (a paced run, hardware at 10 Hz).
 BATCH_AGE = 0.5
+
+#: The same with a live view (``--foxglove``): what it shows lags the robot this much at most.
+LIVE_BATCH_AGE = 0.1
 
 
 class RecordingError(MdleError):
@@ -62,8 +67,8 @@ class McapRecorder:
 
     Parameters
     ----------
-    target : str or path-like
-        The ``.mcap`` file, or with ``rosbag`` the folder.
+    target : str or path-like or None
+        The ``.mcap`` file, or with ``rosbag`` the folder; None for a live view alone.
     header : mapping
         The run's trace header (what ``mdle run`` writes).
     world : sim.World or None
@@ -76,7 +81,9 @@ class McapRecorder:
         Wall clock (injectable for tests).
     **options
         ``chunk_size``, ``max_age``, ``compression`` for the MCAP file (``compression``
-        ``""``, none, unless given: ``"lz4"``).
+        ``""``, none, unless given: ``"lz4"``); ``live`` (live views, batches of
+        :data:`LIVE_BATCH_AGE` at most), ``outlet`` and ``robot`` (a team's robot in a
+        shared file) as :class:`~mdle.ros.topics.RosRecording` takes them.
 
     Raises
     ------
@@ -84,13 +91,15 @@ class McapRecorder:
         The file cannot be created.
     """
 
-    def __init__(self, target: str | os.PathLike[str], header: Mapping[str, Any],
+    def __init__(self, target: str | os.PathLike[str] | None, header: Mapping[str, Any],
                  world: Any = None, *, rosbag: bool = False, batch_ticks: int = BATCH_TICKS,
                  batch_age: float = BATCH_AGE, clock: Callable[[], float] = time.monotonic,
                  **options: Any) -> None:
-        self.target = os.fspath(target)
+        self.target = os.fspath(target) if target is not None else "the live view"
         # chunks not compressed unless asked: the cheapest to write while a run goes
         options.setdefault("compression", "")
+        if options.get("live"):  # a live view: ticks reach it within a tenth of a second
+            batch_age = min(batch_age, LIVE_BATCH_AGE)
         try:
             self.recording = RosRecording(target, header, world, rosbag=rosbag, **options)
         except OSError as exc:
@@ -156,17 +165,22 @@ class McapRecorder:
         self._batch = []
         laser, recording = self._laser, self.recording
         line_and_numbers = self._format.line_and_numbers
+        names = recording.diag_names
+        none = (math.nan,) * len(names)  # no law recording diagnostics this tick
+        every = itemgetter(*names) if len(names) > 1 else None  # a law recording them all
         times: list[float] = []
         lines: list[str] = []
         values: list[tuple[float, ...]] = []
         scans: list[tuple[int, Any]] = []  # (the tick it comes before, the scan)
+        paths: list[str] = []
+        diags: list[tuple[Any, ...]] = []
         for sample in batch:
             scan = sample.scan
             if scan is not None and scan is not laser.last:
                 record = laser.changed(scan)
                 if record is not None:
-                    _publish(recording, times, lines, values, scans)
-                    times, lines, values, scans = [], [], [], []
+                    _publish(recording, times, lines, values, scans, paths, diags)
+                    times, lines, values, scans, paths, diags = [], [], [], [], [], []
                     recording.laser(sample.time, record)
                 scans.append((len(times), scan))
             line, numbers = line_and_numbers(sample)
@@ -174,7 +188,18 @@ class McapRecorder:
             lines.append(line)
             values.append(numbers if numbers is not None and len(numbers) == 10
                           else sample_values(sample, numbers))
-        _publish(recording, times, lines, values, scans)
+            paths.append(sample.path)
+            diag = sample.diag
+            if not diag:
+                diags.append(none)
+            elif every is not None and len(diag) == len(names):
+                try:
+                    diags.append(every(diag))
+                except KeyError:  # other names: those it has
+                    diags.append(tuple([diag.get(n, math.nan) for n in names]))
+            else:
+                diags.append(tuple([diag.get(n, math.nan) for n in names]))
+        _publish(recording, times, lines, values, scans, paths, diags)
 
     def on_end(self, result: RunResult) -> None:
         """Publish the ``end`` record and finish the file (never raises: the run is over)."""
@@ -199,7 +224,8 @@ class McapRecorder:
 
 
 def _publish(recording: RosRecording, times: list[float], lines: list[str],
-             values: list[tuple[float, ...]], scans: list[tuple[int, Any]]) -> None:
+             values: list[tuple[float, ...]], scans: list[tuple[int, Any]],
+             paths: list[str], diags: list[tuple[Any, ...]]) -> None:
     """Publish ticks and scans taken from samples (nothing when there are none)."""
     if not (times or scans):
         return
@@ -207,6 +233,13 @@ def _publish(recording: RosRecording, times: list[float], lines: list[str],
     k = len(times)
     numbers = np.fromiter(chain.from_iterable(values), np.float64, 10 * k).reshape(k, 10)
     ticks = Ticks(times_ns(times), round9(numbers), lines)
+    ticks.paths = paths
+    try:  # numbers and flags (bools) as the law recorded them
+        diag = np.array(diags, np.float64).reshape(k, len(recording.diag_names))
+    except (TypeError, ValueError):  # anything else: NaN, as the export reads it
+        diag = np.array([recording.diagnostics(dict(zip(recording.diag_names, d,
+                                                        strict=True))) for d in diags])
+    ticks.diag = round9(diag.reshape(k, len(recording.diag_names)))
     if scans:
         m = len(scans)
         ticks.scan_at = [at for at, _ in scans]

@@ -1,7 +1,8 @@
 """A batch of ticks' ROS 2 messages as ready MCAP Message records, filled with numpy.
 
 Every tick a run publishes its odometry (``/odom``), transforms (``/tf``), command
-(``/cmd_vel``), in simulation the true pose (``/ground_truth``), the trace's sample line
+(``/cmd_vel``), in simulation the true pose (``/ground_truth``), the body's outline
+(``/footprint``), the law's diagnostics (``/mdle/diagnostics``), the trace's sample line
 (``/mdle/state``) and, when the ladar has a new one, a scan (``/scan``). Frame names and
 beam geometry are constant, so every byte of these Message records (the MCAP record
 header and the CDR message each) is at an offset known in advance, except the state
@@ -12,17 +13,18 @@ joins each tick's scan, row and text into one block that the MCAP file adds with
 index entries at once (:meth:`~mdle.ros.mcap_file.McapFile.add_block`). Records keep the
 order a tick at a time writer gives them: a tick's scan, then its other messages.
 
-Fields that are always zero (z, the quaternion's x and y, the covariances, a planar
-twist's other axes) are zeros of the template. The records' bytes are exactly what a
-field-by-field CDR writer makes (tests decode them with mcap-ros2-support and rosbags);
-sines and cosines come from :mod:`math`, as that writer's would.
+Fields that are always zero (z, the quaternion's x and y, a planar twist's other axes)
+are zeros of the template; the footprint's outline is constant, and the odometry's
+covariances are columns filled per batch (:mod:`mdle.ros.covariance`). The records'
+bytes are exactly what a field-by-field CDR writer makes (tests decode them with
+mcap-ros2-support and rosbags); sines and cosines come from :mod:`math`, as that writer's would.
 """
 
 from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from itertools import chain
 from typing import Any
@@ -31,6 +33,7 @@ import numpy as np
 
 from mdle.ros.cdr import Layout
 from mdle.ros.mcap_file import McapFile
+from mdle.ros.outlet import Outlet
 
 __all__ = ["Rows", "TickEncoder", "Ticks"]
 
@@ -121,6 +124,12 @@ class Ticks:
     scan_ns: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     stamps: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     ranges: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), _FLOAT32))
+    #: the ticks' diagnostics (k x the encoder's names, NaN where not recorded), or None
+    diag: np.ndarray | None = None
+    #: the ticks' running element paths (for ``/mdle/active``), or None
+    paths: list[str] | None = None
+    #: the odometry's pose and twist covariances (k x 36 each), or None: the encoder's
+    covariance: tuple[np.ndarray, np.ndarray] | None = None
 
 
 def times_ns(seconds: Iterable[float]) -> np.ndarray:
@@ -141,24 +150,28 @@ class TickEncoder:
 
     Parameters
     ----------
-    out : McapFile
-        The file.
+    out : McapFile or Outlet
+        The file, or the outlet that hands the messages to the file and live views.
     odom, tf, cmd, state, truth, scan : int
         Channel ids (``truth`` 0 on a robot: no ``/ground_truth`` and no ``map -> odom``).
     frames : (map, odom, base)
         Frame names.
     """
 
-    def __init__(self, out: McapFile, odom: int, tf: int, cmd: int, state: int, truth: int,
-                 scan: int, frames: tuple[str, str, str]) -> None:
+    def __init__(self, out: McapFile | Outlet, odom: int, tf: int, cmd: int, state: int, truth: int,
+                 scan: int, frames: tuple[str, str, str], *, footprint: int = 0,
+                 outline: Sequence[tuple[float, float]] = (), diagnostics: int = 0,
+                 diag_names: Sequence[str] = ()) -> None:
         self._out = out
         map_, odom_f, base = frames
         self.simulation = bool(truth)
         self.scan_channel = scan
+        self.diag_names = tuple(diag_names) if diagnostics else ()
         rows = Rows()
         # nav_msgs/Odometry: header, child frame, pose + covariance, twist + covariance
         lay = _stamp(Layout(), "").string(odom_f).string(base)
-        _planar_twist(_planar_pose(lay, "pose").zeros("d", 36)).zeros("d", 36)
+        _planar_pose(lay, "pose").field("pose_cov", "d", 36)
+        _planar_twist(lay).field("twist_cov", "d", 36)
         rows.message("odom", odom, lay)
         # tf2_msgs/TFMessage: odom -> base_link, in simulation map -> odom after it
         lay = _stamp(Layout().prim("I", 2 if truth else 1), "").string(odom_f).string(base)
@@ -170,9 +183,25 @@ class TickEncoder:
         if truth:  # geometry_msgs/PoseStamped in map
             rows.message("truth", truth, _planar_pose(_stamp(Layout(), "").string(map_),
                                                       "pose"))
+        self._extra: list[str] = []  # the optional records' names
+        if footprint:  # geometry_msgs/PolygonStamped in base_link: only the stamp varies
+            lay = _stamp(Layout(), "").string(base).count(len(outline))
+            for x, y in outline:
+                lay.prim("f", x, y, 0.0)
+            rows.message("footprint", footprint, lay)
+            self._extra.append("footprint")
+        if diagnostics:  # mdle_msgs/Diagnostics: the stamp and a float64 per name
+            lay = _stamp(Layout(), "").string(base)
+            if self.diag_names:
+                lay.field("values", "d", len(self.diag_names))
+            rows.message("diag", diagnostics, lay)
+            self._extra.append("diag")
         # std_msgs/String: its length, the text after the row
         rows.message("state", state, Layout().field("n", "I"), open_end=True)
         self._rows = rows
+        #: the odometry's covariances (36 each, row-major x y z roll pitch yaw) used
+        #: when a batch brings none: all 0 unless set (:mod:`mdle.ros.covariance`)
+        self.covariance = (np.zeros(36), np.zeros(36))
         self._scan: Rows | None = None
         self.count = 0  # beams of a scan
 
@@ -264,9 +293,16 @@ class TickEncoder:
         half = 0.5 * theta
         xy = v[:, 0:2]
         q = np.column_stack((_trig(math.sin, half), _trig(math.cos, half)))
-        names = ["odom", "tf", "cmd", "state"]
+        names = ["odom", "tf", "cmd", "state", *self._extra]
         if self.simulation:
             names.append("truth")
+        for name in self._extra:
+            rows[name + ".sec"], rows[name + ".nsec"] = sec, nsec
+        if self.diag_names:
+            diag = ticks.diag
+            rows["diag.values"] = np.nan if diag is None else diag
+        cov = ticks.covariance if ticks.covariance is not None else self.covariance
+        rows["odom.pose_cov"], rows["odom.twist_cov"] = cov
         times = ns[:, None]
         for name in names:
             rows[name + ".seq"] = seq

@@ -221,6 +221,7 @@ class Scheduler:
         self._stop_requested = False
         self._stop_reason: str | None = None
         self._ending = False
+        self._aborting = False  # ending by an error or a stop: observers cannot undo it
         self._t0: float | None = None
         self._obs: Observation | None = None
         self._pose: Pose = Pose()
@@ -625,8 +626,25 @@ class Scheduler:
 
     def _emit(self, event: Event) -> None:
         self._events.append(event)
+        if self._aborting:
+            self._tell_all("on_event", event)
+            return
         for o in self.observers:
             o.on_event(event)
+
+    def _tell_all(self, hook: str, arg: Any) -> None:
+        """Call ``hook`` of every observer while a run is aborted, whatever one of them does.
+
+        The run already ends with its own error; an observer failing now (a trace on the
+        disk that just filled) must not keep the others from hearing of the end, nor hide
+        that error behind its own. Its failure stays where it keeps it (a trace writer's
+        ``error``).
+        """
+        for o in self.observers:
+            try:
+                getattr(o, hook)(arg)
+            except Exception as exc:  # noqa: BLE001 - see the docstring
+                _log.debug("observer %r failed while the run ended: %s", o, exc)
 
     def _stall_check(self, obs: Observation, now: float) -> str | None:
         """Return the fault when the robot has been stalled or refusing to move too long."""
@@ -656,6 +674,7 @@ class Scheduler:
         ``cmd_omega`` zero), so a trace always ends with the command actually sent.
         """
         self._ending = True
+        self._aborting = cause is not None
         stopped: Observation | None = None
         if cause is not None:
             stopped = self._last_look()
@@ -679,9 +698,7 @@ class Scheduler:
                 self.backend.stop()
                 self._last_cmd = STOP
                 if stopped is not None and self.observers:
-                    sample = _stop_sample(stopped)
-                    for o in self.observers:
-                        o.on_tick(sample)
+                    self._tell_all("on_tick", _stop_sample(stopped))
             finally:
                 root = next((t for t in reversed(self._terminations) if t.level == 0),
                             Termination(self._root.path, 0, cause or Cause.STOPPED, now))
@@ -699,8 +716,11 @@ class Scheduler:
                     max_lateness=self._max_lateness,
                     reason=self._stop_reason if root.cause is Cause.STOPPED else None,
                 )
-                for o in self.observers:
-                    o.on_end(self.result)
+                if self._aborting:
+                    self._tell_all("on_end", self.result)
+                else:
+                    for o in self.observers:
+                        o.on_end(self.result)
 
     def _last_look(self) -> Observation | None:
         """Observe the robot as the run is aborted; the latest observation if that fails.

@@ -15,6 +15,7 @@ import signal
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import replace
 from typing import Any, Protocol
 
@@ -132,6 +133,10 @@ class LocalExecutor:
 
         ctx = multiprocessing.get_context("forkserver")
         ctx.set_forkserver_preload(["mdle.sweep.worker", "mdle.runtime", "mdle.sim", "mdle.atoms"])
+        # started now, before the first submit holds signals while the server loads mdle
+        from multiprocessing import forkserver
+
+        forkserver.ensure_running()
         return ProcessPoolExecutor(self.jobs, mp_context=ctx, initializer=_worker_setup,
                                    initargs=(os.getpid(),))
 
@@ -151,8 +156,9 @@ class LocalExecutor:
                     task = retry.popleft() if retry else next(todo, None)
                     if task is None:
                         break
-                    running[pool.submit(self.function, task)] = task
-                    self._workers = getattr(pool, "_processes", None) or {}
+                    with _signals_held():  # a worker is started whole, or not at all
+                        running[pool.submit(self.function, task)] = task
+                        self._workers = getattr(pool, "_processes", None) or {}
                 if not running:
                     return
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -188,6 +194,38 @@ class LocalExecutor:
         return lost_outcome(task, why)
 
 
+@contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold SIGINT, SIGTERM and SIGHUP for the block; the first one is raised after it.
+
+    A submit may start a worker process. Interrupted halfway, the pool would not know the
+    worker, could not stop it, and would let go of the queues it is still opening (it
+    then prints multiprocessing's traceback). The handlers are swapped, not the signal
+    mask: a signal sent to the process may land on any of its threads. Off the main
+    thread (no handlers can be set there) the block runs as it is.
+    """
+    held = [s for s in (getattr(signal, n, None) for n in ("SIGINT", "SIGTERM", "SIGHUP"))
+            if s is not None]
+    came: list[int] = []
+
+    def record(signum: int, frame: Any) -> None:
+        came.append(signum)
+
+    old: dict[int, Any] = {}
+    try:
+        for sig in held:
+            old[sig] = signal.signal(sig, record)
+    except ValueError:  # not the main thread
+        pass
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+        if came:
+            signal.raise_signal(came[0])  # to the handler that was there before
+
+
 def _failed(task: Task, exc: BaseException) -> Outcome:
     row = task.row()
     row.update(status="error", cause=f"internal error: {type(exc).__name__}: {exc}",
@@ -198,12 +236,15 @@ def _failed(task: Task, exc: BaseException) -> Outcome:
 def _stop(pool: Any) -> None:
     """Cancel what has not started and end the worker processes now."""
     workers = dict(getattr(pool, "_processes", None) or {})   # no public handle on them
-    pool.shutdown(wait=False, cancel_futures=True)
+    # The workers end before the pool lets its queues go: a worker still starting (an
+    # interruption soon after the sweep began) would otherwise open a semaphore the pool
+    # had just removed and print multiprocessing's traceback (SemLock._rebuild).
     for proc in workers.values():
         if proc.is_alive():
             proc.terminate()
     for proc in workers.values():
         proc.join(timeout=5)
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 class DaskExecutor:

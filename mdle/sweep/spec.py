@@ -38,8 +38,10 @@ from pathlib import Path
 from typing import Any
 
 from mdle.errors import MdleError, WorldError
+from mdle.ranges import RATE
 from mdle.sim.yaml_doc import _Doc, _yaml_value
 from mdle.sim.yaml_values import _closest, _integer, _mapping, _number, _show, _string
+from mdle.userfile import os_reason
 
 __all__ = ["SpecError", "Study", "WorldChoice", "RobotChoice", "StartRule", "parse_study",
            "read_study", "SENSING"]
@@ -56,6 +58,11 @@ _RANDOM_PARAMS = ("count", "seed", "ranges")
 SAMPLE_FIELDS = ("x", "y", "theta", "v", "omega", "cmd_v", "cmd_omega", "lateness",
                  "scan_age", "clearance", "true_x", "true_y", "true_theta")
 _MAX_RUNS = 10_000_000
+#: Largest count one axis may list (seeds, generated worlds, random parameter sets): each
+#: is made when the spec is read, before the runs are counted.
+MAX_AXIS = 100_000
+#: Largest seed in a study: the results table stores seeds as 64-bit signed integers.
+MAX_STUDY_SEED = 2 ** 63 - 1
 
 
 class SpecError(MdleError):
@@ -234,9 +241,11 @@ def _parse(doc: _Doc, base: Path, default_name: str) -> Study:
     if not isinstance(keep, bool):
         raise _fail(doc, "keep_traces", f"expected true or false, got {_show(keep)}")
     for path, v in (("seeds", seeds), ("worlds", worlds)):
+        seen: set[Any] = set()  # a set: 100,000 generated worlds compared pairwise took hours
         for i, item in enumerate(v):
-            if item in v[:i]:
+            if item in seen:
                 raise _fail(doc, f"{path}[{i}]", "repeats an earlier entry")
+            seen.add(item)
     study = Study(name=name, plan_label=plan_label, plan_text=plan_text,
                   plan_files=plan_files, entry=entry, worlds=worlds, robots=robots,
                   sensing=sensing, rates=rates, seeds=seeds, duration=duration, starts=starts,
@@ -313,23 +322,27 @@ def _worlds(doc: _Doc, path: str, base: Path, v: Any) -> list[WorldChoice]:
     if not isinstance(v, dict):
         return [_world(doc, path, base, v)]
     _mapping(doc, path, v, ("generated",), "a world name, a file, or {generated: ..}")
+    if "generated" not in v:  # `worlds: [{}]`
+        raise _fail(doc, path, "expected a world name, a file, or {generated: ..}")
     from mdle.sim.generated import FAMILIES
     from mdle.sweep.worlds import generated_text
 
     gpath = f"{path}.generated"
     g = _mapping(doc, gpath, v["generated"], _GENERATED,
                  "seed and count (and first), or seed and index; family")
-    seed = _integer(doc, f"{gpath}.seed", g.get("seed", 0))
+    seed = _integer(doc, f"{gpath}.seed", g.get("seed", 0), maximum=MAX_STUDY_SEED)
     family = None
     if "family" in g:
         family = _choice(doc, f"{gpath}.family", g["family"], FAMILIES)
     if "index" in g:
         if "count" in g or "first" in g:
             raise _fail(doc, gpath, "give `index` (one shape) or `count` (and `first`)")
-        indices = [_integer(doc, f"{gpath}.index", g["index"])]
+        indices = [_integer(doc, f"{gpath}.index", g["index"], maximum=MAX_STUDY_SEED)]
     else:
-        count = _integer(doc, f"{gpath}.count", g.get("count", 1), minimum=1)
-        first = _integer(doc, f"{gpath}.first", g.get("first", 0))
+        # bounded before the list is made: `count: 1e40` would allocate up front
+        count = _integer(doc, f"{gpath}.count", g.get("count", 1), minimum=1,
+                         maximum=MAX_AXIS)
+        first = _integer(doc, f"{gpath}.first", g.get("first", 0), maximum=MAX_STUDY_SEED)
         indices = list(range(first, first + count))
     out = []
     for i in indices:
@@ -349,7 +362,14 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
         text = resources.files("mdle.sim").joinpath("worlds", f"{name}.yaml").read_text("utf-8")
         return WorldChoice(name, text)
     p = base / name
-    if not p.is_file():
+    try:
+        found = p.is_file()
+    except (OSError, ValueError) as err:  # a name too long for a file, a NUL in it
+        why = os_reason(err) if isinstance(err, OSError) else "not a file name"
+        shown = name if len(name) <= 60 else name[:57] + "..."
+        raise _fail(doc, path, f"no reference world `{shown}`, and not a world file "
+                               f"({why})") from None
+    if not found:
         hint = _closest(name, tuple(list_worlds()))
         raise _fail(doc, path, f"no reference world or world file `{name}`"
                     + (f" (did you mean `{hint}`?)" if hint else
@@ -408,8 +428,9 @@ def _choice(doc: _Doc, path: str, v: Any, options: tuple[str, ...]) -> str:
 
 def _rate(doc: _Doc, path: str, v: Any) -> float:
     r = _number(doc, path, v, positive=True)
-    if r > 1000:
-        raise _fail(doc, path, f"must be at most 1000 Hz, got {v}")
+    problem = RATE.problem(r, str(v))
+    if problem is not None:
+        raise _fail(doc, path, problem)
     return r
 
 
@@ -418,10 +439,13 @@ def _seeds(doc: _Doc, v: Any) -> tuple[int, ...]:
         m = _mapping(doc, "seeds", v, ("count", "first"), "count and first seed")
         if "count" not in m:
             raise _fail(doc, "seeds", "missing key `count`")
-        n = _integer(doc, "seeds.count", m["count"], minimum=1)
-        first = _integer(doc, "seeds.first", m.get("first", 0))
+        # bounded before the seeds are made: `count: 2**31` would take 16 GiB up front
+        n = _integer(doc, "seeds.count", m["count"], minimum=1, maximum=MAX_AXIS)
+        first = _integer(doc, "seeds.first", m.get("first", 0),
+                         maximum=MAX_STUDY_SEED - n + 1)
         return tuple(range(first, first + n))
-    return tuple(_integer(doc, f"seeds[{i}]" if isinstance(v, list) else "seeds", s)
+    return tuple(_integer(doc, f"seeds[{i}]" if isinstance(v, list) else "seeds", s,
+                          maximum=MAX_STUDY_SEED)
                  for i, s in enumerate(_list(doc, "seeds", v, "seed")))
 
 
@@ -462,8 +486,8 @@ def _starts(doc: _Doc, v: Any) -> StartRule:
     m = _mapping(doc, path, body, _RANDOM_STARTS, "count, seed, distance, from, heading, spread")
     if "count" not in m:
         raise _fail(doc, path, "missing key `count` (starts per world)")
-    count = _integer(doc, f"{path}.count", m["count"], minimum=1)
-    seed = _integer(doc, f"{path}.seed", m.get("seed", 0))
+    count = _integer(doc, f"{path}.count", m["count"], minimum=1, maximum=_MAX_RUNS)
+    seed = _integer(doc, f"{path}.seed", m.get("seed", 0), maximum=MAX_STUDY_SEED)
     dist = m.get("distance", [1.0, 4.0])
     if isinstance(dist, list) and len(dist) == 2:
         lo = _number(doc, f"{path}.distance[0]", dist[0], nonneg=True)
@@ -527,8 +551,8 @@ def _parameters(doc: _Doc, v: Any) -> tuple[tuple[str, ...], tuple[tuple[tuple[s
     r = _mapping(doc, path, m["random"], _RANDOM_PARAMS, "count, seed and ranges")
     if "count" not in r or "ranges" not in r:
         raise _fail(doc, path, "needs `count` and `ranges`")
-    count = _integer(doc, f"{path}.count", r["count"], minimum=1)
-    seed = _integer(doc, f"{path}.seed", r.get("seed", 0))
+    count = _integer(doc, f"{path}.count", r["count"], minimum=1, maximum=MAX_AXIS)
+    seed = _integer(doc, f"{path}.seed", r.get("seed", 0), maximum=MAX_STUDY_SEED)
     ranges = r["ranges"]
     if not isinstance(ranges, dict) or not ranges:
         raise _fail(doc, f"{path}.ranges", f"expected NAME: [low, high], got {_show(ranges)}")

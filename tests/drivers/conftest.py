@@ -160,6 +160,9 @@ class FakeArcos:
     out on time; like AMRISim, a failed write ends the session before reading more."""
     stop_lag: float = 0.0
     """The wheels keep turning this long after STOP or zero velocities (a ramp down)."""
+    decel_mm: float = 0.0
+    """With a zero command the wheels ramp down at this rate (mm/s^2; the turn rate stops
+    at once), reported SIP by SIP as the firmware does; 0: they stop at once."""
     ignore_stop: bool = False
     """Never stop the wheels (a robot that does not obey: the goodbye must not hang)."""
     vanish_on_stop: bool = False
@@ -177,6 +180,7 @@ class FakeArcos:
         self.t0 = time.monotonic()
         self._halt = threading.Event()
         self._stop_due: float | None = None
+        self._ramp_from: tuple[float, float] | None = None  # (speed mm/s, when) of a ramp down
         self.link: _Link | None = None
         self.dist_conv = arcos.robot_params(self.subtype).dist_conv
         if self.serial:
@@ -270,6 +274,12 @@ class FakeArcos:
             if self._stop_due is not None and now >= self._stop_due:
                 self._stop_due = None
                 self.v_mm = self.w_deg = 0.0
+            if self._ramp_from is not None:
+                v0, since = self._ramp_from
+                left = max(abs(v0) - self.decel_mm * (now - since), 0.0)
+                self.v_mm = math.copysign(left, v0)
+                if left == 0.0:
+                    self._ramp_from = None
             if data and self.baud is not None and link.baud() != self.baud:
                 data = b""  # garbled at the wrong rate: nothing decodes
             if data:
@@ -325,11 +335,16 @@ class FakeArcos:
             self.drop()
         elif self.ignore_stop and (cmd == Cmd.STOP or arg == 0):
             pass
+        elif self.decel_mm and (cmd == Cmd.STOP or (cmd == Cmd.VEL and arg == 0)):
+            if self._ramp_from is None and self.v_mm:
+                self._ramp_from = (self.v_mm, time.monotonic())
+            self.w_deg = 0.0
         elif self.stop_lag and (cmd == Cmd.STOP or (cmd in (Cmd.VEL, Cmd.RVEL) and arg == 0)):
             if self._stop_due is None:
                 self._stop_due = time.monotonic() + self.stop_lag
         elif cmd == Cmd.VEL and isinstance(arg, int):
             self.v_mm = float(arg)
+            self._ramp_from = None
         elif cmd == Cmd.RVEL and isinstance(arg, int):
             self.w_deg = float(arg)
         elif cmd == Cmd.STOP:

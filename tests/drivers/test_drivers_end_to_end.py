@@ -121,20 +121,15 @@ def test_a_recording_on_the_robot_takes_the_ladar_from_the_robot_profile(
     """--robot names the profile whose ladar mount (base_link -> laser) and scan period
     (LaserScan.scan_time) a recording made on hardware uses; without it both are unknown."""
     pytest.importorskip("rosbags")
-    from rosbags.rosbag2 import Reader
-    from rosbags.typesys import Stores, get_typestore
-
-    from tests.ros.conftest import mcap_doctor
+    from tests.ros.conftest import mcap_doctor, read_rosbags
 
     record = tmp_path / "r.mcap"
     _run_on_fake(fake_robot, tmp_path, "--record", str(record),
                  *(["--robot", robot] if robot else []))
     mcap_doctor(record)
-    ts = get_typestore(Stores.ROS2_HUMBLE)
     msgs: dict[str, list[Any]] = {}
-    with Reader(record) as reader:
-        for conn, _, raw in reader.messages():
-            msgs.setdefault(conn.topic, []).append(ts.deserialize_cdr(raw, conn.msgtype))
+    for m in read_rosbags(record):  # mdle's own types registered from the file
+        msgs.setdefault(m.topic, []).append(m.msg)
     assert "/ground_truth" not in msgs and "/map" not in msgs  # no simulation topics
     (static,) = msgs["/tf_static"]
     mount = static.transforms[0].transform.translation

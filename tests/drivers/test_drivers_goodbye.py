@@ -63,15 +63,32 @@ def test_close_waits_for_a_sip_showing_the_wheels_stopped(fake_robot: FakeRobot,
     assert _tail(fake) == [(Cmd.STOP, None), (Cmd.VEL, 0), (Cmd.RVEL, 0), (Cmd.CLOSE, None)]
 
 
+def test_close_waits_for_the_wheels_to_ramp_down_at_the_robots_deceleration(
+        fake_robot: FakeRobot, fast: PioneerOptions) -> None:
+    # The robot brakes at its limit, 0.3 m/s^2 (a P3-DX's), so from 0.3 m/s its wheels
+    # turn for 1 s: a fixed 0.5 s wait sent CLOSE at about 150 mm/s.
+    fake = fake_robot(decel_mm=300.0)
+    backend = _driving(fake, fast)
+    assert backend.limits.max_decel == 0.3
+    backend.close()
+    assert backend.goodbye == "stopped"
+    stop = fake.commands(Cmd.STOP)[-1].t
+    close = fake.commands(Cmd.CLOSE)[-1].t
+    assert 0.95 <= close - stop < 0.5 + 1.0  # after the ramp, within the bound
+    assert fake.v_mm == 0
+
+
 def test_the_wait_is_bounded_when_the_wheels_never_stop(fake_robot: FakeRobot,
                                                         fast: PioneerOptions) -> None:
     fake = fake_robot(ignore_stop=True)
     backend = _driving(fake, replace(fast, goodbye_timeout=0.3))
+    # the bound: 0.3 s, plus the stop at the limits from 0.3 m/s and 0.2 rad/s
+    ramp = max(0.3 / backend.limits.max_decel, 0.2 / backend.limits.max_turn_accel)
     t0 = time.monotonic()
     backend.close()
     took = time.monotonic() - t0
     assert backend.goodbye == "not confirmed"
-    assert 0.3 <= took < 1.5  # the wait, then at most the stream's own bound
+    assert 0.3 + ramp <= took < 0.3 + ramp + 1.0  # the wait, then at most the stream's bound
     assert fake.wait_for(lambda: fake.commands(Cmd.CLOSE) != [])
     assert _tail(fake)[-1] == (Cmd.CLOSE, None)
 

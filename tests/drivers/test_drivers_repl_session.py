@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import io
 import json
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -133,3 +134,23 @@ def test_the_prompt_asks_before_the_first_motion(
     assert "a (level 0) ended by timer" in _out(repl)
     assert _out(repl).count("ended by timer") == 1 and 200 in fake.args(Cmd.VEL)
     assert fake.url[6:] in _out(repl).splitlines()[0]  # the banner names the robot
+
+
+def test_step_is_paced_like_a_run(robot: tuple[FakeArcos, Callable[..., Repl]]) -> None:
+    """Each tick of a ``:step`` waits for its period, as in a run, even after the session
+    looked at the robot between runs (``:pose``, a run's report): such a look used to
+    start the tick grid, so the next ``:step 3`` ran ticks at 0.00, 0.01 and 0.11 s."""
+    _, make = robot
+    repl = make(armed=True)
+    assert repl.handle("(go(0.2 m/s), never, 5 s)")
+    assert repl.handle(":step 1") and repl.handle(":step 3")  # a run begun and paused
+    assert repl.handle("(go(0.2 m/s), never, 0.1 s)")  # a run that ends, then its report
+    assert repl.handle(":pose")
+    time.sleep(0.3)  # the user reads the report
+    for _ in range(2):
+        before = len(repl.session.samples)
+        assert repl.handle(":step 3"), _err(repl)
+        ticks = [s.time for s in repl.session.samples[before:]]
+        assert len(ticks) >= 2
+        # the wait is a lower bound: a tick never comes before its period is over
+        assert all(b - a >= 0.099 for a, b in zip(ticks[:-1], ticks[1:], strict=True)), ticks

@@ -103,7 +103,7 @@ def test_cli_runs_a_small_study_and_writes_one_csv_row_per_run(
 
 @pytest.mark.parametrize(("argv", "message"), [
     (["--generated", "--shapes", "0"], "--shapes must be at least 1"),
-    (["--generated", "--rate", "-1"], "--rate must be > 0"),
+    (["--generated", "--rate", "-1"], "--rate: the rate must be from 0.001 to 1,000 Hz"),
     (["--generated", "--robot", "pioner"], "unknown robot profile"),
     (["--generated", "--jobs", "0"], "--jobs must be at least 1"),
     (["--generated", "--runs", "5"], "--runs is for the paper shapes"),

@@ -10,6 +10,8 @@ minute.
 
 from __future__ import annotations
 
+import importlib.util
+import sys
 from pathlib import Path
 
 import pytest
@@ -20,6 +22,14 @@ from mdle.errors import MdleError, render_diagnostic
 from mdle.lang import load_program, read_source
 from mdle.sim.world_yaml import parse_world, read_world
 from mdle.trace import read_trace
+
+HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
+_scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)
+assert _scale_spec and _scale_spec.loader
+scale = sys.modules.get("mdle_fuzz_scale") or importlib.util.module_from_spec(_scale_spec)
+if "mdle_fuzz_scale" not in sys.modules:
+    sys.modules["mdle_fuzz_scale"] = scale
+    _scale_spec.loader.exec_module(scale)
 
 CORPUS = Path(__file__).resolve().parent / "corpus"
 FILES = sorted(CORPUS.iterdir())
@@ -63,7 +73,8 @@ _YAML_PIECES = ["obstacles:", "\n  - ", "{type: circle, center: [0, 0], radius: 
                 "\t", "\n", "x", ",", "'", '"', "-1", "nan", ".inf", "~", "seed: "]
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=scale.examples(120), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
 @given(hs.lists(hs.sampled_from(_YAML_PIECES), max_size=40).map("".join))
 def test_world_token_soup(text: str) -> None:
     try:
@@ -73,7 +84,8 @@ def test_world_token_soup(text: str) -> None:
             render_diagnostic(d, err.sources)
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=scale.examples(80), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow])
 @given(hs.binary(max_size=400), hs.sampled_from(["plan.mdle", "world.yaml"]))
 def test_random_bytes_on_every_file_reader(tmp_path_factory: pytest.TempPathFactory,
                                            data: bytes, name: str) -> None:

@@ -4,8 +4,10 @@ wrong (exit 0 or 1), never an internal error."""
 
 from __future__ import annotations
 
+import importlib.util
 import io
 import json
+import sys
 from pathlib import Path
 
 import pytest
@@ -16,6 +18,14 @@ from mdle.cli import main
 from mdle.errors import MdleError
 from mdle.plot import trace_figure
 from mdle.trace import TraceError, read_trace
+
+HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
+_scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)
+assert _scale_spec and _scale_spec.loader
+scale = sys.modules.get("mdle_fuzz_scale") or importlib.util.module_from_spec(_scale_spec)
+if "mdle_fuzz_scale" not in sys.modules:
+    sys.modules["mdle_fuzz_scale"] = scale
+    _scale_spec.loader.exec_module(scale)
 
 CORPUS = Path(__file__).parent / "corpus" / "traces"
 PLAN = """\
@@ -87,7 +97,7 @@ def _read(tmp: Path, data: bytes) -> object:
         return None
 
 
-@settings(max_examples=150, deadline=None,
+@settings(max_examples=scale.examples(150), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_mutated_traces_read_or_fail_with_a_message(
@@ -98,7 +108,7 @@ def test_mutated_traces_read_or_fail_with_a_message(
             trace.column(name)  # type: ignore[attr-defined]
 
 
-@settings(max_examples=20, deadline=None,
+@settings(max_examples=scale.examples(20), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_mutated_traces_plot_or_fail_with_a_message(

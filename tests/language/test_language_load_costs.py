@@ -49,3 +49,37 @@ def test_interrupts_of_one_shape_share_their_code() -> None:
     assert tests[0] is not tests[1]  # each has its own constants...
     assert tests[0].__code__ is tests[1].__code__  # ...in one compiled shape
     assert conditions._code.cache_info().misses == 2  # `< d` and `< 2 m and not stalled`
+
+
+def _lines_run(text: str) -> int:
+    """Return the lines of mdle's language package executed checking ``text`` (a count)."""
+    import sys
+
+    count = [0]
+
+    def trace(frame, event, arg):  # type: ignore[no-untyped-def]
+        if "mdle/lang/" not in frame.f_code.co_filename:
+            return None
+        if event == "line":
+            count[0] += 1
+        return trace
+
+    sys.settrace(trace)
+    try:
+        with pytest.raises(CheckError):
+            load_text(text)
+    finally:
+        sys.settrace(None)
+    return count[0]
+
+
+@pytest.mark.parametrize("line", [
+    "atom a{k} = (go(0.3 m/s), unknown{k} < 1 m, 1 s)",   # a name in a condition
+    "behavior a{k} = ((unknown{k}, a0), never, 1 s)",       # a name as an element
+])
+def test_unknown_names_cost_work_linear_in_the_file(line: str) -> None:
+    # each unknown name used to rebuild the list of every name the file defines (and walk
+    # it): 1k/2k/4k/8k lines took 0.76/2.05/7.3/29 s
+    small, large = (_lines_run("\n".join(line.format(k=k) for k in range(n)))
+                    for n in (300, 1200))
+    assert large < 5 * small, (small, large)  # 4x the lines; quadratic work is 16x

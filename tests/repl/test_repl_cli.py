@@ -198,3 +198,50 @@ def test_bytes_that_are_not_utf8_are_reported_and_the_session_goes_on(
     assert "input line 2 is not UTF-8 text (byte 0xff at column 1)" in err
     assert "internal error" not in err and "Traceback" not in err
     assert "a (level 0) ended by timer at 1.00 s" in proc.stdout.decode()
+
+
+SESSION = "atom a = (go(0.3 m/s), never, 1 s)\n" + "a\n:where\n:reset\n" * 30
+
+
+def test_standard_output_closed_from_the_start_is_quiet(tmp_path: Path,
+                                                       mdle_command: list[str]) -> None:
+    # Python makes sys.stdout None: every print was an "internal error"
+    res = subprocess.run([*mdle_command, "repl"], input=SESSION, stdout=None,
+                         stderr=subprocess.PIPE, text=True, cwd=tmp_path, timeout=120,
+                         preexec_fn=lambda: os.close(1), check=False)
+    assert res.returncode == 0, res.stderr
+    assert res.stderr == ""
+
+
+def test_standard_output_closed_by_its_reader_ends_the_session_quietly(
+        tmp_path: Path, mdle_command: list[str]) -> None:
+    # `mdle repl < inputs | head -1`: BrokenPipeError was "a bug in mdle"
+    proc = subprocess.Popen([*mdle_command, "repl"], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path)
+    assert proc.stdout is not None and proc.stdin is not None
+    proc.stdout.close()  # the reader goes away before the first line
+    _, err = proc.communicate(SESSION, timeout=120)
+    assert proc.returncode == 141, err
+    assert "internal error" not in err and "Traceback" not in err
+
+
+def test_a_full_disk_in_the_session_is_a_message_and_the_session_goes_on(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import errno
+    import io
+
+    from mdle.repl.commands import Repl as Session_
+    from mdle.repl.session import Session
+
+    out, err = io.StringIO(), io.StringIO()
+    repl = Session_(Session("default"), out, err)
+    assert repl.handle("atom a = (go(0.3 m/s), never, 1 s)") and repl.handle("a")
+
+    def full(path: str) -> int:
+        raise OSError(errno.ENOSPC, "No space left on device", path)
+
+    monkeypatch.setattr(repl.session, "write_trace", full)
+    assert not repl.handle(f":trace {tmp_path / 't.jsonl'}")
+    assert "the disk is full" in err.getvalue() and "internal error" not in err.getvalue()
+    assert repl.handle("a")

@@ -71,6 +71,7 @@ def test_mistakes_print_a_message_and_keep_the_session(r: Run) -> None:
         (":world atlantis", "unknown world `atlantis`"),
         (":reset 0 0", "overlaps"),
         (":reset a b", "x must be a number"),
+        (":reset 0 1e7", "y: a coordinate must be from -1,000,000 to 1,000,000 m, got 1e7"),
         (":step x", "whole number"),
         (":load /no/such/file.mdle", "no/such/file.mdle"),
         (":set speed 3", "no setting `speed`"),

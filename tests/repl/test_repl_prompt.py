@@ -78,7 +78,7 @@ def test_completer_offers_parameters_symbols_and_units(repl: Repl) -> None:
     assert completions(repl, "(follow_boundary(side = ") == ["right", "left"]
     assert completions(repl, "(go(v), boundary_range(side = l") == ["left"]
     assert completions(repl, "atom a(d = 1 m, speed) = (follow_boundary(rc = 1 m, s") == [
-        "side = ", "scaled", "speed"]  # `scaled`: a symbol the law takes (damping)
+        "side = ", "scaled", "scan", "speed"]  # symbols the law takes (damping, model)
     # units of the parameter's dimension: v of go is a speed, rate of turn a turn rate
     assert completions(repl, "(go(0.3 m") == ["m/s"]
     assert completions(repl, "(turn(30 deg") == ["deg/s"]

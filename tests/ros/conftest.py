@@ -138,13 +138,22 @@ class Msg:
 
 
 def read_rosbags(path: Path | str, store: str = "humble") -> list[Msg]:
-    """Read every message of an MCAP file or rosbag2 folder with rosbags' reader."""
+    """Read every message of an MCAP file or rosbag2 folder with rosbags' reader.
+
+    Types the ROS distribution lacks (mdle's ``mdle_msgs/msg/Diagnostics``) are taken
+    from the definitions the file carries, as a user of rosbags registers them.
+    """
     from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
 
     ts = get_typestore(Stores.ROS2_HUMBLE if store == "humble" else Stores.ROS2_JAZZY)
+    from rosbags.typesys import get_types_from_msg
+
     out = []
     with Reader(Path(path)) as reader:
+        for conn in reader.connections:  # mdle's own types, from the file's schemas
+            if conn.msgtype not in ts.fielddefs:
+                ts.register(get_types_from_msg(conn.msgdef.data, conn.msgtype))
         for conn, t, raw in reader.messages():
             out.append(Msg(conn.topic, t, conn.msgtype, ts.deserialize_cdr(raw, conn.msgtype)))
     return out

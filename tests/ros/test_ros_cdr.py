@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle.ros.markers import obstacle_markers, outlines
+from mdle.ros.markers import PathPieces, obstacle_markers, outlines, path_marker
 from mdle.ros.msgdefs import DEFINITIONS, schema_text
 
 
@@ -248,3 +248,20 @@ def test_markers_of_every_reference_world(store: str) -> None:
         for marker, line in zip(theirs.markers, lines, strict=True):
             assert marker.ns == "obstacles" and marker.type == 4
             assert [(p.x, p.y) for p in marker.points] == line
+
+
+def test_path_pieces_are_the_general_writers_bytes(store: str) -> None:
+    rng = np.random.default_rng(4)
+    for frame in ("odom", "leader/odom", "o"):
+        pieces = PathPieces(frame)
+        for n in (1, 2, 7, 11):
+            xy = rng.normal(scale=5.0, size=(n, 2))
+            points = [(float(x), float(y)) for x, y in xy]
+            ns = int(rng.integers(0, 2**40))
+            data = pieces.piece(ns, n * 3, xy)
+            assert data == path_marker(ns, frame, n * 3, points)
+            mine, theirs = _decode("visualization_msgs/msg/Marker", data, store)
+            assert (theirs.header.frame_id, theirs.id, theirs.type, theirs.ns) == (
+                frame, n * 3, 4, "path")
+            assert [(p.x, p.y, p.z) for p in theirs.points] == [(x, y, 0.0) for x, y in points]
+            assert len(mine.points) == n

@@ -45,7 +45,7 @@ def test_a_whole_trace(trace: Path, tmp_path: Path, capsys: pytest.CaptureFixtur
     n = len(read_trace(trace).samples)
     counts = doctor(mcap)
     assert counts["/odom"] == counts["/mdle/state"] == n
-    assert f"wrote {mcap}: {sum(counts.values())} messages on 9 topics" in out
+    assert f"wrote {mcap}: {sum(counts.values())} messages on 13 topics" in out
 
 
 @pytest.mark.parametrize("cut", [0.3, 0.61, 0.97])
@@ -151,3 +151,112 @@ def test_without_the_extra_the_message_says_how_to_install_it(
         assert "pip install 'mdle[mcap]'" in proc.stderr
         assert "Traceback" not in proc.stderr
     assert not (tmp_path / "r.mcap").exists() and not (tmp_path / "bag").exists()
+
+
+def _records(trace: Path) -> list[str]:
+    return trace.read_text().splitlines()
+
+
+def test_deeply_nested_json_is_a_damaged_record(trace: Path, tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    lines = _records(trace)
+    deep = '{"type": "sample", "t": 0.1, "x": ' + "[" * 100_000 + "]" * 100_000 + "}"
+    code, _, err, out = _export(tmp_path, "\n".join([*lines[:3], deep, *lines[3:]]).encode()
+                                + b"\n", capsys)
+    assert code == 1, err
+    assert "in.jsonl:4: not a trace record (JSON nested too deeply)" in err
+    assert "internal error" not in err and out.exists()
+    code, _, err, _ = _export(tmp_path, ("[" * 100_000).encode(), capsys)  # as the header
+    assert code == 1 and "not an mdle trace" in err
+
+
+@pytest.mark.parametrize("t", ["1e19", "-1e19", "1e300"])
+def test_a_time_past_what_ros_stamps_hold_is_a_damaged_record(
+        trace: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], t: str) -> None:
+    lines = _records(trace)
+    at = next(i for i, line in enumerate(lines) if json.loads(line)["type"] == "sample")
+    lines[at] = json.dumps({**json.loads(lines[at]), "t": float(t)})
+    code, _, err, _ = _export(tmp_path, ("\n".join(lines) + "\n").encode(), capsys)
+    assert code == 1, err
+    assert f"in.jsonl:{at + 1}: `t` is {float(t):g} s; a ROS time holds at most 1e+09 s" in err
+    assert "internal error" not in err and "RuntimeWarning" not in err
+
+
+def test_a_failed_export_leaves_the_old_file_and_no_partial_one(
+        trace: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    import errno
+
+    from mdle.cli import main
+    from mdle.ros.topics import RosRecording
+
+    out = tmp_path / "out.mcap"
+    out.write_bytes(b"the old file")
+
+    def full(self: Any) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(RosRecording, "finish", full)
+    assert main(["export", str(trace), "-o", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert f"cannot export `{trace}`" in err and "the disk is full" in err
+    assert out.read_bytes() == b"the old file"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.mcap"]
+
+
+def test_an_unreadable_trace_is_a_message(trace: Path, tmp_path: Path,
+                                          capsys: pytest.CaptureFixture[str],
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    import errno
+    import io
+
+    from mdle.cli import main
+
+    class Failing(io.BytesIO):
+        def __iter__(self) -> Any:
+            raise OSError(errno.EIO, "Input/output error")
+
+    real = __import__("mdle.ros.export", fromlist=["open_user_file"]).open_user_file
+
+    def failing_open(path: Any, limit: int) -> Any:
+        with real(path, limit) as f:
+            return Failing(f.read())
+
+    monkeypatch.setattr("mdle.ros.export.open_user_file", failing_open)
+    assert main(["export", str(trace), "-o", str(tmp_path / "o.mcap")]) == 1
+    err = capsys.readouterr().err
+    assert "input/output error" in err and "internal error" not in err
+    assert not (tmp_path / "o.mcap").exists()
+
+
+@pytest.mark.parametrize("target", ["/dev/full", "/dev/null"])
+def test_export_never_replaces_a_device(trace: Path, target: str,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+    from mdle.cli import main
+
+    assert main(["export", str(trace), "-o", target]) == 1
+    assert f"cannot write `{target}`: it is a character device" in capsys.readouterr().err
+    assert Path(target).is_char_device()
+
+
+def test_a_damaged_schema_prints_only_mdles_message(tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    from mcap.writer import Writer
+
+    from mdle.cli import main
+
+    path = tmp_path / "bad.mcap"
+    with path.open("wb") as f:
+        w = Writer(f)
+        w.start(profile="ros2", library="test")
+        sid = w.register_schema(name="std_msgs/msg/String", encoding="ros2msg",
+                                data=b"strin$g data\n")
+        cid = w.register_channel(topic="/mdle/state", message_encoding="cdr", schema_id=sid)
+        w.add_message(channel_id=cid, log_time=0, publish_time=0,
+                      data=b"\x00\x01\x00\x00\x02\x00\x00\x00a\x00")
+        w.finish()
+    assert main(["plot", str(path), "-o", str(tmp_path / "b.png")]) == 1
+    err = capsys.readouterr().err
+    # the library printed "Error processing 'strin$g data' ..." before mdle's own line
+    assert err.startswith(f"{path}:1:1: error: not a readable MCAP file"), err
+    assert "Error processing" not in err and len(err.strip().splitlines()) == 1

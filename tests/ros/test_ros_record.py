@@ -111,9 +111,14 @@ def test_topic_counts_match_the_trace(run: dict[str, Any], rosbags_read: Any) ->
     assert n > 200
     assert len(tr.scans) < n  # 10 Hz scans under a 20 Hz loop
     starts = [r for r in tr.extra if r["type"] == "start"]
+    changes = sum(1 for i, s in enumerate(tr.samples)
+                  if i == 0 or s["path"] != tr.samples[i - 1]["path"])
     assert counts == {"/scan": len(tr.scans), "/odom": n, "/tf": n, "/tf_static": 1,
-                      "/cmd_vel": n, "/ground_truth": n, "/map": 1,
-                      "/mdle/events": len(tr.events) + len(starts) + 1, "/mdle/state": n}
+                      "/cmd_vel": n, "/ground_truth": n, "/footprint": n,
+                      "/path": math.ceil((n - 1) / 10), "/map": 1,
+                      "/obstacles": 1, "/mdle/events": len(tr.events) + len(starts) + 1,
+                      "/mdle/active": changes, "/mdle/diagnostics": n, "/mdle/state": n}
+    assert changes == 3  # main/hug, main/wait, "" at the end
 
 
 def test_scan_messages(run: dict[str, Any], rosbags_read: Any, store: str) -> None:
@@ -191,7 +196,9 @@ def test_odometry_transforms_command_truth(run: dict[str, Any], rosbags_read: An
         assert _same_angle(_yaw(o.pose.pose.orientation), s["theta"])
         assert o.pose.pose.orientation.z == math.sin(s["theta"] / 2)
         assert o.twist.twist.linear.x == s["v"] and o.twist.twist.angular.z == s["omega"]
+        # the pioneer2dx's odometry has no noise model: exact, and 0 says so
         assert not np.any(o.pose.covariance) and len(o.pose.covariance) == 36
+        assert not np.any(o.twist.covariance)
         c = cmd.msg
         assert (c.linear.x, c.linear.y, c.angular.z) == (s["cmd_v"], 0.0, s["cmd_omega"])
         g = truth.msg
@@ -214,6 +221,60 @@ def test_odometry_transforms_command_truth(run: dict[str, Any], rosbags_read: An
         assert json.loads(state.msg.data) == s
 
 
+def test_diagnostics_active_element_and_footprint(run: dict[str, Any], rosbags_read: Any,
+                                                  store: str) -> None:
+    from mdle.ros.describe import diagnostic_names
+
+    tr: Trace = run["trace"]
+    msgs = rosbags_read(run["dir"] / "r.mcap", store)
+    diags = [m for m in msgs if m.topic == "/mdle/diagnostics"]
+    assert diags[0].msgtype == "mdle_msgs/msg/Diagnostics"
+    names = diagnostic_names()
+    assert {"side_curvature", "side_range", "mode", "predicted_clearance"} <= set(names)
+    followed = 0
+    for m, s in zip(diags, tr.samples, strict=True):
+        assert m.log_time == _ns(s["t"]) == _stamp(m.msg.header)
+        assert m.msg.header.frame_id == "base_link"
+        for name in names:  # typed numbers: the trace's, NaN where the law has none
+            value = getattr(m.msg, name)
+            want = (s.get("diag") or {}).get(name)
+            assert (math.isnan(value) if want is None else value == float(want)), name
+        followed += bool(s.get("diag"))
+    assert followed > 200
+    active = [(m.log_time, m.msg.data) for m in msgs if m.topic == "/mdle/active"]
+    assert [a for _, a in active] == ["main/hug", "main/wait", ""]
+    assert active[1][0] == _ns(next(s["t"] for s in tr.samples if s["path"] == "main/wait"))
+    prints = [m for m in msgs if m.topic == "/footprint"]
+    assert len(prints) == len(tr.samples)
+    poly = prints[0].msg
+    assert poly.header.frame_id == "base_link"
+    pts = np.array([(p.x, p.y, p.z) for p in poly.polygon.points])
+    # the pioneer2dx's disc of 0.25 m, drawn as a polygon around it
+    r = np.hypot(pts[:, 0], pts[:, 1])
+    assert len(pts) == 24 and np.all(pts[:, 2] == 0) and np.all(r >= 0.25 - 1e-6)
+    assert np.all(r < 0.26)
+
+
+def test_the_path_in_pieces(run: dict[str, Any], rosbags_read: Any) -> None:
+    tr: Trace = run["trace"]
+    pieces = [m for m in rosbags_read(run["dir"] / "r.mcap") if m.topic == "/path"]
+    assert pieces[0].msgtype == "visualization_msgs/msg/Marker"
+    points: list[tuple[float, float]] = []
+    for k, m in enumerate(pieces):
+        marker = m.msg
+        assert (marker.header.frame_id, marker.ns, marker.id, marker.type) == (
+            "odom", "path", k, 4)
+        pts = [(p.x, p.y) for p in marker.points]
+        if points:  # a piece goes on from the last point of the one before
+            assert pts[0] == points[-1]
+            pts = pts[1:]
+        points += pts
+        assert m.log_time == _stamp(marker.header)
+    # every tick's odometry position, in order
+    assert points == [(s["x"], s["y"]) for s in tr.samples]
+    assert pieces[-1].log_time == _ns(tr.samples[-1]["t"])
+
+
 def test_static_transform_map_and_events(run: dict[str, Any], rosbags_read: Any,
                                          store: str) -> None:
     tr: Trace = run["trace"]
@@ -224,7 +285,19 @@ def test_static_transform_map_and_events(run: dict[str, Any], rosbags_read: Any,
     assert (t.transform.translation.x, t.transform.translation.y,
             t.transform.translation.z) == (0.017, 0.008, 0.0)
     assert (t.transform.rotation.z, t.transform.rotation.w) == (0.0, 1.0)
-    (world,) = [m for m in msgs if m.topic == "/map"]
+    (grid,) = [m for m in msgs if m.topic == "/map"]
+    assert grid.log_time == 0 and grid.msg.header.frame_id == "map"
+    info = grid.msg.info
+    cells = np.asarray(grid.msg.data, np.int8).reshape(info.height, info.width)
+    assert info.resolution == np.float32(0.05) and set(np.unique(cells)) == {0, 100}
+    # a cell is occupied where the ellipse's outline passes: its centre's distance to the
+    # outline is under half a cell's diagonal... and free well away from it
+    cx = info.origin.position.x + (np.arange(info.width) + 0.5) * info.resolution
+    cy = info.origin.position.y + (np.arange(info.height) + 0.5) * info.resolution
+    gx, gy = np.meshgrid(cx, cy)
+    level = gx ** 2 / 16 + gy ** 2 / 4
+    assert np.all(cells[level < 0.8] == 100) and np.all(cells[level > 1.2] == 0)
+    (world,) = [m for m in msgs if m.topic == "/obstacles"]
     assert world.log_time == 0
     (marker,) = world.msg.markers
     assert marker.header.frame_id == "map" and marker.type == 4 and marker.action == 0
@@ -246,14 +319,17 @@ def test_export_writes_the_same_messages(run: dict[str, Any]) -> None:
     from mcap.reader import make_reader
 
     def messages(p: Path) -> list[tuple[str, int, int, bytes]]:
+        # each topic's messages in the file's order (a /path piece goes after the batch
+        # of ticks that completes it, and the two batch their ticks differently)
         with open(p, "rb") as f:
-            return [(c.topic, m.log_time, m.sequence, m.data)
-                    for _, c, m in make_reader(f).iter_messages(log_time_order=False)]
+            found = [(c.topic, m.log_time, m.sequence, m.data)
+                     for _, c, m in make_reader(f).iter_messages(log_time_order=False)]
+        return sorted(found, key=lambda m: (m[0], m[2]))
 
     recorded = messages(run["dir"] / "r.mcap")
     assert messages(run["dir"] / "e.mcap") == recorded
     assert messages(run["dir"] / "bag" / "bag_0.mcap") == recorded
-    assert f"{len(recorded)} messages on 9 topics" in run["export_out"]
+    assert f"{len(recorded)} messages on 14 topics" in run["export_out"]
 
 
 def test_rosbag_folder_reads_as_ros2_bag_record_writes_it(run: dict[str, Any],
@@ -265,7 +341,8 @@ def test_rosbag_folder_reads_as_ros2_bag_record_writes_it(run: dict[str, Any],
     bag = run["dir"] / "bag"
     assert sorted(p.name for p in bag.iterdir()) == ["bag_0.mcap", "metadata.yaml"]
     info = yaml.safe_load((bag / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
-    assert info["version"] == 5 and info["storage_identifier"] == "mcap"
+    assert info["version"] == 9 and info["storage_identifier"] == "mcap"
+    assert info["ros_distro"] == "jazzy" and info["custom_data"] == {}
     assert info["relative_file_paths"] == ["bag_0.mcap"]
     direct = rosbags_read(run["dir"] / "r.mcap")
     with Reader(bag) as reader:
@@ -276,7 +353,7 @@ def test_rosbag_folder_reads_as_ros2_bag_record_writes_it(run: dict[str, Any],
         latched = {t for t, c in topics.items()
                    if getattr(c.ext, "offered_qos_profiles")[0].durability  # noqa: B009
                    == QosDurability.TRANSIENT_LOCAL}
-        assert latched == {"/tf_static", "/map"}
+        assert latched == {"/tf_static", "/map", "/obstacles", "/mdle/active"}
     assert [(m.topic, m.log_time) for m in rosbags_read(bag)] == [
         (m.topic, m.log_time) for m in direct]
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import errno
+import math
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -56,11 +57,16 @@ def test_a_robot_run_has_no_simulation_topics(tmp_path: Path, doctor: Any,
     counts = doctor(tmp_path / "r.mcap")
     n = len(read_trace(tmp_path / "t.jsonl").samples)
     assert counts == {"/tf_static": 1, "/scan": n, "/odom": n, "/tf": n, "/cmd_vel": n,
-                      "/mdle/state": n, "/mdle/events": 4}
+                      "/mdle/state": n, "/mdle/events": 4, "/mdle/active": 2,
+                      "/mdle/diagnostics": n, "/path": math.ceil((n - 1) / 10)}
     msgs = rosbags_read(tmp_path / "r.mcap")
     tfs = [m.msg for m in msgs if m.topic == "/tf"]
     assert all(len(t.transforms) == 1 and t.transforms[0].child_frame_id == "base_link"
                for t in tfs)
+    # a robot's odometry noise is unknown: -1 first (REP-145), never zeros read as exact
+    odoms = [m.msg for m in msgs if m.topic == "/odom"]
+    assert all(o.pose.covariance[0] == -1.0 == o.twist.covariance[0]
+               and not o.pose.covariance[1:].any() for o in odoms)
     (static,) = [m.msg.transforms[0] for m in msgs if m.topic == "/tf_static"]
     assert static.transform.translation.x == 0.0  # no mount known: at the robot's origin
     # nor the scans' timing: 0, as LaserScan says for unknown

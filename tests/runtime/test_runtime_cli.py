@@ -170,7 +170,10 @@ def test_a_collision_is_named_in_stderr_the_trace_the_summary_and_the_plot(
     (hit,) = t.collisions()
     assert (hit["obstacle"], hit["kind"], hit["index"], hit["path"]) == (
         "box", "rectangle", 1, "main/go")
-    assert hit["x"] == pytest.approx(0.75, abs=0.01) and hit["t"] == pytest.approx(10.3)
+    # the contact itself, not the tick's start: a ramp of 0.5 / 0.3 s to 0.5 m/s, then
+    # the rest of the 4.75 m at 0.5 m/s, which is 9.5 s plus half the ramp
+    assert hit["x"] == pytest.approx(0.75, abs=0.01)
+    assert hit["t"] == pytest.approx(9.5 + 0.5 / 0.3 / 2, abs=2e-4)
     assert t.end is not None and t.end["collision"]["obstacle"] == "box"
     assert png.read_bytes().startswith(b"\x89PNG")
 

@@ -234,6 +234,27 @@ def test_a_full_disk_ends_the_run_cleanly(
     assert "No space left on device" in res.stderr
 
 
+def test_trace_and_recording_on_one_full_disk_end_cleanly_with_the_end_record(
+        circles: Path, full_disk: Path, mdle_command: list[str]) -> None:
+    # 5 of 5 runs printed a traceback ("could not stop the robot cleanly after ...
+    # TraceWriteError") and 1 of 5 traces had no end record
+    pytest.importorskip("mcap", reason="the mcap extra is not installed")
+    for attempt in range(3):
+        for f in full_disk.iterdir():
+            f.unlink()
+        trace = full_disk / "t.jsonl"
+        res = subprocess.run([*mdle_command, "run", str(circles), "--world", "empty",
+                              "--trace", str(trace), "--record", str(full_disk / "r.mcap")],
+                             capture_output=True, text=True, env=_env(), timeout=DEADLINE)
+        assert res.returncode == 74, res.stderr
+        assert "Traceback" not in res.stderr and "could not stop" not in res.stderr
+        records = _records(trace)
+        assert records[0]["type"] == "header", attempt
+        assert records[-1]["type"] == "end", (attempt, records[-1])  # the reserve made room
+        assert records[-1]["cause"] == "error"
+        assert [f.name for f in full_disk.iterdir() if f.name.endswith(".reserve")] == []
+
+
 # ---------------------------------------------------------------------- stdout closed
 
 

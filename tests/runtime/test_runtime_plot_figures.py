@@ -45,7 +45,9 @@ def left_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Trace, Any]:
 def test_left_side_boundary_is_drawn_on_the_obstacle(left_run: tuple[Trace, Any]) -> None:
     trace, world = left_run
     bearing = trace.column("diag.side_bearing")[trace.column("diag.side_hit") > 0.5]
-    assert len(bearing) and bearing == pytest.approx(np.full(len(bearing), math.pi / 2))
+    # where the nearest boundary point followed lies: on the left, about abeam when following
+    assert len(bearing) and (bearing > 0).mean() > 0.95
+    assert np.median(bearing) == pytest.approx(math.pi / 2, abs=0.1)
     x, y, th, truth = run_pose(trace, world)
     assert truth
     pts = boundary_points(trace, (x, y, th))

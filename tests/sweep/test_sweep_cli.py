@@ -114,3 +114,32 @@ def test_spec_errors_are_located_and_exit_1(tmp_path: Path, mdle_command: list[s
         r = subprocess.run([*mdle_command, "sweep", *argv], capture_output=True, text=True,
                            timeout=60, cwd=tmp_path)
         assert r.returncode in (1, 2) and message in r.stderr
+
+
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
+def test_a_sweep_ends_with_the_code_of_its_signal_and_no_library_traceback(
+        tmp_path: Path, mdle_command: list[str], follow_plan: str, sig: signal.Signals,
+        code: int) -> None:
+    # 130 for every signal once; and a worker still starting when the pool let go of its
+    # queues printed multiprocessing's traceback (SemLock._rebuild): signals come at
+    # several moments from the workers' start on
+    spec = _study(tmp_path, follow_plan)
+    for delay in (0.0, 0.3, 0.8, 1.5):
+        out = tmp_path / f"out-{delay}"
+        proc = subprocess.Popen([*mdle_command, "sweep", str(spec), "--out", str(out),
+                                 "--jobs", "2"], stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        try:
+            deadline = time.monotonic() + 90
+            while not (out / "results.csv").exists() and time.monotonic() < deadline:
+                time.sleep(0.01)  # the table exists just before the workers start
+            time.sleep(delay)
+            proc.send_signal(sig)
+            _, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(10)
+        assert proc.returncode == code, (delay, err)
+        assert "Traceback" not in err and "Error" not in err, (delay, err)
+        assert "interrupted" in err

@@ -45,6 +45,22 @@ def error(text: str, base: Path | None = None) -> str:
     ("robots: [wheelchair]\n", "robots[0]: unknown robot profile"),
     ("robots: [{profile: ideal, max_sped: 2}]\n", "robots[0].max_sped: unknown key"),
     ("keep_traces: yes please\n", "keep_traces: expected true or false"),
+    # numbers that allocated, overflowed or failed late (issue 26)
+    ("rates: [1e309]\n", "rates[0]: expected a finite number, got 1e309"),
+    ("rates: [0.0000001]\n", "rates[0]: the rate must be from 0.001 to 1,000 Hz, got 1e-07"),
+    ("seeds: {count: 300000000000000000000}\n",
+     "seeds.count: must be at most 100000, got 300000000000000000000"),
+    ("seeds: {count: 2147483648}\n", "seeds.count: must be at most 100000, got 2147483648"),
+    ("seeds: [9223372036854775808]\n",
+     "seeds[0]: must be at most 9223372036854775807, got 9223372036854775808"),
+    ("seeds: {count: 10, first: 9223372036854775800}\n", "seeds.first: must be at most"),
+    ("starts: {random: {count: 10000000000000000000000000000000000000000}}\n",
+     "starts.random.count: must be at most 10000000, got a number of 41 digits"),
+    ("worlds: [{generated: {seed: 1, count: 10000000000000000000000000000000000000000}}]\n",
+     "worlds[0].generated.count: must be at most 100000"),
+    ("parameters: {random: {count: 100000000000000000000, ranges: {kf: [1, 2]}}}\n",
+     "parameters.random.count: must be at most 100000"),
+    ("worlds: [" + "w" * 300 + "]\n", "worlds[0]: no reference world `www"),
 ])
 def test_bad_specs_name_the_key_path(body: str, expected: str) -> None:
     assert expected in error(HEAD + body)
@@ -149,3 +165,23 @@ def test_generated_worlds_expand_and_travel_as_parameters() -> None:
         HEAD + "worlds: [{generated: {seed: 1, family: blob}}]\n")
     assert "worlds[0].generated: give `index`" in error(
         HEAD + "worlds: [{generated: {index: 1, count: 2}}]\n")
+
+
+def test_many_generated_worlds_are_checked_for_repeats_in_linear_work(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # each world was compared with every earlier one: 100,000 worlds took hours
+    from mdle.sweep.spec import WorldChoice
+
+    compared = [0]
+    eq = WorldChoice.__eq__
+
+    def counted(self: WorldChoice, other: object) -> bool:
+        compared[0] += 1
+        return eq(self, other)
+
+    monkeypatch.setattr(WorldChoice, "__eq__", counted)
+    n = 5000
+    study = parse_study(HEAD + f"worlds: [{{generated: {{seed: 1, count: {n}}}}}]\n",
+                        file="s.yaml")
+    assert len(study.worlds) == n
+    assert compared[0] < n, compared[0]  # pairwise: n * (n - 1) / 2

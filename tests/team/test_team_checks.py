@@ -127,6 +127,11 @@ def test_a_robot_the_team_lacks_named_by_range_to(tmp_path: Path,
      "messages.loss: a probability is at most 1"),
     ("world: duel.world.yaml\nrobots: {red: {element: main}}\n", "missing key `plan`"),
     ("world: default\nrobots: {red: red.mdle}\n", "world `default` has no `robots:` list"),
+    # checked as --rate is: 1e308 never ended (t + 1e-308 == t), 1e6 over-ran
+    ("world: duel.world.yaml\nrate: 1e308\nrobots: {red: red.mdle}\n",
+     "rate: the rate must be from 0.001 to 1,000 Hz, got 1e308"),
+    ("world: duel.world.yaml\nrate: 1e6\nrobots: {red: red.mdle}\n",
+     "rate: the rate must be from 0.001 to 1,000 Hz, got 1e6"),
 ])
 def test_team_file_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str], team: str,
                           message: str) -> None:
