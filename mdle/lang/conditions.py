@@ -11,6 +11,9 @@ the interpreter's per-tick work). The generated code evaluates exactly what nest
 closures would: the same operations in the same order, ``and``/``or`` short-circuiting,
 every condition normalised to a Python bool. The runtime calls ``Interrupt.test(ctx)``
 and nothing else.
+
+Over 500 lines: the code generator and the closure interpreter of huge expressions
+(:func:`_interpret`) evaluate the same node kinds the same way, and stay side by side.
 """
 
 from __future__ import annotations
@@ -392,6 +395,18 @@ def _node_closure(n: Node, made: Mapping[int, MFn]) -> MFn:
     if op == "sensor":
         fn, args = p
         return lambda ctx, m: fn(args, ctx)
+    if op == "sensor_call":  # the fixed arguments, and those read now, in one dict
+        fn, fixed, names = p[0], p[1], p[2]
+        reads = [part(x) for x in p[3:]]
+        return lambda ctx, m: fn({**fixed, **{k: r(ctx, m) for k, r in zip(names, reads,
+                                                                          strict=True)}},
+                                 ctx)
+    if op == "fn":
+        f0, operands = p[0], [part(x) for x in p[1:]]
+        return lambda ctx, m: f0(*(o(ctx, m) for o in operands))
+    if op == "start":  # evaluated when the element started (Interrupt.remember)
+        key = p[0]
+        return lambda ctx, m: ctx.memory[key]
     if op == "not":
         f = part(p[0])
         return lambda ctx, m: not f(ctx, m)

@@ -153,3 +153,22 @@ def test_a_string_remembers_at_its_own_start() -> None:
     text = ("atom leg = (go(1 m/s), never, 0.3 s)\n"
             "plan main = ((leg, leg, leg, leg)..., x > at_start(x) + 0.65 m, 10 s)\n")
     assert ends(text)[-1] == ("main", "interrupt", 0.7)
+
+
+def test_huge_expressions_evaluate_the_new_nodes_as_the_generated_code_does() -> None:
+    # past the generation limit the interpreter of closures runs them: the same values
+    from mdle.lang import conditions
+
+    program = load_text("atom a = (go(1 m/s), abs(range(bearing_to(8 m, 0 m)) - at_start(x))"
+                        " > max(x, 1 m) or dist_to(8 m, 0 m) < at_start(dist_to(8 m, 0 m)),"
+                        " 10 s)\nrun a\n")
+    interrupt = program.elements["a"].interrupt
+    node = interrupt.__dict__["_node"]
+    scan = _wall_scan(3.0)
+    ctx = Context(Observation(0.0, Pose(1.0, 0.5, 0.2), scan=scan), 0.0, 0.1, LIMITS)
+    ctx.memory = {key: fn(ctx) for key, fn in interrupt.remember}
+    generated = conditions._compile(node, as_bool=True)
+    interpreted = conditions._interpret(node, as_bool=True)
+    assert generated(ctx) is interpreted(ctx)
+    ctx.memory = {key: 0.0 for key, _ in interrupt.remember}
+    assert generated(ctx) is interpreted(ctx)
