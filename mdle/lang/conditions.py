@@ -1,5 +1,8 @@
 """Interrupt expressions compiled once into flat closures.
 
+Over 500 lines: the code generator and the closure interpreter of huge expressions
+(:func:`_interpret`) evaluate the same node kinds the same way, and stay side by side.
+
 The checker types each sub-expression (:class:`Typed`: a condition, or a number of
 some dimension) and combines them bottom-up into an expression tree; constant parts are
 folded at check time. :func:`to_interrupt` then turns the tree into ONE Python function:
@@ -11,9 +14,6 @@ the interpreter's per-tick work). The generated code evaluates exactly what nest
 closures would: the same operations in the same order, ``and``/``or`` short-circuiting,
 every condition normalised to a Python bool. The runtime calls ``Interrupt.test(ctx)``
 and nothing else.
-
-Over 500 lines: the code generator and the closure interpreter of huge expressions
-(:func:`_interpret`) evaluate the same node kinds the same way, and stay side by side.
 """
 
 from __future__ import annotations
