@@ -25,6 +25,7 @@ Example
 
 from __future__ import annotations
 
+import dataclasses
 import enum
 import inspect
 import math
@@ -40,6 +41,7 @@ __all__ = [
     "REQUIRED",
     "BOOL",
     "Param",
+    "Bounds",
     "Report",
     "Context",
     "LawSpec",
@@ -102,6 +104,9 @@ class Param:
     #: constant exceeds the robot's limits. False for a ceiling the law keeps within the
     #: robot's own limit (``umax`` of ``follow_boundary``).
     commanded: bool = True
+    #: For a sensor function's parameter: its argument must be a fixed value (by default
+    #: a sensor function's numeric arguments may read other sensor functions each tick).
+    fixed: bool = False
     any_name: str = ""
     """What an open name argument names (``channel``, ``robot``): any name is taken, and
     the checker records it so that a team can check its channels and robots."""
@@ -156,10 +161,11 @@ class Context:
     The runtime owns the context and sets ``t`` before each evaluation. ``atom`` is the
     per-atom state of the innermost running atom (what its law's ``start`` made; None when
     none runs or it has none), so that a sensor function can report on the running law
-    (``lost``: how long ``follow_boundary`` has lost its boundary).
+    (``lost``: how long ``follow_boundary`` has lost its boundary). ``memory`` holds what
+    the element being tested remembered when it started (``at_start(...)``).
     """
 
-    __slots__ = ("obs", "t", "dt", "limits", "cache", "atom")
+    __slots__ = ("obs", "t", "dt", "limits", "cache", "atom", "memory")
 
     def __init__(self, obs: Observation, t: float, dt: float, limits: RobotLimits,
                  cache: dict[Any, Any] | None = None, atom: Any = None) -> None:
@@ -169,7 +175,12 @@ class Context:
         self.limits = limits
         self.cache: dict[Any, Any] = {} if cache is None else cache
         self.atom = atom
+        #: the values the element being tested remembered when it started (at_start)
+        self.memory: Mapping[Any, Any] = _NO_MEMORY
 
+
+#: The memory of an element that remembers nothing.
+_NO_MEMORY: Mapping[Any, Any] = MappingProxyType({})
 
 #: ``step(args, ctx, state) -> Command``: the control law, called once per tick.
 StepFn = Callable[[Args, Context, Any], Command]
@@ -202,11 +213,46 @@ class LawSpec:
 
 
 @dataclass(frozen=True)
+class Bounds:
+    """The values a sensor function can return (SI): from ``low`` to ``high``.
+
+    ``theta`` lies in (-pi, pi]: ``Bounds(-math.pi, math.pi, low_open=True)``. The
+    checker warns about a comparison with a constant that can never hold.
+    """
+
+    low: float
+    high: float
+    low_open: bool = False
+    high_open: bool = False
+
+    def holds_somewhere(self, op: str, c: float, reading_left: bool) -> bool:
+        """Tell whether ``reading op c`` (or ``c op reading``) can hold for some value."""
+        if not reading_left:  # c < r is r > c
+            op = {"<": ">", "<=": ">=", ">": "<", ">=": "<="}.get(op, op)
+        lo, hi = self.low, self.high
+        if op == ">":
+            return c < hi
+        if op == ">=":
+            return c < hi or (c == hi and not self.high_open)
+        if op == "<":
+            return c > lo
+        if op == "<=":
+            return c > lo or (c == lo and not self.low_open)
+        if op == "==":
+            return (lo < c < hi) or (c == lo and not self.low_open) or (
+                c == hi and not self.high_open)
+        return True
+
+
+@dataclass(frozen=True)
 class SensorSpec:
     """A sensor function: the y that interrupts (and control laws) read.
 
     ``result`` is the dimension of a numeric result, :data:`BOOL`, or None for a number
     whose dimension only its use tells (``message(channel)``: whatever was sent).
+    ``bounds`` are the values it can return, when they are limited. ``overloads`` are
+    other sensor functions of the same name taking other arguments (``bearing_to(robot)``
+    and ``bearing_to(x, y)``): the checker picks the one the call's arguments fit.
     """
 
     name: str
@@ -214,6 +260,8 @@ class SensorSpec:
     result: Dim | _Bool | None
     fn: SensorFn
     doc: str = ""
+    bounds: Bounds | None = None
+    overloads: tuple["SensorSpec", ...] = ()
 
     def param(self, name: str) -> Param | None:
         """Return the parameter called ``name``, or None."""
@@ -245,12 +293,16 @@ def control_law(*params: Param, name: str | None = None, start: StartFn | None =
     return wrap
 
 
-def sensor(*params: Param, result: Dim | _Bool | None, name: str | None = None
-           ) -> Callable[[SensorFn], SensorFn]:
-    """Declare a function ``fn(args, ctx) -> float | bool`` as a sensor function."""
+def sensor(*params: Param, result: Dim | _Bool | None, name: str | None = None,
+           bounds: Bounds | None = None) -> Callable[[SensorFn], SensorFn]:
+    """Declare a function ``fn(args, ctx) -> float | bool`` as a sensor function.
+
+    ``bounds`` declares the values it can return (:class:`Bounds`), when they are limited.
+    """
 
     def wrap(fn: SensorFn) -> SensorFn:
-        spec = SensorSpec(name or fn.__name__.rstrip("_"), tuple(params), result, fn, _doc(fn))
+        spec = SensorSpec(name or fn.__name__.rstrip("_"), tuple(params), result, fn, _doc(fn),
+                          bounds)
         setattr(fn, _SPEC_ATTR, spec)
         return fn
 
@@ -270,6 +322,14 @@ class Registry:
         laws: dict[str, LawSpec] = {}
         sensors: dict[str, SensorSpec] = {}
         for spec in specs:
+            first = sensors.get(spec.name)
+            if (isinstance(spec, SensorSpec) and first is not None
+                    and _arities(spec).isdisjoint(
+                        a for f in (first, *first.overloads) for a in _arities(f))):
+                # the same name with other arguments: an overload (bearing_to(x, y))
+                sensors[spec.name] = dataclasses.replace(
+                    first, overloads=(*first.overloads, spec, *spec.overloads))
+                continue
             if spec.name in laws or spec.name in sensors:
                 raise ValueError(f"`{spec.name}` is registered twice")
             if isinstance(spec, LawSpec):
@@ -293,9 +353,24 @@ class Registry:
 
     def merged(self, other: "Registry") -> "Registry":
         """Return a registry with the entries of both; a name in both is a ``ValueError``."""
-        return Registry.from_specs([*self.laws.values(), *self.sensors.values(),
-                                    *other.laws.values(), *other.sensors.values()])
+        return Registry.from_specs([*self.laws.values(), *_flat(self.sensors.values()),
+                                    *other.laws.values(), *_flat(other.sensors.values())])
 
     def names(self) -> list[str]:
         """Return every registered name, sorted (for completion and 'did you mean')."""
         return sorted([*self.laws, *self.sensors])
+
+
+def _arities(spec: SensorSpec) -> frozenset[int]:
+    """How many arguments a call of ``spec`` may pass (its defaults may be left out)."""
+    needed = sum(1 for p in spec.params if p.default is REQUIRED)
+    return frozenset(range(needed, len(spec.params) + 1))
+
+
+def _flat(specs: Iterable[SensorSpec]) -> list[SensorSpec]:
+    """Each spec without its overloads, then the overloads (for building again)."""
+    out: list[SensorSpec] = []
+    for s in specs:
+        out.append(dataclasses.replace(s, overloads=()))
+        out.extend(s.overloads)
+    return out

@@ -26,7 +26,7 @@ _ROBOT = Param("robot", any_name="robot", doc="the name of another robot of the 
 
 @sensor(_CHANNEL, result=BOOL)
 def received(args: Args, ctx: Context) -> bool:
-    """Tell whether a message on the channel arrived since the element being tested started."""
+    """Tell whether a message on the channel arrived after the tested element's start tick."""
     box = ctx.obs.inbox
     return box is not None and box.since(str(args["channel"]), ctx.obs.time - ctx.t)
 

@@ -33,6 +33,7 @@ __all__ = [
     "STOP",
     "RobotLimits",
     "ClockMode",
+    "TickClock",
     "Backend",
 ]
 
@@ -243,6 +244,33 @@ class ClockMode(enum.Enum):
     the CPU allows (or are paced to the wall clock by the runtime on request)."""
     WALL = "wall"
     """Time is the wall clock; data arrives at its own rate and the runtime paces ticks."""
+
+
+@dataclass
+class TickClock:
+    """A simulated clock counted in whole ticks: the time is ``base + ticks * step``.
+
+    Adding ``dt`` to a float at every tick drifts (36 000 additions of 0.1 give
+    3600.0999999978), and a timer compared with such a sum ends a tick late. Counting
+    ticks keeps tick k at ``k * dt`` to the last bit, at any length. A change of ``dt``
+    starts a new count from the time reached.
+    """
+
+    base: float = 0.0
+    step: float = 0.0
+    ticks: int = 0
+
+    @property
+    def now(self) -> float:
+        """The current time, s."""
+        return self.base + self.ticks * self.step
+
+    def advance(self, dt: float) -> float:
+        """Move on by one tick of ``dt`` seconds; return the new time."""
+        if dt != self.step:
+            self.base, self.step, self.ticks = self.now, dt, 0
+        self.ticks += 1
+        return self.now
 
 
 @runtime_checkable

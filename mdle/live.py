@@ -45,6 +45,8 @@ def format_event(e: Event, t0: float = 0.0) -> str:
     p = e.pose
     what = "start" if e.kind is EventKind.START else "end  "
     cause = f"  {e.cause.value}" if e.cause is not None else ""
+    if e.fired:
+        cause += f" ({e.fired})"
     return (f"{e.time - t0:8.2f} s  {what} {e.path}{cause}  "
             f"(x {p.x:.2f} m, y {p.y:.2f} m, heading {math.degrees(p.theta):.0f} deg)")
 
@@ -52,7 +54,8 @@ def format_event(e: Event, t0: float = 0.0) -> str:
 def summary_rows(result: RunResult, wall_seconds: float | None = None) -> list[tuple[str, str]]:
     """Return the summary as (label, value) rows, shared by the rich table and the plain lines."""
     t = result.termination
-    rows = [("ended", f"{t.path} {ended_how(t.cause)} at {_secs(result.duration)}")]
+    fired = f" ({t.fired})" if t.fired else ""
+    rows = [("ended", f"{t.path} {ended_how(t.cause)}{fired} at {_secs(result.duration)}")]
     if result.fault:
         rows.append(("fault", result.fault))
     rows.append(("distance travelled", f"{result.distance:.2f} m"))
@@ -72,8 +75,11 @@ def summary_rows(result: RunResult, wall_seconds: float | None = None) -> list[t
 def _element_rows(result: RunResult) -> list[tuple[str, str, str]]:
     """Each element path that ran, how many times it ran and how those runs ended."""
     ends: dict[str, Counter[Cause]] = {}
+    fired: dict[str, Counter[str]] = {}  # the conditions that fired, by element
     for term in result.terminations:
         ends.setdefault(term.path, Counter())[term.cause] += 1
+        if term.fired:
+            fired.setdefault(term.path, Counter())[term.fired] += 1
     # in the order they first started: outermost first, then depth first
     order = list(dict.fromkeys(e.path for e in result.events
                                if e.kind is EventKind.START and e.path in ends))
@@ -81,7 +87,11 @@ def _element_rows(result: RunResult) -> list[tuple[str, str, str]]:
     for path in order:
         counts = ends[path]
         n = sum(counts.values())
-        how = ", ".join(ended_how(c) + (f" x{k}" if k > 1 else "") for c, k in counts.items())
+        how = ", ".join(ended_how(c) + (f" x{k}" if k > 1 else "") + (
+            " (" + ", ".join(f"{w}" + (f" x{m}" if m > 1 else "")
+                             for w, m in fired[path].items()) + ")"
+            if c is Cause.INTERRUPT and path in fired else "")
+            for c, k in counts.items())
         rows.append((path, str(n), how))
     return rows
 

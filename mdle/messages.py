@@ -12,7 +12,7 @@ Pure Python, no numpy: sensor functions read inboxes at every tick.
 
 >>> box = Inbox(Pose(1.0, 0.0, 0.0))
 >>> box.put(Message("go", 1.0, "leader", 0.0, 0.1))
->>> box.since("go", 0.0), box.since("go", 0.2), box.value("go")
+>>> box.since("go", 0.0), box.since("go", 0.1), box.value("go")
 (True, False, 1.0)
 """
 
@@ -88,9 +88,14 @@ class Inbox:
             self._poses[msg.sender] = msg
 
     def since(self, channel: str, t: float) -> bool:
-        """Tell whether a message on ``channel`` arrived at or after time ``t``."""
+        """Tell whether a message on ``channel`` arrived after the tick at time ``t``.
+
+        Strictly after: a message that arrived at the tick ``t`` was in that tick's
+        observation, before anything started in it, so it is older than an element
+        started at ``t`` (one message cannot end a chain of waits in one tick).
+        """
         m = self._last.get(channel)
-        return m is not None and m.arrived >= t - _EPS
+        return m is not None and m.arrived > t + _EPS
 
     def value(self, channel: str) -> float:
         """Return the last number received on ``channel`` (NaN: none yet, or a pose)."""

@@ -116,10 +116,13 @@ def start_record(scheduler: "Scheduler") -> dict[str, Any]:
 def event_record(event: Event) -> dict[str, Any]:
     """Return the ``event`` record of an element's start or end."""
     p = event.pose
-    return {"type": "event", "t": event.time, "kind": event.kind.value, "path": event.path,
-            "level": event.level, "element": event.element,
-            "cause": event.cause.value if event.cause is not None else None,
-            "x": p.x, "y": p.y, "theta": p.theta}
+    record = {"type": "event", "t": event.time, "kind": event.kind.value, "path": event.path,
+              "level": event.level, "element": event.element,
+              "cause": event.cause.value if event.cause is not None else None,
+              "x": p.x, "y": p.y, "theta": p.theta}
+    if event.fired is not None:  # an end by interrupt: which of its conditions held
+        record["fired"] = event.fired
+    return record
 
 
 def collision_record(c: Collision) -> dict[str, Any]:
@@ -139,7 +142,8 @@ def end_record(result: RunResult) -> dict[str, Any]:
         "collision": None if result.collision is None else {
             k: v for k, v in collision_record(result.collision).items() if k != "type"},
         "terminations": [{"path": x.path, "level": x.level, "cause": x.cause.value,
-                          "t": x.time} for x in result.terminations]}
+                          "t": x.time, **({"fired": x.fired} if x.fired else {})}
+                         for x in result.terminations]}
 
 
 #: Bytes kept free beside a trace for its end record (a file removed when the end record

@@ -51,6 +51,7 @@ from mdle.backend import (
     Pose,
     RobotLimits,
     Scan,
+    TickClock,
     observation,
 )
 from mdle.errors import BackendError, WorldError
@@ -194,6 +195,7 @@ class SimBackend:
                      if not self._oracle and math.isfinite(self._ladar.profile.max_range)
                      else None)
         self._t = 0.0
+        self._ticks = TickClock()
         self._x, self._y, self._th = pose.x, pose.y, pose.theta
         # Odometry starts at (0, 0, 0) where the robot is now, as on a robot (REP-105 odom).
         self._ox = self._oy = self._oth = 0.0
@@ -355,7 +357,7 @@ class SimBackend:
             raise BackendError(f"advance(dt) needs a finite dt >= 0, got {dt}")
         if dt == 0.0:
             return 0.0
-        t1 = self._t + dt
+        t1 = self._ticks.advance(dt)   # whole ticks: no drift over long runs
         if not self._timed:
             self._step(t1, True)
         elif self._cycled:

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import Pose, Scan, plain_scan
+from mdle.backend import Pose, Scan, TickClock, plain_scan
 from mdle.errors import BackendError, WorldError
 from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from mdle.sim.backend import SimBackend, SimEvent
@@ -302,6 +302,7 @@ class TeamSim:
         self.world = world
         self.places = tuple(places)
         self.time = 0.0
+        self._ticks = TickClock()   # the team's time in whole ticks, as each member's
         n = len(self.places)
         for i in range(n):
             for j in range(i):
@@ -358,7 +359,7 @@ class TeamSim:
             self._move_all(dt)
         finally:
             self.stepping = False
-        self.time += dt
+        self.time = self._ticks.advance(dt)
         self._add_others_to_clearances()
         self._settle_scans()
         self.radio.deliver(self.time, [m.box for m in self.members], sent_at)

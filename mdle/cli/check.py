@@ -43,6 +43,8 @@ def add_parser(subparsers: Any) -> None:
     p.add_argument("-q", "--quiet", action="store_true",
                    help="print errors only (no warnings, no summary)")
     p.add_argument("--strict", action="store_true", help="treat warnings as errors (exit 1)")
+    p.add_argument("--laws", metavar="FILE.py",
+                   help="a Python file of your own control laws and sensor functions")
     p.add_argument("--world", metavar="NAME|FILE",
                    help="the world the plans run in: its robot's limits are checked (default: "
                         "PLAN.world.yaml or PLAN.yaml beside each plan, else the default world)")
@@ -73,7 +75,7 @@ def _load(path: str, args: argparse.Namespace,
 
     try:
         robot = known_robot(path, args.world, args.robot, robots)
-        return load_program(path, robot=robot)
+        return load_program(path, getattr(args, "registry", None), robot=robot)
     except MdleError as err:
         return err
 
@@ -135,6 +137,10 @@ def run(args: argparse.Namespace) -> int:
     from mdle.lang import missing_entry
 
     files = expand_paths(args.files)
+    if args.laws:
+        from mdle.userlaws import load_laws
+
+        args.registry = load_laws(args.laws)
     robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once
     teams = (".yaml", ".yml")  # a team file (its plans are checked with it)
     results = {path: _load(path, args, robots) for path in files if not path.endswith(teams)}

@@ -29,7 +29,7 @@ from mdle.cli.options import hertz
 
 __all__ = ["add_parser", "run"]
 
-EXPERIMENTS = ("curvature", "following", "random-starts")
+EXPERIMENTS = ("curvature", "following", "random-starts", "navigation")
 
 
 def add_parser(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
@@ -59,6 +59,8 @@ def add_parser(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]"
     p.add_argument("--resume", action="store_true",
                    help="following/random-starts: keep each run's row in OUT/NAME/results.csv "
                         "and skip the runs already there")
+    p.add_argument("--nav-plan", type=Path, default=None, metavar="FILE",
+                   help="navigation: the plan to run (default plans/nav/bug2.mdle, here)")
     generated_study.add_arguments(p)
     p.set_defaults(handler=run)
 
@@ -70,6 +72,10 @@ def run(args: argparse.Namespace) -> int:
         print("mdle experiment: --draws, --runs and --jobs must be at least 1",
               file=sys.stderr)
         return output.EXIT_USAGE
+    if args.name == "navigation":  # its own options: mdle/cli/navigation.py
+        from mdle.cli.navigation import run_navigation_study
+
+        return run_navigation_study(args)
     misplaced = _misplaced(args)
     if misplaced:
         print(f"mdle experiment {args.name}: {misplaced}", file=sys.stderr)

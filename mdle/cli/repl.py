@@ -34,6 +34,8 @@ def add_parser(subparsers: Any) -> None:
         epilog="History is kept in $XDG_DATA_HOME/mdle/repl_history "
                "(~/.local/share/mdle/repl_history).")
     p.add_argument("file", nargs="?", metavar="FILE.mdle", help="definitions to load first")
+    p.add_argument("--laws", metavar="FILE.py",
+                   help="a Python file of your own control laws and sensor functions")
     p.add_argument("--world", metavar="NAME|FILE",
                    help="simulated world: a reference world name or a YAML file "
                         "(default: the default world)")
@@ -90,8 +92,11 @@ def run(args: argparse.Namespace) -> int:
     elif args.backend == "pioneer":
         session = _robot_session(args, until)
     else:
+        from mdle.userlaws import laws_option
+
         session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
-                          sensing=args.sensing, realtime=args.realtime)
+                          sensing=args.sensing, realtime=args.realtime,
+                          registry=laws_option(args.laws))
     repl = Repl(session, debug=getattr(args, "debug", False))
     live = None
     try:

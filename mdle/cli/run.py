@@ -72,6 +72,8 @@ def add_parser(subparsers: Any) -> None:
                         "PLAN.world.yaml or PLAN.yaml beside the plan, else the default world)")
     p.add_argument("--plan", dest="element", metavar="NAME",
                    help="element to run (default: the file's `run` target, else `main`)")
+    p.add_argument("--laws", metavar="FILE.py",
+                   help="a Python file of your own control laws and sensor functions")
     p.add_argument("--set", dest="overrides", action="append", default=[],
                    metavar="NAME=VALUE",
                    help="override a parameter's default, with units as in a plan: "
@@ -240,6 +242,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     from mdle.errors import Diagnostic, MdleError
     from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
+    from mdle.userlaws import laws_option
 
     if args.plot:
         writable_output(args.plot, "--plot", (".png", ".svg", ".pdf"))
@@ -256,7 +259,8 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
         else known_robot(None, None, args.robot if args.backend == "ros2" else None)
     try:
-        program = load_program(args.plan, settings=args.overrides, robot=robot)
+        program = load_program(args.plan, laws_option(args.laws), settings=args.overrides,
+                               robot=robot)
     except MdleError as err:
         from mdle.lang import yaml_as_plan
 

@@ -41,6 +41,19 @@ class Checker(NameChecks, DimensionChecks, StructureChecks):
 
     # ------------------------------------------------------------------ whole programs
 
+    def limit_warnings(self, entry: str | None) -> None:
+        """Give the held robot-limit warnings of atoms not used only scaled.
+
+        An atom that runs as it stands (the entry, an unscaled use, or no use at all) gets
+        its warnings; one whose every use scales it gets only the scaled uses' own.
+        """
+        for name, held in self.deferred.items():
+            uses = self.scaled_uses.get(name, set())
+            if uses == {True} and name != entry:
+                continue
+            for where, message, hint in held:
+                self.warn(where, message, hint=hint)
+
     def check_definition(self, d: st.Definition) -> Element | None:
         """Check a definition on its own; returns its element if it can run as it stands."""
         if d.name in self.broken:
@@ -52,6 +65,8 @@ class Checker(NameChecks, DimensionChecks, StructureChecks):
         else:
             runnable, bound = True, {}
         self._partial = not runnable
+        if d.kind is st.DefKind.ATOM:
+            self._deferring = self.deferred.setdefault(d.name, [])
         try:
             if d.kind is st.DefKind.INTERRUPT:
                 self._interrupt_body(d, bound, None)
@@ -61,6 +76,7 @@ class Checker(NameChecks, DimensionChecks, StructureChecks):
             return None
         finally:
             self._partial = False
+            self._deferring = None
         if runnable:
             key = ("element", d.name, _freeze(bound))
             self.element_uses[d.name] = tuple(dict.fromkeys(self._key_uses.get(key, ())))
@@ -118,6 +134,7 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     except RecursionError:
         checker.error(None, "the program nests too deeply to check")
         entry = None
+    checker.limit_warnings(entry)
     errors.extend(checker.errors)
     if errors:
         raise CheckError(_ordered(errors), srcs)
@@ -163,6 +180,9 @@ def _checker(modules: Sequence[st.Module], registry: Registry, replace: bool,
     broken, cycle_errors = find_cycles(ns, uses)
     checker = Checker(ns, robot)
     checker.broken = broken
+    # definitions refused for taking a law's or sensor function's name: their uses are
+    # not reported again (the refusal says it all)
+    checker.refused = frozenset(d.name for d in defs if d.name not in ns.definitions)
     return checker, errors + cycle_errors, uses
 
 

@@ -10,16 +10,16 @@ robot's limits when the robot is known.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from types import MappingProxyType
 
 from mdle.atoms.registry import BOOL, LawSpec, SensorSpec
 from mdle.errors import Diagnostic, Severity, Span
 from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
+from mdle.lang.check_expressions import ExpressionChecks, disjuncts, overload
 from mdle.lang.check_state import (
     MAX_NESTING,
-    CheckerState,
     Env,
     _Abort,
     _freeze,
@@ -46,7 +46,7 @@ from mdle.units import NONE, TIME, TURN_RATE
 _new_quantity = builder(Quantity)
 
 
-class DimensionChecks(CheckerState):
+class DimensionChecks(ExpressionChecks):
     """Dimensions: values, timers, conditions and interrupts."""
 
     def value(self, expr: st.Expr, env: Env) -> Value:
@@ -72,6 +72,8 @@ class DimensionChecks(CheckerState):
             if expr.name in env:
                 return env[expr.name]
             target = self._lookup(expr.name)
+            if target is not None and expr.name in self.refused:
+                raise _Abort  # its definition was refused, with the reason
             if target is not None:
                 self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
                            f"{_kind_name(target)}",
@@ -230,6 +232,8 @@ class DimensionChecks(CheckerState):
                 raise _Abort
             if self._messages:
                 self._note_message_dim(a, b)
+            if self._bounded:
+                self._never_holds(expr, a, b)
             return cond.compare(op, a, b)
         if op in ("+", "-"):
             if not _same_dim(a, b):
@@ -247,6 +251,8 @@ class DimensionChecks(CheckerState):
     def _reading(self, expr: st.Name | st.Call, env: Env) -> cond.Typed:
         name = expr.name
         args = expr.args if isinstance(expr, st.Call) else ()
+        if isinstance(expr, st.Call) and name in cond.BUILTINS and name not in env:
+            return self._builtin(expr, env)
         if isinstance(expr, st.Name) and name in env:
             v = env[name]
             if isinstance(v, Symbol):
@@ -255,10 +261,24 @@ class DimensionChecks(CheckerState):
                 raise _Abort
             return cond.constant(None if v.zero else v.dim, v.value)
         target = self._lookup(name)
+        if name in self.refused:
+            raise _Abort  # meant as the refused definition: that refusal says it all
         if isinstance(target, SensorSpec):
-            bound = self.bind(name, self._slots_of_spec(target), args, env, expr.span)
+            target = overload(target, args)
+            read: dict[str, cond.Typed] = {}  # the arguments read each tick
+            outer, self._live_args = self._live_args, (
+                read if any(self._is_live(a.value, env) for a in args) else None)
+            try:
+                bound = self.bind(name, self._slots_of_spec(target), args, env, expr.span)
+            finally:
+                self._live_args = outer
             self._note_names(target, bound, expr.span)
+            if read:
+                fixed = {k: v for k, v in self._plain(bound).items() if k not in read}
+                return cond.sensor_call(target, fixed, tuple(read.items()))
             t = cond.sensor_reading(target, MappingProxyType(self._plain(bound)))
+            if target.bounds is not None:
+                self._bounded[id(t.node)] = (target.bounds, name)
             if target.result is None and "channel" in bound:
                 channel = bound["channel"]
                 if isinstance(channel, Symbol):
@@ -328,12 +348,20 @@ class DimensionChecks(CheckerState):
         if isinstance(expr, st.Never):
             return cond.to_interrupt(t, "never")
 
-        def source() -> str:  # the text `show` and traces print, made when first read
-            shown = {k: show_value(v) for k, v in env.items()
-                     if not (isinstance(v, Quantity) and math.isnan(v.value))}
-            return format_expr(expr, shown)
+        shown: dict[str, str] = {}
 
-        return cond.to_interrupt(t, source)
+        def text(part: st.Expr) -> Callable[[], str]:
+            def made() -> str:  # the text `show` and traces print, made when first read
+                if not shown:
+                    shown.update({k: show_value(v) for k, v in env.items()
+                                  if not (isinstance(v, Quantity) and math.isnan(v.value))})
+                return format_expr(part, shown)
+            return made
+
+        parts_of = disjuncts(expr)
+        parts = tuple((text(d), self.condition(d, env)) for d in parts_of) \
+            if len(parts_of) > 1 else ()
+        return cond.to_interrupt(t, text(expr), parts)
 
     def _note_message_dim(self, a: cond.Typed, b: cond.Typed) -> None:
         """Record the dimension a `message(channel)` is used with (known from the other side)."""
@@ -367,10 +395,15 @@ class DimensionChecks(CheckerState):
             where = span or (arg.span if arg is not None else call.span)
             value = show_value(Quantity(v.value * factor, p.dim))
             scaled = f" (scaled by {factor:g})" if span is not None else ""
-            self.warn(where, f"`{p.name}` of `{law.name}` is {value}{scaled}, more than the "
-                      f"robot can do: {why}", hint="the robot clamps the command to its "
-                      "limit, so the plan does not move as written; use a value within the "
-                      "limit, or name the robot meant (--robot, --world)", in_use=True)
+            message = (f"`{p.name}` of `{law.name}` is {value}{scaled}, more than the "
+                       f"robot can do: {why}")
+            hint = ("the robot clamps the command to its limit, so the plan does not move "
+                    "as written; use a value within the limit, or name the robot meant "
+                    "(--robot, --world)")
+            if self._deferring is not None and span is None:
+                self._deferring.append((where, message, hint))  # known once every use is
+            else:
+                self.warn(where, message, hint=hint, in_use=True)
 
 
 def _same_dim(a: cond.Typed, b: cond.Typed) -> bool:
@@ -385,4 +418,3 @@ def _unit_hint(expr: st.Binary, a: cond.Typed, b: cond.Typed) -> str | None:
             if unit:
                 return f"add a unit: `{side.text} {unit}`"
     return None
-

@@ -88,11 +88,17 @@ class NameChecks(CheckerState):
         given: dict[str, st.Argument] = {}
         ok = True
         positional_done = False
+        late = _late_positionals(slots, args)
         for i, a in enumerate(args):
             if a.name is None:
                 if positional_done:
-                    self.error(a.span, "a positional argument cannot follow a keyword argument")
+                    fix = late.get(i)
+                    self.error(a.span, "a positional argument cannot follow a keyword argument",
+                               hint=None if fix is None else
+                               f"name it: `{_renamed(callee, args, late)}`")
                     ok = False
+                    if fix is not None:
+                        given[fix] = a  # the slot it was meant for is not missing too
                     continue
                 if i >= len(slots):
                     names = [s.name for s in slots]
@@ -151,6 +157,9 @@ class NameChecks(CheckerState):
         if (slot.param is not None and slot.param.any_name and isinstance(expr, st.Name)
                 and expr.name not in env):
             return Symbol(expr.name)  # a channel or robot: any name
+        live = self.live_argument(callee, slot, expr, env)
+        if live is not None:
+            return live  # read each tick: typed and kept aside
         v = self.value(expr, env)
         if slot.choices:
             if not isinstance(v, Symbol) or v.name not in slot.choices:
@@ -251,7 +260,10 @@ class NameChecks(CheckerState):
             self.error(expr.span, f"`{name}` is a parameter, not an element")
             raise _Abort
         target = self._lookup(name)
+        if name in self.refused and not isinstance(target, st.Definition):
+            raise _Abort  # its definition was refused, with the reason
         if isinstance(target, st.Definition) and target.kind is not st.DefKind.INTERRUPT:
+            self.scaled_uses.setdefault(name, set()).add(self._scaling is expr)
             if name in self.broken:
                 raise _Abort
             args = expr.args if isinstance(expr, st.Call) else ()
@@ -281,6 +293,29 @@ class NameChecks(CheckerState):
         self.error(span, f"unknown name `{name}`: not a control law, atom, behavior or plan",
                    hint=f"did you mean `{close[0]}`?" if close else None)
         raise _Abort
+
+
+def _late_positionals(slots: Sequence[_Slot], args: Sequence[st.Argument]) -> dict[int, str]:
+    """Return the parameter each positional argument after a keyword was meant for, by index.
+
+    In ``arc(v = 0.2 m/s, 10 deg/s)`` the ``10 deg/s`` fills the first parameter not
+    given otherwise: ``omega``.
+    """
+    named = {a.name for a in args if a.name is not None}
+    first_kw = next((i for i, a in enumerate(args) if a.name is not None), len(args))
+    taken = {s.name for s in slots[:first_kw]} | named
+    free = [s.name for s in slots if s.name not in taken]
+    late = [i for i in range(first_kw, len(args)) if args[i].name is None]
+    return dict(zip(late, free[:len(late)], strict=False))
+
+
+def _renamed(callee: str, args: Sequence[st.Argument], late: Mapping[int, str]) -> str:
+    """Return the call with each late positional argument named (see above)."""
+    parts = []
+    for i, a in enumerate(args):
+        name = a.name if a.name is not None else late.get(i)
+        parts.append((f"{name} = " if name else "") + format_expr(a.value))
+    return f"{callee}({', '.join(parts)})"
 
 
 def _completed(callee: str, args: Sequence[st.Argument], missing: Sequence[_Slot]) -> str:

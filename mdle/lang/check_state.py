@@ -131,6 +131,22 @@ class CheckerState(ABC):
         #: Names defined by statements that did not parse: uses of them are not errors
         #: of their own (the syntax error is reported)
         self.unparsed: frozenset[str] = frozenset()
+        #: Names of definitions refused (a control law's or sensor function's name): a
+        #: use that does not fit what the name really is, is not an error of its own
+        self.refused: frozenset[str] = frozenset()
+        #: For each definition used as an element: whether each use was scaled, and the
+        #: robot-limit warnings of atoms checked on their own, held until every use is
+        #: known (an atom used only scaled down is not too fast)
+        self.scaled_uses: dict[str, set[bool]] = {}
+        self._deferring: list[tuple[Span | None, str, str]] | None = None
+        self.deferred: dict[str, list[tuple[Span | None, str, str]]] = {}
+        #: While the arguments of a sensor function are bound: those read each tick
+        #: (``range(-theta)``), by parameter (None: every argument must be fixed)
+        self._live_args: dict[str, Any] | None = None
+        #: True inside ``at_start(...)``
+        self._remembering = False
+        #: id of each reading of a sensor function with declared bounds: (bounds, name)
+        self._bounded: dict[int, tuple[Any, str]] = {}
         #: True while a definition is checked with its required parameters unknown (NaN):
         #: a NaN is then no error (each use with arguments is checked again)
         self._partial = False
@@ -234,6 +250,10 @@ class CheckerState(ABC):
     def bind(self, callee: str, slots: Sequence[_Slot], args: Sequence[st.Argument],
              env: Env, span: Span) -> dict[str, Value]:
         """Bind call arguments to parameters (:mod:`~mdle.lang.check_names`)."""
+
+    @abstractmethod
+    def live_argument(self, callee: str, slot: _Slot, expr: st.Expr, env: Env) -> Value | None:
+        """Type an argument read each tick (:mod:`~mdle.lang.check_dimensions`)."""
 
     @abstractmethod
     def slots_of(self, d: st.Definition) -> list[_Slot]:

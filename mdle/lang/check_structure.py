@@ -151,8 +151,8 @@ class StructureChecks(CheckerState):
         if isinstance(head, (st.Name, st.Call)):
             if isinstance(head, st.Name) and head.name in env:
                 return "scaled"
-            if isinstance(self._lookup(head.name), LawSpec):
-                return "atom"
+            if isinstance(self._lookup(head.name), LawSpec) and head.name not in self.refused:
+                return "atom"  # (a refused definition of a law's name was meant as one)
             return "string"
         return "scaled"
 

@@ -1,5 +1,8 @@
 """Interrupt expressions compiled once into flat closures.
 
+Over 500 lines: the code generator and the closure interpreter of huge expressions
+(:func:`_interpret`) evaluate the same node kinds the same way, and stay side by side.
+
 The checker types each sub-expression (:class:`Typed`: a condition, or a number of
 some dimension) and combines them bottom-up into an expression tree; constant parts are
 folded at check time. :func:`to_interrupt` then turns the tree into ONE Python function:
@@ -20,7 +23,7 @@ import math
 import operator
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from types import CodeType
+from types import CodeType, MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
@@ -28,8 +31,13 @@ from mdle.frozen import builder
 from mdle.lang.program import NEVER, Interrupt
 from mdle.units import Dim
 
-__all__ = ["Typed", "constant", "sensor_reading", "negate", "logic", "compare", "arith",
-           "to_interrupt"]
+__all__ = ["Typed", "constant", "sensor_reading", "sensor_call", "negate", "logic", "compare",
+           "arith", "apply", "remembered", "to_interrupt", "BUILTINS"]
+
+#: Functions of numbers a condition may call, by name: how many arguments each takes
+#: (low, high). ``at_start(e)`` is the value ``e`` had when the element started.
+BUILTINS: Mapping[str, tuple[int, float]] = {
+    "abs": (1, 1), "min": (2, math.inf), "max": (2, math.inf), "at_start": (1, 1)}
 
 Kind = Any  # Dim (a number), None (a number of unknown dimension) or BOOL (a condition)
 Fn = Callable[[Context], Any]
@@ -49,9 +57,11 @@ _BOOL_NODES = frozenset({"not", "cmp", "and", "or", "xor"})
 class Node:
     """A node of an expression read at run time: ``op`` applied to ``parts``.
 
-    ``op`` is ``sensor`` (parts: function, arguments), ``const`` (value), ``not`` or
-    ``neg`` (operand), ``cmp`` or ``arith`` (operator, left, right), or ``and``, ``or``,
-    ``xor`` (left, right).
+    ``op`` is ``sensor`` (parts: function, arguments), ``sensor_call`` (function, fixed
+    arguments, names of the arguments read each tick, then their nodes), ``const``
+    (value), ``not`` or ``neg`` (operand), ``cmp`` or ``arith`` (operator, left, right),
+    ``and``, ``or``, ``xor`` (left, right), ``fn`` (a Python function of numbers, then its
+    operands), or ``start`` (a :class:`Remembered` key, the node it remembers).
     """
 
     op: str
@@ -112,6 +122,66 @@ def constant(kind: Kind, value: Any) -> Typed:
 def sensor_reading(spec: SensorSpec, args: Mapping[str, Any]) -> Typed:
     """Return a sensor function read each time the interrupt is tested."""
     return _typed(spec.result, _node("sensor", (spec.fn, args)), None)
+
+
+def sensor_call(spec: SensorSpec, fixed: Mapping[str, Any],
+                read: tuple[tuple[str, Typed], ...]) -> Typed:
+    """Return a sensor function whose arguments ``read`` are expressions read each tick.
+
+    ``range(bearing_to(8 m, 0 m))``: the bearing is computed, then the range read along
+    it, at every test. Constant arguments among ``read`` join the fixed ones.
+    """
+    args = dict(fixed)
+    live = []
+    for name, t in read:
+        if t.node is None:
+            args[name] = t.const
+        else:
+            live.append((name, t.node))
+    if not live:
+        return sensor_reading(spec, MappingProxyType(args))
+    return _typed(spec.result, _node("sensor_call", (
+        spec.fn, MappingProxyType(args), tuple(n for n, _ in live), *(n for _, n in live))),
+        None)
+
+
+def apply(fn: Callable[..., Any], args: list[Typed], kind: Kind) -> Typed:
+    """Return ``fn(*args)`` (abs, min, max): folded when every argument is constant."""
+    if all(a.node is None for a in args):
+        return constant(kind, fn(*(a.const for a in args)))
+    return _typed(kind, _node("fn", (fn, *(_operand(a) for a in args))), None)
+
+
+class Remembered:
+    """The key of one ``at_start(...)``: where an element keeps the value it remembers."""
+
+    __slots__ = ()
+
+
+def remembered(t: Typed) -> Typed:
+    """Return ``at_start(t)``: ``t`` as it was when the element started (a constant stays)."""
+    if t.node is None:
+        return t
+    return _typed(t.kind, _node("start", (Remembered(), t.node)), None)
+
+
+def remembers(t: Typed) -> tuple[tuple[Remembered, Fn], ...]:
+    """Return each ``at_start`` of a condition: its key and its expression compiled."""
+    if t.node is None:
+        return ()
+    found: dict[int, tuple[Remembered, Fn]] = {}
+    seen = set()
+    stack = [t.node]
+    while stack:
+        n = stack.pop()
+        if id(n) in seen:
+            continue
+        seen.add(id(n))
+        if n.op == "start":
+            found[id(n)] = (n.parts[0], _compile(n.parts[1], as_bool=False))
+            continue  # the checker refuses at_start inside at_start
+        stack.extend(p for p in n.parts if isinstance(p, Node))
+    return tuple(found.values())
 
 
 def negate(op: str, a: Typed) -> Typed:
@@ -254,6 +324,14 @@ class _Source:
             return self.bind("k", p[0])
         if op == "sensor":
             return f"{self.bind('s', p[0])}({self.bind('a', p[1])}, ctx)"
+        if op == "sensor_call":  # the fixed arguments, and those read now, in one dict
+            read = ", ".join(f"{name!r}: {self.value(node)}"
+                             for name, node in zip(p[2], p[3:], strict=True))
+            return f"{self.bind('s', p[0])}({{**{self.bind('a', p[1])}, {read}}}, ctx)"
+        if op == "fn":
+            return f"{self.bind('f', p[0])}({', '.join(self.value(x) for x in p[1:])})"
+        if op == "start":  # evaluated when the element started (Interrupt.remember)
+            return f"ctx.memory[{self.bind('r', p[0])}]"
         if op == "not":
             return f"(not {self.value(p[0])})"
         if op == "neg":
@@ -317,6 +395,18 @@ def _node_closure(n: Node, made: Mapping[int, MFn]) -> MFn:
     if op == "sensor":
         fn, args = p
         return lambda ctx, m: fn(args, ctx)
+    if op == "sensor_call":  # the fixed arguments, and those read now, in one dict
+        fn, fixed, names = p[0], p[1], p[2]
+        reads = [part(x) for x in p[3:]]
+        return lambda ctx, m: fn({**fixed, **{k: r(ctx, m) for k, r in zip(names, reads,
+                                                                          strict=True)}},
+                                 ctx)
+    if op == "fn":
+        f0, operands = p[0], [part(x) for x in p[1:]]
+        return lambda ctx, m: f0(*(o(ctx, m) for o in operands))
+    if op == "start":  # evaluated when the element started (Interrupt.remember)
+        key = p[0]
+        return lambda ctx, m: ctx.memory[key]
     if op == "not":
         f = part(p[0])
         return lambda ctx, m: not f(ctx, m)
@@ -413,10 +503,12 @@ def _code(source: str) -> CodeType:
     return compile(source, "<interrupt>", "exec")
 
 
-def to_interrupt(t: Typed, source: str | Callable[[], str]) -> Interrupt:
+def to_interrupt(t: Typed, source: str | Callable[[], str],
+                 parts: tuple[tuple[Callable[[], str], Typed], ...] = ()) -> Interrupt:
     """Return the runtime's :class:`~mdle.lang.program.Interrupt` for a checked condition.
 
-    ``source`` is the interrupt's text, or a function making it when first read.
+    ``source`` is the interrupt's text, or a function making it when first read;
+    ``parts`` the conditions of a top-level ``or``, each with a function making its text.
     """
     if t.is_const:
         text = source if isinstance(source, str) else source()
@@ -424,7 +516,11 @@ def to_interrupt(t: Typed, source: str | Callable[[], str]) -> Interrupt:
             return NEVER if text == "never" else Interrupt(NEVER.test, text, never=True)
         return Interrupt(lambda ctx: True, text)
     assert t.node is not None
-    return _Deferred(t.node, source)
+    return _Deferred(t.node, source, parts)
+
+
+def _always(ctx: Context) -> bool:
+    return True
 
 
 class _Deferred(Interrupt):
@@ -435,16 +531,34 @@ class _Deferred(Interrupt):
     gets the compiled function itself (no wrapper per call).
     """
 
-    def __init__(self, node: Node, source: str | Callable[[], str]) -> None:
+    def __init__(self, node: Node, source: str | Callable[[], str],
+                 parts: tuple[tuple[Callable[[], str], Typed], ...] = ()) -> None:
         fields = self.__dict__  # as object.__setattr__ would, one call fewer each
         fields["never"] = False
         fields["_node"] = node
         fields["_source"] = source
+        fields["_parts"] = parts
+
+    @functools.cached_property
+    def parts(self) -> tuple[tuple[str, Fn], ...]:
+        """The conditions of a top-level ``or``, each with its text and test (compiled now)."""
+        out = []
+        for text, t in self.__dict__["_parts"]:
+            if t.node is not None:
+                out.append((text(), _compile(t.node, as_bool=True)))
+            elif t.const:
+                out.append((text(), _always))
+        return tuple(out)
 
     @functools.cached_property
     def test(self) -> Fn:
         """The compiled function of ``ctx``."""
         return _compile(self.__dict__["_node"], as_bool=True)
+
+    @functools.cached_property
+    def remember(self) -> tuple[tuple[Any, Fn], ...]:
+        """Each ``at_start`` of the condition, compiled (see :class:`Interrupt`)."""
+        return remembers(Typed(BOOL, self.__dict__["_node"]))
 
     @functools.cached_property
     def source(self) -> str:

@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Union
+from typing import Any, Union
 
 from mdle.atoms.registry import Args, Context, LawSpec
 from mdle.errors import Diagnostic, Span
@@ -44,11 +44,18 @@ class Interrupt:
 
     ``source`` is the canonical text (for ``mdle show``, traces and messages);
     ``never`` marks the interrupt that never fires, so the runtime can skip it.
+    ``remember`` lists the values the condition reads as they were when the element
+    started (``at_start(...)``): a key, and the function the runtime evaluates once, at
+    the start, to store under it in ``ctx.memory``.
     """
 
     test: Callable[[Context], bool]
     source: str
     never: bool = False
+    remember: tuple[tuple[Any, Callable[[Context], Any]], ...] = ()
+    #: The conditions joined by a top-level ``or`` (``at_goal or stalled``): each one's
+    #: text and test, so that the runtime can say which fired. Empty for one condition.
+    parts: tuple[tuple[str, Callable[[Context], bool]], ...] = ()
 
 
 def _never(ctx: Context) -> bool:

@@ -17,6 +17,7 @@ from typing import Any
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
 from mdle.errors import Diagnostic, Severity
 from mdle.lang import syntax as st
+from mdle.lang.conditions import BUILTINS
 
 __all__ = ["Namespace", "build_namespace", "symbol_argument", "references", "uses_of",
            "find_cycles"]
@@ -52,7 +53,8 @@ def build_namespace(definitions: Iterable[st.Definition], registry: Registry, *,
     errors: list[Diagnostic] = []
     for d in definitions:
         kind = ("control law" if d.name in registry.laws else
-                "sensor function" if d.name in registry.sensors else None)
+                "sensor function" if d.name in registry.sensors else
+                "built-in function" if d.name in BUILTINS else None)
         if kind is not None:
             errors.append(Diagnostic(
                 d.name_span, f"`{d.name}` is already a {kind}; a definition cannot take its name",

@@ -161,19 +161,22 @@ def number(state: BuildState, token: str, span: Span) -> st.Number:
         state.diagnostics.append(Diagnostic(span, f"the number `{text}` is too large"))
         return st.Number(0.0, NONE, text, unit, span)
     if dim is None:
-        state.diagnostics.append(_unknown_unit(unit, span))
+        state.diagnostics.append(_unknown_unit(unit, span, text))
         return st.Number(value, NONE, text, unit, span)
     return new_number(value * factor, dim, text, unit, span)
 
 
-def _unknown_unit(unit: str, span: Span) -> Diagnostic:
+def _unknown_unit(unit: str, span: Span, digits: str) -> Diagnostic:
     known = sorted(UNITS)
     parts = unit.split("/")
     bad = next((p for p in parts if p not in UNITS), unit)
     close = difflib.get_close_matches(bad, known, n=1, cutoff=0.5)
     hint = (f"did you mean `{close[0]}`? " if close else "") + \
         f"units are {', '.join(known)} and quotients such as m/s, deg/s"
-    if bad in ("x", "y", "v", "t") or len(parts) == 1 and bad not in UNITS and not close:
+    if len(parts) == 2 and parts[0] in UNITS and bad == parts[1]:
+        # `0.4 m/v`: a tight `/` joins the unit; spaces make it a division
+        hint += f"; to divide by `{bad}`, put spaces around `/`: `{digits} {parts[0]} / {bad}`"
+    elif bad in ("x", "y", "v", "t") or len(parts) == 1 and bad not in UNITS and not close:
         hint += "; to multiply, write `*`"
     return Diagnostic(span, f"unknown unit `{bad}`", hint=hint)
 

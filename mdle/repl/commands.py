@@ -391,8 +391,10 @@ class Repl:
         ending = (f", ending `{last}`: `mdle run {shlex.quote(path)}` runs it"
                   if last.startswith("run ")
                   else "; no `run` line: nothing here runs without arguments")
+        world = (f", and world `{self.session.world.name}` to "
+                 f"{self.session.world_path(path)}" if self.session.simulated else "")
         self.say(f"saved {n} definition{'s' if n != 1 else ''} to {path} "
-                 f"({lines} line{'s' if lines != 1 else ''}{ending})")
+                 f"({lines} line{'s' if lines != 1 else ''}{ending}){world}")
         return True
 
     def _load(self, args: list[str]) -> bool:

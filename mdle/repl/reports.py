@@ -172,6 +172,6 @@ def _side_stats(samples: Sequence[Sample]) -> SideStats | None:
         return None
     t, r = np.asarray(rows, dtype=float).T
     window = min(SETTLED_WINDOW, float(t[-1] - t[0]))
-    last = r[t >= t[-1] - window]
+    last = r[t >= t[-1] - window - 1e-9]  # both ends: tick stamps are products
     return SideStats(float(r.min()), float(r.max()), float(last.mean()), float(last.std()),
                      window, len(r))

@@ -358,22 +358,37 @@ class Session:
         """Write every definition, formatted as ``mdle fmt`` does, then a ``run`` line.
 
         The ``run`` line names :meth:`save_entry` (none when nothing runs as it stands).
-        Returns the text.
+        In simulation the session's world (obstacles, start, robot, ladar, seed) is
+        written beside it (:meth:`world_path`), where ``mdle run FILE`` looks for it, so
+        that the file runs as it ran here. Returns the text.
 
         Raises
         ------
         ReplError
-            Nothing is defined yet, or the file cannot be written.
+            Nothing is defined yet, or a file cannot be written.
         """
         text = self.save_text()
         if not text.strip():
             raise ReplError("nothing to save: no definitions yet")
-        try:
-            with open(path, "w", encoding="utf-8") as f:
-                f.write(text)
-        except OSError as exc:
-            raise ReplError(f"cannot write `{os.fspath(path)}`: {exc.strerror}") from None
+        files = [(path, text)]
+        if self.simulated:
+            from mdle.sim.world_dump import world_to_yaml
+
+            files.append((self.world_path(path), world_to_yaml(self.world)))
+        for where, content in files:
+            try:
+                with open(where, "w", encoding="utf-8") as f:
+                    f.write(content)
+            except OSError as exc:
+                raise ReplError(f"cannot write `{os.fspath(where)}`: {exc.strerror}") from None
         return text
+
+    @staticmethod
+    def world_path(path: str | os.PathLike[str]) -> str:
+        """Return where :meth:`save` writes the world of a plan saved to ``path``."""
+        base = os.fspath(path)
+        stem = base[:-len(".mdle")] if base.endswith(".mdle") else base
+        return stem + ".world.yaml"
 
     @property
     def sources(self) -> dict[str, str]:

@@ -88,6 +88,9 @@ class Event:
     element: str
     pose: Pose
     cause: Cause | None = None
+    #: For an end by interrupt: which of its conditions held (``stalled``, or
+    #: ``at_goal and stalled`` when both did); None otherwise
+    fired: str | None = None
 
     @property
     def label(self) -> str:
@@ -97,12 +100,17 @@ class Event:
 
 @dataclass(frozen=True)
 class Termination:
-    """How one element ended: which one (``path``, ``level``), ``cause`` and ``time`` (s)."""
+    """How one element ended: which one (``path``, ``level``), ``cause`` and ``time`` (s).
+
+    ``fired`` says, for an end by interrupt, which of the interrupt's conditions held
+    (the parts of a top-level ``or``; the whole interrupt when it has none).
+    """
 
     path: str
     level: int
     cause: Cause
     time: float
+    fired: str | None = None
 
 
 @dataclass(frozen=True)

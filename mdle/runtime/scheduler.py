@@ -51,6 +51,7 @@ DEFAULT_STALL_TIMEOUT = 5.0
 _log = logging.getLogger(__name__)
 
 _EMPTY: MappingProxyType[str, float] = MappingProxyType({})
+_NO_MEMORY: MappingProxyType[Any, Any] = MappingProxyType({})
 
 
 @dataclass(frozen=True)
@@ -80,7 +81,7 @@ class _Slot:
 
     __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "limit",
                  "test", "source", "_children", "repeat", "step", "start", "args", "alpha_v",
-                 "alpha_w", "law", "span", "tested", "sends")
+                 "alpha_w", "law", "span", "tested", "sends", "remember")
 
     def __init__(self, node: Element, path: str, label: str, level: int) -> None:
         self.node = node
@@ -96,6 +97,9 @@ class _Slot:
         # timer have not: such levels are left out of the per-tick scan)
         self.tested = self.test is not None or self.limit < math.inf
         self.source = node.interrupt.source
+        # the values the interrupt reads as they were at the start (at_start): evaluated
+        # once when the element starts, kept in its frame
+        self.remember = () if self.test is None else node.interrupt.remember
         self.span: Span | None = node.span
         self._children: tuple[_Slot, ...] | None = ()
         self.repeat = False
@@ -149,7 +153,7 @@ def _child_slots(node: StringNode, path: str, level: int) -> list[_Slot]:
 class _Frame:
     """A running element: its slot, start time, position in its string, atom state."""
 
-    __slots__ = ("slot", "start", "index", "state", "pass_tick")
+    __slots__ = ("slot", "start", "index", "state", "pass_tick", "memory")
 
     def __init__(self, slot: _Slot, start: float, tick: int) -> None:
         self.slot = slot
@@ -157,6 +161,8 @@ class _Frame:
         self.index = 0
         self.state: Any = None
         self.pass_tick = tick
+        #: what the element's interrupt remembered when it started (at_start)
+        self.memory: Mapping[Any, Any] = _NO_MEMORY
 
 
 class Scheduler:
@@ -204,9 +210,10 @@ class Scheduler:
         self._root = _Slot(element, element.label, element.label, 0)
         self._pacer = Pacer() if realtime and backend.clock is ClockMode.SIMULATED else None
         self._stack: list[_Frame] = []
-        # (level, start, limit, test, slot) of each active level that can fire, outermost
-        # first; rebuilt after the stack changes (None: stale)
-        self._checks: tuple[tuple[int, float, float, Any, _Slot], ...] | None = ()
+        # (level, start, limit, test, slot, memory) of each active level that can fire,
+        # outermost first; rebuilt after the stack changes (None: stale)
+        self._checks: tuple[tuple[int, float, float, Any, _Slot, Mapping[Any, Any]], ...
+                            ] | None = ()
         self._events: list[Event] = []
         self._terminations: list[Termination] = []
         self._ticks = 0
@@ -476,14 +483,14 @@ class Scheduler:
             checks = self._checks
             if checks is None:
                 checks = self._checks = tuple(
-                    (f.slot.level, f.start, f.slot.limit, f.slot.test, f.slot)
+                    (f.slot.level, f.start, f.slot.limit, f.slot.test, f.slot, f.memory)
                     for f in stack if f.slot.tested)
             fired = -1
             cause = Cause.TIMER
             checked: _Slot | None = None
             t = 0.0
             try:
-                for lvl, start, limit, test, checked in checks:  # noqa: B007
+                for lvl, start, limit, test, checked, memory in checks:  # noqa: B007
                     if lvl < level:
                         continue
                     t = now - start
@@ -492,6 +499,7 @@ class Scheduler:
                         break
                     if test is not None:
                         ctx.t = t
+                        ctx.memory = memory
                         if test(ctx):
                             fired = lvl
                             cause = Cause.INTERRUPT
@@ -503,7 +511,8 @@ class Scheduler:
                 raise _failure(f"interrupt `{checked.source}` of `{checked.path}` failed at "
                                f"t = {t:.3f} s", checked.span, exc) from exc
             if fired >= 0:
-                self._end_from(fired, cause, now)
+                why = self._which(checked, ctx) if cause is Cause.INTERRUPT else None
+                self._end_from(fired, cause, now, fired_by=why)
                 level = self._next_child(now, ctx)
                 continue
             # Every active element has been tested and none fired.
@@ -550,6 +559,8 @@ class Scheduler:
             self._checks = None
             self._emit(Event(now, EventKind.START, slot.path, slot.level, slot.kind,
                              self._pose))
+            if slot.remember:
+                frame.memory = self._remember(slot, ctx)
             if slot.is_atom:
                 if slot.start is not None:
                     ctx.t = 0.0
@@ -565,8 +576,36 @@ class Scheduler:
                 return
             slot = slot.children[0]
 
-    def _end_from(self, level: int, cause: Cause, now: float, all_levels: bool = False
-                  ) -> None:
+    @staticmethod
+    def _remember(slot: _Slot, ctx: Context) -> dict[Any, Any]:
+        """Evaluate what ``slot``'s interrupt remembers, at its start (local time 0)."""
+        memory: dict[Any, Any] = {}
+        ctx.t = 0.0
+        ctx.memory = memory
+        for key, fn in slot.remember:
+            try:
+                memory[key] = fn(ctx)
+            except MdleError:
+                raise
+            except Exception as exc:
+                raise _failure(f"interrupt `{slot.source}` of `{slot.path}` failed to "
+                               "remember its start values", slot.span, exc) from exc
+        return memory
+
+    @staticmethod
+    def _which(slot: _Slot | None, ctx: Context) -> str | None:
+        """Say which conditions of ``slot``'s interrupt hold (it has just fired)."""
+        if slot is None:
+            return None
+        interrupt = slot.node.interrupt
+        try:
+            held = [text for text, test in interrupt.parts if test(ctx)]
+        except Exception:  # the interrupt itself evaluated: its parts will; never fail here
+            held = []
+        return " and ".join(held) if held else interrupt.source
+
+    def _end_from(self, level: int, cause: Cause, now: float, all_levels: bool = False,
+                  fired_by: str | None = None) -> None:
         """End the frames at ``level`` and below, innermost first (rule 3).
 
         The frame at ``level`` ends with ``cause``, those inside it are ended by their
@@ -580,9 +619,10 @@ class Scheduler:
             c = cause if all_levels or len(stack) == level else Cause.ENDED_BY_PARENT
             frame.state = None  # per-atom state is dropped with the atom
             slot.release()
-            self._terminations.append(Termination(slot.path, slot.level, c, now))
+            why = fired_by if c is cause and len(stack) == level else None
+            self._terminations.append(Termination(slot.path, slot.level, c, now, why))
             self._emit(Event(now, EventKind.END, slot.path, slot.level, slot.kind,
-                             self._pose, c))
+                             self._pose, c, why))
 
     def _emit(self, event: Event) -> None:
         self._events.append(event)

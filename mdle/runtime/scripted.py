@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any, Union
 
-from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan
+from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan, TickClock
 from mdle.errors import BackendError
 
 __all__ = ["ScriptedBackend", "Script", "IDEAL_LIMITS"]
@@ -84,6 +84,7 @@ class ScriptedBackend:
         self.clock = clock
         self.limits = limits
         self.time = float(start_time)
+        self._clock = TickClock(base=self.time)
         self.pose = pose
         self.motors_enabled = motors_enabled
         self._script = script
@@ -141,7 +142,7 @@ class ScriptedBackend:
             self._held = STOP
         if self.motors_enabled:
             self.pose = _integrate(self.pose, self._held, dt)
-        self.time += dt
+        self.time = self._clock.advance(dt)
         tick = self._ticks
         self._ticks += 1
         return self._lateness(tick) if self._lateness is not None else 0.0

@@ -184,7 +184,8 @@ def test_defs_save_load(r: Run, tmp_path: Path) -> None:
     target = tmp_path / "saved.mdle"
     ok, out, _ = r(f":save {target}")
     assert ok and out == (f"saved 3 definitions to {target} (4 lines, ending `run both`: "
-                          f"`mdle run {target}` runs it)\n")
+                          f"`mdle run {target}` runs it), and world `ellipse` to "
+                          f"{tmp_path / 'saved.world.yaml'}\n")
     assert target.read_text() == expected
     other = Run()
     ok, out, _ = other(f":load {target}")
@@ -394,7 +395,8 @@ def test_load_of_a_world_file_says_to_use_world(r: Run, tmp_path: Path) -> None:
 def test_save_says_when_nothing_can_run(r: Run, tmp_path: Path) -> None:
     r("atom need(v) = (go(v), never, 1 s)")
     ok, out, _ = r(f":save {tmp_path / 'n.mdle'}")
-    assert ok and out.endswith("(1 line; no `run` line: nothing here runs without arguments)\n")
+    assert ok and out.endswith("(1 line; no `run` line: nothing here runs without arguments), "
+                               f"and world `ellipse` to {tmp_path / 'n.world.yaml'}\n")
 
 
 def test_speeds_are_compared_with_the_sessions_robot() -> None:

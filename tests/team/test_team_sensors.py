@@ -33,7 +33,9 @@ def test_compose_and_relative_follow_the_conventions() -> None:
 def test_received_counts_only_since_the_element_started() -> None:
     box = Inbox(Pose())
     box.put(Message("go", 1.0, "a", 4.9, 5.0))
-    assert received({"channel": "go"}, _ctx(box, time=10.0, t=5.0))      # started at 5.0
+    assert received({"channel": "go"}, _ctx(box, time=10.0, t=5.1))      # started at 4.9
+    assert not received({"channel": "go"}, _ctx(box, time=10.0, t=5.0))  # started at 5.0:
+    # the message was in the observation of the tick the element started in, so older
     assert not received({"channel": "go"}, _ctx(box, time=10.0, t=4.9))  # started at 5.1
     assert not received({"channel": "stop"}, _ctx(box))
     assert not received({"channel": "go"}, _ctx(None))                    # a robot alone
