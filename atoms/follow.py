@@ -193,21 +193,23 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     z = scan_points_complex(ctx)  # the safety layer and the corner search read complex points
     if moved != STILL:
         z = _into(z, moved[0], sgn * moved[1], sgn * moved[2])
+    # the law and the safety layer read the scan in the law's frame, so the left side is the
+    # right side's exact mirror image (ties included)
+    zl = z if sgn > 0 else _mirrored(z)
     if state.scan_model:
-        u, side = closest.step(front, z if sgn > 0 else z.conjugate(), law_pose, ctx.t, ctx.dt,
-                               state.memory, v, rc, g, g.umax, filter_kappa=not view.exact)
+        u, side = closest.step(front, zl, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
+                               g.umax, filter_kappa=not view.exact)
     else:
         u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                           g.umax, filter_kappa=not view.exact,
-                          near=lambda: _nearest_on_side(z, sgn))
-    u *= sgn
-    u_law, v_law = u, v
+                          near=lambda: _nearest_on_side(zl))
+    u_law, v_law = sgn * u, v
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        v, u, clearance = safety.filter_complex(z, v, u, g.umax, ctx.limits.radius, margin,
-                                                float(args["lookahead"]),
-                                                side=1 if left else -1)
+        v, u, clearance = safety.filter_complex(zl, v, u, g.umax, ctx.limits.radius, margin,
+                                                float(args["lookahead"]), side=-1)
+    u *= sgn
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
     f = view.front  # the trace shows what was measured (the side: what the law followed)
@@ -240,11 +242,11 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
 _command = builder(Command)
 
 
-def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:
-    """Return (distance, law-frame bearing) of the nearest scan point on the followed side.
+def _nearest_on_side(z: Any) -> tuple[float, float] | None:
+    """Return (distance, bearing) of the nearest scan point on the followed (right) side.
 
-    ``z``: the scan points (complex, (M,)); ``sgn`` -1 mirrors the law's frame for left
-    following. Distances are compared squared, as ``x x + y y`` (not the modulus, which
+    ``z``: the scan points in the law's frame (complex, (M,); :func:`_mirrored` for left
+    following). Distances are compared squared, as ``x x + y y`` (not the modulus, which
     rounds differently): the scan's ranges come in millimetres, so two beams are often
     equally near, and this picks the same one whichever way the points were made.
     """
@@ -255,12 +257,23 @@ def _nearest_on_side(z: Any, sgn: float) -> tuple[float, float] | None:
     x, y = z.real, z.imag
     d2 = x * x  # full-length operations only (a reduction over the short axis is slow)
     d2 += y * y
-    d2 = np.where(y < 0.0 if sgn > 0 else y > 0.0, d2, math.inf)  # never the other side
+    d2 = np.where(y < 0.0, d2, math.inf)  # never the other side
     k = int(d2.argmin())
     r2 = float(d2[k])
     if not r2 < math.inf:
         return None
-    return math.sqrt(r2), math.atan2(sgn * float(y[k]), float(x[k]))
+    return math.sqrt(r2), math.atan2(float(y[k]), float(x[k]))
+
+
+def _mirrored(z: Any) -> Any:
+    """Return robot-frame scan points (complex, (M,)) in the left side's mirrored law frame.
+
+    ``y -> -y`` *and* the beam order reversed, so the law reads the mirror image of the
+    scan beam for beam: the scan runs right to left, and the law's argmin ties (ranges are
+    whole millimetres: ties are common) and neighbour windows go by beam order. Conjugating
+    alone would break every tie towards the other end of the scan than on the right side.
+    """
+    return z[::-1].conjugate()
 
 
 def _into(z: Any, dx: float, dy: float, dth: float) -> Any:
