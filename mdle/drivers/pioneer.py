@@ -27,13 +27,10 @@ runtime stops the robot at the end of every run.
 
 from __future__ import annotations
 
-import atexit
 import logging
 import math
-import signal
 import threading
 import time
-import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
@@ -44,6 +41,7 @@ from mdle.drivers.arcos import Cmd, OdometryState, PacketReader, RobotParams, Sy
 from mdle.drivers.limits import check_limits, check_robot_params
 from mdle.drivers.transport import Transport, TransportClosed, read_or_fail
 from mdle.errors import BackendError
+from mdle.exit_hooks import ExitHooks, register_exit_hooks
 
 __all__ = ["PioneerBackend", "PioneerOptions", "ScanSource", "limits_from_params"]
 
@@ -228,8 +226,7 @@ class PioneerBackend:
         self._observed_at: float | None = None  # when observe() last ran (monotonic s)
         self._t0 = time.monotonic()
         self._assembler = arcos_laser.ScanAssembler(opt.laser_max_range_mm, opt.laser_fov_deg)
-        self._old_sigterm: Any = None
-        self._atexit: Any = None
+        self._exit_hooks: ExitHooks | None = None
         self.goodbye: str | None = None
         """How the last close went: ``stopped`` (a SIP showed the wheels stopped),
         ``link lost``, ``not confirmed`` (no such SIP within ``goodbye_timeout``) or
@@ -254,7 +251,7 @@ class PioneerBackend:
             self._odometer = arcos.Odometer(self.params,
                                             relative=opt.odometry_origin == "start")
             # from here on the motors may move: a signal or an exit must stop them
-            self._register_exit_hooks()
+            self._exit_hooks = register_exit_hooks(self, self._opt.handle_sigterm)
             self._write(arcos.encode_command(Cmd.OPEN))
             self._write(_PULSE + arcos.encode_command(Cmd.ENABLE, 1))
             if self._sim_laser:
@@ -356,6 +353,11 @@ class PioneerBackend:
             self._write(_STOP_PACKETS)
         except TransportClosed:
             pass
+
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has run (the robot stopped and let go of)."""
+        return self._closed
 
     def close(self) -> None:
         """Stop the robot, close the ARCOS session and release everything (idempotent)."""
@@ -633,10 +635,8 @@ class PioneerBackend:
                     self._laser_source.close()
                 except Exception:  # noqa: BLE001
                     _log.debug("closing the laser failed", exc_info=True)
-            self._restore_sigterm()
-            hook, self._atexit = self._atexit, None
-            if hook is not None:
-                atexit.unregister(hook)
+            if self._exit_hooks is not None:
+                self._exit_hooks.release()
 
     def _stopping_bound(self, odo: OdometryState | None) -> float:
         """Return how long the goodbye waits at most for the wheels to stop, seconds.
@@ -679,40 +679,6 @@ class PioneerBackend:
             if left <= 0:
                 return "not confirmed"
             self._lost.wait(min(left, 0.01))
-
-    def _register_exit_hooks(self) -> None:
-        ref = weakref.ref(self)
-
-        def _close_at_exit() -> None:
-            backend = ref()
-            if backend is not None:
-                backend.close()
-
-        self._atexit = _close_at_exit
-        atexit.register(_close_at_exit)
-        # One owner of SIGTERM: a handler already there (mdle's command-line guard, an
-        # application's) keeps it; it must end the program through ``finally`` blocks,
-        # which stop and close the robot. Only an unhandled SIGTERM (SIG_DFL) is taken.
-        if (self._opt.handle_sigterm
-                and threading.current_thread() is threading.main_thread()
-                and signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None)):
-
-            def _sigterm_to_exit(signum: int, frame: object) -> None:
-                # SIGTERM as SystemExit(143): ``finally`` blocks run and stop the robot;
-                # a second one while the goodbye is under way must not cut it short
-                backend = ref()
-                if backend is None or not backend._closed:
-                    raise SystemExit(128 + signum)
-
-            self._old_sigterm = signal.signal(signal.SIGTERM, _sigterm_to_exit)
-
-    def _restore_sigterm(self) -> None:
-        old, self._old_sigterm = self._old_sigterm, None
-        if old is not None and threading.current_thread() is threading.main_thread():
-            try:
-                signal.signal(signal.SIGTERM, old)
-            except (ValueError, TypeError):
-                pass
 
 
 def _check_arguments(laser: object, rate: float, opt: PioneerOptions) -> str | None:

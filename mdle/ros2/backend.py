@@ -17,18 +17,16 @@ a program ends without closing it.
 
 from __future__ import annotations
 
-import atexit
 import logging
 import math
-import signal
 import threading
 import time
-import weakref
 from dataclasses import dataclass
 from typing import Any, NoReturn
 
 from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
 from mdle.errors import BackendError
+from mdle.exit_hooks import ExitHooks, register_exit_hooks
 
 __all__ = ["Ros2Backend", "Ros2Options"]
 
@@ -141,10 +139,9 @@ class Ros2Backend:
         self.mount_source = "profile" if opt.mount is not None else "none"
         #: Why the robot was lost (stale data), None while it is up (the REPL asks).
         self.failure: str | None = None
-        self._old_sigterm: Any = None
-        self._atexit: Any = None
+        self._exit_hooks: ExitHooks | None = None
         try:
-            self._register_exit_hooks()
+            self._exit_hooks = register_exit_hooks(self, self._opt.handle_sigterm)
             self._await_first_data()
         except BaseException:
             self.close()
@@ -221,6 +218,11 @@ class Ros2Backend:
         except Exception:  # noqa: BLE001 - a stop must not fail the way out
             _log.debug("publishing the stop failed", exc_info=True)
 
+    @property
+    def closed(self) -> bool:
+        """Whether :meth:`close` has run (the robot stopped and let go of)."""
+        return self._closed
+
     def close(self) -> None:
         """Publish a zero command, wait for its acknowledgement, leave the domain.
 
@@ -237,10 +239,8 @@ class Ros2Backend:
             self._cmd.wait_for_acks(duration(seconds=self._opt.goodbye_timeout))
         except Exception:  # noqa: BLE001 - closing goes on whatever DDS says
             _log.debug("waiting for the stop's acknowledgement failed", exc_info=True)
-        self._restore_sigterm()
-        hook, self._atexit = self._atexit, None
-        if hook is not None:
-            atexit.unregister(hook)
+        if self._exit_hooks is not None:
+            self._exit_hooks.release()
 
     def __enter__(self) -> Ros2Backend:  # noqa: PYI034 (typing.Self needs Python 3.11)
         return self
@@ -403,35 +403,6 @@ class Ros2Backend:
         self.failure = message
         self.stop()
         raise BackendError(message)
-
-    def _register_exit_hooks(self) -> None:
-        ref = weakref.ref(self)
-
-        def _close_at_exit() -> None:
-            backend = ref()
-            if backend is not None:
-                backend.close()
-
-        self._atexit = _close_at_exit
-        atexit.register(_close_at_exit)
-        if (self._opt.handle_sigterm
-                and threading.current_thread() is threading.main_thread()
-                and signal.getsignal(signal.SIGTERM) in (signal.SIG_DFL, None)):
-
-            def _sigterm_to_exit(signum: int, frame: object) -> None:
-                backend = ref()
-                if backend is None or not backend._closed:
-                    raise SystemExit(128 + signum)
-
-            self._old_sigterm = signal.signal(signal.SIGTERM, _sigterm_to_exit)
-
-    def _restore_sigterm(self) -> None:
-        old, self._old_sigterm = self._old_sigterm, None
-        if old is not None and threading.current_thread() is threading.main_thread():
-            try:
-                signal.signal(signal.SIGTERM, old)
-            except (ValueError, TypeError):
-                pass
 
 
 def _waited(message: Any) -> float:
