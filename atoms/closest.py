@@ -52,14 +52,12 @@ from mdle.atoms.steering import (
     f_gain,
     wrap,
 )
-from mdle.frozen import builder
 
 if TYPE_CHECKING:
     import numpy as np
 
 __all__ = ["nearest_point", "closest_law", "step", "FIT_RADIUS", "REACH", "FOV_EDGE"]
 
-_ray = builder(Ray)
 
 #: Points within this many ``rc`` of the nearest point are fitted (0.25 m at rc 0.5: about
 #: as much wall as the two-ray law's 30-degree side window, and no more than one pole).
@@ -162,7 +160,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
             return ray, sel
         radius *= 0.5
         near = near[abs(near - q) < radius]
-    return _ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA), sel
+    return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA), sel
 
 
 def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -> Ray | None:
@@ -211,7 +209,7 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     beta = math.atan2(tan_.imag, tan_.real)
     if not (math.isfinite(beta) and math.isfinite(kappa)):
         return None
-    return _ray(True, r, beta, kappa)
+    return Ray(True, r, beta, kappa)
 
 
 def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray:
@@ -254,7 +252,7 @@ def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray
     if not (ok[k] and 0.0 < r2 < math.inf):
         return MISS
     p = complex(z[k])
-    return _ray(True, math.sqrt(r2), math.atan2(p.real, -p.imag), POINT_KAPPA)
+    return Ray(True, math.sqrt(r2), math.atan2(p.real, -p.imag), POINT_KAPPA)
 
 
 def _solve3(m: float, s1: float, u1: float, s2: float, su: float, u2: float, h0: float,
@@ -435,7 +433,7 @@ def _remembered(mem: Memory, x: float, y: float, theta: float) -> Ray:
     r = math.hypot(dx, dy)
     if not r > 0.0:
         return MISS
-    return _ray(True, r, wrap(math.atan2(dy, dx) - theta + math.pi / 2.0), POINT_KAPPA)
+    return Ray(True, r, wrap(math.atan2(dy, dx) - theta + math.pi / 2.0), POINT_KAPPA)
 
 
 def _with_front(front: Ray, near: Ray, u: float, v: float, rc: float, g: Gains,
