@@ -103,11 +103,24 @@ def _hold_signals_to_the_end() -> None:
 
     from mdle.cli.signals import SIGNALS
 
-    for sig in SIGNALS:
+    # The guard's handlers raise; a signal that lands while they are being swapped (between
+    # two signal.signal calls) raised out of here with a traceback, exit 1. So: block the
+    # signals, ignore them all, and take a handler that had already fired late as ignored
+    # too (at most one per signal: the rest wait, blocked, and are discarded once ignored).
+    block = getattr(signal, "pthread_sigmask", None)
+    for _ in range(len(SIGNALS) + 1):
         try:
-            signal.signal(sig, signal.SIG_IGN)
+            if block is not None:
+                block(signal.SIG_BLOCK, SIGNALS)
+            for sig in SIGNALS:
+                signal.signal(sig, signal.SIG_IGN)
+            break
+        except KeyboardInterrupt:  # the guard's Interrupted, for a signal as the command ended
+            continue
         except (ValueError, OSError):  # not the main thread
-            return
+            break
+    if block is not None:
+        block(signal.SIG_UNBLOCK, SIGNALS)
 
 
 def _closed_streams_to_null() -> None:
