@@ -78,7 +78,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     guard = SignalGuard().install(deferred=True)
     _closed_streams_to_null()
     try:
-        return _main(argv, guard)
+        code = _main(argv, guard)
+        # The command has ended: a signal from here on is recorded, never raised. One
+        # raised while the handlers were swapped to ignored escaped with a traceback (exit 1)
+        guard.settle()
+        return code
     except KeyboardInterrupt as exc:  # a signal while the command line was read
         from mdle.cli import output
 
@@ -103,24 +107,11 @@ def _hold_signals_to_the_end() -> None:
 
     from mdle.cli.signals import SIGNALS
 
-    # The guard's handlers raise; a signal that lands while they are being swapped (between
-    # two signal.signal calls) raised out of here with a traceback, exit 1. So: block the
-    # signals, ignore them all, and take a handler that had already fired late as ignored
-    # too (at most one per signal: the rest wait, blocked, and are discarded once ignored).
-    block = getattr(signal, "pthread_sigmask", None)
-    for _ in range(len(SIGNALS) + 1):
+    for sig in SIGNALS:
         try:
-            if block is not None:
-                block(signal.SIG_BLOCK, SIGNALS)
-            for sig in SIGNALS:
-                signal.signal(sig, signal.SIG_IGN)
-            break
-        except KeyboardInterrupt:  # the guard's Interrupted, for a signal as the command ended
-            continue
+            signal.signal(sig, signal.SIG_IGN)
         except (ValueError, OSError):  # not the main thread
-            break
-    if block is not None:
-        block(signal.SIG_UNBLOCK, SIGNALS)
+            return
 
 
 def _closed_streams_to_null() -> None:

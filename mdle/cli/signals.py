@@ -153,6 +153,10 @@ class SignalGuard:
 
     # ------------------------------------------------------------------ modes
 
+    def settle(self) -> None:
+        """Enter ``defer`` mode for good: what runs now is the end, signals are only recorded."""
+        self._mode = "defer"
+
     def arm(self) -> None:
         """Enter ``raise`` mode; a signal that came while deferred is raised now."""
         self._mode = "raise"
