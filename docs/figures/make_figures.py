@@ -7,7 +7,7 @@
   in plans/paper/ run in the simulator as the README's table says, its trace drawn by
   ``mdle plot`` (the same figure);
 * Figures 4-5 (curvature estimates against the scan angle): ``mdle experiment curvature``;
-* the kf x rate study of docs/sweep.md (72 runs, about two minutes on two idle cores):
+* the kf x rate study of docs/sweep.md (72 runs, under a minute on two cores):
   ``mdle sweep plans/sweep/kf-rate.yaml`` and its report's kf plot, one line per rate;
 * ``numbers.json`` beside the figures: the numbers the docs quote beside them (each figure
   run's following error and clearance, what its curvature panel shows, and the runs those
@@ -76,6 +76,10 @@ NUMBER_RUNS: dict[str, tuple[str, list[str], str | None]] = {
 
 #: Where the numbers go, beside the figures.
 NUMBERS = "numbers.json"
+#: The kf x rate study's entry in the table (kept as it was by --no-sweep).
+SWEEP = "sweep-kf-rate"
+#: A quoted block, in a fence right after its marker: ``<!--block:sweep-kf-rate.report-->``.
+BLOCK = re.compile(r"(<!--block:([A-Za-z0-9_.-]+)-->\n```\n)(.*?)(\n```)", re.DOTALL)
 #: A quoted number and its key: ``0.012<!--n:hexagon-10hz.mean_err-->`` (in ``+-0.1`` the
 #: sign belongs to the text, not to the number).
 MARKER = re.compile(r"((?:(?<!\+)-)?\d+(?:\.\d+)?)<!--n:([A-Za-z0-9_.-]+)-->")
@@ -201,6 +205,15 @@ def all_numbers(work: str, jobs: int) -> dict[str, Any]:
     return table
 
 
+def kept_sweep_numbers(out: Path) -> dict[str, str]:
+    """Return the kf x rate study's numbers as the table in ``out`` has them (none: empty)."""
+    path = out / NUMBERS
+    if not path.is_file():
+        return {}
+    kept = json.loads(path.read_text("utf-8")).get(SWEEP)
+    return kept if isinstance(kept, dict) else {}
+
+
 def write_numbers(table: dict[str, Any], out: Path) -> Path:
     """Write the numbers table as JSON (keys sorted, one run per block)."""
     path = out / NUMBERS
@@ -223,20 +236,21 @@ def doc_files() -> list[Path]:
 
 
 def rewrite_numbers(text: str, table: dict[str, Any], where: str) -> str:
-    """Return ``text`` with every marked number replaced by the table's.
+    """Return ``text`` with every marked number (and block) replaced by the table's.
 
     Raises
     ------
     KeyError
         A marker names a number the table does not have (``where`` names the file).
     """
-    def new(m: re.Match[str]) -> str:
-        value = lookup(table, m.group(2))
-        if value is None:
-            raise KeyError(f"{where}: no number `{m.group(2)}` in {NUMBERS}")
-        return f"{value}<!--n:{m.group(2)}-->"
+    def value(key: str) -> str:
+        found = lookup(table, key)
+        if found is None:
+            raise KeyError(f"{where}: no number `{key}` in {NUMBERS}")
+        return found
 
-    return MARKER.sub(new, text)
+    text = BLOCK.sub(lambda m: m.group(1) + value(m.group(2)) + m.group(4), text)
+    return MARKER.sub(lambda m: f"{value(m.group(2))}<!--n:{m.group(2)}-->", text)
 
 
 def update_docs(table: dict[str, Any]) -> list[str]:
@@ -262,8 +276,12 @@ def draw_figure(name: str, trace: str, out: str) -> str:
     return path
 
 
-def sweep_figure(out: Path, work: Path, jobs: int) -> Path:
-    """Run the kf x rate study and draw its kf plot, one median line per rate."""
+def sweep_figure(out: Path, work: Path, jobs: int) -> tuple[Path, dict[str, str]]:
+    """Run the kf x rate study and draw its kf plot, one median line per rate.
+
+    Returns the figure's path and the numbers docs/sweep.md quotes beside it
+    (:func:`sweep_numbers`).
+    """
     from mdle.cli import main
     from mdle.sweep.report import plot_axes
     from mdle.sweep.table import read_rows
@@ -273,12 +291,51 @@ def sweep_figure(out: Path, work: Path, jobs: int) -> Path:
                  "--jobs", str(jobs)])
     if code != 0:
         raise RuntimeError(f"mdle sweep exited {code}")
-    [plot] = plot_axes(read_rows(results), work / "plots", "follow_mean_err", ["param_kf"],
-                       group="rate")
+    rows = read_rows(results)
+    [plot] = plot_axes(rows, work / "plots", "follow_mean_err", ["param_kf"], group="rate")
     target = out / "sweep-kf-rate.png"
     shutil.copyfile(plot, target)
     shrink(target)
-    return target
+    return target, sweep_numbers(rows)
+
+
+def sweep_numbers(rows: list[dict[str, Any]]) -> dict[str, str]:
+    """Return what docs/sweep.md quotes of the kf x rate study's results rows.
+
+    ``runs``, ``collisions``, ``engaged``, ``closest`` (the least body clearance, m); per
+    cell ``mean_kf{kf}_{rate}hz`` (the median over its runs of the mean |d - rc|) and
+    ``max_kf{kf}_{rate}hz`` (the worst single tick); ``fall_lo`` and ``fall_hi``: by how much
+    the median falls from the smallest kf to the largest, at the rate where it falls least and
+    most; ``report``: what ``mdle sweep report DIR --by rate --by world --no-plots`` prints,
+    without its closing notes.
+    """
+    import numpy as np
+
+    from mdle.sweep.report import format_summary
+
+    def key(value: Any) -> str:
+        return f"{float(value):g}"
+
+    out = {"runs": str(len(rows)),
+           "collisions": str(sum(bool(r.get("collided")) for r in rows)),
+           "engaged": str(sum(bool(r.get("engaged")) for r in rows)),
+           "closest": f"{min(float(r['min_clearance']) for r in rows):.3f}"}
+    kfs = sorted({float(r["param_kf"]) for r in rows})
+    falls = []
+    for rate in sorted({float(r["rate"]) for r in rows}):
+        medians = {}
+        for kf in kfs:
+            cell = [r for r in rows if float(r["param_kf"]) == kf and float(r["rate"]) == rate]
+            medians[kf] = float(np.median([float(r["follow_mean_err"]) for r in cell]))
+            out[f"mean_kf{key(kf)}_{key(rate)}hz"] = f"{medians[kf]:.3f}"
+            out[f"max_kf{key(kf)}_{key(rate)}hz"] = \
+                f"{max(float(r['follow_max_err']) for r in cell):.2f}"
+        falls.append(medians[kfs[0]] / medians[kfs[-1]])
+    out |= {"fall_lo": f"{min(falls):.0f}", "fall_hi": f"{max(falls):.0f}"}
+    # the summary's tables, without the notes after the last one
+    report = format_summary(rows, ["rate", "world"])
+    out["report"] = report[:report.index("\n\nengaged:")]
+    return out
 
 
 def main() -> int:
@@ -286,7 +343,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "figures")
     parser.add_argument("--no-sweep", action="store_true",
-                        help="skip the two-minute kf x rate study (keep its figure)")
+                        help="skip the kf x rate study (keep its figure and its numbers)")
     parser.add_argument("--only", nargs="*", metavar="NAME", default=None,
                         help="only these run figures (file names, e.g. fig1-ellipse.png); "
                              "the numbers and the docs are left as they are")
@@ -312,6 +369,11 @@ def main() -> int:
                     print(f"wrote {path}", flush=True)
         else:
             table = all_numbers(work, jobs)
+            if args.no_sweep or args.numbers_only:  # the study's numbers stay as they were
+                table[SWEEP] = kept_sweep_numbers(args.out)
+            else:
+                target, table[SWEEP] = sweep_figure(args.out, Path(work), jobs)
+                print(f"wrote {target}", flush=True)
             print(f"wrote {write_numbers(table, args.out)}", flush=True)
             for doc in update_docs(table):
                 print(f"updated the quoted numbers in {doc}", flush=True)
@@ -324,8 +386,6 @@ def main() -> int:
                 for path in plot_figures(args.out, dpi=DPI):
                     shrink(path)
                     print(f"wrote {path}", flush=True)
-                if not args.no_sweep:
-                    print(f"wrote {sweep_figure(args.out, Path(work), jobs)}", flush=True)
     print(f"done in {time.perf_counter() - t0:.0f} s on {jobs} processes")
     return 0
 
