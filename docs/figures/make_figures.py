@@ -184,6 +184,21 @@ def trashcan_numbers(seed: int = 0, draws: int = 5) -> dict[str, str]:
             "visible_beams": str(int(on_can.sum())), "estimated_beams": str(estimated)}
 
 
+def cabinet_numbers(seed: int = 0, draws: int = 5) -> dict[str, str]:
+    """Figure 4's number: how deep the corner's hump is (median over the scans, 1/m)."""
+    import numpy as np
+
+    from mdle.atoms import estimators as E
+    from mdle.experiments.curvature import object_scans
+
+    scans, _ = object_scans("cabinet", draws, seed)  # the scans Figure 4 draws
+    deepest = []
+    for scan in scans:
+        est = E.averaged_curvature(E.surfaces(scan.ranges, scan.bearings, scan.valid))
+        deepest.append(float(np.min(est.curvature[est.valid])))
+    return {"hump": f"{float(np.median(deepest)):.0f}"}
+
+
 def measure(name: str, work: str) -> tuple[str, dict[str, str], str]:
     """Run one figure or number run; return its name, its numbers and its trace's path."""
     trace = run_plan(name, work)
@@ -201,6 +216,7 @@ def all_numbers(work: str, jobs: int) -> dict[str, Any]:
             results = list(pool.map(measure, names, [work] * len(names)))
     for name, numbers, _ in results:
         table[name] = numbers
+    table["figure4-cabinet"] = cabinet_numbers()
     table["figure5-trashcan"] = trashcan_numbers()
     return table
 
