@@ -12,11 +12,14 @@
 * ``numbers.json`` beside the figures: the numbers the docs quote beside them (each figure
   run's following error and clearance, what its curvature panel shows, and the runs those
   paragraphs compare against: the hexagon at 10 Hz, the Pioneer plans on the whole-scan
-  model, the trash can's estimates), measured from the same runs. Every such number in the
-  README and docs/*.md is followed by a marker, ``0.012<!--n:hexagon-10hz.mean_err-->``,
-  which this script rewrites to the new value; tests/test_docs_numbers.py checks the docs
-  against the table and the table against fresh runs. ``--numbers-only`` does that part
-  alone (the runs, no drawing: about 15 s).
+  model; Figures 4-5's estimates; the kf x rate study's table and summary), measured from
+  the same runs. Every such number in the README and docs/*.md is followed by a marker,
+  ``0.012<!--n:hexagon-10hz.mean_err-->``, which this script rewrites to the new value;
+  tests/test_docs_numbers.py checks the docs against the table and the table against fresh
+  runs. ``--numbers-only`` does that part
+  alone (the runs, no drawing: about 15 s); it and ``--no-sweep`` keep the study's numbers
+  as the table has them. A fenced block the docs quote whole follows its own marker,
+  ``<!--block:sweep-kf-rate.report-->``.
 
 The runs go on every core (one process each). Figures are written at 100 dpi with a
 128-colour palette to keep the repository small. Works from a checkout where mdle is not installed.
