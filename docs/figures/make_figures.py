@@ -56,8 +56,8 @@ def shrink(path: str | Path) -> None:
 def run_figure(name: str, out: str, work: str) -> str:
     """Run one plan with a trace and draw it; return the figure's path."""
     from mdle.cli import main
-    from mdle.figure_output import save_figure
-    from mdle.plot import trace_and_world, trace_figure
+    from mdle.view.figure_output import save_figure
+    from mdle.view.plot import trace_and_world, trace_figure
 
     plan, extra = RUNS[name]
     trace = os.path.join(work, name.replace(".png", ".jsonl"))

@@ -12,10 +12,10 @@ import sys
 from collections.abc import Callable, Iterable, Mapping
 from typing import IO, TYPE_CHECKING
 
-from mdle.errors import Diagnostic, MdleError, Severity, render_diagnostic
+from mdle.core.errors import Diagnostic, MdleError, Severity, render_diagnostic
 
 if TYPE_CHECKING:
-    from mdle.cli.signals import SignalGuard
+    from mdle.console.signals import SignalGuard
 
 __all__ = [
     "EXIT_OK",
@@ -99,14 +99,14 @@ def guarded(handler: Callable[[argparse.Namespace], int], args: argparse.Namespa
         output_closed()
         return EXIT_PIPE
     except OSError as exc:
-        from mdle.userfile import file_fault, file_fault_words
+        from mdle.core.userfile import file_fault, file_fault_words
 
         if not file_fault(exc):
             return _internal(exc, args)
         print(f"mdle: {file_fault_words(exc)}", file=sys.stderr)
         return EXIT_IO
     except Exception as exc:  # an mdle bug: never a raw traceback unless asked
-        from mdle.cli.signals import interruption_of
+        from mdle.console.signals import interruption_of
 
         signal_exc = interruption_of(exc)
         if signal_exc is not None:  # a signal inside class creation, wrapped by Python
@@ -126,7 +126,7 @@ def _internal(exc: Exception, args: argparse.Namespace) -> int:
 
 def interrupted(exc: BaseException, guard: SignalGuard | None) -> int:
     """Say that a signal ended the command; return 128 + its number."""
-    from mdle.cli.signals import signal_name
+    from mdle.console.signals import signal_name
 
     signum = getattr(exc, "signum", None)
     if signum is None and guard is not None:

@@ -14,15 +14,14 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-from mdle.frozen import builder
+from mdle.core.frozen import builder
+from mdle.core.messages import Inbox
+from mdle.core.pose import Pose
 
 if TYPE_CHECKING:  # numpy is only needed by those who build scans
     import numpy as np
 
-    from mdle.messages import Inbox
-
 __all__ = [
-    "Pose",
     "Scan",
     "Observation",
     "LazyTruth",
@@ -36,15 +35,6 @@ __all__ = [
     "TickClock",
     "Backend",
 ]
-
-
-@dataclass(frozen=True)
-class Pose:
-    """A planar pose in the odometry (world) frame: metres and radians."""
-
-    x: float = 0.0
-    y: float = 0.0
-    theta: float = 0.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,7 +96,7 @@ class Observation:
     motors_enabled: bool = True
     battery: float | None = None
     truth: Mapping[str, Any] = field(default_factory=dict)
-    inbox: "Inbox | None" = None
+    inbox: Inbox | None = None
 
 
 class LazyTruth(Mapping[str, Any]):

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 
 __all__ = ["POSE_CHANNEL", "Message", "Inbox", "DeliveryRules", "compose", "relative"]
 

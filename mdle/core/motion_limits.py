@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from mdle.units import SPEED, TURN_RATE, Dim
+from mdle.core.units import SPEED, TURN_RATE, Dim
 
 __all__ = ["KnownRobot", "excess", "SPEED", "TURN_RATE"]
 

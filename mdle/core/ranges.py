@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["NumberRange", "RATE", "COORDINATE"]
+__all__ = ["NumberRange", "RATE", "COORDINATE", "MAX_SEED"]
 
 
 @dataclass(frozen=True)
@@ -39,6 +39,8 @@ RATE = NumberRange("the rate", 0.001, 1000.0, "Hz")
 #: Coordinates of poses (m): farther from the origin than this is a typo, not a place
 #: (the same bound as a world file's coordinates).
 COORDINATE = NumberRange("a coordinate", -1e6, 1e6, "m")
+#: Largest simulation seed (numpy's legacy seeding takes 32 bits).
+MAX_SEED = 2**32 - 1
 
 
 

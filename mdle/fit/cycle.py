@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mdle.sim.recording import Recording
+from mdle.fit.recording import Recording
 from mdle.sim.robot import Latency, RobotProfile, RunClock
 
 __all__ = ["OMEGA_SCALE", "V_SCALE", "CycleFit", "fit_cycled", "report_times", "run_clock"]

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mdle.sim.fit_cycle import (
+from mdle.fit.cycle import (
     _ACC_V,
     _ACC_W,
     OMEGA_SCALE,
@@ -33,8 +33,8 @@ from mdle.sim.fit_cycle import (
     fit_cycled,
     run_clock,
 )
-from mdle.sim.fit_scans import fit_half_rate, half_rate_stretches, scan_stamps
-from mdle.sim.recording import Recording
+from mdle.fit.recording import Recording
+from mdle.fit.scans import fit_half_rate, half_rate_stretches, scan_stamps
 from mdle.sim.robot import RAMPS, HalfRate, Latency, RobotProfile, RunClock
 
 # The scales and run_clock live in fit_cycle.py (both fits use them); tests read them here.

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mdle.errors import MdleError
+from mdle.core.errors import MdleError
 
 __all__ = ["CSV_COLUMNS", "Recording", "read_recording"]
 
@@ -116,7 +116,7 @@ def _from_csv(p: Path) -> Recording:
 
 
 def _from_trace(p: Path) -> Recording:
-    from mdle.trace import read_trace
+    from mdle.record.load import read_trace
 
     trace = read_trace(p)
     if not trace.samples:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mdle.sim.recording import Recording
+from mdle.fit.recording import Recording
 from mdle.sim.robot import HalfRate
 
 __all__ = ["Stretches", "fit_half_rate", "half_rate_stretches"]

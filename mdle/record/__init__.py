@@ -1,14 +1,14 @@
 """Runs as ROS 2 data: MCAP files (and rosbag2 folders) that robotics tools open.
 
-The trace's records (:mod:`mdle.trace`) become ROS 2 messages on the usual topics
+The trace's records (:mod:`mdle.record.trace`) become ROS 2 messages on the usual topics
 (``/scan``, ``/odom``, ``/tf``, ``/tf_static``, ``/cmd_vel``, ``/ground_truth``,
 ``/footprint``, ``/path``, ``/map``, ``/obstacles``, ``/mdle/events``, ``/mdle/active``,
 ``/mdle/diagnostics``, ``/mdle/state``; ``docs/trace.md`` lists them), CDR-encoded, in a
 chunked, indexed MCAP file. The same mapping serves a live run (:class:`McapRecorder`,
 ``mdle run --record``) and a trace read back (:func:`export_trace`, ``mdle export``), so
-both give the same messages; a live view (``--foxglove``, :mod:`mdle.ros.live`) gets
-the very same bytes (:mod:`mdle.ros.outlet`), a team's robots share one file
-(:mod:`mdle.ros.team_record`), and ``mdle recover`` (:mod:`mdle.ros.recover`) finishes
+both give the same messages; a live view (``--foxglove``, :mod:`mdle.view.foxglove`) gets
+the very same bytes (:mod:`mdle.record.outlet`), a team's robots share one file
+(:mod:`mdle.record.team_record`), and ``mdle recover`` (:mod:`mdle.record.recover`) finishes
 a file a kill cut off.
 
 Writing needs the optional extra ``mdle[mcap]`` (the ``mcap`` and ``mcap-ros2-support``
@@ -17,7 +17,7 @@ libraries and ``lz4``); :func:`require` says how to install it when it is missin
 
 from __future__ import annotations
 
-from mdle.errors import Diagnostic, MdleError
+from mdle.core.errors import Diagnostic, MdleError
 
 __all__ = ["MissingExtraError", "require", "INSTALL_HINT"]
 

@@ -1,7 +1,7 @@
 """``mdle export``: a JSON lines trace to an MCAP file (or a rosbag2 folder).
 
 The trace is read line by line and each record handed to a
-:class:`~mdle.ros.topics.RosRecording`, exactly as the live recorder hands them over, so
+:class:`~mdle.record.topics.RosRecording`, exactly as the live recorder hands them over, so
 the export of a run's trace holds the messages ``mdle run --record`` writes. A trace
 that is cut short or damaged is exported up to the last good record: the file is still
 finished (summary and index), and the report says at which line the export stopped and
@@ -18,10 +18,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from mdle.errors import Diagnostic, MdleError, Span
-from mdle.ros.topics import RosRecording
-from mdle.trace import TRACE_FORMAT, TRACE_VERSION, TraceError, decode_ranges
-from mdle.userfile import UserFileError, open_user_file, os_reason, replacing
+from mdle.core.errors import Diagnostic, MdleError, Span
+from mdle.core.userfile import UserFileError, open_user_file, os_reason, replacing
+from mdle.record.topics import RosRecording
+from mdle.record.trace import TRACE_FORMAT, TRACE_VERSION, TraceError, decode_ranges
 
 __all__ = ["ExportReport", "export_trace"]
 

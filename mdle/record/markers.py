@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.ros.cdr import ENCAPSULATION, CdrWriter
+from mdle.rosmsg.cdr import ENCAPSULATION, CdrWriter
 
 __all__ = ["PathPieces", "obstacle_markers", "outlines", "path_marker"]
 

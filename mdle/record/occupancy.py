@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.ros.cdr import CdrWriter
+from mdle.rosmsg.cdr import CdrWriter
 
 __all__ = ["RESOLUTION", "occupancy_grid"]
 

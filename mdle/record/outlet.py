@@ -1,6 +1,6 @@
 """Where a run's ROS 2 messages go: an MCAP file, live views, or both, from one source.
 
-:class:`~mdle.ros.topics.RosRecording` (and :class:`~mdle.ros.tick.TickEncoder`) make
+:class:`~mdle.record.topics.RosRecording` (and :class:`~mdle.record.tick.TickEncoder`) make
 each message once and hand it to an :class:`Outlet`, which gives the very same bytes to
 the MCAP file (``--record``, ``--rosbag``) and to every live sink (``--foxglove``):
 what a recording holds is what the live view showed. Several recordings (a team's
@@ -20,7 +20,7 @@ from typing import Protocol
 
 import numpy as np
 
-from mdle.ros.mcap_file import McapFile
+from mdle.record.mcap_file import McapFile
 
 __all__ = ["LiveSink", "Outlet"]
 
@@ -54,7 +54,7 @@ class Outlet:
     live : sequence of LiveSink
         Live views.
 
-    It offers the part of :class:`~mdle.ros.mcap_file.McapFile`'s interface that a
+    It offers the part of :class:`~mdle.record.mcap_file.McapFile`'s interface that a
     recording uses, and counts messages itself (sequence numbers, time range) so that a
     live view works without a file. Schemas are registered once per name and text, so
     recordings sharing the outlet share them.

@@ -1,4 +1,4 @@
-"""Read an MCAP recording of a run back as a :class:`~mdle.trace.Trace` (for plots, the REPL).
+"""Read an MCAP recording of a run back as a trace (for plots, the REPL).
 
 The file is read record by record with the mcap library's stream reader and the ROS 2
 messages decoded with mcap-ros2-support: the header from the ``mdle`` Metadata record,
@@ -17,8 +17,8 @@ import os
 import struct
 from typing import Any
 
-from mdle.errors import Diagnostic, Span
-from mdle.trace import TRACE_FORMAT, TRACE_VERSION, Trace, TraceError
+from mdle.core.errors import Diagnostic, Span
+from mdle.record.trace import TRACE_FORMAT, TRACE_VERSION, Trace, TraceError
 
 __all__ = ["read_recording"]
 
@@ -38,7 +38,7 @@ def read_recording(path: str | os.PathLike[str]) -> Trace:
         The MCAP libraries are missing, the file is not MCAP, or it is not an mdle
         recording (no ``/mdle/state`` topic).
     """
-    from mdle.ros import MissingExtraError, require
+    from mdle.record import MissingExtraError, require
 
     path = os.fspath(path)
     try:
@@ -47,13 +47,13 @@ def read_recording(path: str | os.PathLike[str]) -> Trace:
         raise TraceError(exc.diagnostics) from None
     source = path
     if os.path.isdir(path):
-        from mdle.ros.rosbag import mcap_in
+        from mdle.record.rosbag import mcap_in
 
         found = mcap_in(path)
         if found is None:
             raise _error(path, "no .mcap file in this rosbag2 folder")
         source = found
-    from mdle.userfile import UserFileError, open_user_file, os_reason
+    from mdle.core.userfile import UserFileError, open_user_file, os_reason
 
     try:  # a regular file only: a FIFO or a device is refused, not read until it ends
         f = open_user_file(source)

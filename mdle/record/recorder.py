@@ -2,14 +2,14 @@
 
 Ticks are encoded in batches (:data:`BATCH_TICKS`, or :data:`BATCH_AGE` of wall time):
 a batch's numbers, scans and records are converted and filled with numpy a column at a
-time (:mod:`mdle.ros.tick`), and the batch runs with its code and data warm in the CPU's
+time (:mod:`mdle.record.tick`), and the batch runs with its code and data warm in the CPU's
 caches, where one tick at a time would find them evicted by the simulation every tick.
 An event flushes the batch first, so the file holds the messages in the trace's order.
 A kill loses at most the batch waiting and the open chunk (``docs/trace.md``).
 
-It makes the same records the trace writer makes (:mod:`mdle.trace`: the same sample
+It makes the same records the trace writer makes (:mod:`mdle.record.trace`: the same sample
 line, event and end records, ``laser`` and ``scan`` records) and hands them to a
-:class:`~mdle.ros.topics.RosRecording`, so a recording and the export of the run's trace
+:class:`~mdle.record.topics.RosRecording`, so a recording and the export of the run's trace
 hold the same messages. Whatever ends the run (its end, an error, Ctrl-C, SIGTERM), the
 scheduler calls :meth:`McapRecorder.on_end` and the file is finished with its summary
 and index; :meth:`McapRecorder.close` does it if the run never ended.
@@ -27,12 +27,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mdle.errors import Diagnostic, MdleError
-from mdle.ros.rounding import round9
-from mdle.ros.tick import Ticks, times_ns
-from mdle.ros.topics import RosRecording, sample_values
-from mdle.runtime.events import Event, RunResult, Sample
-from mdle.trace import (
+from mdle.core.errors import Diagnostic, MdleError
+from mdle.record.rounding import round9
+from mdle.record.tick import Ticks, times_ns
+from mdle.record.topics import RosRecording, sample_values
+from mdle.record.trace import (
     LaserRecords,
     SampleFormat,
     dumps,
@@ -42,6 +41,7 @@ from mdle.trace import (
     laser_timing,
     start_record,
 )
+from mdle.runtime.events import Event, RunResult, Sample
 
 if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
@@ -83,7 +83,7 @@ class McapRecorder:
         ``chunk_size``, ``max_age``, ``compression`` for the MCAP file (``compression``
         ``""``, none, unless given: ``"lz4"``); ``live`` (live views, batches of
         :data:`LIVE_BATCH_AGE` at most), ``outlet`` and ``robot`` (a team's robot in a
-        shared file) as :class:`~mdle.ros.topics.RosRecording` takes them.
+        shared file) as :class:`~mdle.record.topics.RosRecording` takes them.
 
     Raises
     ------
@@ -153,7 +153,7 @@ class McapRecorder:
     def _flush(self) -> None:
         """Publish the ticks waiting: new scans, odometry, transforms, command, state.
 
-        The batch goes to the file as one :class:`~mdle.ros.tick.Ticks`: its scans'
+        The batch goes to the file as one :class:`~mdle.record.tick.Ticks`: its scans'
         ranges turned to float32 (+inf without a return) in one numpy operation, its
         numbers in one array. A new beam geometry publishes the ticks before it first.
         Raises OSError when the file cannot be written.

@@ -2,12 +2,12 @@
 
 A killed ``mdle run --record`` leaves an MCAP file without its summary and footer (and a
 ``--rosbag`` folder without ``metadata.yaml``), which the usual readers refuse. Every
-chunk closed before the kill is whole on disk (:mod:`mdle.ros.mcap_file`), so the file
+chunk closed before the kill is whole on disk (:mod:`mdle.record.mcap_file`), so the file
 is read record by record, CRCs checked, up to the first record that is cut short or
 damaged; schemas, channels, metadata and the messages of every whole chunk are written
 again, with the mcap library's writer, into a finished file (summary, indexes, footer).
 The file is replaced only once the new one is complete. A rosbag2 folder also gets its
-``metadata.yaml`` (:mod:`mdle.ros.rosbag`).
+``metadata.yaml`` (:mod:`mdle.record.rosbag`).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 
-from mdle.errors import Diagnostic, MdleError
+from mdle.core.errors import Diagnostic, MdleError
 
 __all__ = ["RecoverReport", "recover"]
 
@@ -45,7 +45,7 @@ def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | Non
     ``output`` (an MCAP file) keeps the source as it is; without it the source is
     replaced. Raises MdleError when the source is not an MCAP recording.
     """
-    from mdle.ros import require
+    from mdle.record import require
 
     require("mdle recover")
     src = os.fspath(source)
@@ -60,7 +60,7 @@ def recover(source: str | os.PathLike[str], output: str | os.PathLike[str] | Non
             data = f.read()
     except OSError as exc:
         raise MdleError(Diagnostic(None, f"cannot read `{src}`: {exc.strerror}")) from None
-    from mdle.ros.mcap_file import MAGIC
+    from mdle.record.mcap_file import MAGIC
 
     if not data.startswith(MAGIC):
         raise MdleError(Diagnostic(None, f"`{src}` is not an MCAP file (no MCAP magic at "
@@ -138,8 +138,8 @@ def _rewrite(src: str, data: bytes, out: str, complete: bool) -> RecoverReport:
 
 def _bag_metadata(folder: str, name: str, report: RecoverReport) -> None:
     """Write a rosbag2 folder's ``metadata.yaml`` from the recovered file's channels."""
-    from mdle.ros.rosbag import write_metadata
-    from mdle.ros.topics import Topic
+    from mdle.record.rosbag import write_metadata
+    from mdle.record.topics import Topic
 
     topics = []
     for topic, kind, qos in _channels(os.path.join(folder, name)):

@@ -14,7 +14,7 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mdle.errors import Diagnostic, MdleError
+from mdle.core.errors import Diagnostic, MdleError
 
 __all__ = ["prepare_folder", "qos_profiles", "write_metadata", "mcap_in"]
 
@@ -80,7 +80,7 @@ def write_metadata(folder: str, mcap_name: str, topics: Sequence[Any],
                    counts: Mapping[str, int], span: tuple[int, int]) -> str:
     """Write ``metadata.yaml`` (version 9) for the recording; returns its path.
 
-    ``topics`` are :class:`~mdle.ros.topics.Topic` records, ``counts`` messages per
+    ``topics`` are :class:`~mdle.record.topics.Topic` records, ``counts`` messages per
     topic name, ``span`` the first and last log time (ns).
     """
     import yaml

@@ -1,7 +1,7 @@
 """A team run recorded in one file (and shown in one live view): ``mdle run --team --record``.
 
-Every robot has a :class:`~mdle.ros.recorder.McapRecorder` of its own (its scheduler's
-observer), and all of them write into one :class:`~mdle.ros.outlet.Outlet`: one MCAP
+Every robot has a :class:`~mdle.record.recorder.McapRecorder` of its own (its scheduler's
+observer), and all of them write into one :class:`~mdle.record.outlet.Outlet`: one MCAP
 file or rosbag2 folder, one live view. A robot's topics are ``/NAME/scan``,
 ``/NAME/odom``, ``/NAME/tf``... and its frames ``NAME/odom``, ``NAME/base_link``,
 ``NAME/laser``, all under the world's one ``map`` (``map -> NAME/odom`` on
@@ -16,11 +16,11 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mdle.errors import Diagnostic
-from mdle.ros.mcap_file import McapFile
-from mdle.ros.outlet import LiveSink, Outlet
-from mdle.ros.recorder import McapRecorder, RecordingError
-from mdle.ros.topics import library_name
+from mdle.core.errors import Diagnostic
+from mdle.record.mcap_file import McapFile
+from mdle.record.outlet import LiveSink, Outlet
+from mdle.record.recorder import McapRecorder, RecordingError
+from mdle.record.topics import library_name
 
 __all__ = ["TeamRecording"]
 
@@ -63,7 +63,7 @@ class TeamRecording:
         try:
             if self.target is not None:
                 if rosbag:
-                    from mdle.ros.rosbag import prepare_folder
+                    from mdle.record.rosbag import prepare_folder
 
                     self.path = prepare_folder(self.target)
                 file = McapFile(self.path or "", library=library_name(),
@@ -98,7 +98,7 @@ class TeamRecording:
         try:
             self.outlet.finish()
             if self.rosbag and self.target is not None and self.path is not None:
-                from mdle.ros.rosbag import write_metadata
+                from mdle.record.rosbag import write_metadata
 
                 topics, counts = [], {}
                 for r in self.recorders.values():

@@ -10,12 +10,12 @@ line's text, which comes last in a tick. :class:`TickEncoder` therefore lays a t
 fixed records out once as a row (:class:`Rows`: a template of the constant bytes and the
 numpy fields of the variable ones), fills a whole batch of rows a column at a time, and
 joins each tick's scan, row and text into one block that the MCAP file adds with its
-index entries at once (:meth:`~mdle.ros.mcap_file.McapFile.add_block`). Records keep the
+index entries at once (:meth:`~mdle.record.mcap_file.McapFile.add_block`). Records keep the
 order a tick at a time writer gives them: a tick's scan, then its other messages.
 
 Fields that are always zero (z, the quaternion's x and y, a planar twist's other axes)
 are zeros of the template; the footprint's outline is constant, and the odometry's
-covariances are columns filled per batch (:mod:`mdle.ros.covariance`). The records'
+covariances are columns filled per batch (:mod:`mdle.record.covariance`). The records'
 bytes are exactly what a field-by-field CDR writer makes (tests decode them with
 mcap-ros2-support and rosbags); sines and cosines come from :mod:`math`, as that writer's would.
 """
@@ -31,9 +31,9 @@ from typing import Any
 
 import numpy as np
 
-from mdle.ros.cdr import Layout
-from mdle.ros.mcap_file import McapFile
-from mdle.ros.outlet import Outlet
+from mdle.record.mcap_file import McapFile
+from mdle.record.outlet import Outlet
+from mdle.rosmsg.cdr import Layout
 
 __all__ = ["Rows", "TickEncoder", "Ticks"]
 
@@ -64,7 +64,7 @@ class Rows:
 
     :meth:`message` appends a record: the MCAP header (its ``seq`` and ``times`` (log and
     publish time) fields, and with ``open_end`` its ``length``) and the message laid out by a
-    :class:`~mdle.ros.cdr.Layout`, its fields named ``PREFIX.NAME``.
+    :class:`~mdle.rosmsg.cdr.Layout`, its fields named ``PREFIX.NAME``.
     """
 
     def __init__(self) -> None:
@@ -200,7 +200,7 @@ class TickEncoder:
         rows.message("state", state, Layout().field("n", "I"), open_end=True)
         self._rows = rows
         #: the odometry's covariances (36 each, row-major x y z roll pitch yaw) used
-        #: when a batch brings none: all 0 unless set (:mod:`mdle.ros.covariance`)
+        #: when a batch brings none: all 0 unless set (:mod:`mdle.record.covariance`)
         self.covariance = (np.zeros(36), np.zeros(36))
         self._scan: Rows | None = None
         self.count = 0  # beams of a scan

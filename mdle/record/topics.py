@@ -2,7 +2,7 @@
 
 :class:`RosRecording` takes the trace's records one by one (the live recorder hands
 them over as the run makes them, the exporter as it reads a trace) and writes the ROS
-messages they become into an MCAP file (:class:`~mdle.ros.mcap_file.McapFile`), or a
+messages they become into an MCAP file (:class:`~mdle.record.mcap_file.McapFile`), or a
 rosbag2 folder (the MCAP file and ``metadata.yaml``). Frames follow REP-105: ``map``
 (the simulated world), ``odom`` (where odometry counts from), ``base_link`` (the
 robot: x forward, y left, REP-103) and ``laser`` (the ladar, at the profile's mount).
@@ -22,14 +22,14 @@ from typing import Any
 
 import numpy as np
 
-from mdle.ros import cdr
-from mdle.ros.covariance import OdometryCovariance
-from mdle.ros.describe import diagnostic_names, footprint
-from mdle.ros.markers import PathPieces
-from mdle.ros.mcap_file import McapFile
-from mdle.ros.msgdefs import DIAGNOSTICS, diagnostics_definition, schema_text
-from mdle.ros.outlet import LiveSink, Outlet
-from mdle.ros.tick import TickEncoder, Ticks, times_ns
+from mdle.record.covariance import OdometryCovariance
+from mdle.record.describe import diagnostic_names, footprint
+from mdle.record.markers import PathPieces
+from mdle.record.mcap_file import McapFile
+from mdle.record.outlet import LiveSink, Outlet
+from mdle.record.tick import TickEncoder, Ticks, times_ns
+from mdle.rosmsg import cdr
+from mdle.rosmsg.msgdefs import DIAGNOSTICS, diagnostics_definition, schema_text
 
 __all__ = ["BATCH", "FRAMES", "TOPICS", "Topic", "RosRecording",
            "footprint", "library_name", "sample_values", "to_ns"]
@@ -132,9 +132,9 @@ BATCH = 64
 
 
 def sample_values(s: Any, numbers: tuple[float, ...] | None) -> tuple[float, ...]:
-    """Return a sample's ten numbers for :class:`~mdle.ros.tick.Ticks`, not yet rounded.
+    """Return a sample's ten numbers for :class:`~mdle.record.tick.Ticks`, not yet rounded.
 
-    ``numbers`` are the line's as :meth:`mdle.trace.SampleFormat.line_and_numbers` gives
+    ``numbers`` are the line's as :meth:`mdle.record.trace.SampleFormat.line_and_numbers` gives
     them (seven without a true pose), or None (a number not finite: they are taken from
     the sample). An unknown true pose is NaN.
     """
@@ -173,7 +173,7 @@ class RosRecording:
         A team robot's name: its topics are ``/NAME/...``, its frames ``NAME/odom``,
         ``NAME/base_link``, ``NAME/laser`` (``map`` is the world's, shared), its header
         the Metadata record ``mdle/NAME``.
-    chunk_size, max_age, compression : see :class:`~mdle.ros.mcap_file.McapFile`.
+    chunk_size, max_age, compression : see :class:`~mdle.record.mcap_file.McapFile`.
 
     Feed it :meth:`start`, :meth:`event`, :meth:`laser`, :meth:`scan`, :meth:`sample` and
     :meth:`end` in the trace's order; :meth:`finish` ends the file.
@@ -183,7 +183,7 @@ class RosRecording:
                  world: Any = None, *, rosbag: bool = False, live: Sequence[LiveSink] = (),
                  outlet: Outlet | None = None, robot: str | None = None,
                  **file_options: Any) -> None:
-        from mdle.trace import dumps
+        from mdle.record.trace import dumps
 
         self.target = os.fspath(target) if target is not None else None
         self.rosbag = rosbag and outlet is None
@@ -193,7 +193,7 @@ class RosRecording:
             file = None
             if self.target is not None:
                 if rosbag:
-                    from mdle.ros.rosbag import prepare_folder
+                    from mdle.record.rosbag import prepare_folder
 
                     self.path = prepare_folder(self.target)
                 file = McapFile(self.path or "", library=library_name(), **file_options)
@@ -259,11 +259,11 @@ class RosRecording:
         if not self._started:
             self._started = True
             if self._world is not None and "/map" in self.channels:
-                from mdle.ros.occupancy import occupancy_grid
+                from mdle.record.occupancy import occupancy_grid
 
                 self.out.add(self.channels["/map"], ns, occupancy_grid(self._world, ns))
             if self._world is not None and "/obstacles" in self.channels:
-                from mdle.ros.markers import obstacle_markers
+                from mdle.record.markers import obstacle_markers
 
                 self.out.add(self.channels["/obstacles"], ns,
                              obstacle_markers(self._world, ns))
@@ -359,7 +359,7 @@ class RosRecording:
         self.publish(batch)
 
     def publish(self, ticks: Ticks) -> None:
-        """Publish a batch of ticks (a :class:`~mdle.ros.tick.Ticks`), after those waiting.
+        """Publish a batch of ticks (a :class:`~mdle.record.tick.Ticks`), after those waiting.
 
         A change of the running element (``ticks.paths``) goes on ``/mdle/active`` at the
         tick it happens, before the batch's records.
@@ -435,7 +435,7 @@ class RosRecording:
             return
         self.out.finish()
         if self.rosbag and self.target is not None and self.path is not None:
-            from mdle.ros.rosbag import write_metadata
+            from mdle.record.rosbag import write_metadata
 
             span = self.out.time_range or (0, 0)
             write_metadata(self.target, os.path.basename(self.path), self.topics,

@@ -30,10 +30,10 @@ from dataclasses import dataclass, field
 from math import isfinite
 from typing import IO, TYPE_CHECKING, Any
 
-from mdle.backend import Scan
-from mdle.errors import Diagnostic, MdleError, Span
+from mdle.core.backend import Scan
+from mdle.core.errors import Diagnostic, MdleError, Span
+from mdle.core.userfile import UserFileError, open_user_file, os_reason
 from mdle.runtime.events import Collision, Event, RunResult, Sample
-from mdle.userfile import UserFileError, open_user_file, os_reason
 
 if TYPE_CHECKING:
     import numpy as np
@@ -41,7 +41,7 @@ if TYPE_CHECKING:
     from mdle.runtime.scheduler import Scheduler
 
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
-           "TraceWriteError", "SampleFormat", "LaserRecords", "read_trace", "versions",
+           "TraceWriteError", "SampleFormat", "LaserRecords", "read_jsonl_trace", "versions",
            "decode_ranges", "dumps", "start_record", "event_record", "end_record", "scan_ranges",
            "encode_ranges", "laser_mount", "laser_timing"]
 
@@ -855,11 +855,10 @@ def _wrong(kind: str, key: str, what: str, value: Any) -> str:
     return f"`{key}` of the {kind} record must be {what}, not {shown}"
 
 
-def read_trace(path: str | os.PathLike[str]) -> Trace:
-    """Read a trace written by :class:`TraceWriter`, or an MCAP recording of a run.
+def read_jsonl_trace(path: str | os.PathLike[str]) -> Trace:
+    """Read a trace written by :class:`TraceWriter` (JSON lines).
 
-    An MCAP file (``mdle run --record``) or a rosbag2 folder holding one (``--rosbag``)
-    is read back through the mcap library (:func:`mdle.ros.read_recording`).
+    :func:`mdle.record.load.read_trace` reads any recorded run, MCAP files too.
 
     Raises
     ------
@@ -868,10 +867,6 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
         other than a cut-off last line (the message names the file and line).
     """
     path = os.fspath(path)
-    if _is_recording(path):
-        from mdle.ros.read import read_recording
-
-        return read_recording(path)
     header: dict[str, Any] | None = None
     events: list[Mapping[str, Any]] = []
     samples: list[Mapping[str, Any]] = []
@@ -936,19 +931,6 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
         raise _error(path, 1, "empty file: not an mdle trace")
     return Trace(path, header, tuple(events), tuple(samples), end, truncated, tuple(extra),
                  tuple(lasers), tuple(scans))
-
-
-def _is_recording(path: str) -> bool:
-    """Return True for an MCAP file (by its magic) or a rosbag2 folder."""
-    if os.path.isdir(path):
-        return os.path.isfile(os.path.join(path, "metadata.yaml"))
-    if not os.path.isfile(path):  # a FIFO or device: never open it here
-        return False
-    try:
-        with open(path, "rb") as f:
-            return f.read(8) == b"\x89MCAP0\r\n"
-    except OSError:
-        return False
 
 
 def _error(path: str, line: int, message: str) -> TraceError:

@@ -16,7 +16,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from mdle.backend import Command, Pose, Scan
+from mdle.core.backend import Command, Scan
+from mdle.core.pose import Pose
 from mdle.ros2 import types as msg
 
 __all__ = ["mount_from_transforms", "odometry_message", "odometry_values", "ScanReader",

@@ -25,8 +25,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from mdle.backend import STOP, Command, Scan
-from mdle.errors import BackendError
+from mdle.core.backend import STOP, Command, Scan
+from mdle.core.errors import BackendError
 
 __all__ = ["ServeOptions", "SimServer"]
 

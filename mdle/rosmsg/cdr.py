@@ -7,7 +7,7 @@ each aligned to its own size (counted from after the header), strings as a uint3
 The messages written every tick (odometry, transforms, twist, pose, scan, string) have
 constant frame names, so all their offsets are known in advance: a :class:`Layout`
 gives their constant bytes and where their variable fields lie, from which
-:mod:`mdle.ros.tick` fills a whole batch of ticks with numpy. Rare messages (the
+:mod:`mdle.record.tick` fills a whole batch of ticks with numpy. Rare messages (the
 obstacle markers, the static transform) use the general :class:`CdrWriter`. Tests
 check every message against the mcap-ros2-support decoder and against rosbags' Humble
 and Jazzy type stores.
@@ -99,7 +99,7 @@ class Layout(CdrWriter):
     :class:`CdrWriter` writes them (:meth:`prim`, :meth:`string`). The result is a
     :attr:`template` (the constant bytes, zeros where the named fields go) and the named
     fields' numpy types and offsets (:attr:`fields`): a batch of such messages is the
-    template repeated, its named fields filled a column at a time (:mod:`mdle.ros.tick`).
+    template repeated, its named fields filled a column at a time (:mod:`mdle.record.tick`).
     """
 
     _NUMPY = {"d": "<f8", "f": "<f4", "i": "<i4", "I": "<u4"}

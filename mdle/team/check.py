@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from mdle.errors import Diagnostic, Severity, Span
+from mdle.core.errors import Diagnostic, Severity, Span
+from mdle.core.messages import POSE_CHANNEL
+from mdle.core.units import Dim
 from mdle.lang import MessageUse, dim_words, same_kind
-from mdle.messages import POSE_CHANNEL
-from mdle.units import Dim
 
 __all__ = ["check_team"]
 

@@ -21,10 +21,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mdle.backend import Pose
-from mdle.errors import Diagnostic, MdleError, Severity, WorldError
-from mdle.messages import DeliveryRules
-from mdle.ranges import RATE
+from mdle.core.errors import Diagnostic, MdleError, Severity, WorldError
+from mdle.core.messages import DeliveryRules
+from mdle.core.pose import Pose
+from mdle.core.ranges import RATE
 
 __all__ = ["MemberSpec", "TeamSpec", "LoadedTeam", "parse_team", "read_team", "robot_plan",
            "load_team"]
@@ -77,7 +77,7 @@ def robot_plan(text: str) -> MemberSpec:
 
 def read_team(path: str | os.PathLike[str]) -> TeamSpec:
     """Read and validate a team file (TeamError naming the place of the first problem)."""
-    from mdle.userfile import UserFileError, read_user_file
+    from mdle.core.userfile import UserFileError, read_user_file
 
     try:
         data = read_user_file(Path(path))
@@ -195,7 +195,7 @@ def load_team(spec: TeamSpec, *, world: str | None = None, overrides: Sequence[s
     from mdle import sim
     from mdle.lang import load_program
     from mdle.runtime import element_of
-    from mdle.teamcheck import check_team
+    from mdle.team.check import check_team
 
     members: dict[str, MemberSpec] = {m.name: m for m in spec.members}
     world_spec = world or spec.world

@@ -14,9 +14,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from mdle.backend import Pose
+from mdle.core.messages import Message
+from mdle.core.pose import Pose
 from mdle.lang import Element
-from mdle.messages import Message
 from mdle.runtime import RunResult, Scheduler
 from mdle.runtime.events import Observer
 from mdle.runtime.pacing import Pacer

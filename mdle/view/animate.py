@@ -14,9 +14,10 @@ import math
 import os
 from typing import TYPE_CHECKING, Any
 
-from mdle.errors import Diagnostic
-from mdle.plot import PlotError, draw_world, robot_radius, run_pose
-from mdle.trace import Trace, decode_ranges
+from mdle.core.errors import Diagnostic
+from mdle.record.trace import Trace, decode_ranges
+from mdle.view.figure_output import PlotError
+from mdle.view.plot import draw_world, robot_radius, run_pose
 
 if TYPE_CHECKING:
     import numpy as np
@@ -92,7 +93,7 @@ def animate_trace(trace: Trace, world: Any, out: str | os.PathLike[str],
     from matplotlib.figure import Figure
     from matplotlib.patches import Circle
 
-    from mdle.figure_output import atomic_output
+    from mdle.view.figure_output import atomic_output
 
     out = os.fspath(out)
     writer = _writer(out)

@@ -14,11 +14,17 @@ import sys
 from collections.abc import Callable, Iterator, Mapping
 from typing import TYPE_CHECKING
 
+from mdle.core.errors import Diagnostic, MdleError
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["has_display", "open_window", "WindowError", "show_or_write", "save_figure",
+__all__ = ["PlotError", "has_display", "open_window", "WindowError", "show_or_write", "save_figure",
            "atomic_output"]
+
+
+class PlotError(MdleError):
+    """A plot cannot be made: unknown output format, or a trace with no samples."""
 
 #: matplotlib backends that draw to files only (no window).
 _FILE_BACKENDS = frozenset({"agg", "cairo", "pdf", "pgf", "ps", "svg", "template"})
@@ -82,9 +88,6 @@ def atomic_output(out: str) -> Iterator[str]:
     PlotError
         The file cannot be written (the message names it and says why).
     """
-    from mdle.errors import Diagnostic
-    from mdle.plot import PlotError
-
     head, name = os.path.split(os.path.abspath(out))
     stem, ext = os.path.splitext(name)
     tmp = os.path.join(head, f".{stem}.{os.getpid()}.part{ext}")
@@ -112,9 +115,6 @@ def save_figure(fig: "Figure", out: str, dpi: int = 130) -> None:
     PlotError
         The name has no known image extension, or the file cannot be written.
     """
-    from mdle.errors import Diagnostic
-    from mdle.plot import PlotError
-
     ext = os.path.splitext(out)[1].lower().lstrip(".")
     if ext not in ("png", "svg", "pdf"):
         raise PlotError(Diagnostic(None, f"cannot write a plot to `{out}`: the file name must "

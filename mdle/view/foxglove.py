@@ -2,7 +2,7 @@
 
 A :class:`FoxgloveServer` serves, through a :class:`FoxgloveSink` per run, the run's ROS 2
 messages (the very bytes a recording
-holds: :mod:`mdle.ros.outlet`) with the foxglove-sdk's WebSocket server (the
+holds: :mod:`mdle.record.outlet`) with the foxglove-sdk's WebSocket server (the
 ``foxglove.websocket.v1`` protocol), each topic a channel of ``cdr`` messages with its
 ``ros2msg`` schema, so the Foxglove app decodes them as it decodes the MCAP file.
 
@@ -18,7 +18,7 @@ from __future__ import annotations
 import threading
 from typing import Any
 
-from mdle.errors import Diagnostic, MdleError
+from mdle.core.errors import Diagnostic, MdleError
 
 try:  # the optional extra: without it, FoxgloveSink says how to install it
     from foxglove.websocket import ServerListener
@@ -111,7 +111,7 @@ class FoxgloveServer:
 
 
 class FoxgloveSink:
-    """One run's messages, served live (a :class:`~mdle.ros.outlet.LiveSink`).
+    """One run's messages, served live (a :class:`~mdle.record.outlet.LiveSink`).
 
     ``server`` is the :class:`FoxgloveServer`; with ``owns_server`` (``mdle run``)
     closing the sink stops it, otherwise (the REPL) only this run's channels close.
@@ -190,7 +190,7 @@ class _Listener(ServerListener):
 class LiveRuns:
     """An observer that shows every run of a session live (``mdle repl --foxglove``).
 
-    Each run gets a recorder without a file (:class:`~mdle.ros.recorder.McapRecorder`)
+    Each run gets a recorder without a file (:class:`~mdle.record.recorder.McapRecorder`)
     whose messages go to ``server`` through a sink of its own: the run's channels are
     advertised when it starts and closed when it ends; the server stays up for the
     next run until :meth:`close`.
@@ -202,8 +202,8 @@ class LiveRuns:
 
     def on_start(self, scheduler: Any) -> None:
         """Advertise the run's topics and start recording it."""
-        from mdle.ros.describe import body_header
-        from mdle.ros.recorder import McapRecorder
+        from mdle.record.describe import body_header
+        from mdle.record.recorder import McapRecorder
 
         backend = scheduler.backend
         world = getattr(backend, "world", None)

@@ -19,9 +19,9 @@ import time
 from collections import Counter, deque
 from typing import IO, TYPE_CHECKING, Any
 
-from mdle.run_report import FollowingStats, MapPoints, path_map
 from mdle.runtime.events import Cause, Event, EventKind, RunResult, Sample, ended_how
 from mdle.runtime.observer import BaseObserver
+from mdle.view.run_report import FollowingStats, MapPoints, path_map
 
 if TYPE_CHECKING:
     from mdle.runtime.scheduler import ActiveElement, Scheduler

@@ -6,9 +6,9 @@ body and heading at even steps along the path, the path coloured by the atom tha
 running and every element's end marked by its cause; the legend sits beside the panel.
 A scene much wider than tall (a corridor) has its y axis stretched, and says so. The
 bottom panel, when the steering law recorded it, is the measured boundary curvature
-against the distance travelled, beside the truth (:mod:`mdle.plot_curvature`).
+against the distance travelled, beside the truth (:mod:`mdle.view.plot_curvature`).
 matplotlib is used headless (the Agg canvas, no pyplot state), so this works on a
-machine with no display; :mod:`mdle.figure_output` opens a window when there is one.
+machine with no display; :mod:`mdle.view.figure_output` opens a window when there is one.
 """
 
 from __future__ import annotations
@@ -18,17 +18,19 @@ import os
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
-from mdle.errors import Diagnostic, MdleError
-from mdle.plot_curvature import CURVATURE_KEYS
+from mdle.core.errors import Diagnostic, MdleError
+from mdle.record.load import read_trace
+from mdle.record.trace import Trace
 from mdle.runtime.events import Cause, ended_how
-from mdle.trace import Trace, read_trace
+from mdle.view.figure_output import PlotError, save_figure
+from mdle.view.plot_curvature import CURVATURE_KEYS
 
 if TYPE_CHECKING:
     import numpy as np
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["plot_trace", "trace_figure", "PlotError", "boundary_points", "CURVATURE_KEYS",
+__all__ = ["plot_trace", "trace_figure", "boundary_points", "CURVATURE_KEYS",
            "run_pose", "robot_radius", "draw_world", "world_of", "trace_and_world",
            "draw_footprints", "CAUSE_WORDS"]
 
@@ -55,10 +57,6 @@ _CAUSES = frozenset(c.value for c in Cause)
 _MIN_ASPECT = 0.3
 #: Robot footprints drawn along the path.
 _FOOTPRINTS = 12
-
-
-class PlotError(MdleError):
-    """A plot cannot be made: unknown output format, or a trace with no samples."""
 
 
 def run_pose(trace: Trace, world: Any = None) -> "tuple[np.ndarray, np.ndarray, np.ndarray, bool]":
@@ -104,7 +102,7 @@ def boundary_points(trace: Trace, pose: "tuple[np.ndarray, np.ndarray, np.ndarra
     """
     import numpy as np
 
-    from mdle.plot_curvature import ladar_mount
+    from mdle.view.plot_curvature import ladar_mount
 
     r = trace.column("diag.side_range")
     if not np.isfinite(r).any():
@@ -222,8 +220,8 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
 
-    from mdle.plot_curvature import draw_curvature, measured_curvature, true_curvature
     from mdle.sweep.metrics import path_length
+    from mdle.view.plot_curvature import draw_curvature, measured_curvature, true_curvature
 
     if not trace.samples:
         raise PlotError(Diagnostic(None, f"trace `{trace.path}` has no samples to plot"))
@@ -426,8 +424,6 @@ def plot_trace(trace_path: str | os.PathLike[str], out: str | os.PathLike[str],
     WorldError
         ``world`` names a world that cannot be loaded.
     """
-    from mdle.figure_output import save_figure
-
     out = os.fspath(out)
     ext = os.path.splitext(out)[1].lower().lstrip(".")
     if ext not in ("png", "svg", "pdf"):

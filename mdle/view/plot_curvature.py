@@ -20,7 +20,7 @@ import textwrap
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from mdle.trace import Trace
+from mdle.record.trace import Trace
 
 if TYPE_CHECKING:
     import numpy as np

@@ -13,9 +13,10 @@ import os
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from mdle.errors import Diagnostic
-from mdle.plot import PlotError, draw_world, robot_radius, run_pose
-from mdle.trace import Trace
+from mdle.core.errors import Diagnostic
+from mdle.record.trace import Trace
+from mdle.view.figure_output import PlotError
+from mdle.view.plot import draw_world, robot_radius, run_pose
 
 if TYPE_CHECKING:
     import numpy as np

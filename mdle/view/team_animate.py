@@ -13,8 +13,8 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from mdle.errors import Diagnostic
-from mdle.trace import Trace
+from mdle.core.errors import Diagnostic
+from mdle.record.trace import Trace
 
 __all__ = ["animate_team"]
 
@@ -36,10 +36,10 @@ def animate_team(traces: Sequence[Trace], world: Any, out: str | os.PathLike[str
     from matplotlib.figure import Figure
     from matplotlib.patches import Circle
 
-    from mdle.animate import FPS, _writer, frame_indices
-    from mdle.figure_output import atomic_output
-    from mdle.plot import PlotError, draw_world, robot_radius, run_pose
-    from mdle.team_plot import robot_name
+    from mdle.view.animate import FPS, _writer, frame_indices
+    from mdle.view.figure_output import PlotError, atomic_output
+    from mdle.view.plot import draw_world, robot_radius, run_pose
+    from mdle.view.team_plot import robot_name
 
     out = os.fspath(out)
     writer = _writer(out)

@@ -13,8 +13,9 @@ import os
 from collections.abc import Sequence
 from typing import Any
 
-from mdle.errors import Diagnostic
-from mdle.trace import Trace, read_trace
+from mdle.core.errors import Diagnostic
+from mdle.record.load import read_trace
+from mdle.record.trace import Trace
 
 __all__ = ["team_figure", "plot_team", "is_team_trace", "robot_name"]
 
@@ -49,7 +50,8 @@ def team_figure(traces: Sequence[Trace], world: Any = None) -> Any:
     from matplotlib.figure import Figure
     from matplotlib.patches import Circle
 
-    from mdle.plot import PlotError, draw_world
+    from mdle.view.figure_output import PlotError
+    from mdle.view.plot import draw_world
 
     fig = Figure(figsize=(7.5, 6.5))
     ax = fig.add_subplot(1, 1, 1)
@@ -129,8 +131,8 @@ def _radius(world: Any, name: str) -> float:
 def plot_team(trace_paths: Sequence[str | os.PathLike[str]], out: str | os.PathLike[str],
               world: Any = None) -> str:
     """Draw the traces of a team's robots into one plot ``out`` (.png, .svg, .pdf)."""
-    from mdle.figure_output import save_figure
-    from mdle.plot import world_of
+    from mdle.view.figure_output import save_figure
+    from mdle.view.plot import world_of
 
     out = os.fspath(out)
     traces = [read_trace(p) for p in trace_paths]

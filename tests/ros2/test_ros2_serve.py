@@ -20,7 +20,7 @@ def _server(dds_env: dict[str, str], world: str, **kw: object) -> SimServer:
 
 def test_it_obeys_cmd_vel_publishes_at_its_rates_and_its_watchdog_stops_the_robot(
         dds_env: dict[str, str]) -> None:
-    from mdle.backend import Command
+    from mdle.core.backend import Command
 
     server = _server(dds_env, "empty", namespace="/bot", cmd_timeout=0.3)
     peer = Node(server.node.domain)
