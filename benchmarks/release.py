@@ -118,8 +118,8 @@ def main() -> None:
             for tree in (old, ROOT):
                 _build_kernels(tree)
             plans = _plans(old, ROOT)
-            check = {"old": [], "new": []}
-            tick = {"old": [], "new": []}
+            check: dict[str, list[float]] = {"old": [], "new": []}
+            tick: dict[str, list[float]] = {"old": [], "new": []}
             for _ in range(args.repeat):
                 for name, tree in (("old", old), ("new", ROOT)):
                     check[name].append(_check_seconds(tree, plans))
