@@ -34,7 +34,7 @@ def body_header(backend: Any) -> dict[str, Any]:
 
     The body's radius (m) draws ``/footprint``; the simulator's odometry noise model
     (``distance``, ``turn``, ``drift``) sets ``/odom``'s covariances
-    (:mod:`mdle.record.covariance`). A robot's unknown noise is left out.
+    (:mod:`mdle.rosmsg.covariance`). A robot's unknown noise is left out.
     """
     profile = getattr(backend, "profile", None)
     if hasattr(profile, "radius") and hasattr(profile, "odometry"):  # a simulated robot

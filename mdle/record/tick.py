@@ -15,7 +15,7 @@ order a tick at a time writer gives them: a tick's scan, then its other messages
 
 Fields that are always zero (z, the quaternion's x and y, a planar twist's other axes)
 are zeros of the template; the footprint's outline is constant, and the odometry's
-covariances are columns filled per batch (:mod:`mdle.record.covariance`). The records'
+covariances are columns filled per batch (:mod:`mdle.rosmsg.covariance`). The records'
 bytes are exactly what a field-by-field CDR writer makes (tests decode them with
 mcap-ros2-support and rosbags); sines and cosines come from :mod:`math`, as that writer's would.
 """
@@ -200,7 +200,7 @@ class TickEncoder:
         rows.message("state", state, Layout().field("n", "I"), open_end=True)
         self._rows = rows
         #: the odometry's covariances (36 each, row-major x y z roll pitch yaw) used
-        #: when a batch brings none: all 0 unless set (:mod:`mdle.record.covariance`)
+        #: when a batch brings none: all 0 unless set (:mod:`mdle.rosmsg.covariance`)
         self.covariance = (np.zeros(36), np.zeros(36))
         self._scan: Rows | None = None
         self.count = 0  # beams of a scan

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.record.covariance import OdometryCovariance
+from mdle.rosmsg.covariance import OdometryCovariance
 from mdle.record.describe import diagnostic_names, footprint
 from mdle.record.markers import PathPieces
 from mdle.record.mcap_file import McapFile
