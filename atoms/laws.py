@@ -10,8 +10,8 @@ from __future__ import annotations
 from typing import Any
 
 from mdle.atoms.registry import Args, Context, Param, control_law
-from mdle.backend import Command
-from mdle.units import SPEED, TURN_RATE
+from mdle.core.backend import Command
+from mdle.core.units import SPEED, TURN_RATE
 
 __all__ = ["go", "turn", "arc", "stop"]
 

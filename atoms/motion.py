@@ -11,8 +11,8 @@ import math
 from typing import Any
 
 from mdle.atoms.registry import Args, Context, Param, control_law
-from mdle.backend import Command
-from mdle.units import ANGLE, LENGTH, SPEED, TURN_RATE
+from mdle.core.backend import Command
+from mdle.core.units import ANGLE, LENGTH, SPEED, TURN_RATE
 
 __all__ = ["goto", "heading"]
 

@@ -12,7 +12,7 @@ import math
 from typing import TYPE_CHECKING
 
 from mdle.atoms.steering import MISS, Ray
-from mdle.frozen import builder
+from mdle.core.frozen import builder
 
 if TYPE_CHECKING:
     import numpy as np

@@ -12,7 +12,7 @@ numeric code is imported on first use.
 
 Example
 -------
->>> from mdle.units import SPEED
+>>> from mdle.core.units import SPEED
 >>> @control_law(Param("v", SPEED, 0.3, doc="forward speed"))
 ... def cruise(args, ctx, state):
 ...     '''Drive straight ahead.'''
@@ -34,8 +34,8 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Union
 
-from mdle.backend import Command, Observation, RobotLimits
-from mdle.units import NONE, Dim
+from mdle.core.backend import Command, Observation, RobotLimits
+from mdle.core.units import NONE, Dim
 
 __all__ = [
     "REQUIRED",

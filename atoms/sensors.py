@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from mdle.atoms.registry import BOOL, Args, Bounds, Context, Param, sensor
-from mdle.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
+from mdle.core.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
 
 __all__ = ["range_", "min_range", "x", "y", "theta", "speed", "turn_rate", "t", "stalled",
            "dist_to", "bearing_to_point", "clear"]

@@ -35,7 +35,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from mdle.frozen import builder
+from mdle.core.frozen import builder
 
 if TYPE_CHECKING:
     from collections.abc import Callable

@@ -1,6 +1,6 @@
 """Sensor functions and a control law for robots that talk: messages and the others' poses.
 
-They read the robot's inbox (``ctx.obs.inbox``, :class:`mdle.messages.Inbox`), which a
+They read the robot's inbox (``ctx.obs.inbox``, :class:`mdle.core.messages.Inbox`), which a
 team run fills; a robot alone has none, and then nothing has been received:
 ``received`` is false, ``message`` NaN, ``range_to`` inf and ``bearing_to`` NaN, so
 comparisons with them stay false. The channel and robot arguments take any name; a
@@ -14,9 +14,10 @@ from collections import deque
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Args, Context, Param, control_law, sensor
-from mdle.backend import Command, Pose
-from mdle.messages import relative
-from mdle.units import ANGLE, LENGTH, SPEED
+from mdle.core.backend import Command
+from mdle.core.messages import relative
+from mdle.core.pose import Pose
+from mdle.core.units import ANGLE, LENGTH, SPEED
 
 __all__ = ["received", "message", "range_to", "bearing_to", "pursue"]
 

@@ -43,7 +43,7 @@ sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 
 import numpy as np  # noqa: E402 (after the path fix above)
 
-from mdle.backend import Pose  # noqa: E402 (after the path fix above)
+from mdle.core.pose import Pose  # noqa: E402 (after the path fix above)
 from mdle.sim.ladar import LMS200  # noqa: E402 (after the path fix above)
 from mdle.sim.shapes import Polygon, Rectangle, Wall  # noqa: E402 (after the path fix above)
 from mdle.sim.world import World  # noqa: E402 (after the path fix above)

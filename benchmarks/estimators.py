@@ -25,7 +25,7 @@ sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != Path(__file__)
 # The project's imports must come after the sys.path fix above, hence the E402 waivers.
 from mdle.atoms import estimators as E  # noqa: E402 (after the sys.path fix)
 from mdle.atoms.boundary import boundary_view  # noqa: E402 (after the sys.path fix)
-from mdle.backend import Scan  # noqa: E402 (after the sys.path fix)
+from mdle.core.backend import Scan  # noqa: E402 (after the sys.path fix)
 
 
 def _scan(rng: np.random.Generator, centre: tuple[float, float] = (2.0, 0.5)) -> Scan:

@@ -29,7 +29,7 @@ from typing import Any
 sys.path.append(str(Path(__file__).resolve().parent.parent))  # the installed mdle wins
 
 from mdle.atoms.registry import Args, Context, Param, Registry, sensor  # noqa: E402 (after the path fix)
-from mdle.units import LENGTH  # noqa: E402
+from mdle.core.units import LENGTH  # noqa: E402
 
 _READS = [0]
 
@@ -75,7 +75,8 @@ def main() -> int:
 
     from mdle import sim
     from mdle.atoms import default_registry
-    from mdle.backend import Observation, Pose, RobotLimits
+    from mdle.core.backend import Observation, RobotLimits
+    from mdle.core.pose import Pose
     from mdle.lang import load_text, show_program
     from mdle.runtime import Scheduler
 

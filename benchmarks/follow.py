@@ -77,7 +77,7 @@ from mdle.atoms import follow as follow_module  # noqa: E402 (after the sys.path
 from mdle.atoms.boundary import cached_view  # noqa: E402 (after the sys.path fix)
 from mdle.atoms.follow import follow_boundary, scan_points_cached, start_follow  # noqa: E402
 from mdle.atoms.registry import Context  # noqa: E402 (after the sys.path fix)
-from mdle.backend import Observation  # noqa: E402 (after the sys.path fix)
+from mdle.core.backend import Observation  # noqa: E402 (after the sys.path fix)
 from mdle.lang import load_text  # noqa: E402 (after the sys.path fix)
 from mdle.runtime import Scheduler, run  # noqa: E402 (after the sys.path fix)
 from mdle.sim.raycast import COMPILED  # noqa: E402 (after the sys.path fix)

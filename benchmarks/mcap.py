@@ -1,6 +1,6 @@
 """What recording a run as MCAP costs: per tick, and as a share of a whole simulated run.
 
-1. Per tick: :class:`mdle.ros.McapRecorder` fed prepared ticks of a robot on an arc, each
+1. Per tick: :class:`mdle.record.McapRecorder` fed prepared ticks of a robot on an arc, each
    with a new 181-beam scan (noisy ranges, a third of the beams with no return), ground
    truth and follow_boundary-like diagnostics, written to a real file (chunks indexed,
    written as they fill, not compressed: ``mdle run --record``'s default). The figure
@@ -52,13 +52,14 @@ _HERE = Path(__file__).resolve().parent
 sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != _HERE]
 sys.path.append(str(_HERE.parent))     # the installed mdle wins, else this checkout's
 
-from mdle.backend import Pose, Scan  # noqa: E402
+from mdle.core.backend import Scan  # noqa: E402
+from mdle.core.pose import Pose  # noqa: E402
 from mdle.lang import load_program  # noqa: E402
-from mdle.ros.mcap_file import MAX_CHUNK_AGE  # noqa: E402
-from mdle.ros.recorder import BATCH_AGE, McapRecorder  # noqa: E402
+from mdle.record.mcap_file import MAX_CHUNK_AGE  # noqa: E402
+from mdle.record.recorder import BATCH_AGE, McapRecorder  # noqa: E402
+from mdle.record.trace import TraceWriter  # noqa: E402
 from mdle.runtime import Scheduler  # noqa: E402
 from mdle.runtime.events import Event, EventKind, Sample  # noqa: E402
-from mdle.trace import TraceWriter  # noqa: E402
 
 BEAMS = 181
 

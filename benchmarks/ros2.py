@@ -20,9 +20,10 @@ from collections.abc import Callable
 
 import numpy as np
 
-from mdle.backend import Command, Pose, Scan
-from mdle.ros.cdr import CdrWriter
+from mdle.core.backend import Command, Scan
+from mdle.core.pose import Pose
 from mdle.ros2.dds import loopback_config
+from mdle.rosmsg.cdr import CdrWriter
 
 
 def _per_call_us(fn: Callable[[], object], cycles: int) -> float:

@@ -29,10 +29,11 @@ import tempfile
 import time
 
 from mdle.atoms.registry import Context, LawSpec
-from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits
+from mdle.core.backend import ClockMode, Command, Observation, RobotLimits
+from mdle.core.pose import Pose
 from mdle.lang import AtomNode, Element, Interrupt, StringNode, load_text
+from mdle.record.trace import TraceWriter
 from mdle.runtime import Scheduler
-from mdle.trace import TraceWriter
 
 LIMITS = RobotLimits(1.0, 1.0, 1.0)
 

@@ -43,7 +43,8 @@ sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 
 import numpy as np  # noqa: E402 (after the path fix above)
 
-from mdle.backend import Command, Pose  # noqa: E402 (after the path fix above)
+from mdle.core.backend import Command  # noqa: E402 (after the path fix above)
+from mdle.core.pose import Pose  # noqa: E402 (after the path fix above)
 from mdle.sim.backend import SimBackend  # noqa: E402 (after the path fix above)
 from mdle.sim.catalog import load_world  # noqa: E402 (after the path fix above)
 from mdle.sim.ladar import LMS200, Ladar  # noqa: E402 (after the path fix above)

@@ -36,14 +36,14 @@ sys.path[:] = [p for p in sys.path if os.path.abspath(p or os.curdir) != _HERE]
 
 import numpy as np  # noqa: E402 (after the path fix above)
 
-from mdle.backend import Pose  # noqa: E402 (after the path fix above)
+from mdle.core.pose import Pose  # noqa: E402 (after the path fix above)
 from mdle.lang import load_text  # noqa: E402 (after the path fix above)
 from mdle.sim.ladar import LMS200  # noqa: E402 (after the path fix above)
 from mdle.sim.profiles import robot_profile  # noqa: E402 (after the path fix above)
 from mdle.sim.shapes import Rectangle, Wall  # noqa: E402 (after the path fix above)
 from mdle.sim.team import TeamSim  # noqa: E402 (after the path fix above)
 from mdle.sim.world import RobotPlace, World  # noqa: E402 (after the path fix above)
-from mdle.teamrun import TeamRun  # noqa: E402 (after the path fix above)
+from mdle.team.run import TeamRun  # noqa: E402 (after the path fix above)
 
 PLAN = """
 atom cruise = (go(0.3 m/s), min_range(-30 deg, 30 deg) < 0.7 m, 20 s{send})

@@ -14,7 +14,7 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
 from mdle.sim.world_yaml import parse_world, parse_world_robot, read_world, read_world_robot
 
 if TYPE_CHECKING:

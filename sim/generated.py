@@ -49,7 +49,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.sim.robot import RobotProfile
 from mdle.sim.shapes import Arc, Circle, Curve, Polygon, Rectangle, Shape
 from mdle.sim.world import World

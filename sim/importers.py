@@ -27,8 +27,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from mdle.backend import Pose
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
+from mdle.core.pose import Pose
 
 __all__ = ["LINE_THICKNESS", "import_irsim", "import_map", "import_world"]
 

@@ -2,7 +2,7 @@
 
 A :class:`LadarProfile` is plain data; a :class:`Ladar` owns the random generator and
 the preallocated noise buffer and turns ray-cast ground truth into a
-:class:`mdle.backend.Scan`. Beams: ``beams`` bearings evenly over ``fov``, index 0 at
+:class:`mdle.core.backend.Scan`. Beams: ``beams`` bearings evenly over ``fov``, index 0 at
 ``-fov/2`` (the robot's right), counter-clockwise. A beam that sees nothing within
 ``max_range`` is flagged invalid and reported at ``max_range``.
 
@@ -32,8 +32,8 @@ from typing import Any
 
 import numpy as np
 
-from mdle.backend import Scan, plain_scan
-from mdle.errors import WorldError
+from mdle.core.backend import Scan, plain_scan
+from mdle.core.errors import WorldError
 from mdle.sim.raycast import MAX_RANGE_SLACK, FanCaster, RayCaster, RayHits
 
 __all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_profile",

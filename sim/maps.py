@@ -41,12 +41,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
+from mdle.sim.shapes import Parts
 
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
-
-    from mdle.sim.shapes import Parts
 
 __all__ = ["MAP_MODES", "MAX_MAP_CELLS", "FloorPlan", "MapInfo", "load_map", "occupied_cells",
            "outline", "outline_parts", "read_image", "read_map_info"]
@@ -117,9 +116,9 @@ def read_map_info(path: str | os.PathLike[str]) -> MapInfo:
     WorldError
         Unreadable, not YAML, a missing or unknown key, or a bad value (file, line, key).
     """
+    from mdle.core.userfile import UserFileError, read_user_file
     from mdle.sim.yaml_doc import _Doc, _yaml_value
     from mdle.sim.yaml_values import _mapping, _number, _show, _string
-    from mdle.userfile import UserFileError, read_user_file
 
     file = str(path)
     try:
@@ -175,7 +174,7 @@ def read_image(path: str | os.PathLike[str]) -> np.ndarray:
     WorldError
         Unreadable, not an image, or larger than :data:`MAX_MAP_CELLS`.
     """
-    from mdle.userfile import UserFileError, read_user_file
+    from mdle.core.userfile import UserFileError, read_user_file
 
     try:
         data = read_user_file(path)
@@ -336,7 +335,6 @@ def outline_parts(geom: BaseGeometry) -> Parts:
     """
     import shapely
 
-    from mdle.sim.shapes import Parts
 
     polys = shapely.get_parts(geom)
     if polys.shape[0] == 0:

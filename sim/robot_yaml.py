@@ -1,43 +1,24 @@
-r"""Robot profile files: YAML (metres, seconds, degrees) to a :class:`sim.robot.RobotProfile`.
+r"""The keys of a robot profile: YAML (metres, seconds, degrees) to profile values.
 
 A profile file holds the keys of a world's ``robot:`` section plus ``name``,
 ``description`` and ``source``; ``profile: NAME`` starts from another profile and
-overrides some keys. Problems are reported as :class:`mdle.errors.WorldError` naming the
+overrides some keys. Problems are reported as :class:`mdle.core.errors.WorldError` naming the
 file, line, column and key path, as world files are. The keys are documented in
-``docs/robots.md``.
-
->>> p = parse_robot('''
-... name: slow
-... radius: 0.2
-... max_speed: 0.5
-... max_turn_rate: 90
-... command_latency: 0.15
-... scan_latency: {min: 0.02, max: 0.06}
-... ''')
->>> p.name, round(p.max_turn_rate, 4), p.command_latency, p.scan_latency.describe()
-('slow', 1.5708, 0.15, 'uniform 20-60 ms')
->>> try:
-...     parse_robot("name: x\nradius: 0.2\nmax_speed: -1\nmax_turn_rate: 90\n", file="r.yaml")
-... except WorldError as err:
-...     print(err)
-r.yaml:3:12: error: max_speed: must be positive, got -1
+``docs/robots.md``. Reading a whole profile, which may start from another by name,
+is :mod:`sim.profiles`'s job.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import os
-from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
-from mdle.errors import WorldError
 from mdle.sim.robot import RAMPS, HalfRate, Latency, OdometryNoise, RobotProfile
-from mdle.sim.yaml_doc import _Doc, _yaml_value
+from mdle.sim.yaml_doc import _Doc
 from mdle.sim.yaml_values import _mapping, _number, _show, _string
 
-__all__ = ["ROBOT_KEYS", "check_mount", "dump_robot", "parse_robot", "read_robot",
+__all__ = ["ROBOT_KEYS", "PROFILE_KEYS", "REQUIRED_KEYS", "check_mount", "dump_robot",
            "robot_overrides"]
 
 #: Keys a profile (or a world's ``robot:`` mapping) may override.
@@ -46,8 +27,10 @@ ROBOT_KEYS = ("radius", "max_speed", "max_reverse_speed", "max_turn_rate", "max_
               "sip_cycle", "control_cycle", "input_window", "report_slip",
               "report_slip_rate", "scan_period", "scan_latency", "scan_half_rate",
               "ladar_mount", "odometry")
-_FILE_KEYS = ("name", "description", "source", "profile", *ROBOT_KEYS)
-_REQUIRED = ("radius", "max_speed", "max_turn_rate")
+#: Keys a profile file may hold.
+PROFILE_KEYS = ("name", "description", "source", "profile", *ROBOT_KEYS)
+#: Keys a profile file needs unless it starts from another (`profile: NAME`).
+REQUIRED_KEYS = ("radius", "max_speed", "max_turn_rate")
 _ODOM_KEYS = ("distance", "turn", "drift")
 _MAX_DELAY = 10.0  # s: a longer latency or cycle is a typo (milliseconds written as seconds)
 _MAX_STRETCH = 3600.0  # s: a half-rate stretch longer than an hour is a typo
@@ -158,63 +141,6 @@ def check_mount(doc: _Doc, path: str, m: dict[str, Any], robot: RobotProfile) ->
         raise doc.fail(f"{path}.{key}" if path else key,
                        f"the ladar at ({mx:g}, {my:g}) m must sit within the body "
                        f"(radius {robot.radius:g} m)")
-
-
-def parse_robot(text: str, file: str = "<string>", default_name: str = "robot",
-                lookup: Callable[[str], RobotProfile] | None = None) -> RobotProfile:
-    """Parse and validate robot profile YAML text.
-
-    ``lookup`` resolves a ``profile:`` base (default :func:`sim.profiles.robot_profile`).
-
-    Raises
-    ------
-    WorldError
-        With the file, line, column, key path and problem of the first error found.
-    """
-    doc = _Doc(file, text)
-    data = _yaml_value(doc)
-    top = _mapping(doc, "", {} if data is None else data, _FILE_KEYS, "a robot profile")
-    name = _string(doc, "name", top["name"]) if "name" in top else default_name
-    ch = robot_overrides(doc, "", top)
-    for key in ("description", "source"):
-        if key in top:
-            ch[key] = " ".join(_string(doc, key, top[key]).split())
-    if "profile" in top:
-        if lookup is None:
-            from mdle.sim.profiles import robot_profile
-
-            lookup = robot_profile
-        base_name = _string(doc, "profile", top["profile"])
-        try:
-            base = lookup(base_name)
-        except WorldError as err:
-            raise doc.fail("profile", err.diagnostics[0].message) from None
-        robot = base.with_overrides(name=name, **ch)
-    else:
-        for key in _REQUIRED:
-            if key not in top:
-                raise doc.fail("", f"missing key `{key}` (a profile needs "
-                                   f"{', '.join(_REQUIRED)}, or `profile: NAME` to start from)")
-        ch.setdefault("max_reverse_speed", ch["max_speed"])
-        robot = RobotProfile(name=name, **ch)
-    check_mount(doc, "", top, robot)
-    return robot
-
-
-def read_robot(path: str | os.PathLike[str]) -> RobotProfile:
-    """Read and validate a robot profile file (WorldError if unreadable or invalid)."""
-    from mdle.userfile import UserFileError, read_user_file
-
-    p = Path(path)
-    try:  # a regular file of bounded size: `--robot /dev/zero` would read until memory ran out
-        text = read_user_file(p).decode("utf-8")
-    except UserFileError as err:
-        if err.reason == "no such file":
-            raise WorldError(f"robot profile file not found: {p}") from None
-        raise WorldError(f"cannot read robot profile file {p}: {err.reason}") from None
-    except UnicodeDecodeError as err:
-        raise WorldError(f"cannot read robot profile file {p}: {err}") from None
-    return parse_robot(text, file=str(path), default_name=p.stem)
 
 
 def _g(x: float) -> str:

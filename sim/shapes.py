@@ -31,8 +31,6 @@ import numpy as np
 if TYPE_CHECKING:
     from shapely.geometry.base import BaseGeometry
 
-    from mdle.sim.maps import FloorPlan
-
 __all__ = [
     "Arc",
     "Circle",
@@ -485,5 +483,6 @@ class Curve:
         return Parts.make((ring, nxt, k))
 
 
-# An imported map's obstacle (sim/maps.py) is one too: named, not imported, here.
-Shape = Union[Polygon, Rectangle, Circle, Ellipse, Wall, Arc, Curve, "FloorPlan"]
+# The shapes a world's YAML draws; an imported map's obstacle is a sim.maps.FloorPlan,
+# which is built from these (so it lives above them) and is a world's obstacle too.
+Shape = Union[Polygon, Rectangle, Circle, Ellipse, Wall, Arc, Curve]

@@ -30,7 +30,8 @@ True
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Iterator
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -104,6 +105,25 @@ def _outline(world: World) -> list[np.ndarray]:
     return [np.asarray(orient(p, sign=1.0).exterior.coords) for p in polys]
 
 
+def _take(n: int, candidates: Iterator[Start], world: World, what: str) -> list[Start]:
+    """Return the first ``n`` starts of ``candidates``, numbered in order.
+
+    The candidates are drawn lazily, batch by batch, so a search stops as soon as it has
+    ``n`` (and draws the same numbers as one that stops there).
+
+    Raises
+    ------
+    ValueError
+        The candidates ran out (their bounded search ended) before ``n``.
+    """
+    found: list[Start] = []
+    for start in candidates:
+        found.append(replace(start, index=len(found)))
+        if len(found) == n:
+            return found
+    raise ValueError(f"world `{world.name}`: found only {len(found)} of {n} {what}")
+
+
 def collision_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
                      side: str = "right") -> list[Start]:
     """Draw ``n`` seeded starts on a collision course with the world's obstacles.
@@ -118,13 +138,16 @@ def collision_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
     sign = _check_side(side)
     if not world.obstacles:
         raise ValueError(f"world `{world.name}` has no obstacles to start towards")
-    rng = np.random.default_rng(seed)
+    return _take(n, _collision_courses(world, np.random.default_rng(seed), sign), world,
+                 "collision-course starts 3-8 m from the obstacles")
+
+
+def _collision_courses(world: World, rng: np.random.Generator, sign: float) -> Iterator[Start]:
     rings = _outline(world)
     seg_a = np.vstack([r[:-1] for r in rings])
     seg_b = np.vstack([r[1:] for r in rings])
     seg_len = np.linalg.norm(seg_b - seg_a, axis=1)
     cum = np.concatenate([[0.0], np.cumsum(seg_len)])
-    starts: list[Start] = []
     for _ in range(_MAX_BATCHES):
         s = rng.uniform(0.0, cum[-1], _BATCH)
         k = np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(seg_len) - 1)
@@ -147,13 +170,8 @@ def collision_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
             th = float(theta[i])
             normal_in = float(hit.tangents[0]) - math.pi / 2  # obstacle on the tangent's right
             inc = math.remainder(th - normal_in, 2 * math.pi) * sign
-            starts.append(Start(len(starts), float(xy[i, 0]), float(xy[i, 1]),
-                                math.remainder(th, 2 * math.pi), False, float(dist[i]),
-                                incidence=inc, ahead=float(hit.ranges[0])))
-            if len(starts) == n:
-                return starts
-    raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} collision-course "
-                     "starts 3-8 m from the obstacles")
+            yield Start(0, float(xy[i, 0]), float(xy[i, 1]), math.remainder(th, 2 * math.pi),
+                        False, float(dist[i]), incidence=inc, ahead=float(hit.ranges[0]))
 
 
 def blind_side_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
@@ -171,9 +189,12 @@ def blind_side_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
     sign = _check_side(side)
     if not world.obstacles:
         raise ValueError(f"world `{world.name}` has no obstacles to pass")
-    rng = np.random.default_rng(seed)
+    return _take(n, _blind_passes(world, np.random.default_rng(seed), sign), world,
+                 "blind-side starts 3-8 m from the obstacles")
+
+
+def _blind_passes(world: World, rng: np.random.Generator, sign: float) -> Iterator[Start]:
     verts = np.vstack(_outline(world))
-    starts: list[Start] = []
     for _ in range(_MAX_BATCHES):
         theta = rng.uniform(-math.pi, math.pi, _BATCH)
         h = np.column_stack([np.cos(theta), np.sin(theta)])
@@ -190,12 +211,8 @@ def blind_side_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
         for i in np.flatnonzero(ok):
             if bool(world.cast(xy[i], [theta[i]]).hit[0]):
                 continue  # the polygon approximation of a curve let the path graze it
-            starts.append(Start(len(starts), float(xy[i, 0]), float(xy[i, 1]),
-                                float(theta[i]), True, float(dist[i]), gap=float(gap[i])))
-            if len(starts) == n:
-                return starts
-    raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} blind-side "
-                     "starts 3-8 m from the obstacles")
+            yield Start(0, float(xy[i, 0]), float(xy[i, 1]), float(theta[i]), True,
+                        float(dist[i]), gap=float(gap[i]))
 
 
 def tangential_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
@@ -219,9 +236,13 @@ def tangential_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
     sign = _check_side(side)
     if not world.obstacles:
         raise ValueError(f"world `{world.name}` has no obstacles to pass")
-    rng = np.random.default_rng(seed)
+    return _take(n, _tangential_passes(world, np.random.default_rng(seed), sign, ladar), world,
+                 "tangential starts")
+
+
+def _tangential_passes(world: World, rng: np.random.Generator, sign: float,
+                       ladar: float) -> Iterator[Start]:
     verts = np.vstack(_outline(world))
-    starts: list[Start] = []
     for _ in range(_MAX_BATCHES):
         out = rng.uniform(-math.pi, math.pi, _BATCH)
         e = np.column_stack([np.cos(out), np.sin(out)])
@@ -236,10 +257,6 @@ def tangential_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
         dist = np.asarray(world.nearest_boundary(xy).distance)
         ok = (dist >= 0.4) & ~np.asarray(world.inside(xy))
         for i in np.flatnonzero(ok):
-            starts.append(Start(len(starts), float(xy[i, 0]), float(xy[i, 1]),
-                                math.remainder(float(theta[i]), 2 * math.pi), False,
-                                float(dist[i]), gap=float(gap[i])))
-            if len(starts) == n:
-                return starts
-    raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} tangential "
-                     "starts")
+            yield Start(0, float(xy[i, 0]), float(xy[i, 1]),
+                        math.remainder(float(theta[i]), 2 * math.pi), False, float(dist[i]),
+                        gap=float(gap[i]))

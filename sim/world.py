@@ -24,9 +24,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.sim.distance import nearest_boundary
 from mdle.sim.ladar import LMS200, LadarProfile
+from mdle.sim.maps import FloorPlan
 from mdle.sim.raycast import RayCaster, RayHits
 from mdle.sim.robot import RobotProfile
 from mdle.sim.shapes import Circle, Parts, Shape
@@ -104,7 +105,7 @@ class World:
     """
 
     name: str
-    obstacles: tuple[Shape, ...] = ()
+    obstacles: tuple[Shape | FloorPlan, ...] = ()
     start_pose: Pose = field(default_factory=Pose)
     seed: int = 0
     robot: RobotProfile = field(default_factory=lambda: _default_robot())

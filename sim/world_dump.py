@@ -48,7 +48,7 @@ def _pts(points: Iterable[Iterable[float]]) -> str:
     return "[" + ", ".join(_pt(p) for p in points) + "]"
 
 
-def _obstacle(o: Shape) -> str:
+def _obstacle(o: Shape | FloorPlan) -> str:
     if isinstance(o, FloorPlan):    # its polygons, one entry each
         return "\n".join(_obstacle(p) for p in _floor_polygons(o))
     if isinstance(o, Polygon):

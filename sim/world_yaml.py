@@ -1,7 +1,7 @@
 r"""World files: YAML (metres and degrees) to a validated :class:`sim.world.World`.
 
 Loading validates everything and reports the first problem as a
-:class:`mdle.errors.WorldError` naming the file, the line and column, and the key path
+:class:`mdle.core.errors.WorldError` naming the file, the line and column, and the key path
 (``obstacles[3].points``) with what was wrong. Only ``yaml`` safe loading is used.
 The format is documented in ``docs/worlds.md``. The YAML reading and value checks are
 in :mod:`sim.yaml_doc` and :mod:`sim.yaml_values`, the sections in :mod:`sim.world_obstacles`
@@ -31,8 +31,8 @@ import re
 from pathlib import Path
 from typing import Any
 
-from mdle.backend import Pose
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
+from mdle.core.pose import Pose
 from mdle.sim.world_obstacles import OBSTACLE_TYPES, _check_budget, _obstacle
 from mdle.sim.world_robots import _ladar, _robot, _start
 from mdle.sim.yaml_doc import MAX_YAML_DEPTH, _Doc, _yaml_value
@@ -192,7 +192,7 @@ def _describe(shape: Any, index: int) -> str:
 def read_world(path: str | os.PathLike[str]) -> Any:
     """Read and validate a world file (WorldError if unreadable or invalid).
 
-    Only a regular file of at most :data:`mdle.userfile.MAX_FILE_BYTES` is read.
+    Only a regular file of at most :data:`mdle.core.userfile.MAX_FILE_BYTES` is read.
     """
     return parse_world(_world_text(path), file=str(path), default_name=Path(path).stem)
 
@@ -222,7 +222,7 @@ def parse_world_robot(text: str, file: str = "<string>") -> Any:
 
 
 def _world_text(path: str | os.PathLike[str]) -> str:
-    from mdle.userfile import UserFileError, read_user_file
+    from mdle.core.userfile import UserFileError, read_user_file
 
     p = Path(path)
     try:

@@ -4,7 +4,7 @@ Every YAML input (world files, robot files, study specs, team files) is read by
 :func:`_yaml_value` into plain Python values through :class:`_Builder`: ``yaml`` safe
 loading only, nesting refused past :data:`MAX_YAML_DEPTH`, aliases shared rather than
 copied. :class:`_Doc` keeps each key path's line and column, so a problem found later
-is reported as a :class:`mdle.errors.WorldError` naming the file, line, column and path.
+is reported as a :class:`mdle.core.errors.WorldError` naming the file, line, column and path.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from mdle.errors import Diagnostic, Span, WorldError
+from mdle.core.errors import Diagnostic, Span, WorldError
 
 __all__ = ["MAX_YAML_DEPTH"]
 

@@ -1,7 +1,7 @@
 """Plain values read from a YAML document: numbers, whole numbers, text, points, mappings.
 
 Each check takes the :class:`~mdle.sim.yaml_doc._Doc` and the key path, and raises the
-document's :class:`mdle.errors.WorldError` for that path when the value is not what
+document's :class:`mdle.core.errors.WorldError` for that path when the value is not what
 was expected (saying, for a number written with a unit, that units are implied).
 """
 
@@ -73,7 +73,7 @@ def _written_unit(v: Any, implied: str | None) -> str:
     number, written = m.group(1), m.group(2)
     value = number.lstrip("+")
     if implied is not None and written != implied:
-        from mdle.units import unit_value
+        from mdle.core.units import unit_value
 
         try:
             (f_written, d_written), (f_implied, d_implied) = (unit_value(written),

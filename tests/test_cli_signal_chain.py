@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
-from mdle.cli import output
-from mdle.cli.signals import Interrupted, SignalGuard, interruption_of
+from mdle.console import output
+from mdle.console.signals import Interrupted, SignalGuard, interruption_of
 
 
 class _Raises:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from mdle.errors import Diagnostic, Span, render_diagnostic
+from mdle.core.errors import Diagnostic, Span, render_diagnostic
 
 
 def _caret_target(text: str) -> str:

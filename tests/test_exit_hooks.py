@@ -1,4 +1,4 @@
-"""mdle.exit_hooks: what a robot backend registers so the robot stops however mdle ends."""
+"""mdle.core.exit_hooks: what a robot backend registers so the robot stops however mdle ends."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import signal
 
 import pytest
 
-from mdle.exit_hooks import register_exit_hooks
+from mdle.core.exit_hooks import register_exit_hooks
 
 
 class _Robot:

@@ -4,7 +4,7 @@ A read error (EIO: a failing disk, a lost network share) on any input of ``check
 ``show``, ``fmt``, ``run`` (the plan, an import, ``--world``, ``--robot``, ``--team``),
 ``sweep``, ``plot`` and ``export``, and in the REPL's ``:load``, used to end in
 "internal error". The fault is injected in-process: every file opened through
-:mod:`mdle.userfile` whose path is the chosen one fails its reads with EIO.
+:mod:`mdle.core.userfile` whose path is the chosen one fails its reads with EIO.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ class _Failing(io.RawIOBase):
 @pytest.fixture
 def eio(monkeypatch: pytest.MonkeyPatch) -> Callable[[Path], None]:
     """Make reads of one file fail with EIO (call it with the file)."""
-    import mdle.userfile
+    import mdle.core.userfile
 
     real = os.fdopen
     failing: list[str] = []
@@ -49,7 +49,7 @@ def eio(monkeypatch: pytest.MonkeyPatch) -> Callable[[Path], None]:
             return io.BufferedReader(_Failing())
         return real(fd, *args, **kwargs)
 
-    monkeypatch.setattr(mdle.userfile.os, "fdopen", fdopen)
+    monkeypatch.setattr(mdle.core.userfile.os, "fdopen", fdopen)
     return lambda path: failing.append(os.path.realpath(path))
 
 

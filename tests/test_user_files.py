@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from mdle.userfile import MAX_FILE_BYTES, UserFileError, open_user_file, read_user_file
+from mdle.core.userfile import MAX_FILE_BYTES, UserFileError, open_user_file, read_user_file
 
 DEADLINE = 60.0
 ZERO = "/dev/zero"

@@ -16,8 +16,8 @@ LAWS = '''\
 import math
 
 from mdle.atoms.registry import Param, control_law, sensor
-from mdle.backend import Command
-from mdle.units import LENGTH, SPEED
+from mdle.core.backend import Command
+from mdle.core.units import LENGTH, SPEED
 
 
 @control_law(Param("v", SPEED, 0.3), Param("grow", LENGTH, 0.2))
@@ -72,7 +72,7 @@ def test_the_repl_uses_the_user_s_laws(files: tuple[Path, Path]) -> None:
      "parameter `d` of `d`: its dimension is `'metres'`", 3),
     ("import nothing_like_this\n", "could not be loaded: ModuleNotFoundError", 1),
     ("x = 1\n", "`{f}` declares no control law or sensor function", None),
-    ("from mdle.atoms.registry import sensor\nfrom mdle.units import LENGTH\n\n"
+    ("from mdle.atoms.registry import sensor\nfrom mdle.core.units import LENGTH\n\n"
      "@sensor(result=LENGTH)\ndef x(args, ctx):\n    return 0.0\n",
      "`x` of `{f}` is already a shipped sensor function", None),
 ])

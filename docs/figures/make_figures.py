@@ -127,9 +127,9 @@ def run_numbers(trace_path: str) -> dict[str, str]:
     """
     import numpy as np
 
-    from mdle.plot import robot_radius, trace_and_world
-    from mdle.plot_curvature import measured_curvature
-    from mdle.plot_nearest import (
+    from mdle.view.plot import robot_radius, trace_and_world
+    from mdle.view.plot_curvature import measured_curvature
+    from mdle.view.plot_nearest import (
         NearestPanel,
         is_nearest_point_trace,
         nearest_measured,
@@ -286,8 +286,8 @@ def update_docs(table: dict[str, Any]) -> list[str]:
 
 def draw_figure(name: str, trace: str, out: str) -> str:
     """Draw a figure run's trace as `mdle plot` does; return the figure's path."""
-    from mdle.figure_output import save_figure
-    from mdle.plot import trace_and_world, trace_figure
+    from mdle.view.figure_output import save_figure
+    from mdle.view.plot import trace_and_world, trace_figure
 
     path = os.path.join(out, name)
     save_figure(trace_figure(*trace_and_world(trace)), path, dpi=DPI)

@@ -3,7 +3,7 @@
 Each module in :data:`COMMANDS` defines ``add_parser(subparsers)`` (registering its
 subcommand with ``set_defaults(handler=run)``) and ``run(args) -> int``. Those modules
 import their heavy dependencies inside ``run``, so ``mdle --help`` and ``mdle check``
-start fast. :func:`main` installs the signal handlers (:mod:`mdle.cli.signals`) before
+start fast. :func:`main` installs the signal handlers (:mod:`mdle.console.signals`) before
 anything else, so a signal at any moment ends mdle with 128 + its number and a message.
 """
 
@@ -15,7 +15,7 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from mdle.cli.signals import SignalGuard
+from mdle.console.signals import SignalGuard
 
 if TYPE_CHECKING:
     import argparse
@@ -84,7 +84,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         guard.settle()
         return code
     except KeyboardInterrupt as exc:  # a signal while the command line was read
-        from mdle.cli import output
+        from mdle.console import output
 
         return output.interrupted(exc, guard)
     finally:
@@ -105,7 +105,7 @@ def _hold_signals_to_the_end() -> None:
     """
     import signal
 
-    from mdle.cli.signals import SIGNALS
+    from mdle.console.signals import SIGNALS
 
     for sig in SIGNALS:
         try:
@@ -136,7 +136,7 @@ def _closed_streams_to_null() -> None:
 
 
 def _main(argv: Sequence[str] | None, guard: SignalGuard) -> int:
-    from mdle.cli import output
+    from mdle.console import output
 
     parser = build_parser()
     try:

@@ -14,8 +14,8 @@ import argparse
 import os
 from collections.abc import Iterable, Sequence
 
-from mdle.errors import Diagnostic, MdleError
-from mdle.userfile import same_file
+from mdle.core.errors import Diagnostic, MdleError
+from mdle.core.userfile import same_file
 
 __all__ = ["refuse_clobbering", "run_inputs", "run_outputs"]
 

@@ -24,8 +24,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from mdle.cli import generated_study, output
+from mdle.cli import generated_study
 from mdle.cli.options import hertz
+from mdle.console import output
 
 __all__ = ["add_parser", "run"]
 
@@ -81,8 +82,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"mdle experiment {args.name}: {misplaced}", file=sys.stderr)
         return output.EXIT_USAGE
     if args.name == "curvature" or getattr(args, "resume", False):
-        from mdle.errors import MdleError
-        from mdle.userfile import UserFileError, writable_folder
+        from mdle.core.errors import MdleError
+        from mdle.core.userfile import UserFileError, writable_folder
 
         try:  # before the computing: its results go there
             writable_folder(args.out)

@@ -11,7 +11,7 @@ import argparse
 import sys
 from typing import Any
 
-from mdle.cli import output
+from mdle.console import output
 
 __all__ = ["add_parser", "run"]
 
@@ -39,11 +39,11 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Export; returns the exit code."""
-    from mdle.ros import require
+    from mdle.record import require
 
     require("mdle export")
     from mdle.cli.clobber import refuse_clobbering
-    from mdle.ros.export import export_trace
+    from mdle.record.export import export_trace
 
     target = args.output or args.rosbag
     refuse_clobbering([("-o", args.output), ("--rosbag", args.rosbag)],

@@ -34,8 +34,8 @@ def add_parser(subparsers: Any) -> None:
 def run(args: argparse.Namespace) -> int:
     """Format each file; returns the exit code."""
     from mdle.cli.check import expand_paths
-    from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
-    from mdle.errors import Diagnostic, MdleError
+    from mdle.console.output import EXIT_INPUT, EXIT_OK, print_diagnostics
+    from mdle.core.errors import Diagnostic, MdleError
     from mdle.lang import format_source, read_source
 
     status = EXIT_OK

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from mdle.cli import output
+from mdle.console import output
 
 if TYPE_CHECKING:  # numpy and the simulator load only when a study runs (mdle check stays light)
     from mdle.experiments.generated import Row, StudyConfig
@@ -61,7 +61,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def config_from(args: argparse.Namespace) -> "StudyConfig | str":
     """Build the study's configuration from the options, or return what is wrong with them."""
-    from mdle.errors import WorldError
+    from mdle.core.errors import WorldError
     from mdle.experiments.generated import StudyConfig
     from mdle.sim.profiles import robot_profile
 

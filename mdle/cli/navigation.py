@@ -15,7 +15,7 @@ import csv
 import dataclasses
 import sys
 
-from mdle.cli import output
+from mdle.console import output
 
 __all__ = ["run_navigation_study"]
 

@@ -11,8 +11,10 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from mdle.core.ranges import MAX_SEED
+
 if TYPE_CHECKING:
-    from mdle.motion_limits import KnownRobot
+    from mdle.core.motion_limits import KnownRobot
 
 __all__ = ["DEFAULT_RATE", "add_simulation_options", "hertz", "known_robot", "positive_seconds",
            "seconds", "seed", "world_beside", "writable_output"]
@@ -58,7 +60,7 @@ def known_robot(plan: str | os.PathLike[str] | None, world: str | None = None,
     WorldError
         The profile or the world cannot be read, or its ``robot`` is bad.
     """
-    from mdle.motion_limits import KnownRobot
+    from mdle.core.motion_limits import KnownRobot
     from mdle.sim.catalog import DEFAULT_WORLD, world_robot
     from mdle.sim.profiles import robot_profile
 
@@ -116,9 +118,6 @@ def positive_seconds(text: str) -> float:
     return value
 
 
-#: Largest simulation seed (numpy's legacy seeding takes 32 bits).
-MAX_SEED = 2**32 - 1
-
 
 def seed(text: str) -> int:
     """Read a simulation seed: a whole number from 0 to :data:`MAX_SEED` (argparse ``type``).
@@ -140,7 +139,7 @@ def seed(text: str) -> int:
 
 def hertz(text: str) -> float:
     """Read a control rate in Hz (an argparse ``type``), in the range every input shares."""
-    from mdle.ranges import RATE
+    from mdle.core.ranges import RATE
 
     try:
         value = float(text)
@@ -164,7 +163,7 @@ def writable_output(path: str, option: str, suffixes: tuple[str, ...] = ()) -> N
         The suffix is not accepted, the folder does not exist or cannot be written, or
         the path is a folder or a file that cannot be written.
     """
-    from mdle.errors import Diagnostic, MdleError
+    from mdle.core.errors import Diagnostic, MdleError
 
     def refuse(why: str) -> MdleError:
         return MdleError(Diagnostic(None, f"{option} `{path}`: {why}"))

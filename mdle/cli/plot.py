@@ -1,11 +1,11 @@
 """``mdle plot``: draw a run from its trace (path, obstacles, events, boundary curvature).
 
-One trace: the run's figure (:mod:`mdle.plot`). Several: their paths and following errors
-overlaid (:mod:`mdle.plot_overlay`), or, for the robots of one team run, every path in one
-world with the messages marked (:mod:`mdle.team_plot`). ``--animate F.gif|F.mp4``: the
-run as an animation (:mod:`mdle.animate`). Without ``-o`` (and without ``--animate``) the
+One trace: the run's figure (:mod:`mdle.view.plot`). Several: their paths and following errors
+overlaid (:mod:`mdle.view.plot_overlay`), or, for the robots of one team run, every path in one
+world with the messages marked (:mod:`mdle.view.team_plot`). ``--animate F.gif|F.mp4``: the
+run as an animation (:mod:`mdle.view.animate`). Without ``-o`` (and without ``--animate``) the
 figure opens in a window when there is a display, else it is written to ``NAME.png`` here,
-and the line printed says where (:mod:`mdle.figure_output`).
+and the line printed says where (:mod:`mdle.view.figure_output`).
 """
 
 from __future__ import annotations
@@ -46,10 +46,10 @@ def run(args: argparse.Namespace) -> int:
     """Draw, overlay or animate; returns the exit code."""
     from mdle.cli.clobber import refuse_clobbering
     from mdle.cli.options import writable_output
-    from mdle.errors import MdleError
-    from mdle.figure_output import save_figure, show_or_write
-    from mdle.plot import trace_and_world, trace_figure
-    from mdle.team_plot import is_team_trace, team_figure
+    from mdle.core.errors import MdleError
+    from mdle.view.figure_output import save_figure, show_or_write
+    from mdle.view.plot import trace_and_world, trace_figure
+    from mdle.view.team_plot import is_team_trace, team_figure
 
     refuse_clobbering([("-o", args.output), ("--animate", args.animate)],
                       [*(("the trace", t) for t in args.traces), ("the world", args.world)])
@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
             raise MdleError("--animate draws one run: give one trace")
         if args.output is not None:
             raise MdleError("--animate writes its own file: leave out -o")
-        from mdle.animate import animate_trace
+        from mdle.view.animate import animate_trace
 
         writable_output(args.animate, "--animate", (".gif", ".mp4"))
         trace, world = trace_and_world(args.traces[0], args.world)
@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
         fig = team_figure([trace for trace, _ in runs], runs[0][1])
         name = "team"
     else:
-        from mdle.plot_overlay import overlay_figure
+        from mdle.view.plot_overlay import overlay_figure
 
         fig = overlay_figure(runs)
         name = "overlay"
@@ -92,10 +92,10 @@ def run(args: argparse.Namespace) -> int:
 def _animate_team(args: argparse.Namespace) -> int:
     """Animate the robots of one team run together (``--animate`` with several traces)."""
     from mdle.cli.options import writable_output
-    from mdle.errors import MdleError
-    from mdle.plot import trace_and_world
-    from mdle.team_animate import animate_team
-    from mdle.team_plot import is_team_trace
+    from mdle.core.errors import MdleError
+    from mdle.view.plot import trace_and_world
+    from mdle.view.team_animate import animate_team
+    from mdle.view.team_plot import is_team_trace
 
     if args.output is not None:
         raise MdleError("--animate writes its own file: leave out -o")

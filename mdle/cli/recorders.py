@@ -17,7 +17,7 @@ def recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> l
     """
     if not (args.record or args.rosbag or args.foxglove):
         return []
-    from mdle.ros.recorder import McapRecorder
+    from mdle.record.recorder import McapRecorder
 
     out: list[Any] = []
     live = live_view(args) if args.foxglove else []
@@ -44,7 +44,7 @@ def recorders(args: argparse.Namespace, header: dict[str, Any], world: Any) -> l
 
 def live_view(args: argparse.Namespace) -> list[Any]:
     """Start ``--foxglove``'s server; returns its sink (a list of one)."""
-    from mdle.ros.live import FoxgloveServer, FoxgloveSink, parse_address
+    from mdle.view.foxglove import FoxgloveServer, FoxgloveSink, parse_address
 
     server = FoxgloveServer(*parse_address(args.foxglove))
     try:  # where to connect (port 0 picks one): on standard error with -q

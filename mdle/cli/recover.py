@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from mdle.cli import output
+from mdle.console import output
 
 __all__ = ["add_parser", "run"]
 
@@ -32,7 +32,7 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Recover; returns the exit code."""
-    from mdle.ros.recover import recover
+    from mdle.record.recover import recover
 
     report = recover(args.source, args.output)
     span = ""

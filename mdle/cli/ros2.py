@@ -31,7 +31,7 @@ def check_ros2_options(args: argparse.Namespace) -> None:
                         ("--twist-stamped", args.twist_stamped),
                         ("--use-sim-time", args.use_sim_time), ("--no-laser", args.no_laser)):
         if value not in (None, False):
-            from mdle.errors import Diagnostic, MdleError
+            from mdle.core.errors import Diagnostic, MdleError
 
             raise MdleError(Diagnostic(None, f"{flag} is for a ROS 2 robot: it needs "
                                              "--backend ros2",

@@ -30,7 +30,7 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Show the program; returns the exit code."""
-    from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
+    from mdle.console.output import EXIT_INPUT, EXIT_OK, print_diagnostics
     from mdle.lang import load_program, show_program
 
     program = load_program(args.file)  # an MdleError is reported by the CLI guard

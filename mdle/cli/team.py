@@ -17,11 +17,11 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from mdle.cli import output
 from mdle.cli.clobber import refuse_clobbering, run_inputs
 from mdle.cli.options import DEFAULT_RATE, writable_output
-from mdle.cli.signals import SignalGuard, signal_name
-from mdle.errors import Diagnostic, MdleError
+from mdle.console import output
+from mdle.console.signals import SignalGuard, signal_name
+from mdle.core.errors import Diagnostic, MdleError
 
 __all__ = ["run_team", "trace_paths"]
 
@@ -35,9 +35,9 @@ def trace_paths(trace: str, names: list[str]) -> dict[str, str]:
 
 def run_team(args: argparse.Namespace) -> int:
     """Run a team; returns the exit code."""
+    from mdle.record.trace import TraceWriter
     from mdle.sim.team import TeamSim
-    from mdle.teamrun import TeamRun
-    from mdle.trace import TraceWriter
+    from mdle.team.run import TeamRun
 
     guard: SignalGuard = getattr(args, "signals", None) or SignalGuard()
     if args.start is not None or args.robot or args.backend != "sim":
@@ -45,7 +45,7 @@ def run_team(args: argparse.Namespace) -> int:
                                          "a team's robots, profiles and starts are in its "
                                          "world and team file"))
     if args.record or args.rosbag:
-        from mdle.ros import require
+        from mdle.record import require
 
         require("--record" if args.record else "--rosbag")
     if args.plan is not None:
@@ -56,7 +56,7 @@ def run_team(args: argparse.Namespace) -> int:
     if args.trace:
         writable_output(args.trace, "--trace")
     guard.arm()
-    from mdle.teamfile import TeamSpec, load_team, read_team, robot_plan
+    from mdle.team.file import TeamSpec, load_team, read_team, robot_plan
 
     spec = read_team(args.team) if args.team else TeamSpec(None, ())
     spec = dataclasses.replace(spec, members=spec.members + tuple(
@@ -131,7 +131,7 @@ def run_team(args: argparse.Namespace) -> int:
             _say(f"mdle run: {rec.error}")
             return output.EXIT_IO
     if args.plot:
-        from mdle.team_plot import plot_team
+        from mdle.view.team_plot import plot_team
 
         plot_team([w.path for w in writers.values()], args.plot, world=world)
     if guard.received is not None:
@@ -162,7 +162,7 @@ def _recordings(args: argparse.Namespace, headers: dict[str, dict[str, Any]],
     if not (args.record or args.rosbag or args.foxglove):
         return []
     from mdle.cli.recorders import live_view
-    from mdle.ros.team_record import TeamRecording
+    from mdle.record.team_record import TeamRecording
 
     live = live_view(args) if args.foxglove else []
     compression = "" if args.record_compression == "none" else args.record_compression
@@ -198,7 +198,7 @@ def _summary(name: str, result: Any) -> str:
 def _header(args: argparse.Namespace, spec: Any, world: Any, seed: int, rate: float,
             until: float | None, name: str, plan: str, program: Any, element: str
             ) -> dict[str, Any]:
-    from mdle.ros.describe import profile_header  # the body and odometry noise, for recordings
+    from mdle.record.describe import profile_header  # the body and odometry noise, for recordings
 
     r = next(r for r in world.robots if r.name == name)
     return {"program": {"file": os.path.abspath(plan),

@@ -1,7 +1,7 @@
 """``mdle worlds``: list the reference worlds, or draw one (``mdle worlds show NAME [-o F.png]``).
 
 Without ``-o`` the drawing opens in a window when there is a display, else it is written to
-``NAME.png`` here (:mod:`mdle.figure_output`).
+``NAME.png`` here (:mod:`mdle.view.figure_output`).
 """
 
 from __future__ import annotations
@@ -89,7 +89,7 @@ def world_figure(world: Any, scan: bool = True) -> Any:
     from matplotlib.figure import Figure
     from matplotlib.patches import Circle as DiscPatch
 
-    from mdle.plot import draw_world
+    from mdle.view.plot import draw_world
 
     fig = Figure(figsize=(8, 6), layout="constrained")
     ax = fig.subplots()
@@ -128,14 +128,14 @@ def _show(args: argparse.Namespace) -> int:
 
     from mdle import sim
     from mdle.cli.clobber import refuse_clobbering
-    from mdle.figure_output import save_figure, show_or_write
+    from mdle.view.figure_output import save_figure, show_or_write
 
     refuse_clobbering([("-o", args.output)], [("the world", args.world)])
     if args.output is not None:
         ext = os.path.splitext(args.output)[1].lower().lstrip(".")
         if ext not in ("png", "svg", "pdf"):
             # matplotlib would add `.png` to a name without one and report nothing
-            from mdle.errors import MdleError
+            from mdle.core.errors import MdleError
 
             raise MdleError(f"cannot draw to `{args.output}`: the file name must end in .png, "
                             ".svg or .pdf")
@@ -152,7 +152,7 @@ def _show(args: argparse.Namespace) -> int:
 def _import(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
     from mdle.sim.importers import import_world
     from mdle.sim.world_dump import world_to_yaml
 

@@ -1,4 +1,4 @@
-"""Hardware drivers: real robots and sensors behind the :class:`mdle.backend.Backend` seam.
+"""Hardware drivers: real robots and sensors behind the :class:`mdle.core.backend.Backend` seam.
 
 * :mod:`mdle.drivers.arcos`: the Pioneer ARCOS packet codec (framing, commands, SIPs).
 * :mod:`mdle.drivers.arcos_laser`: the Pioneer simulators' laser packets.
@@ -16,10 +16,10 @@ __all__ = ["BACKEND_KINDS", "open_backend"]
 
 from typing import TYPE_CHECKING
 
-from mdle.errors import BackendError
+from mdle.core.errors import BackendError
 
 if TYPE_CHECKING:
-    from mdle.backend import Backend, RobotLimits
+    from mdle.core.backend import Backend, RobotLimits
 
 #: The kinds :func:`open_backend` knows.
 BACKEND_KINDS: tuple[str, ...] = ("pioneer",)

@@ -322,7 +322,7 @@ class RobotParams:
     """Per-model conversion factors and working limits of a Pioneer.
 
     Conversions multiply firmware units into mm, mm/s or radians; limits are SI and
-    become the backend's :class:`~mdle.backend.RobotLimits`.
+    become the backend's :class:`~mdle.core.backend.RobotLimits`.
     """
 
     dist_conv: float = 1.0

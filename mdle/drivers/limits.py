@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-from mdle.backend import RobotLimits
+from mdle.core.backend import RobotLimits
+from mdle.core.errors import BackendError
 from mdle.drivers.arcos import RobotParams
-from mdle.errors import BackendError
 
 __all__ = [
     "LASER_MAX_RANGE",

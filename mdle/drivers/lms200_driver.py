@@ -16,12 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mdle.backend import Scan
+from mdle.core.backend import Scan
+from mdle.core.errors import BackendError
 from mdle.drivers import lms200
 from mdle.drivers.arcos_laser import BEARING_CACHE_SIZE
 from mdle.drivers.lms200 import Ack, Telegram, TelegramReader
 from mdle.drivers.transport import Transport, TransportClosed, read_or_fail
-from mdle.errors import BackendError
 
 __all__ = ["Lms200Driver", "Lms200Options", "scan_angle_for"]
 

@@ -3,9 +3,9 @@
 On a robot the motion comes from the robot itself, so a profile (``mdle robots``) does not
 change how it moves. It says what the robot is like where the driver cannot measure it:
 
-* the law's lag prediction: :attr:`~mdle.backend.RobotLimits.command_latency` (a
+* the law's lag prediction: :attr:`~mdle.core.backend.RobotLimits.command_latency` (a
   ``follow_boundary`` with ``latency = inf``, its default, predicts over it) and the
-  typical scan age :attr:`~mdle.backend.RobotLimits.scan_latency`, as the profile's
+  typical scan age :attr:`~mdle.core.backend.RobotLimits.scan_latency`, as the profile's
   timing model has them in simulation;
 * the ladar's mount and scan period, which recordings use for their ``base_link ->
   laser`` transform and ``LaserScan`` timing.

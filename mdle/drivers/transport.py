@@ -26,7 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from mdle.errors import BackendError
+from mdle.core.errors import BackendError
 
 __all__ = [
     "DEFAULT_TCP_PORT",

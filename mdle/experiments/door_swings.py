@@ -99,7 +99,7 @@ def door_stats(x: np.ndarray, theta: np.ndarray, side: np.ndarray) -> list[DoorS
 
 def recorded_doors(path: str | os.PathLike[str]) -> list[DoorStats]:
     """Return the door statistics of a recorded run (an mdle trace)."""
-    from mdle.trace import read_trace
+    from mdle.record.load import read_trace
 
     trace = read_trace(path)
     hit = trace.column("diag.side_hit")

@@ -72,7 +72,7 @@ def run_follow(world: str, *, side: str = "right", rc: float | None = None, v: f
     """
     import numpy as np
 
-    from mdle.backend import Pose
+    from mdle.core.pose import Pose
     from mdle.lang import load_text
     from mdle.runtime import run
     from mdle.runtime.observer import Recorder
@@ -185,7 +185,7 @@ def run_many(tasks: Sequence[RunTask], *, jobs: int | None = None,
     MdleError
         A run failed (its cause), or ``out`` holds another experiment's table.
     """
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
     from mdle.sweep.engine import run_tasks
     from mdle.sweep.table import columns_for
 

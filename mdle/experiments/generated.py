@@ -3,7 +3,7 @@
 A study is a list of :class:`RunSpec` (one per start: the shape's ``(seed, index)``, the start
 pose, the law's parameters, the robot, the sensing and rate), built by :func:`study_specs`.
 :func:`run_spec` is a pure function from one spec to one row (a flat dict of the spec and
-its :class:`~mdle.experiments.engagement.FollowMetrics`): it regenerates the world from the
+its :class:`~mdle.sweep.engagement.FollowMetrics`): it regenerates the world from the
 spec, runs the MDLe plan ::
 
     atom f = (follow_boundary(side = right, rc = 0.5 m, v = 1 m/s), never, 40 s)
@@ -194,13 +194,13 @@ def run_spec(spec: RunSpec) -> Row:
 
     Pure: the world, the start and every random draw come from the spec.
     """
-    from mdle.backend import Pose
-    from mdle.experiments.engagement import follow_metrics
+    from mdle.core.pose import Pose
     from mdle.lang import load_text
     from mdle.runtime import Recorder, run_named
     from mdle.sim import SimBackend
     from mdle.sim.generated import generate_shape
     from mdle.sim.profiles import robot_profile
+    from mdle.sweep.engagement import follow_metrics
 
     shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
     world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
@@ -225,7 +225,7 @@ def run_spec(spec: RunSpec) -> Row:
 
 def _error_row(spec: RunSpec, error: BaseException) -> Row:
     """Return the row of a run that raised: NaN metrics and the error's text."""
-    from mdle.experiments.engagement import FollowMetrics
+    from mdle.sweep.engagement import FollowMetrics
 
     nan_metrics = {f.name: math.nan for f in fields(FollowMetrics)}
     nan_metrics.update(collided=False, engaged=False)
@@ -251,7 +251,7 @@ def replay_files(spec: RunSpec) -> tuple[str, str]:
     """
     from dataclasses import replace
 
-    from mdle.backend import Pose
+    from mdle.core.pose import Pose
     from mdle.sim.generated import generate_shape
     from mdle.sim.profiles import robot_profile
     from mdle.sim.world_dump import world_to_yaml
@@ -314,7 +314,7 @@ class SpecTask:
         """Return the hash of the spec (what decides the run)."""
         import hashlib
 
-        from mdle.sweep.spec import canonical
+        from mdle.sweep.keys import canonical
 
         text = canonical([TASK_VERSION, asdict(self.spec)])
         return hashlib.sha256(text.encode()).hexdigest()[:20]
@@ -341,7 +341,7 @@ def run_task(task: SpecTask) -> Any:
 
 
 def _columns() -> list[str]:
-    from mdle.experiments.engagement import FollowMetrics
+    from mdle.sweep.engagement import FollowMetrics
 
     return ["key", *spec_fields(), *(f.name for f in fields(FollowMetrics)), "x_end", "y_end",
             "theta_end", "error", *_BOOKKEEPING[1:]]

@@ -6,7 +6,7 @@ checker's concerns: names and arity (:mod:`~mdle.lang.check_names`), dimensions
 (:mod:`~mdle.lang.check_dimensions`), structure and reachability
 (:mod:`~mdle.lang.check_structure`), over their shared state
 (:mod:`~mdle.lang.check_state`). Errors are collected, not raised one at a time:
-:func:`check_program` raises one :class:`~mdle.errors.CheckError` with all of them.
+:func:`check_program` raises one :class:`~mdle.core.errors.CheckError` with all of them.
 
 A definition with parameters is checked once on its own (parameters without a
 default may be anything) and again for each distinct use with arguments, so a
@@ -19,7 +19,8 @@ from collections.abc import Mapping, Sequence
 from types import MappingProxyType
 
 from mdle.atoms.registry import REQUIRED, Registry
-from mdle.errors import CheckError, Diagnostic, Severity, Span
+from mdle.core.errors import CheckError, Diagnostic, Severity, Span
+from mdle.core.motion_limits import KnownRobot
 from mdle.lang import syntax as st
 from mdle.lang.check_dimensions import DimensionChecks
 from mdle.lang.check_names import NameChecks
@@ -27,7 +28,6 @@ from mdle.lang.check_state import _UNKNOWN, MAX_NESTING, _Abort, _freeze, _kind_
 from mdle.lang.check_structure import StructureChecks, never_ends
 from mdle.lang.program import Element, Program
 from mdle.lang.resolve import Namespace, build_namespace, find_cycles, uses_of
-from mdle.motion_limits import KnownRobot
 
 __all__ = ["Checker", "check_program", "MAX_NESTING", "missing_entry", "never_ends"]
 

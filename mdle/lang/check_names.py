@@ -13,7 +13,8 @@ import math
 from collections.abc import Mapping, Sequence
 
 from mdle.atoms.registry import REQUIRED, LawSpec, SensorSpec
-from mdle.errors import Diagnostic, Severity, Span
+from mdle.core.errors import Diagnostic, Severity, Span
+from mdle.core.units import NONE
 from mdle.lang import syntax as st
 from mdle.lang.check_state import _EMPTY, CheckerState, Env, _Abort, _kind_name, _short, _Slot
 from mdle.lang.dimensions import (
@@ -28,7 +29,6 @@ from mdle.lang.dimensions import (
 )
 from mdle.lang.format import format_expr
 from mdle.lang.program import Element, MessageUse
-from mdle.units import NONE
 
 #: Most names one "did you mean" compares an unknown name with.
 _MAX_CANDIDATES = 200

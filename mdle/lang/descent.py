@@ -21,7 +21,7 @@ import re
 from collections.abc import Iterator, Sequence
 from typing import Any, TypeVar
 
-from mdle.errors import Span, make_span
+from mdle.core.errors import Span, make_span
 from mdle.lang import syntax as st
 from mdle.lang.treebuild import (
     COMPARISON_POWER,
@@ -161,7 +161,7 @@ class _Descent:
     """Recursive descent over the token stream; every method starts at its first token.
 
     Hot paths move to the next token inline (``self.tok = self.pull()``) and make spans
-    with :func:`~mdle.errors.make_span` of the tokens' places.
+    with :func:`~mdle.core.errors.make_span` of the tokens' places.
     """
 
     def __init__(self, tokens: Iterator[_Token], state: BuildState) -> None:

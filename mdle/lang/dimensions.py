@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from mdle.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE, Dim
+from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE, Dim
 
 __all__ = [
     "Quantity",
@@ -98,7 +98,7 @@ def same_kind(a: Dim, b: Dim) -> bool:
     rad/s with ``1 / 1 s``. A bare angle stays apart from a plain number, so that
     ``heading > 30`` still asks for a unit.
     """
-    if a is b or a == b:  # dimensions are mostly the shared constants of mdle.units
+    if a is b or a == b:  # dimensions are mostly the shared constants of mdle.core.units
         return True
     if (a.length or a.time) and (b.length or b.time):
         return (a.length, a.time) == (b.length, b.time)

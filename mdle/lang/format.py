@@ -32,7 +32,7 @@ _INDENT = "    "
 
 def format_source(text: str, file: str = "<string>") -> str:
     """Return the canonical form of a text (raises MdleSyntaxError if it does not parse)."""
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
     from mdle.lang.hints import refine_error
     from mdle.lang.parser import parse_module
 

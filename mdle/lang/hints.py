@@ -4,7 +4,7 @@ The parser reports some mistakes with a generic example (``comparisons do not ch
 ``write `0 m < x and x < 10 m```). Here such a hint is rewritten from the very text the
 user wrote, so it can be copied as it stands:
 
->>> from mdle.errors import Diagnostic, Span
+>>> from mdle.core.errors import Diagnostic, Span
 >>> text = "atom b = (go(0.3 m/s), 0 m < x < 1 m, 1 s)"
 >>> d = Diagnostic(Span("t.mdle", 1, 32, 1, 33), CHAINED, hint="write `0 m < x and x < 10 m`")
 >>> refine_hints([d], {"t.mdle": text})[0].hint
@@ -17,7 +17,7 @@ import dataclasses
 import re
 from collections.abc import Mapping, Sequence
 
-from mdle.errors import Diagnostic, MdleError, MdleSyntaxError, source_line
+from mdle.core.errors import Diagnostic, MdleError, MdleSyntaxError, source_line
 
 __all__ = ["CHAINED", "chained_hint", "refine_error", "refine_hints", "yaml_as_plan"]
 

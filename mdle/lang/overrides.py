@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from mdle.atoms.registry import Registry
-from mdle.errors import CheckError, Diagnostic, MdleError, Severity, Span
+from mdle.core.errors import CheckError, Diagnostic, MdleError, Severity, Span
 from mdle.lang import syntax as st
 from mdle.lang.resolve import Namespace, build_namespace
 
@@ -88,7 +88,7 @@ def parse_override(text: str, file: str = OVERRIDE_FILE) -> Override:
         No ``=``, a name that is not ``PARAM`` or ``DEFINITION.PARAM``, or a value that
         does not parse (the message points into ``text``, shown as file ``file``).
     """
-    from mdle.errors import MdleSyntaxError
+    from mdle.core.errors import MdleSyntaxError
     from mdle.lang.parser import parse_expression
 
     sources = {file: text}

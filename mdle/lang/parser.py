@@ -10,7 +10,7 @@ the LALR tables at every start. The tree is built during parsing by lark's LALR
 callbacks (no recursion, so 1 MB of parentheses cannot exhaust the stack); a nesting
 limit of :data:`MAX_DEPTH` keeps the later recursive stages safe.
 
-Syntax errors become :class:`~mdle.errors.MdleSyntaxError` with file, line, column,
+Syntax errors become :class:`~mdle.core.errors.MdleSyntaxError` with file, line, column,
 the source line, a caret, what was expected in words and a hint; after an error the
 parser resynchronises at the next line that starts with a statement keyword, so
 several errors in one file are reported together.
@@ -33,7 +33,7 @@ from typing import Any
 from lark import Lark, Token, Transformer, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from mdle.errors import Diagnostic, MdleSyntaxError, Severity, Span
+from mdle.core.errors import Diagnostic, MdleSyntaxError, Severity, Span
 from mdle.lang import syntax as st
 from mdle.lang.descent import Lexer, parse_valid
 from mdle.lang.syntax_errors import (

@@ -15,7 +15,7 @@ from types import MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
-from mdle.errors import Diagnostic, Severity
+from mdle.core.errors import Diagnostic, Severity
 from mdle.lang import syntax as st
 from mdle.lang.conditions import BUILTINS
 

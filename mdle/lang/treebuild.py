@@ -17,10 +17,10 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
-from mdle.errors import Diagnostic, Span, make_span
-from mdle.frozen import builder
+from mdle.core.errors import Diagnostic, Span, make_span
+from mdle.core.frozen import builder
+from mdle.core.units import NONE, UNITS, unit_value
 from mdle.lang import syntax as st
-from mdle.units import NONE, UNITS, unit_value
 
 __all__ = ["MAX_DEPTH", "POWERS", "NOT_POWER", "SIGN_POWER", "COMPARISON_POWER", "COMPARISONS",
            "BuildState", "TooDeep", "Op", "Prefixed", "token_span", "over",

@@ -25,7 +25,7 @@ from typing import IO, TYPE_CHECKING, Any
 
 from prompt_toolkit.completion import CompleteEvent
 
-from mdle.cli.signals import ends_session
+from mdle.console.signals import ends_session
 from mdle.repl.commands import Repl
 from mdle.repl.completion import MdleCompleter
 from mdle.repl.highlight import MdleLexer

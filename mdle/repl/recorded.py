@@ -1,6 +1,6 @@
 """A recorded run (a trace or an MCAP recording) back as runtime records, for ``:load``.
 
-:func:`recorded_run` turns a :class:`~mdle.trace.Trace` into the samples, events and
+:func:`recorded_run` turns a :class:`~mdle.record.trace.Trace` into the samples, events and
 result a run in the REPL would have made, scans included, so the REPL's path, map, plot
 and trace show it as if it had run in the session.
 """
@@ -12,10 +12,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from mdle.backend import Pose, Scan
+from mdle.core.backend import Scan
+from mdle.core.pose import Pose
+from mdle.record.trace import Trace, decode_ranges
 from mdle.runtime import Cause, RunResult, Sample, Termination
 from mdle.runtime.events import Event, EventKind
-from mdle.trace import Trace, decode_ranges
 
 __all__ = ["RecordedRun", "recorded_run"]
 

@@ -11,8 +11,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from mdle.backend import Pose
-from mdle.errors import MdleError
+from mdle.core.errors import MdleError
+from mdle.core.pose import Pose
 from mdle.runtime import Cause, RunResult, Sample, Termination
 
 if TYPE_CHECKING:

@@ -26,8 +26,9 @@ from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 from mdle.atoms.registry import Registry
-from mdle.backend import Backend, Pose
-from mdle.errors import Diagnostic, MdleError
+from mdle.core.backend import Backend
+from mdle.core.errors import Diagnostic, MdleError
+from mdle.core.pose import Pose
 from mdle.repl.reports import RunReport, StepOutcome, _side_stats
 from mdle.repl.runs import _Run
 from mdle.repl.session import DEFAULT_UNTIL, ReplError, Session
@@ -86,7 +87,7 @@ class RobotSession(Session):
         self._told_lost = False
         self._closed = False
         super().__init__(None, registry=registry, rate=rate, until=until, realtime=False)
-        from mdle.motion_limits import KnownRobot
+        from mdle.core.motion_limits import KnownRobot
 
         limits = backend.limits
         self.workspace.robot = KnownRobot(name, limits.max_speed, limits.max_reverse_speed,
@@ -259,7 +260,7 @@ class RobotSession(Session):
         """Draw the odometry path since the last reset (no world: there is none)."""
         import tempfile
 
-        from mdle.plot import plot_trace
+        from mdle.view.plot import plot_trace
 
         with tempfile.TemporaryDirectory(prefix="mdle-repl-") as tmp:
             trace = os.path.join(tmp, "session.jsonl")

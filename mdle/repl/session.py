@@ -27,9 +27,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from mdle.atoms.registry import Registry
-from mdle.backend import Backend, Observation, Pose, RobotLimits
-from mdle.cli.signals import ends_session
-from mdle.errors import Diagnostic, MdleError
+from mdle.console.signals import ends_session
+from mdle.core.backend import Backend, Observation, RobotLimits
+from mdle.core.errors import Diagnostic, MdleError
+from mdle.core.pose import Pose
 from mdle.lang import Element, Workspace
 from mdle.repl.reports import (
     LoadedRun,
@@ -167,7 +168,7 @@ class Session:
             backend.reset(pose)
         self._stop_stepping()
         self.world, self.backend = world, backend
-        from mdle.motion_limits import KnownRobot
+        from mdle.core.motion_limits import KnownRobot
 
         self.workspace.robot = KnownRobot.of(
             backend.profile, "--robot" if self._robot else f"the robot of world `{world.name}`")
@@ -280,8 +281,8 @@ class Session:
         ReplError
             The recording has no ticks.
         """
+        from mdle.record.load import read_trace
         from mdle.repl.recorded import recorded_run
-        from mdle.trace import read_trace
 
         trace = read_trace(path)
         run = recorded_run(trace)
@@ -579,7 +580,7 @@ class Session:
         ReplError
             Nothing has run since the last reset, or the file cannot be written.
         """
-        from mdle.trace import TraceWriter
+        from mdle.record.trace import TraceWriter
 
         runs = [r for r in self._runs if r.scheduler is not None]
         if not any(r.samples for r in runs):
@@ -600,7 +601,7 @@ class Session:
         ------
         ReplError, PlotError
         """
-        from mdle.plot import plot_trace
+        from mdle.view.plot import plot_trace
 
         with tempfile.TemporaryDirectory(prefix="mdle-repl-") as tmp:
             trace = os.path.join(tmp, "session.jsonl")

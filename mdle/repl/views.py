@@ -10,14 +10,15 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from mdle.backend import Observation, Pose
+from mdle.core.backend import Observation
+from mdle.core.pose import Pose
 from mdle.runtime.events import ended_how
 
 if TYPE_CHECKING:
     import numpy as np
 
     from mdle.atoms.registry import Registry, Report
-    from mdle.backend import RobotLimits
+    from mdle.core.backend import RobotLimits
     from mdle.repl.reports import RunReport, StepRow
     from mdle.sim import World
 
@@ -180,7 +181,7 @@ def _reported(v: float, report: Report | None) -> str:
 
     Angles in degrees, turn rates in rad/s (as the command above), curvatures in 1/m.
     """
-    from mdle.units import ANGLE, CURVATURE, NONE, TURN_RATE
+    from mdle.core.units import ANGLE, CURVATURE, NONE, TURN_RATE
 
     if report is None:
         return f"{v:.3g}"

@@ -1,6 +1,6 @@
 """A ROS 2 robot as an mdle backend: ``scan`` and ``odom`` in, ``cmd_vel`` out.
 
-:class:`Ros2Backend` implements :class:`mdle.backend.Backend` on the wall clock (or on
+:class:`Ros2Backend` implements :class:`mdle.core.backend.Backend` on the wall clock (or on
 ``/clock`` with ``use_sim_time``) over Cyclone DDS, as a ROS 2 node would: it reads
 ``sensor_msgs/LaserScan`` on ``scan`` and ``nav_msgs/Odometry`` on ``odom`` (sensor-data
 QoS, best effort), the laser's mount from ``tf_static`` (or the robot profile), and
@@ -9,7 +9,7 @@ namespace given. Odometry counts from where the robot was when the backend conne
 (REP-105 ``odom`` frame, as the simulator's does), so a plan means the same here.
 
 Safety: a scan or odometry older than its limit (a stopped driver, a lost peer) stops the
-robot and ends the run with a :class:`~mdle.errors.BackendError`; :meth:`Ros2Backend.close`
+robot and ends the run with a :class:`~mdle.core.errors.BackendError`; :meth:`Ros2Backend.close`
 (idempotent, safe from ``finally`` blocks) publishes a zero command and waits for the
 robot's reliable readers to acknowledge it before leaving. An exit hook does the same if
 a program ends without closing it.
@@ -24,9 +24,10 @@ import time
 from dataclasses import dataclass
 from typing import Any, NoReturn
 
-from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
-from mdle.errors import BackendError
-from mdle.exit_hooks import ExitHooks, register_exit_hooks
+from mdle.core.backend import ClockMode, Command, Observation, RobotLimits, Scan
+from mdle.core.errors import BackendError
+from mdle.core.exit_hooks import ExitHooks, register_exit_hooks
+from mdle.core.pose import Pose
 
 __all__ = ["Ros2Backend", "Ros2Options"]
 
@@ -75,7 +76,7 @@ class _Newest:
 
 
 class Ros2Backend:
-    """A ROS 2 robot as a :class:`~mdle.backend.Backend` (``clock = ClockMode.WALL``).
+    """A ROS 2 robot as a :class:`~mdle.core.backend.Backend` (``clock = ClockMode.WALL``).
 
     Parameters
     ----------

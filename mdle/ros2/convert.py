@@ -16,7 +16,8 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from mdle.backend import Command, Pose, Scan
+from mdle.core.backend import Command, Scan
+from mdle.core.pose import Pose
 from mdle.ros2 import types as msg
 
 __all__ = ["mount_from_transforms", "odometry_message", "odometry_values", "ScanReader",
@@ -50,15 +51,28 @@ def twist_message(cmd: Command) -> msg.Twist:
     return msg.Twist(msg.Vector3(float(cmd.v), 0.0, 0.0), msg.Vector3(0.0, 0.0, float(cmd.omega)))
 
 
-def odometry_message(t: float, pose: Pose, v: float, omega: float, odom: str,
-                     base: str) -> msg.Odometry:
-    """Return ``nav_msgs/Odometry``: ``pose`` in frame ``odom``, the twist in ``base``."""
+def odometry_message(t: float, pose: Pose, v: float, omega: float, odom: str, base: str,
+                     pose_covariance: Iterable[float] | None = None,
+                     twist_covariance: Iterable[float] | None = None) -> msg.Odometry:
+    """Return ``nav_msgs/Odometry``: ``pose`` in frame ``odom``, the twist in ``base``.
+
+    The covariances are 36 numbers each (row-major x y z roll pitch yaw); zeros if not given.
+    """
     return msg.Odometry(
         msg.Header(time_of(t), odom), base,
         msg.PoseWithCovariance(msg.Pose(msg.Point(pose.x, pose.y, 0.0),
-                                        _quaternion(pose.theta))),
+                                        _quaternion(pose.theta)),
+                               _covariance(pose_covariance)),
         msg.TwistWithCovariance(msg.Twist(msg.Vector3(v, 0.0, 0.0),
-                                          msg.Vector3(0.0, 0.0, omega))))
+                                          msg.Vector3(0.0, 0.0, omega)),
+                                _covariance(twist_covariance)))
+
+
+def _covariance(values: Iterable[float] | None) -> list[float]:
+    out = [0.0] * 36 if values is None else [float(x) for x in values]
+    if len(out) != 36:
+        raise ValueError(f"a covariance has 36 numbers, got {len(out)}")
+    return out
 
 
 def odometry_values(m: msg.Odometry) -> tuple[Pose, float, float]:

@@ -15,7 +15,7 @@ import enum
 import os
 from typing import Any
 
-from mdle.errors import BackendError
+from mdle.core.errors import BackendError
 from mdle.ros2.names import dds_topic, ros_topic
 
 __all__ = ["Node", "QosKind", "domain_id", "loopback_config", "require", "take"]

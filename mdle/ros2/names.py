@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 
-from mdle.errors import BackendError
+from mdle.core.errors import BackendError
 
 __all__ = ["dds_topic", "dds_type", "frame_id", "namespace", "ros_topic"]
 

@@ -7,7 +7,8 @@ robot's driver does:
 
 * it obeys ``cmd_vel`` (``geometry_msgs/Twist``, or ``TwistStamped``), stopping the
   robot when no command came for ``cmd_timeout`` wall seconds (a driver's watchdog);
-* it publishes ``odom`` (``nav_msgs/Odometry``) and ``tf`` (``odom -> base_link``) at the
+* it publishes ``odom`` (``nav_msgs/Odometry``, with the covariances of the profile's
+  odometry noise, :mod:`mdle.rosmsg.covariance`) and ``tf`` (``odom -> base_link``) at the
   robot's report cycle, ``scan`` (``sensor_msgs/LaserScan``) at each new scan of the
   ladar, ``tf_static`` (``base_link -> laser``, the profile's mount) once, latched, and
   ``/clock`` (``rosgraph_msgs/Clock``) at every step.
@@ -25,8 +26,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from mdle.backend import STOP, Command, Scan
-from mdle.errors import BackendError
+import numpy as np
+
+from mdle.core.backend import STOP, Command, Scan
+from mdle.core.errors import BackendError
+from mdle.rosmsg.covariance import OdometryCovariance
 
 __all__ = ["ServeOptions", "SimServer"]
 
@@ -69,6 +73,15 @@ class _Served:
     moving: bool = False
     commands: int = 0
     published: dict[str, int] = field(default_factory=lambda: {"odom": 0, "scan": 0})
+    #: the odometry's covariances, grown from the robot's odometry noise as it drives
+    covariance: OdometryCovariance = field(default_factory=lambda: OdometryCovariance({}))
+
+
+def _covariance(backend: Any) -> OdometryCovariance:
+    """Return the odometry covariances of a simulated robot, from its profile's noise."""
+    noise = backend.profile.odometry
+    return OdometryCovariance({"distance": float(noise.distance), "turn": float(noise.turn),
+                               "drift": float(noise.drift)})
 
 
 class SimServer:
@@ -142,7 +155,8 @@ class SimServer:
             scan=node.writer(ros_topic(ns, "scan"), LaserScan, QosKind.SENSOR),
             tf=node.writer(ros_topic(ns, "tf"), TFMessage, QosKind.RELIABLE),
             tf_static=node.writer(ros_topic(ns, "tf_static"), TFMessage, QosKind.LATCHED),
-            frames=frames, period=sip if sip > 0 else self.options.step)
+            frames=frames, period=sip if sip > 0 else self.options.step,
+            covariance=_covariance(backend))
 
     # ------------------------------------------------------------------ the loop
 
@@ -218,8 +232,11 @@ class SimServer:
         obs = r.backend.observe()
         if force or self.time >= r.next_report - 1e-9:  # a report is due
             r.next_report += r.period
+            pose = np.array([[obs.pose.x, obs.pose.y, obs.pose.theta]])
+            cov = r.covariance.batch(pose) or r.covariance.constant
             odom = odometry_message(self.time, obs.pose, obs.v, obs.omega, r.frames["odom"],
-                                    r.frames["base_link"])
+                                    r.frames["base_link"], pose_covariance=cov[0].ravel(),
+                                    twist_covariance=cov[1].ravel())
             r.odom.write(odom)
             p = odom.pose.pose
             r.tf.write(TFMessage([TransformStamped(

@@ -17,7 +17,7 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
-from mdle.ros.msgdefs import DEFINITIONS
+from mdle.rosmsg.msgdefs import DEFINITIONS
 
 __all__ = ["ROS2_DEFINITIONS", "type_description", "type_hash"]
 

@@ -19,8 +19,8 @@ from __future__ import annotations
 import difflib
 from collections.abc import Sequence
 
-from mdle.backend import Backend
-from mdle.errors import Diagnostic, MdleRuntimeError
+from mdle.core.backend import Backend
+from mdle.core.errors import Diagnostic, MdleRuntimeError
 from mdle.lang import Element, Program
 from mdle.runtime.events import Observer, RunResult
 from mdle.runtime.scheduler import DEFAULT_STALL_TIMEOUT, Scheduler

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
-from mdle.backend import Pose, Scan
+from mdle.core.backend import Scan
+from mdle.core.pose import Pose
 
 __all__ = ["Cause", "EventKind", "Event", "Termination", "Collision", "Sample", "RunResult",
            "ended_how", "Observer"]

@@ -5,7 +5,7 @@ arrives at its own rate (a scan every ``scan_period`` s), a scan older than the 
 (``scan_delay``), a command watchdog that stops the robot when no command came for
 ``watchdog`` s, a robot that refuses to move (``motors_enabled=False``), late ticks
 (``lateness``) and a connection that drops (``drop_at``: every call from then on raises
-:class:`~mdle.errors.BackendError`). Between those, it is an ideal unicycle: the held
+:class:`~mdle.core.errors.BackendError`). Between those, it is an ideal unicycle: the held
 command is integrated exactly (arcs) over each ``advance``.
 """
 
@@ -16,8 +16,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any, Union
 
-from mdle.backend import STOP, ClockMode, Command, Observation, Pose, RobotLimits, Scan, TickClock
-from mdle.errors import BackendError
+from mdle.core.backend import STOP, ClockMode, Command, Observation, RobotLimits, Scan, TickClock
+from mdle.core.errors import BackendError
+from mdle.core.pose import Pose
 
 __all__ = ["ScriptedBackend", "Script", "IDEAL_LIMITS"]
 

@@ -7,7 +7,7 @@ simulator), vectorised. Boundary following is measured on the ticks a
 * ``follow_mean_err`` / ``follow_max_err``: mean and max of ``|d - rc|`` over the second
   half (in time) of those ticks, ``d`` the true distance from the robot's centre to the
   nearest boundary;
-* ``engaged`` (the engagement measure of :mod:`mdle.experiments.engagement`): the robot
+* ``engaged`` (the engagement measure of :mod:`mdle.sweep.engagement`): the robot
   held ``|d - rc| <= 0.2 m`` with the nearest boundary on the followed side for 4 m of path
   without a break; ``engage_time``/``engage_distance`` when that stretch began (s, m of
   path from the run's start); ``engaged_mean_err``/``engaged_max_err`` over the second half
@@ -97,12 +97,12 @@ def follow_metrics(t: np.ndarray, x: np.ndarray, y: np.ndarray, theta: np.ndarra
     dict
         ``follow_rc`` (the first atom's rc), ``follow_mean_err`` and ``follow_max_err``
         (second half of the following time, engaged or not), and the engagement measures
-        of :func:`mdle.experiments.engagement.follow_metrics` on the following ticks:
+        of :func:`mdle.sweep.engagement.follow_metrics` on the following ticks:
         ``engaged``, ``engage_time``, ``engage_distance`` (from the start of the run),
         ``engaged_mean_err``, ``engaged_max_err`` (second half of the time after
         engagement); None where no tick was following.
     """
-    from mdle.experiments.engagement import follow_metrics as engagement
+    from mdle.sweep.engagement import follow_metrics as engagement
 
     none: dict[str, float | bool | None] = dict.fromkeys(FOLLOW_COLUMNS)
     if not following.any():

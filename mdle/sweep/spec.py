@@ -29,7 +29,6 @@ study.yaml:2:9: error: rates[0]: expected a number, got 'fast'
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import os
 from collections.abc import Mapping
@@ -37,11 +36,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from mdle.errors import MdleError, WorldError
-from mdle.ranges import RATE
+from mdle.core.errors import MdleError, WorldError
+from mdle.core.ranges import RATE
+from mdle.core.userfile import os_reason
 from mdle.sim.yaml_doc import _Doc, _yaml_value
 from mdle.sim.yaml_values import _closest, _integer, _mapping, _number, _show, _string
-from mdle.userfile import os_reason
 
 __all__ = ["SpecError", "Study", "WorldChoice", "RobotChoice", "StartRule", "parse_study",
            "read_study", "SENSING"]
@@ -151,7 +150,7 @@ def read_study(path: str | os.PathLike[str]) -> Study:
     SpecError
         The file cannot be read, or what :func:`parse_study` reports.
     """
-    from mdle.userfile import UserFileError
+    from mdle.core.userfile import UserFileError
 
     p = Path(path)
     try:
@@ -167,7 +166,7 @@ def read_study(path: str | os.PathLike[str]) -> Study:
 
 def _read_text(path: Path) -> str:
     """Read a file the spec names (regular files of bounded size only), as UTF-8."""
-    from mdle.userfile import read_user_file
+    from mdle.core.userfile import read_user_file
 
     return read_user_file(path).decode("utf-8-sig")
 
@@ -374,7 +373,7 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
         raise _fail(doc, path, f"no reference world or world file `{name}`"
                     + (f" (did you mean `{hint}`?)" if hint else
                        f"; reference worlds: {', '.join(list_worlds())}"))
-    from mdle.userfile import UserFileError
+    from mdle.core.userfile import UserFileError
 
     try:
         text = _read_text(p)
@@ -392,7 +391,7 @@ def _robot(doc: _Doc, path: str, base: Path, v: Any) -> RobotChoice:
     from mdle.sim.world_robots import _robot as robot_section
 
     if isinstance(v, str) and (v.endswith((".yaml", ".yml")) or "/" in v):
-        from mdle.userfile import UserFileError
+        from mdle.core.userfile import UserFileError
 
         p = base / v
         try:
@@ -583,6 +582,3 @@ def _parameters(doc: _Doc, v: Any) -> tuple[tuple[str, ...], tuple[tuple[tuple[s
     return names, combos
 
 
-def canonical(value: Any) -> str:
-    """Return the canonical JSON text of ``value`` (sorted keys; what run keys hash)."""
-    return json.dumps(value, sort_keys=True, separators=(",", ":"), allow_nan=True)

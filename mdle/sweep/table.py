@@ -18,7 +18,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from mdle.errors import MdleError
+from mdle.core.errors import MdleError
 
 __all__ = ["ResultsTable", "columns_for", "read_rows", "write_parquet", "column_type",
            "RESULT_COLUMNS"]

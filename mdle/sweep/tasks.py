@@ -17,7 +17,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from mdle.sweep.spec import StartRule, Study, WorldChoice, canonical
+from mdle.sweep.keys import canonical
+from mdle.sweep.spec import StartRule, Study, WorldChoice
 
 __all__ = ["RunTask", "expand", "start_poses"]
 
@@ -64,9 +65,18 @@ class RunTask:
 
     def row(self) -> dict[str, Any]:
         """Return the columns that describe the run (known before it runs)."""
-        from mdle.sweep.worker import base_row
-
-        return base_row(self)
+        pose = self.pose
+        row: dict[str, Any] = {
+            "key": self.key, "index": self.index, "plan": self.labels.get("plan", ""),
+            "entry": self.entry or "", "world": self.labels.get("world", ""),
+            "robot": self.labels.get("robot", ""), "sensing": self.sensing, "rate": self.rate,
+            "seed": self.seed,
+            "x0": None if pose is None else pose[0], "y0": None if pose is None else pose[1],
+            "theta0": None if pose is None else math.degrees(pose[2]),
+        }
+        for name, value in self.settings:
+            row[f"param_{name}"] = value
+        return row
 
 
 def expand(study: Study) -> Iterator[RunTask]:

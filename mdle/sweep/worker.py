@@ -20,7 +20,7 @@ from typing import Any
 
 from mdle.sweep.tasks import RunTask
 
-__all__ = ["Outcome", "execute", "base_row", "STATUSES"]
+__all__ = ["Outcome", "execute", "STATUSES"]
 
 #: What ``status`` can say: ran cleanly, collided, failed (cause in ``cause``), or its
 #: worker was lost twice.
@@ -35,32 +35,16 @@ class Outcome:
     trace: bytes | None = None
 
 
-def base_row(task: RunTask) -> dict[str, Any]:
-    """Return the columns that describe a run (known before it runs)."""
-    pose = task.pose
-    row: dict[str, Any] = {
-        "key": task.key, "index": task.index, "plan": task.labels.get("plan", ""),
-        "entry": task.entry or "", "world": task.labels.get("world", ""),
-        "robot": task.labels.get("robot", ""), "sensing": task.sensing, "rate": task.rate,
-        "seed": task.seed,
-        "x0": None if pose is None else pose[0], "y0": None if pose is None else pose[1],
-        "theta0": None if pose is None else math.degrees(pose[2]),
-    }
-    for name, value in task.settings:
-        row[f"param_{name}"] = value
-    return row
-
-
 def execute(task: RunTask) -> Outcome:
     """Run ``task`` and measure it; every failure is reported in the row, not raised."""
     start, cpu = time.perf_counter(), time.process_time()
-    row = base_row(task)
+    row = task.row()
     trace: bytes | None = None
     try:
         metrics, trace = _run(task)
         row.update(metrics)
     except Exception as exc:  # a run's failure is a row, never the end of the sweep
-        from mdle.errors import MdleError
+        from mdle.core.errors import MdleError
 
         row["status"] = "error"
         if isinstance(exc, MdleError):
@@ -85,7 +69,7 @@ def _world(task: RunTask) -> Any:
 def _run(task: RunTask) -> tuple[dict[str, Any], bytes | None]:
     import numpy as np
 
-    from mdle.backend import Pose
+    from mdle.core.pose import Pose
     from mdle.lang import load_text
     from mdle.runtime import run
     from mdle.runtime.api import element_of
@@ -106,7 +90,7 @@ def _run(task: RunTask) -> tuple[dict[str, Any], bytes | None]:
     observers: list[Any] = [recorder]
     tmp = None
     if task.keep_trace:
-        from mdle.trace import TraceWriter
+        from mdle.record.trace import TraceWriter
 
         tmp = tempfile.NamedTemporaryFile(prefix="mdle-sweep-", suffix=".jsonl", delete=False)
         tmp.close()

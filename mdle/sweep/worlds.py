@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from mdle.sweep.spec import canonical
+from mdle.sweep.keys import canonical
 
 __all__ = ["GENERATOR_VERSION", "generated_text", "build_world"]
 

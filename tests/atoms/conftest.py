@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle.backend import Scan
+from mdle.core.backend import Scan
 
 MAX_RANGE = 10.0
 BEARINGS: np.ndarray = np.radians(np.arange(-90.0, 90.5, 1.0))
@@ -199,7 +199,8 @@ def closed_loop(shape: Shape, args: dict[str, Any], pose: tuple[float, float, fl
     """Run the real ``follow_boundary`` atom against ``shape`` with exact unicycle arcs."""
     from mdle.atoms.follow import follow_boundary, start_follow
     from mdle.atoms.registry import Context
-    from mdle.backend import Observation, Pose, RobotLimits
+    from mdle.core.backend import Observation, RobotLimits
+    from mdle.core.pose import Pose
 
     limits = RobotLimits(1.0, 0.0, umax, radius=radius)
     rng = np.random.default_rng(seed)

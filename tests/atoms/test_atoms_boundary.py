@@ -13,7 +13,8 @@ from mdle.atoms.boundary import Side, boundary_view, cached_beams, cached_view, 
 from mdle.atoms.estimators import valid_points
 from mdle.atoms.follow import scan_points_cached, scan_points_complex
 from mdle.atoms.registry import Context
-from mdle.backend import Observation, Pose, RobotLimits, Scan
+from mdle.core.backend import Observation, RobotLimits, Scan
+from mdle.core.pose import Pose
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Case, Raycast, World2D

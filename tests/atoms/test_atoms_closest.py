@@ -10,7 +10,7 @@ import pytest
 from mdle import sim
 from mdle.atoms import closest as C
 from mdle.atoms import steering as S
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.lang import load_text
 from mdle.runtime import Recorder, run
 from mdle.sim.profiles import robot_profile

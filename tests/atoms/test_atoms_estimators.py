@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mdle.atoms import estimators as E
-from mdle.backend import Scan
+from mdle.core.backend import Scan
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Case, Raycast

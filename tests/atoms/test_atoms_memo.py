@@ -10,7 +10,7 @@ import numpy as np
 from mdle.atoms.boundary import boundary_view
 from mdle.atoms.estimators import scan_points, valid_points
 from mdle.atoms.memo import ByIdentity
-from mdle.backend import Scan
+from mdle.core.backend import Scan
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Raycast

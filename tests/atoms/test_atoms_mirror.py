@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.experiments.generated import StudyConfig, plan_text, study_specs
 from mdle.lang import load_text
 from mdle.runtime import Recorder, run_named

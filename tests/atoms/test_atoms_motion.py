@@ -10,7 +10,8 @@ import pytest
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Context
-from mdle.backend import Observation, Pose, RobotLimits
+from mdle.core.backend import Observation, RobotLimits
+from mdle.core.pose import Pose
 
 LIMITS = RobotLimits(1.0, 1.0, 2.0)
 

@@ -16,7 +16,7 @@ import pytest
 
 from mdle.atoms import estimators as E
 from mdle.atoms.boundary import boundary_view
-from mdle.backend import Scan
+from mdle.core.backend import Scan
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Raycast

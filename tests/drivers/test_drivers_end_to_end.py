@@ -13,10 +13,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pytest
 
+from mdle.core.errors import BackendError
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
 from mdle.drivers.pioneer import PioneerOptions
-from mdle.errors import BackendError
 from mdle.lang import load_text
 from mdle.runtime import Cause, element_of, run
 

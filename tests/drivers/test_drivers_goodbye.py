@@ -8,7 +8,7 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from mdle.backend import Command
+from mdle.core.backend import Command
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
 from mdle.drivers.pioneer import PioneerBackend, PioneerOptions

@@ -11,12 +11,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from mdle.backend import Command, Scan
+from mdle.core.backend import Command, Scan
+from mdle.core.errors import BackendError
 from mdle.drivers import open_backend
 from mdle.drivers.lms200_driver import Lms200Driver, Lms200Options
 from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
 from mdle.drivers.transport import SerialTransport
-from mdle.errors import BackendError
 
 if TYPE_CHECKING:
     from tests.drivers.conftest import FakeArcos, FakeLms200

@@ -14,11 +14,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pytest
 
-from mdle.backend import Backend, ClockMode, Command, RobotLimits
+from mdle.core.backend import Backend, ClockMode, Command, RobotLimits
+from mdle.core.errors import BackendError
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
 from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
-from mdle.errors import BackendError
 
 if TYPE_CHECKING:
     from tests.drivers.conftest import FakeArcos
@@ -418,7 +418,7 @@ def test_a_sigterm_handler_already_there_stays_the_one_owner(fake_robot: FakeRob
                                                              fast: PioneerOptions) -> None:
     """Under mdle's command line its SignalGuard owns SIGTERM: the driver leaves it so,
     and the guard's Interrupted still ends in the driver's goodbye (stop, then CLOSE)."""
-    from mdle.cli.signals import Interrupted, SignalGuard
+    from mdle.console.signals import Interrupted, SignalGuard
 
     guard = SignalGuard().install(deferred=False)
     try:

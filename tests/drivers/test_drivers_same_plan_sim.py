@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.drivers import open_backend
 from mdle.drivers.pioneer import PioneerOptions
 from mdle.lang import load_text

@@ -9,6 +9,7 @@ import tty
 
 import pytest
 
+from mdle.core.errors import BackendError
 from mdle.drivers.transport import (
     DEFAULT_TCP_PORT,
     SerialTransport,
@@ -16,7 +17,6 @@ from mdle.drivers.transport import (
     TransportClosed,
     parse_url,
 )
-from mdle.errors import BackendError
 
 
 @pytest.mark.parametrize("url,scheme,host,port,path,baud,options", [

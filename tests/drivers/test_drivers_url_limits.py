@@ -13,11 +13,11 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from mdle.core.errors import BackendError
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import ROBOT_PARAMS, RobotParams
 from mdle.drivers.limits import LASER_MAX_RANGE, ROBOT_PARAM_RANGES, Range, check_robot_params
 from mdle.drivers.pioneer import PioneerBackend, PioneerOptions
-from mdle.errors import BackendError
 
 if TYPE_CHECKING:
     from tests.drivers.conftest import FakeArcos
@@ -57,7 +57,7 @@ def test_a_negative_speed_limit_never_reaches_the_wire(fake_robot: FakeRobot,
     # parameter overrides given directly), the backend refuses before any motor command
     from dataclasses import replace
 
-    from mdle.backend import RobotLimits
+    from mdle.core.backend import RobotLimits
     from mdle.drivers.arcos import Cmd
 
     fake = fake_robot()
@@ -82,7 +82,7 @@ def test_every_shipped_model_is_inside_the_ranges() -> None:
 
 def test_the_limits_keep_commands_inside_the_firmware_fields(fake_robot: FakeRobot,
                                                              fast: PioneerOptions) -> None:
-    from mdle.backend import Command
+    from mdle.core.backend import Command
     from mdle.drivers.arcos import Cmd
 
     fake = fake_robot()

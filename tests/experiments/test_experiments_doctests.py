@@ -8,7 +8,7 @@ import importlib
 import pytest
 
 
-@pytest.mark.parametrize("name", ["mdle.experiments.engagement", "mdle.experiments.generated",
+@pytest.mark.parametrize("name", ["mdle.sweep.engagement", "mdle.experiments.generated",
                                   "mdle.experiments.navigation"])
 def test_doctests(name: str) -> None:
     result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from mdle.experiments.engagement import ENGAGE_BAND, ENGAGE_PATH, FollowMetrics, follow_metrics
+from mdle.sweep.engagement import ENGAGE_BAND, ENGAGE_PATH, FollowMetrics, follow_metrics
 
 
 def _along_wall(y: np.ndarray, heading: float = 0.0, dt: float = 0.1, speed: float = 1.0,

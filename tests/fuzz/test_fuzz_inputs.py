@@ -2,7 +2,7 @@
 
 A seeded corpus of hostile files (``corpus/``: plans, worlds, traces, raw bytes) is
 read through the same functions the commands use, and hypothesis mutates worlds and
-byte streams. Any exception other than :class:`~mdle.errors.MdleError` (a RecursionError,
+byte streams. Any exception other than :class:`~mdle.core.errors.MdleError` (a RecursionError,
 OverflowError, OSError, UnicodeDecodeError...) fails; so does a message without a place
 where the corpus file says where. The example counts keep the suite well under a
 minute.
@@ -18,10 +18,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hs
 
-from mdle.errors import MdleError, render_diagnostic
+from mdle.core.errors import MdleError, render_diagnostic
 from mdle.lang import load_program, read_source
+from mdle.record.load import read_trace
 from mdle.sim.world_yaml import parse_world, read_world
-from mdle.trace import read_trace
 
 HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
 _scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)
@@ -44,7 +44,7 @@ def _only_mdle_errors(path: Path) -> MdleError | None:
             read_world(path)
         else:
             trace = read_trace(path)
-            from mdle.plot import world_of
+            from mdle.view.plot import world_of
 
             world_of(trace)  # the world a header names is read safely, or skipped
     except MdleError as err:

@@ -20,7 +20,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mdle.errors import MdleError
+from mdle.core.errors import MdleError
 
 HERE = Path(__file__).resolve().parent
 _spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE / "scale.py")
@@ -61,7 +61,7 @@ TEAM_KEYS = st.sampled_from(["seed", "rate", "until", "messages"])
                                 max_size=3))
 def test_team_files_parse_or_say_why(top: dict[str, Any], messages: dict[str, Any],
                                      tmp_path: Path) -> None:
-    from mdle.teamfile import parse_team
+    from mdle.team.file import parse_team
 
     data: dict[str, Any] = {"world": "duel.world.yaml", "robots": {"red": "red.mdle"}, **top}
     if messages and "messages" not in top:

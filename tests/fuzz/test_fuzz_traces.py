@@ -15,9 +15,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mdle.cli import main
-from mdle.errors import MdleError
-from mdle.plot import trace_figure
-from mdle.trace import TraceError, read_trace
+from mdle.core.errors import MdleError
+from mdle.record.load import read_trace
+from mdle.record.trace import TraceError
+from mdle.view.plot import trace_figure
 
 HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
 _scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)

@@ -8,8 +8,9 @@ from pathlib import Path
 import pytest
 
 from mdle.atoms.registry import BOOL, Args, Context, Param, Registry, control_law, sensor
-from mdle.backend import Command, Observation, Pose, RobotLimits
-from mdle.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
+from mdle.core.backend import Command, Observation, RobotLimits
+from mdle.core.pose import Pose
+from mdle.core.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
 
 REPO = Path(__file__).resolve().parents[2]
 PLANS = sorted((REPO / "plans").rglob("*.mdle"))

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from mdle.atoms.registry import Context, Registry
-from mdle.errors import CheckError, Diagnostic, Span, render_diagnostic
+from mdle.core.errors import CheckError, Diagnostic, Span, render_diagnostic
 from mdle.lang import AtomNode, Program, StringKind, StringNode, load_text
 
 

@@ -11,10 +11,10 @@ import pytest
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Param
-from mdle.errors import CheckError, MdleError, MdleSyntaxError, render_diagnostic
+from mdle.core.errors import CheckError, MdleError, MdleSyntaxError, render_diagnostic
+from mdle.core.units import LENGTH
 from mdle.lang import check as compile_module
 from mdle.lang import load_text
-from mdle.units import LENGTH
 
 
 def error_at(text: str) -> tuple[str, int, int]:

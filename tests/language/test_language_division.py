@@ -6,12 +6,12 @@ import math
 
 import pytest
 
-from mdle.errors import MdleSyntaxError
+from mdle.core.errors import MdleSyntaxError
+from mdle.core.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
 from mdle.lang import format_source, load_text
 from mdle.lang import syntax as st
 from mdle.lang.descent import parse_valid
 from mdle.lang.parser import _fast_lexer, parse_expression, parse_module
-from mdle.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 
 @pytest.mark.parametrize("text, value, dim", [

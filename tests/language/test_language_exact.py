@@ -8,10 +8,11 @@ import math
 import pytest
 
 from mdle.atoms.registry import Context
-from mdle.backend import Observation, Pose, RobotLimits
-from mdle.errors import CheckError, Diagnostic
+from mdle.core.backend import Observation, RobotLimits
+from mdle.core.errors import CheckError, Diagnostic
+from mdle.core.motion_limits import KnownRobot
+from mdle.core.pose import Pose
 from mdle.lang import load_text
-from mdle.motion_limits import KnownRobot
 
 PIONEER = KnownRobot("pioneer2dx", 2.2, 2.2, math.radians(500), "the default robot")
 

@@ -18,11 +18,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st_h
 
 from mdle.atoms.registry import Args, Context, Param, Registry, sensor
-from mdle.backend import Observation, Pose, RobotLimits
-from mdle.errors import CheckError
+from mdle.core.backend import Observation, RobotLimits
+from mdle.core.errors import CheckError
+from mdle.core.pose import Pose
+from mdle.core.units import LENGTH
 from mdle.lang import StringNode, load_text, show_program, structure
 from mdle.lang.check import never_ends
-from mdle.units import LENGTH
 
 CALLS: list[int] = [0]
 

@@ -11,8 +11,9 @@ import pytest
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Context
 from mdle.atoms.sensors import bearing_to_point, clear
-from mdle.backend import Observation, Pose, RobotLimits, Scan
-from mdle.errors import CheckError
+from mdle.core.backend import Observation, RobotLimits, Scan
+from mdle.core.errors import CheckError
+from mdle.core.pose import Pose
 from mdle.lang import format_source, load_text
 from mdle.runtime import run_named
 from mdle.runtime.scripted import ScriptedBackend

@@ -9,7 +9,7 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as hs
 
-from mdle.errors import MdleError, render_diagnostic
+from mdle.core.errors import MdleError, render_diagnostic
 from mdle.lang import Workspace, format_source, load_program, load_text
 
 HERE = Path(__file__).resolve().parent

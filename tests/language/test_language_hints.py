@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from mdle.atoms import default_registry
-from mdle.errors import Diagnostic, MdleError
+from mdle.core.errors import Diagnostic, MdleError
 from mdle.lang import load_text
 from mdle.lang.hints import chained_hint
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from mdle.errors import CheckError, Diagnostic, MdleSyntaxError, Span
+from mdle.core.errors import CheckError, Diagnostic, MdleSyntaxError, Span
 from mdle.lang import load_program
 
 
@@ -92,7 +92,7 @@ def test_not_utf8(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("text", ['import "a\x00b.mdle"', 'import ""', 'import "a\x00"\natom ('])
 def test_impossible_import_names(text: str) -> None:
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
     from mdle.lang import load_text
 
     with pytest.raises(MdleError) as err:

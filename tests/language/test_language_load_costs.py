@@ -6,7 +6,7 @@ import gc
 
 import pytest
 
-from mdle.errors import CheckError
+from mdle.core.errors import CheckError
 from mdle.lang import StringNode, conditions, load_text
 
 PLAN = """

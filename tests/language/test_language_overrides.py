@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from mdle.errors import MdleError, render_diagnostic
+from mdle.core.errors import MdleError, render_diagnostic
 from mdle.lang import AtomNode, StringNode, load_program
 from mdle.lang.overrides import parse_override
 

@@ -6,10 +6,10 @@ import math
 
 import pytest
 
-from mdle.errors import Diagnostic, MdleSyntaxError, Span
+from mdle.core.errors import Diagnostic, MdleSyntaxError, Span
+from mdle.core.units import ANGLE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 from mdle.lang import syntax as st
 from mdle.lang.parser import MAX_DEPTH, parse_expression, parse_module
-from mdle.units import ANGLE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 
 def _at(d: Diagnostic) -> Span:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from mdle.errors import MdleError, MdleSyntaxError
+from mdle.core.errors import MdleError, MdleSyntaxError
 from mdle.lang import load_program, load_text
 from mdle.lang.parser import parse_partial
 

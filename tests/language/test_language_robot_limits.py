@@ -14,9 +14,9 @@ from typing import Any
 import pytest
 
 from mdle.atoms import default_registry
-from mdle.errors import Diagnostic
+from mdle.core.errors import Diagnostic
+from mdle.core.motion_limits import KnownRobot
 from mdle.lang import load_text
-from mdle.motion_limits import KnownRobot
 
 PIONEER = KnownRobot("pioneer2dx", 2.2, 2.2, math.radians(500), "the default robot")
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from mdle.errors import CheckError
+from mdle.core.errors import CheckError
 from mdle.lang import AtomNode, Program, load_text
 from mdle.lang.overrides import parse_setting
 

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from mdle.atoms import default_registry
-from mdle.errors import CheckError
+from mdle.core.errors import CheckError
 from mdle.lang import check_names as compile_module
 from mdle.lang import load_text
 

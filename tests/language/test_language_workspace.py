@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from mdle.atoms.registry import Registry
-from mdle.errors import CheckError, MdleSyntaxError
+from mdle.core.errors import CheckError, MdleSyntaxError
 from mdle.lang import AtomNode, StringNode, Workspace
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.repl.commands import COMMANDS, Repl, classify
 from mdle.repl.session import Session
 
@@ -312,7 +312,7 @@ def test_a_failing_control_law_is_reported_and_the_session_goes_on() -> None:
 
     from mdle.atoms import default_registry
     from mdle.atoms.registry import Registry, control_law
-    from mdle.backend import Command
+    from mdle.core.backend import Command
 
     @control_law()
     def explode(args: object, ctx: object, state: object) -> Command:

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from mdle.backend import Pose
-from mdle.errors import CheckError, MdleError, WorldError
+from mdle.core.errors import CheckError, MdleError, WorldError
+from mdle.core.pose import Pose
+from mdle.record.load import read_trace
 from mdle.repl.session import ReplError, Session
 from mdle.runtime import Cause
-from mdle.trace import read_trace
 
 START = (-9.0, 0.3, 0.0)
 

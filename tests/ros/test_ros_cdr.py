@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle.ros.markers import PathPieces, obstacle_markers, outlines, path_marker
-from mdle.ros.msgdefs import DEFINITIONS, schema_text
+from mdle.record.markers import PathPieces, obstacle_markers, outlines, path_marker
+from mdle.rosmsg.msgdefs import DEFINITIONS, schema_text
 
 
 def _decode(name: str, data: bytes, store: str) -> tuple[Any, Any]:
@@ -50,7 +50,7 @@ def _records(tmp_path: Path, write: Any) -> dict[str, list[tuple[int, int, bytes
     of each message by topic, read back with the mcap library's strict reader."""
     from mcap.reader import make_reader
 
-    from mdle.ros.mcap_file import McapFile
+    from mdle.record.mcap_file import McapFile
     from tests.ros.conftest import mcap_doctor
 
     path = tmp_path / "m.mcap"
@@ -73,7 +73,7 @@ def _records(tmp_path: Path, write: Any) -> dict[str, list[tuple[int, int, bytes
 
 
 def _encoder(out: Any, ch: dict[str, int], simulation: bool = True) -> Any:
-    from mdle.ros.tick import TickEncoder
+    from mdle.record.tick import TickEncoder
 
     return TickEncoder(out, ch["/odom"], ch["/tf"], ch["/cmd_vel"], ch["/mdle/state"],
                        ch["/ground_truth"] if simulation else 0, ch["/scan"],
@@ -83,7 +83,7 @@ def _encoder(out: Any, ch: dict[str, int], simulation: bool = True) -> Any:
 def _ticks(*ticks: tuple[Any, ...], scans: tuple[Any, ...] = ()) -> Any:
     """A batch of ticks (ns, x, y, theta, v, omega, cmd_v, cmd_omega, truth, line) and
     scans (the tick each comes before, ns, stamp, float32 ranges)."""
-    from mdle.ros.tick import Ticks
+    from mdle.record.tick import Ticks
 
     batch = Ticks(np.array([t[0] for t in ticks], np.int64),
                   np.array([(*t[1:8], *(t[8] or (math.nan,) * 3)) for t in ticks],

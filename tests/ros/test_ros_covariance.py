@@ -7,9 +7,9 @@ import math
 import numpy as np
 
 from mdle import sim
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.lang import load_text
-from mdle.ros.covariance import UNKNOWN, OdometryCovariance
+from mdle.rosmsg.covariance import UNKNOWN, OdometryCovariance
 from mdle.runtime import Recorder, run
 from mdle.sim.profiles import robot_profile
 from mdle.sim.robot import OdometryNoise

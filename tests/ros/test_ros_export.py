@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from mdle.trace import read_trace
+from mdle.record.load import read_trace
 
 PLAN = "atom hug = (follow_boundary(side = right, rc = 1 m, v = 1 m/s), never, 6 s)\nrun hug\n"
 
@@ -188,7 +188,7 @@ def test_a_failed_export_leaves_the_old_file_and_no_partial_one(
     import errno
 
     from mdle.cli import main
-    from mdle.ros.topics import RosRecording
+    from mdle.record.topics import RosRecording
 
     out = tmp_path / "out.mcap"
     out.write_bytes(b"the old file")
@@ -216,13 +216,13 @@ def test_an_unreadable_trace_is_a_message(trace: Path, tmp_path: Path,
         def __iter__(self) -> Any:
             raise OSError(errno.EIO, "Input/output error")
 
-    real = __import__("mdle.ros.export", fromlist=["open_user_file"]).open_user_file
+    real = __import__("mdle.record.export", fromlist=["open_user_file"]).open_user_file
 
     def failing_open(path: Any, limit: int) -> Any:
         with real(path, limit) as f:
             return Failing(f.read())
 
-    monkeypatch.setattr("mdle.ros.export.open_user_file", failing_open)
+    monkeypatch.setattr("mdle.record.export.open_user_file", failing_open)
     assert main(["export", str(trace), "-o", str(tmp_path / "o.mcap")]) == 1
     err = capsys.readouterr().err
     assert "input/output error" in err and "internal error" not in err

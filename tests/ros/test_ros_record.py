@@ -19,7 +19,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle.trace import Trace, decode_ranges, read_trace
+from mdle.record.load import read_trace
+from mdle.record.trace import Trace, decode_ranges
 
 PLAN = """\
 atom hug = (follow_boundary(side = right, rc = 1 m, v = 0.6 m/s), never, 12 s)
@@ -223,7 +224,7 @@ def test_odometry_transforms_command_truth(run: dict[str, Any], rosbags_read: An
 
 def test_diagnostics_active_element_and_footprint(run: dict[str, Any], rosbags_read: Any,
                                                   store: str) -> None:
-    from mdle.ros.describe import diagnostic_names
+    from mdle.record.describe import diagnostic_names
 
     tr: Trace = run["trace"]
     msgs = rosbags_read(run["dir"] / "r.mcap", store)

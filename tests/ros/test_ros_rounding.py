@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from mdle.ros.rounding import round9
+from mdle.record.rounding import round9
 
 
 def _parsed(x: np.ndarray) -> np.ndarray:

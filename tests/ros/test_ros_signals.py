@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from mdle.trace import read_trace
+from mdle.record.load import read_trace
 
 SPIN = """\
 atom spin = (turn(20 deg/s), never, inf)
@@ -164,7 +164,7 @@ def test_sigkill_leaves_a_file_readable_up_to_its_last_chunk(
         dec(m.data)
     # what was recovered is the run as the trace has it, short of at most the open chunk
     # and the ticks waiting to be encoded (one batch)
-    from mdle.ros.recorder import BATCH_TICKS
+    from mdle.record.recorder import BATCH_TICKS
 
     trace = read_trace(tmp_path / "t.jsonl")
     k = min(len(back.samples), len(trace.samples))

@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from mdle.trace import read_trace
+from mdle.record.load import read_trace
 
 TEAM = Path(__file__).resolve().parents[2] / "plans" / "team" / "pair.team.yaml"
 

@@ -10,8 +10,8 @@ from typing import Any
 
 import pytest
 
-from mdle.backend import Command, RobotLimits
-from mdle.errors import BackendError
+from mdle.core.backend import Command, RobotLimits
+from mdle.core.errors import BackendError
 from mdle.ros2 import types as msg
 from mdle.ros2.backend import Ros2Backend, Ros2Options
 from mdle.ros2.convert import odometry_message, static_transform
@@ -45,7 +45,7 @@ class FakeRobot:
         self._thread.start()
 
     def _run(self) -> None:
-        from mdle.backend import Pose
+        from mdle.core.pose import Pose
 
         while not self._halt.is_set():
             t = time.time()

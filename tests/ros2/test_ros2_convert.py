@@ -3,8 +3,8 @@ import math
 import numpy as np
 import pytest
 
-from mdle.backend import Command, Pose, Scan
-from mdle.ros.cdr import CdrWriter
+from mdle.core.backend import Command, Scan
+from mdle.core.pose import Pose
 from mdle.ros2 import types as msg
 from mdle.ros2.convert import (
     ScanReader,
@@ -15,6 +15,7 @@ from mdle.ros2.convert import (
     static_transform,
     twist_message,
 )
+from mdle.rosmsg.cdr import CdrWriter
 
 
 def test_a_twist_is_byte_for_byte_what_mdles_recordings_write() -> None:

@@ -1,6 +1,6 @@
 import pytest
 
-from mdle.errors import BackendError
+from mdle.core.errors import BackendError
 from mdle.ros2.names import dds_topic, dds_type, frame_id, namespace, ros_topic
 from mdle.ros2.typehash import type_description, type_hash
 

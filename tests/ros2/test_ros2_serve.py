@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 
 import pytest
@@ -20,7 +21,7 @@ def _server(dds_env: dict[str, str], world: str, **kw: object) -> SimServer:
 
 def test_it_obeys_cmd_vel_publishes_at_its_rates_and_its_watchdog_stops_the_robot(
         dds_env: dict[str, str]) -> None:
-    from mdle.backend import Command
+    from mdle.core.backend import Command
 
     server = _server(dds_env, "empty", namespace="/bot", cmd_timeout=0.3)
     peer = Node(server.node.domain)
@@ -100,3 +101,44 @@ def test_every_endpoint_announces_its_ros2_type_hash_in_user_data(
         time.sleep(0.05)
     for key, ros_type in expected.items():
         assert seen.get(key) == f"typehash={type_hash(ros_type)};".encode(), (key, seen)
+
+
+def test_odometry_carries_the_covariance_of_the_robots_noise_model(
+        dds_env: dict[str, str]) -> None:
+    from mdle.core.backend import Command
+    from mdle.sim.world_yaml import parse_world
+
+    # a heading drift only (2 deg per sqrt(m)): the path stays smooth, so the reports the
+    # reader kept measure the path the model has summed
+    world = parse_world("name: noisy\nrobot:\n  profile: ideal\n"
+                        "  odometry: {distance: 0, turn: 0, drift: 2}\n")
+    server = SimServer(world, options=ServeOptions(domain=int(dds_env["ROS_DOMAIN_ID"]),
+                                                   namespace="/bot"))
+    peer = Node(server.node.domain)
+    cmd = peer.writer("/bot/cmd_vel", msg.Twist, QosKind.RELIABLE)
+    odom = peer.reader("/bot/odom", msg.Odometry, QosKind.SENSOR)
+    robot = server.robots[0]
+    end = time.monotonic() + 20
+    while robot.commands == 0 and time.monotonic() < end:
+        cmd.write(twist_message(Command(0.5, 0.0)))
+        server.step()
+        time.sleep(0.01)
+    for i in range(100):
+        if i % 10 == 0:
+            cmd.write(twist_message(Command(0.5, 0.0)))
+        server.step()
+        time.sleep(0.001)
+    time.sleep(0.5)
+    got = take(odom, 1000)
+    assert len(got) >= 2  # the reader keeps the last few
+    first, last = got[0].pose.covariance, got[-1].pose.covariance
+    # nearly straight ahead: the path is the distance from the start
+    path = math.hypot(got[-1].pose.pose.position.x, got[-1].pose.pose.position.y)
+    var_yaw = math.radians(2.0) ** 2 * path
+    assert path > 0.3
+    assert last[35] == pytest.approx(var_yaw, rel=0.05)
+    assert last[0] == last[7] == pytest.approx(var_yaw * path ** 2 / 3, rel=0.1)
+    assert last[0] > first[0] >= 0.0
+    assert list(got[-1].twist.covariance) == [0.0] * 36  # the measured motion is exact
+    # z, roll, pitch and the cross terms stay 0
+    assert [c for i, c in enumerate(last) if i not in (0, 7, 35)] == [0.0] * 33

@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 
 from mdle.atoms.registry import Context, LawSpec
-from mdle.backend import Command
+from mdle.core.backend import Command
 from mdle.lang import INF, NEVER, AtomNode, Element, Interrupt, StringKind, StringNode
 from mdle.runtime import Event, EventKind
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import pytest
 
-from mdle.trace import read_trace
+from mdle.record.load import read_trace
 
 FOLLOW = """\
 interrupt blocked(d = 0.5 m) = range(0 deg) < d

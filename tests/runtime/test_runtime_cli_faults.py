@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from mdle.trace import read_trace
+from mdle.record.load import read_trace
 
 #: Moves (v and omega both non-zero) and changes atom often, forever.
 CIRCLES = """\

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
+from mdle.core.units import LENGTH
 from mdle.lang import conditions as cond
-from mdle.units import LENGTH
 
 
 def _reader(name: str, values: list[Any], calls: list[str], kind: Any = LENGTH) -> cond.Typed:

@@ -6,10 +6,10 @@ import json
 from pathlib import Path
 
 from mdle.lang import load_text
-from mdle.live import summary_rows
+from mdle.record.trace import TraceWriter
 from mdle.runtime import Cause, run_named
 from mdle.runtime.scripted import ScriptedBackend
-from mdle.trace import TraceWriter
+from mdle.view.live import summary_rows
 
 
 def _run(text: str, tmp_path: Path | None = None) -> object:

@@ -9,9 +9,9 @@ from types import SimpleNamespace
 from typing import Any
 
 from mdle.lang import StringNode
-from mdle.live import LiveView, summary_rows
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
+from mdle.view.live import LiveView, summary_rows
 
 
 class _Tty(io.StringIO):
@@ -69,7 +69,7 @@ def test_summary_rows_report_faults_and_collisions(ir: SimpleNamespace) -> None:
 
 def _follower(ir: SimpleNamespace) -> StringNode:
     """A plan whose atom records rc as follow_boundary does, 0.5 m from a wall on its right."""
-    from mdle.backend import Command
+    from mdle.core.backend import Command
 
     def step(args: Any, ctx: Any, state: Any) -> Command:
         ctx.cache["trace"] = {"rc": 0.5, "side_hit": 1.0, "side_range": 0.55,

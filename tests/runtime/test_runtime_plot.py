@@ -13,12 +13,14 @@ import pytest
 from matplotlib.collections import LineCollection
 
 from mdle.atoms.registry import Context
-from mdle.backend import Command
+from mdle.core.backend import Command
 from mdle.lang import AtomNode, Element
-from mdle.plot import PlotError, boundary_points, plot_trace, trace_figure
+from mdle.record.load import read_trace
+from mdle.record.trace import TraceWriter
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
-from mdle.trace import TraceWriter, read_trace
+from mdle.view.figure_output import PlotError
+from mdle.view.plot import boundary_points, plot_trace, trace_figure
 
 
 def _wall_follower(ir: SimpleNamespace) -> AtomNode:

@@ -9,19 +9,20 @@ from typing import Any
 
 import pytest
 
-from mdle import figure_output
 from mdle.cli import main
-from mdle.plot_overlay import overlay_figure
+from mdle.record.load import read_trace
+from mdle.record.trace import TraceWriter
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
-from mdle.trace import TraceWriter, read_trace
+from mdle.view import figure_output
+from mdle.view.plot_overlay import overlay_figure
 
 
 def _trace(ir: SimpleNamespace, path: Path, v: float = 1.0, rc: float | None = None) -> Path:
     """A short scripted run with ground truth (and an rc, like follow_boundary records)."""
 
     def step(args: Any, ctx: Any, state: Any) -> Any:
-        from mdle.backend import Command
+        from mdle.core.backend import Command
 
         if rc is not None:
             ctx.cache["trace"] = {"rc": rc}

@@ -104,7 +104,8 @@ def test_a_plot_that_fails_while_written_leaves_no_partial_file(
 
     from matplotlib.figure import Figure
 
-    from mdle.plot import PlotError, plot_trace
+    from mdle.view.figure_output import PlotError
+    from mdle.view.plot import plot_trace
 
     def full(self: Figure, *args: object, **kwargs: object) -> None:
         raise OSError(errno.ENOSPC, "No space left on device")

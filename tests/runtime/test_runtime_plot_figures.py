@@ -13,13 +13,14 @@ import numpy as np
 import pytest
 
 from mdle.atoms.registry import Context
-from mdle.backend import Command
 from mdle.cli import main
-from mdle.plot import CAUSE_WORDS, boundary_points, run_pose, trace_figure
-from mdle.plot_curvature import measured_curvature, robust_limits
+from mdle.core.backend import Command
+from mdle.record.load import read_trace
+from mdle.record.trace import Trace, TraceWriter
 from mdle.runtime import run
 from mdle.runtime.scripted import ScriptedBackend
-from mdle.trace import Trace, TraceWriter, read_trace
+from mdle.view.plot import CAUSE_WORDS, boundary_points, run_pose, trace_figure
+from mdle.view.plot_curvature import measured_curvature, robust_limits
 
 LEFT_PLAN = """\
 atom follow_left = (follow_boundary(side = left, rc = 1 m, v = 1 m/s), never, 22 s)

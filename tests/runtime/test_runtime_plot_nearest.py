@@ -14,15 +14,15 @@ import pytest
 
 from mdle.atoms.closest import POINT_KAPPA
 from mdle.cli import main
-from mdle.plot import trace_and_world, trace_figure
-from mdle.plot_nearest import (
+from mdle.record.trace import Trace
+from mdle.view.plot import trace_and_world, trace_figure
+from mdle.view.plot_nearest import (
     NearestPanel,
     followed_side,
     is_nearest_point_trace,
     nearest_measured,
     nearest_truth,
 )
-from mdle.trace import Trace
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -17,7 +17,7 @@ from typing import Any
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mdle.backend import Command
+from mdle.core.backend import Command
 from mdle.lang import INF, NEVER, AtomNode, Element, StringNode
 from mdle.runtime import Cause, EventKind, RunResult, run
 from mdle.runtime.scripted import ScriptedBackend

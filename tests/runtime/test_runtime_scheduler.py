@@ -13,8 +13,9 @@ from typing import Any
 import pytest
 
 from mdle.atoms.registry import Context
-from mdle.backend import ClockMode, Command, Pose, Scan
-from mdle.errors import BackendError, MdleRuntimeError
+from mdle.core.backend import ClockMode, Command, Scan
+from mdle.core.errors import BackendError, MdleRuntimeError
+from mdle.core.pose import Pose
 from mdle.lang import Program
 from mdle.runtime import (
     BaseObserver,

@@ -10,8 +10,9 @@ import math
 
 import pytest
 
-from mdle.backend import Backend, ClockMode, Command, Pose, RobotLimits
-from mdle.errors import BackendError
+from mdle.core.backend import Backend, ClockMode, Command, RobotLimits
+from mdle.core.errors import BackendError
+from mdle.core.pose import Pose
 from mdle.runtime.scripted import ScriptedBackend
 
 

@@ -14,7 +14,7 @@ from typing import Any
 import pytest
 
 from mdle.atoms.registry import Context
-from mdle.backend import Command
+from mdle.core.backend import Command
 from mdle.lang import StringKind
 from mdle.runtime import Cause, Recorder, Scheduler, run
 from mdle.runtime.scripted import ScriptedBackend

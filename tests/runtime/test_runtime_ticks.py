@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from mdle import sim
-from mdle.backend import TickClock
+from mdle.core.backend import TickClock
 from mdle.lang import load_text
 from mdle.runtime import Cause, run_named
 from mdle.runtime.scripted import ScriptedBackend

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from mdle import sim
-from mdle.backend import Backend, ClockMode, Command, Pose
-from mdle.errors import BackendError, WorldError
+from mdle.core.backend import Backend, ClockMode, Command
+from mdle.core.errors import BackendError, WorldError
+from mdle.core.pose import Pose
 from mdle.sim.backend import SimBackend
 from mdle.sim.ladar import Ladar, LadarProfile
 from mdle.sim.profiles import robot_profile

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import yaml
 
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
 from mdle.sim import world_obstacles, world_yaml
 from mdle.sim.shapes import Arc, Circle, Curve, Ellipse, Parts, Rectangle
 from mdle.sim.world import World

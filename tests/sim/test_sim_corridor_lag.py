@@ -7,14 +7,14 @@ from pathlib import Path
 
 import numpy as np
 
+from mdle.fit.profile import run_clock
+from mdle.fit.recording import read_recording
 from mdle.lang import load_text
 from mdle.runtime import run
 from mdle.runtime.events import Sample
 from mdle.runtime.observer import Recorder
 from mdle.sim import SimBackend, load_world
-from mdle.sim.fit import run_clock
 from mdle.sim.profiles import robot_profile
-from mdle.sim.recording import read_recording
 from mdle.sim.robot import RunClock
 
 ROOT = Path(__file__).resolve().parents[2]

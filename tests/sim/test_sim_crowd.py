@@ -7,8 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from mdle.backend import Command, Pose
-from mdle.errors import WorldError
+from mdle.core.backend import Command
+from mdle.core.errors import WorldError
+from mdle.core.pose import Pose
 from mdle.sim.crowd import CrowdCollider, Discs, cast_discs
 from mdle.sim.ladar import ladar_profile
 from mdle.sim.profiles import robot_profile
@@ -122,7 +123,7 @@ def test_the_world_file_lists_robots_and_refuses_overlaps() -> None:
 
 
 def test_messages_arrive_at_the_next_tick_within_range_and_lossy_by_seed() -> None:
-    from mdle.messages import DeliveryRules
+    from mdle.core.messages import DeliveryRules
 
     places = [_place("a", 0, 0), _place("b", 2, 0), _place("c", 6, 0)]
     team = TeamSim(_world(), places, rules=DeliveryRules(range=3.0))

@@ -12,7 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from mdle.backend import Command, Pose
+from mdle.core.backend import Command
+from mdle.core.pose import Pose
 from mdle.sim import raycast
 from mdle.sim.backend import SimBackend
 from mdle.sim.faceindex import PAD, FaceGrid

@@ -198,7 +198,8 @@ def test_collider_near_list_in_a_large_world_is_exact() -> None:
 
 def test_fast_observation_and_scan_equal_the_dataclass_constructors() -> None:
     """observation() and plain_scan() fill every field as the dataclasses' own __init__ do."""
-    from mdle.backend import Observation, Pose, Scan, observation, plain_scan
+    from mdle.core.backend import Observation, Scan, observation, plain_scan
+    from mdle.core.pose import Pose
 
     r, b, v = np.ones(3), np.zeros(3), np.ones(3, dtype=bool)
     fast = plain_scan(r, b, v, 0.5, 10.0)

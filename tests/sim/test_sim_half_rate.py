@@ -9,14 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mdle.backend import Command
-from mdle.errors import WorldError
+from mdle.core.backend import Command
+from mdle.core.errors import WorldError
+from mdle.fit.recording import Recording, read_recording
+from mdle.fit.scans import MIN_GAPS, fit_half_rate, half_rate_stretches
 from mdle.sim.backend import SimBackend
-from mdle.sim.fit_scans import MIN_GAPS, fit_half_rate, half_rate_stretches
-from mdle.sim.profiles import robot_profile
-from mdle.sim.recording import Recording, read_recording
+from mdle.sim.profiles import parse_robot, robot_profile
 from mdle.sim.robot import HalfRate, Latency
-from mdle.sim.robot_yaml import dump_robot, parse_robot
+from mdle.sim.robot_yaml import dump_robot
 from mdle.sim.world import World
 
 SESSION = Path(__file__).resolve().parents[1] / "data" / "recordings" / "amrisim-2026-11-28"

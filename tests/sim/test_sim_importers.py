@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
 from mdle.sim.catalog import load_world
 from mdle.sim.importers import LINE_THICKNESS, import_irsim, import_world
 from mdle.sim.shapes import Circle, Polygon, Rectangle, Wall

@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle.backend import Command, Pose
+from mdle.core.backend import Command
+from mdle.core.pose import Pose
 from mdle.sim import crowd, raycast
 from mdle.sim.backend import SimBackend
 from mdle.sim.catalog import load_world

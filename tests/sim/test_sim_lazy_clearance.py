@@ -12,7 +12,8 @@ import pickle
 
 import pytest
 
-from mdle.backend import Command, LazyTruth, Pose, clearance_floor
+from mdle.core.backend import Command, LazyTruth, clearance_floor
+from mdle.core.pose import Pose
 from mdle.lang import load_text
 from mdle.runtime import Scheduler
 from mdle.sim.backend import SimBackend

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import shapely
 
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
 from mdle.sim.catalog import load_world
 from mdle.sim.maps import (
     FloorPlan,

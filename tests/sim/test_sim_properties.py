@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from mdle import sim
-from mdle.backend import Command
+from mdle.core.backend import Command
 from mdle.sim.backend import SimBackend
 
 commands = st.lists(st.tuples(st.floats(-3.0, 3.0), st.floats(-6.0, 6.0),
@@ -37,7 +37,7 @@ def test_random_drives_never_overlap_obstacles(world: str, robot: str,
 @settings(max_examples=25, deadline=None)
 @given(world=st.sampled_from(sim.list_worlds()), heading=st.floats(-math.pi, math.pi))
 def test_noise_free_scans_equal_ground_truth_casts(world: str, heading: float) -> None:
-    from mdle.backend import Pose
+    from mdle.core.pose import Pose
 
     w = sim.load_world(world)
     b = SimBackend(w, ladar="lms200-ideal")

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from mdle.backend import Pose
+from mdle.core.pose import Pose
 from mdle.sim.catalog import list_worlds, load_world
 from mdle.sim.generated import FAMILIES, generate_shape
 from mdle.sim.world import World

@@ -8,7 +8,7 @@ import yaml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
 from mdle.sim.world_yaml import OBSTACLE_TYPES, parse_world
 
 KEYS = ["name", "description", "seed", "start", "robot", "ladar", "extent", "obstacles", "type",

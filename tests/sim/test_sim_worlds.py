@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from mdle import sim
-from mdle.errors import WorldError
+from mdle.core.errors import WorldError
 from mdle.sim.shapes import Circle, Ellipse
 from mdle.sim.world_yaml import parse_world
 

@@ -66,7 +66,7 @@ def test_a_dask_worker_that_raises_records_an_error_row(tiny_spec: Path, client:
 
 
 def test_an_unreachable_scheduler_is_a_clear_error() -> None:
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
 
     with pytest.raises(MdleError, match="cannot reach the scheduler"):
         DaskExecutor("tcp://127.0.0.1:9", timeout=1.0)

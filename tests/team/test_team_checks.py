@@ -41,7 +41,7 @@ def test_robots_that_collide_are_reported_with_both_names(tmp_path: Path,
     out = capsys.readouterr().out
     assert "red: " in out and "robots `red` and `blue` touched" in out
     assert "robots `blue` and `red` touched" in out
-    from mdle.trace import read_trace
+    from mdle.record.load import read_trace
 
     hits = read_trace(tmp_path / "t.red.jsonl").collisions()
     assert hits and hits[0]["obstacle"] == "blue" and hits[0]["kind"] == "robot"
@@ -165,7 +165,7 @@ def test_robot_plan_options_with_a_world(tmp_path: Path,
     ("(stop, never, 1 s, 3)", "an atom is (control law, interrupt, timer); this has 4 parts"),
 ])
 def test_send_and_receive_errors_in_a_plan(atom: str, message: str) -> None:
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
     from mdle.lang import load_text
 
     with pytest.raises(MdleError, match=message.replace("(", r"\(").replace(")", r"\)")):

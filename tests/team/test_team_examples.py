@@ -11,8 +11,8 @@ import pytest
 
 from mdle.runtime import Recorder
 from mdle.sim.team import TeamSim
-from mdle.teamfile import load_team, read_team
-from mdle.teamrun import TeamRun
+from mdle.team.file import load_team, read_team
+from mdle.team.run import TeamRun
 
 TEAM = Path(__file__).resolve().parents[2] / "plans" / "team"
 
@@ -122,7 +122,7 @@ def test_the_relay_passes_the_baton_down_the_line_within_radio_range() -> None:
 
 
 def test_with_a_short_radio_the_relay_stops_at_the_first_runner() -> None:
-    from mdle.messages import DeliveryRules
+    from mdle.core.messages import DeliveryRules
 
     run, _ = _run("relay.team.yaml", rules=DeliveryRules(range=1.0), until=30.0)
     results = run.results
@@ -142,8 +142,8 @@ def test_every_example_runs_from_the_command_line(tmp_path: Path) -> None:
 
 def test_a_team_run_is_drawn_and_animated_from_its_traces(tmp_path: Path) -> None:
     from mdle.cli import main
-    from mdle.team_animate import animate_team
-    from mdle.trace import read_trace
+    from mdle.record.load import read_trace
+    from mdle.view.team_animate import animate_team
 
     assert main(["run", "--team", str(TEAM / "wait.team.yaml"), "-q",
                  "--trace", str(tmp_path / "w.jsonl")]) == 0

@@ -6,8 +6,8 @@ from pathlib import Path
 
 from mdle.runtime import Recorder
 from mdle.sim.team import TeamSim
-from mdle.teamfile import load_team, read_team
-from mdle.teamrun import TeamRun
+from mdle.team.file import load_team, read_team
+from mdle.team.run import TeamRun
 
 WORLD = """\
 name: duel

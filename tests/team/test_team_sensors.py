@@ -10,8 +10,9 @@ import pytest
 
 from mdle.atoms.registry import Context
 from mdle.atoms.team import bearing_to, message, pursue, range_to, received
-from mdle.backend import Observation, Pose, RobotLimits
-from mdle.messages import Inbox, Message, compose, relative
+from mdle.core.backend import Observation, RobotLimits
+from mdle.core.messages import Inbox, Message, compose, relative
+from mdle.core.pose import Pose
 
 LIMITS = RobotLimits(1.0, 1.0, 2.0)
 ORIGIN = Pose()
