@@ -55,6 +55,11 @@ def test_every_quoted_number_is_the_tables(script: ModuleType, table: dict[str, 
             assert m.group(1) == value, (f"{doc.name} quotes {m.group(1)} for {m.group(2)}, "
                                          f"numbers.json has {value}: rerun make_figures.py")
             quoted += 1
+        for m in script.BLOCK.finditer(doc.read_text("utf-8")):
+            value = script.lookup(table, m.group(2))
+            assert value is not None, f"{doc.name}: block `{m.group(2)}` is not in numbers.json"
+            assert m.group(3) == value, f"{doc.name}: block {m.group(2)}: rerun make_figures.py"
+            quoted += 1
     # the figures' runs, the hexagon at 10 Hz, the Pioneer on both models, the trash can
     assert quoted >= 30
 
@@ -79,5 +84,8 @@ def test_a_marker_is_rewritten_and_an_unknown_one_named(script: ModuleType) -> N
     table = {"a": {"err": "0.012", "axis": "0.1", "k": "-12.0"}}
     assert script.rewrite_numbers(text, table, "x.md") == (
         "error 0.012<!--n:a.err--> m, axis +-0.1<!--n:a.axis--> 1/m, -12.0<!--n:a.k-->")
+    block = "<!--block:a.report-->\n```\nold\nlines\n```\n"
+    assert script.rewrite_numbers(block, {"a": {"report": "new"}}, "x.md") == (
+        "<!--block:a.report-->\n```\nnew\n```\n")
     with pytest.raises(KeyError, match=r"x\.md: no number `a\.gone`"):
         script.rewrite_numbers("1<!--n:a.gone-->", table, "x.md")
