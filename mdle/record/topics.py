@@ -22,13 +22,13 @@ from typing import Any
 
 import numpy as np
 
-from mdle.rosmsg.covariance import OdometryCovariance
 from mdle.record.describe import diagnostic_names, footprint
 from mdle.record.markers import PathPieces
 from mdle.record.mcap_file import McapFile
 from mdle.record.outlet import LiveSink, Outlet
 from mdle.record.tick import TickEncoder, Ticks, times_ns
 from mdle.rosmsg import cdr
+from mdle.rosmsg.covariance import OdometryCovariance
 from mdle.rosmsg.msgdefs import DIAGNOSTICS, diagnostics_definition, schema_text
 
 __all__ = ["BATCH", "FRAMES", "TOPICS", "Topic", "RosRecording",

@@ -222,6 +222,12 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
 
     from mdle.sweep.metrics import path_length
     from mdle.view.plot_curvature import draw_curvature, measured_curvature, true_curvature
+    from mdle.view.plot_nearest import (
+        draw_nearest_curvature,
+        is_nearest_point_trace,
+        nearest_measured,
+        nearest_truth,
+    )
 
     if not trace.samples:
         raise PlotError(Diagnostic(None, f"trace `{trace.path}` has no samples to plot"))
@@ -276,7 +282,15 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     if curv and axk is not None:
         ox, oy = trace.column("x"), trace.column("y")
         exact = str(trace.header.get("sensing") or "") == "exact"
-        draw_curvature(axk, path_length(ox, oy), curv, true_curvature(trace, world), exact)
+        nearest = nearest_measured(trace) if is_nearest_point_trace(trace) else None
+        if nearest is not None:  # the whole-scan model: the nearest point's curvature
+            draw_nearest_curvature(axk, path_length(ox, oy), nearest,
+                                   nearest_truth(trace, world), exact)
+        else:
+            draw_curvature(axk, path_length(ox, oy), curv, true_curvature(trace, world), exact)
+    # one layout pass now: constrained layout converges over two passes when a panel has a
+    # fixed aspect, and a single pass at save time cut the curvature panel's y label
+    fig.draw_without_rendering()
     return fig
 
 

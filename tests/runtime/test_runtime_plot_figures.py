@@ -66,9 +66,9 @@ def test_left_side_curvature_is_drawn_convex_negative_beside_the_truth(
     fig = trace_figure(trace, world)
     axk = fig.axes[1]
     assert "convex negative" in axk.get_ylabel() and "1/m" in axk.get_ylabel()
-    [truth] = [ln for ln in axk.lines if ln.get_label() == "true curvature at the side ray"]
+    [truth] = [ln for ln in axk.lines if ln.get_label() == "truth at the nearest point"]
     t = np.asarray(truth.get_ydata(), dtype=float)
-    # the ellipse's true curvature at the side ray: between -a/b^2 and -b/a^2
+    # the ellipse's true curvature at the nearest point: between -a/b^2 and -b/a^2
     assert len(t) > 50 and t.max() < -0.1 and t.min() > -1.05
 
 

@@ -11,7 +11,7 @@ MODULES = ["mdle.sim", "mdle.sim.shapes", "mdle.sim.raycast", "mdle.sim.distance
            "mdle.sim.world", "mdle.sim.world_yaml", "mdle.sim.catalog", "mdle.sim.robot",
            "mdle.sim.ladar", "mdle.sim.collision", "mdle.sim.backend", "mdle.sim.generated",
            "mdle.sim.starts", "mdle.sim.world_dump",
-           "mdle.sim.faceindex"]
+           "mdle.sim.faceindex", "mdle.sim.nearest_truth"]
 
 
 @pytest.mark.parametrize("name", MODULES)
