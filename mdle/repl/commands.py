@@ -35,6 +35,7 @@ from mdle.backend import Pose
 from mdle.cli.output import print_diagnostics
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
+from mdle.lang import keywords, statement_keywords
 from mdle.ranges import COORDINATE
 from mdle.repl import views
 from mdle.repl.reports import RunReport
@@ -45,10 +46,11 @@ from mdle.userfile import file_fault, file_fault_words
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 
-#: First words of an input that defines something (rather than running an element).
-DEFINITION_KEYWORDS = ("atom", "behavior", "plan", "interrupt", "import", "run")
-#: Every MDLe keyword (completion, highlighting).
-KEYWORDS = DEFINITION_KEYWORDS + ("never", "inf", "and", "or", "xor", "not")
+#: First words of an input that defines something (rather than running an element): the
+#: grammar's statement keywords.
+DEFINITION_KEYWORDS = statement_keywords()
+#: Every MDLe keyword (completion, highlighting), as the grammar has them.
+KEYWORDS = tuple(keywords())
 
 
 @dataclass(frozen=True)
