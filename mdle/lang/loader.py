@@ -15,13 +15,16 @@ import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
+from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
 from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
 from mdle.lang import syntax as st
 from mdle.lang.check import check_program
 from mdle.lang.hints import refine_hints
+from mdle.lang.overrides import override_defaults
 from mdle.lang.parser import normalise_newlines, parse_partial
 from mdle.lang.program import Program
+from mdle.lang.syntax import Loaded
 from mdle.motion_limits import KnownRobot
 from mdle.userfile import UserFileError, read_user_file
 
@@ -53,15 +56,6 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
             Span(name, line, col, line, col + 1),
             f"`{name}` is not UTF-8 text (byte 0x{data[err.start]:02x} at offset {err.start})",
             hint="MDLe plans are plain text files; is this a binary file?")) from None
-
-
-@dataclass(frozen=True)
-class Loaded:
-    """The files of a program: modules in dependency order (imports first), their texts."""
-
-    modules: tuple[st.Module, ...]
-    sources: dict[str, str]
-    main: st.Module | None
 
 
 _IMPORT_LINE = re.compile(r'^[ \t]*import[ \t]+"([^"\n]*)"', re.M)
@@ -260,8 +254,6 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         MdleSyntaxError or CheckError, with ``.sources`` filled.
     """
     if registry is None:
-        from mdle.atoms import default_registry
-
         registry = default_registry()
     with _collector_paused():
         found = _load(text, file, base_dir, files)
@@ -270,8 +262,6 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
             raise _error(found.diagnostics + _check_errors(found, registry), loaded.sources,
                          found.syntax_failed)
         if settings:
-            from mdle.lang.overrides import override_defaults
-
             loaded = override_defaults(loaded, settings, registry)
         return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main,
                              robot=robot)

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import lark
 from lark import Lark, Token, Transformer, v_args
 
 from mdle.errors import Diagnostic, Span
@@ -352,8 +353,6 @@ class _Build(Transformer):
 
 def _cache_file(grammar: str) -> str | None:
     """Return a per-user cache file for the analysed grammar (None: nowhere to write)."""
-    import lark
-
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     key = hashlib.sha256(f"{grammar}{lark.__version__}".encode()).hexdigest()[:16]
     folder = Path(base) / "mdle"
