@@ -45,8 +45,7 @@ from mdle.lang.parser import parse_expression
 from mdle.lang.resolve import Namespace, build_namespace
 from mdle.lang.syntax import Loaded
 
-__all__ = ["Override", "parse_override", "parse_setting", "settable_parameters",
-           "apply_overrides", "override_defaults", "OVERRIDE_FILE"]
+__all__ = ["Override", "parse_override", "apply_overrides", "override_defaults", "OVERRIDE_FILE"]
 
 #: The file name messages give an override's text (``--set:1:10: error: ...``).
 OVERRIDE_FILE = "--set"
@@ -268,28 +267,6 @@ def _replaced(module: st.Module, new: Mapping[tuple[str, str], st.Expr]) -> st.M
             changed = True
         statements.append(s)
     return dataclasses.replace(module, statements=tuple(statements)) if changed else module
-
-
-def parse_setting(text: str) -> tuple[str, str]:
-    """Split ``NAME=VALUE`` into its two parts, each stripped.
-
-    Raises
-    ------
-    ValueError
-        No ``=``, or an empty name or value.
-    """
-    name, eq, value = text.partition("=")
-    name, value = name.strip(), value.strip()
-    if not eq or not name or not value:
-        raise ValueError(f"expected NAME=VALUE, got {text!r}")
-    return name, value
-
-
-def settable_parameters(module: st.Module) -> list[str]:
-    """Return the parameter names of the definitions in ``module``, sorted, each once."""
-    names = {p.name for d in module.statements if isinstance(d, st.Definition)
-             for p in (d.params or ())}
-    return sorted(names)
 
 
 def override_defaults(loaded: Loaded, settings: Mapping[str, str] | Sequence[str],

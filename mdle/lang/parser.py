@@ -1,9 +1,8 @@
 """Text to syntax tree: parsing with lark's LALR parser, error recovery, and errors in words.
 
-The parser and its tree builder are :mod:`mdle.lang.treebuild`'s; this module parses
-whole files, expressions and fragments with them, recovers from syntax errors and words
-them. Both of those work on lark's error objects and parser state, which no other module
-sees.
+Over 500 lines: besides parsing whole files, expressions and fragments (with the parser
+and tree builder of :mod:`mdle.lang.treebuild`), it recovers from syntax errors and words
+them, and both work on lark's error objects and parser state, which no other module sees.
 
 Syntax errors become :class:`~mdle.errors.MdleSyntaxError` with file, line, column,
 the source line, a caret, what was expected in words and a hint; after an error the

@@ -83,7 +83,6 @@ _IMPORT = Label("expected a file name in double quotes after `import`",
                 'for example `import "common.mdle"`')
 _RUN = Label("expected the name of an atom, behavior or plan after `run`",
              "for example `run main`")
-_CHAINED = Label("comparisons do not chain", "write `0 m < x and x < 10 m`")
 _ASSIGN = Label("`=` gives a default or a keyword argument; it does not compare",
                 "to compare two values write `==`")
 _MISSING_VALUE = Label("expected a value here: a number such as `1 m`, a name, a call or `(`")
