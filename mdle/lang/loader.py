@@ -9,6 +9,7 @@ every file are reported together, then the check errors.
 from __future__ import annotations
 
 import contextlib
+import functools
 import gc
 import os
 import re
@@ -25,6 +26,7 @@ from mdle.lang.overrides import override_defaults
 from mdle.lang.parser import normalise_newlines, parse_partial
 from mdle.lang.program import Program
 from mdle.lang.syntax import Loaded
+from mdle.lang.vocabulary import word_of
 from mdle.motion_limits import KnownRobot
 from mdle.userfile import UserFileError, read_user_file
 
@@ -58,13 +60,16 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
             hint="MDLe plans are plain text files; is this a binary file?")) from None
 
 
-_IMPORT_LINE = re.compile(r'^[ \t]*import[ \t]+"([^"\n]*)"', re.M)
+@functools.lru_cache(maxsize=1)
+def _import_line() -> re.Pattern[str]:
+    """Return the pattern of an import statement on a line of its own."""
+    return re.compile(r'^[ \t]*' + word_of("IMPORT") + r'[ \t]+"([^"\n]*)"', re.M)
 
 
 def _scan_imports(text: str, file: str) -> list[st.Import]:
     """Return the imports of a file that does not parse (found line by line)."""
     out = []
-    for m in _IMPORT_LINE.finditer(text):
+    for m in _import_line().finditer(text):
         line = text.count("\n", 0, m.start()) + 1
         col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
         out.append(st.Import(m.group(1), Span(file, line, col, line, col + len(m.group(0)))))

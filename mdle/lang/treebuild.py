@@ -11,7 +11,8 @@ The grammar is read once through :mod:`importlib.resources` (it ships inside the
 package as ``mdle.grammar``), and lark's analysed parser (its LALR tables) is cached in a
 per-user file (``$XDG_CACHE_HOME/mdle``, else ``~/.cache/mdle``) named by a hash of the
 grammar and lark's version, so ``mdle check`` does not rebuild the tables at every start.
-lark checks the cache's hash when it loads it and rebuilds it when it does not fit.
+lark checks the cache's hash when it loads it, and rebuilds and rewrites it when the hash
+does not fit or the file is corrupt; a folder it cannot write only costs the rebuild.
 """
 
 from __future__ import annotations
