@@ -17,8 +17,8 @@ parser alone:
 
 and in the same run, the release before (a hand-written parser read valid files, lark
 only files with errors): 23,800 90 B and 9,300 132 B. That parser was removed: on the
-shipped plans (at most 55 lines) it saved at most 3 ms a file, against about 0.15 s of
-CPU time for the whole `mdle check`.
+shipped plans (at most 55 lines) it saved at most 4 ms of parsing a file, against about
+0.15 s of CPU time for the whole `mdle check`.
 
 Run: python benchmarks/parse.py [--lines N] [--repeat R]
 """

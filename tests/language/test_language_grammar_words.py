@@ -33,6 +33,7 @@ from mdle.lang.vocabulary import (
 )
 from mdle.repl.commands import DEFINITION_KEYWORDS, KEYWORDS, classify
 from mdle.repl.highlight import MdleLexer
+from mdle.units import UNITS
 
 GRAMMAR = importlib.resources.files("mdle.grammar").joinpath("mdle.lark").read_text("utf-8")
 
@@ -56,6 +57,13 @@ def test_the_number_pattern_refuses_every_keyword_as_a_unit() -> None:
     # not a keyword); it must be the grammar's list, no more, no less.
     (listed,) = re.findall(r"\(\?!\(\?:([a-z|]+)\)", GRAMMAR)
     assert set(listed.split("|")) == set(keywords())
+
+
+def test_the_number_pattern_joins_the_unit_table_s_units_after_a_spaced_slash() -> None:
+    # `0.3 m / s` is a unit only when a unit of the table follows the spaced `/`; the
+    # pattern lists those units itself, and they must be the table's.
+    (listed,) = re.findall(r"\\/\[ \\t\]\*\(\?:([a-z|]+)\)", GRAMMAR)
+    assert set(listed.split("|")) == set(UNITS)
 
 
 def test_statement_and_definition_keywords() -> None:
