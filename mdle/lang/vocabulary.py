@@ -44,13 +44,15 @@ def _alternatives(rule: str) -> list[list[str]]:
 
 
 def _first(symbol: str, seen: frozenset[str] = frozenset()) -> list[str]:
-    """Return the terminals a symbol can start with, in the grammar's order."""
-    if symbol.isupper() or symbol.lstrip("_").isupper():
-        return [symbol]
+    """Return the terminals a rule can start with, in the grammar's order."""
     out: list[str] = []
-    for expansion in _alternatives(symbol):
-        if expansion and expansion[0] not in seen:
-            out += [t for t in _first(expansion[0], seen | {symbol}) if t not in out]
+    for r in lark_parser().rules:
+        if r.origin.name != symbol or not r.expansion:
+            continue
+        head = r.expansion[0]
+        found = [head.name] if head.is_term else (
+            [] if head.name in seen else _first(head.name, seen | {symbol}))
+        out += [t for t in found if t not in out]
     return out
 
 
