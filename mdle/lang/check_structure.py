@@ -20,13 +20,13 @@ from types import MappingProxyType
 from typing import Any, TypeVar
 
 from mdle.atoms.registry import LawSpec
-from mdle.errors import Diagnostic, Severity, Span
+from mdle.core.errors import Diagnostic, Severity, Span
+from mdle.core.messages import POSE_CHANNEL
 from mdle.lang import syntax as st
 from mdle.lang.check_state import _MISSING, MAX_NESTING, CheckerState, Env, _Abort, _freeze, _short
 from mdle.lang.dimensions import Quantity, Symbol, Value
 from mdle.lang.format import format_expr
 from mdle.lang.program import AtomNode, Element, Interrupt, MessageUse, Send, StringKind, StringNode
-from mdle.messages import POSE_CHANNEL
 
 _E = TypeVar("_E", AtomNode, StringNode)
 

@@ -27,8 +27,8 @@ from types import CodeType, MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
+from mdle.core.units import Dim
 from mdle.lang.program import NEVER, Interrupt
-from mdle.units import Dim
 
 __all__ = ["Typed", "constant", "sensor_reading", "sensor_call", "negate", "logic", "compare",
            "arith", "apply", "remembered", "to_interrupt", "BUILTINS"]

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from mdle.errors import MdleError
+from mdle.core.errors import MdleError
 from mdle.lang import syntax as st
 from mdle.lang.hints import refine_error
 from mdle.lang.parser import parse_module

@@ -18,7 +18,9 @@ from dataclasses import dataclass
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
-from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
+from mdle.core.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
+from mdle.core.motion_limits import KnownRobot
+from mdle.core.userfile import UserFileError, read_user_file
 from mdle.lang import syntax as st
 from mdle.lang.check import check_program
 from mdle.lang.hints import refine_hints
@@ -27,8 +29,6 @@ from mdle.lang.parser import normalise_newlines, parse_partial
 from mdle.lang.program import Program
 from mdle.lang.syntax import Loaded
 from mdle.lang.vocabulary import word_of
-from mdle.motion_limits import KnownRobot
-from mdle.userfile import UserFileError, read_user_file
 
 __all__ = ["load_program", "load_text", "load_modules", "read_source", "plan_bundle", "Loaded"]
 
@@ -37,7 +37,7 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
                 span: Span | None = None) -> str:
     """Return the text of a plan file (UTF-8, an optional BOM dropped).
 
-    Only a regular file of at most :data:`mdle.userfile.MAX_FILE_BYTES` is read.
+    Only a regular file of at most :data:`mdle.core.userfile.MAX_FILE_BYTES` is read.
 
     Raises
     ------
@@ -251,7 +251,7 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         :func:`load_modules`); ``base_dir`` is the folder they are relative to.
     robot : KnownRobot, optional
         The robot the plan is meant for: constants beyond its speed or turn-rate limits
-        are warnings (see :mod:`mdle.motion_limits`).
+        are warnings (see :mod:`mdle.core.motion_limits`).
 
     Raises
     ------

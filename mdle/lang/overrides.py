@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
-from mdle.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
+from mdle.core.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
 from mdle.lang import syntax as st
 from mdle.lang.check import Checker
 from mdle.lang.check_state import _Abort

@@ -4,7 +4,7 @@ Over 500 lines: besides parsing whole files, expressions and fragments (with the
 and tree builder of :mod:`mdle.lang.treebuild`), it recovers from syntax errors and words
 them, and both work on lark's error objects and parser state, which no other module sees.
 
-Syntax errors become :class:`~mdle.errors.MdleSyntaxError` with file, line, column,
+Syntax errors become :class:`~mdle.core.errors.MdleSyntaxError` with file, line, column,
 the source line, a caret, what was expected in words and a hint; after an error the
 parser resynchronises at the next line that starts with a statement keyword, so
 several errors in one file are reported together.
@@ -22,7 +22,7 @@ from typing import Any
 from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
-from mdle.errors import Diagnostic, MdleSyntaxError, Severity, Span
+from mdle.core.errors import Diagnostic, MdleSyntaxError, Severity, Span
 from mdle.lang import syntax as st
 from mdle.lang.syntax_errors import (
     EXAMPLES,

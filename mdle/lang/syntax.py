@@ -20,8 +20,8 @@ import enum
 from dataclasses import dataclass, field
 from typing import Union
 
-from mdle.errors import Span
-from mdle.units import Dim
+from mdle.core.errors import Span
+from mdle.core.units import Dim
 
 __all__ = [
     "Number",

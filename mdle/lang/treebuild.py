@@ -32,9 +32,9 @@ from typing import Any
 import lark
 from lark import Lark, Token, Transformer, v_args
 
-from mdle.errors import Diagnostic, Span
+from mdle.core.errors import Diagnostic, Span
+from mdle.core.units import NONE, UNITS, unit_value
 from mdle.lang import syntax as st
-from mdle.units import NONE, UNITS, unit_value
 
 __all__ = ["MAX_DEPTH", "POWERS", "PREFIX_POWERS", "COMPARISONS", "BuildState", "PARSE_STATE",
            "TooDeep", "Prefixed", "lark_parser", "token_span", "over", "deeper",

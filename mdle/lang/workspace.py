@@ -13,7 +13,8 @@ from typing import Any
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
-from mdle.errors import CheckError, Diagnostic, MdleError
+from mdle.core.errors import CheckError, Diagnostic, MdleError
+from mdle.core.motion_limits import KnownRobot
 from mdle.lang import syntax as st
 from mdle.lang.check import _checker, check_program
 from mdle.lang.check_state import _Abort
@@ -23,7 +24,6 @@ from mdle.lang.loader import load_modules, read_source
 from mdle.lang.parser import MAX_DEPTH, lex_fragment, parse_expression
 from mdle.lang.program import Element, Program
 from mdle.lang.resolve import build_namespace
-from mdle.motion_limits import KnownRobot
 
 __all__ = ["Workspace"]
 

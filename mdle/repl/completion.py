@@ -21,7 +21,7 @@ from mdle.repl.commands import COMMANDS, DEFINITION_KEYWORDS, KEYWORDS, Repl
 
 __all__ = ["UNITS", "MdleCompleter"]
 
-#: Units offered after a number (the table of :mod:`mdle.units` and their quotients).
+#: Units offered after a number (the table of :mod:`mdle.core.units` and their quotients).
 UNITS = ("m", "cm", "mm", "s", "ms", "min", "deg", "rad", "m/s", "deg/s", "rad/s")
 
 _WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]*$")
@@ -105,7 +105,7 @@ class MdleCompleter(Completer):
         Those of the parameter's dimension when the number is an argument of a law or
         sensor, else every unit.
         """
-        from mdle.units import unit_value
+        from mdle.core.units import unit_value
 
         found = _enclosing_call_at(before)
         dim = None

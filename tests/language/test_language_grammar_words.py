@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from mdle.core.units import UNITS
 
 from mdle.lang import load_text
 from mdle.lang import syntax as st
@@ -33,7 +34,6 @@ from mdle.lang.vocabulary import (
 )
 from mdle.repl.commands import DEFINITION_KEYWORDS, KEYWORDS, classify
 from mdle.repl.highlight import MdleLexer
-from mdle.units import UNITS
 
 GRAMMAR = importlib.resources.files("mdle.grammar").joinpath("mdle.lark").read_text("utf-8")
 
