@@ -16,7 +16,6 @@ from typing import NamedTuple
 
 __all__ = [
     "Span",
-    "make_span",
     "Severity",
     "Diagnostic",
     "MdleError",
@@ -46,17 +45,6 @@ class Span(NamedTuple):
 
     def __str__(self) -> str:
         return f"{self.file}:{self.line}:{self.column}"
-
-
-_tuple_new = tuple.__new__
-
-
-def make_span(file: str, line: int, column: int, end_line: int, end_column: int) -> Span:
-    """Return ``Span(file, line, column, end_line, end_column)`` without the keyword handling.
-
-    (``tuple.__new__`` directly: the parsers make a span per token.)
-    """
-    return _tuple_new(Span, (file, line, column, end_line, end_column))
 
 
 class Severity(enum.Enum):

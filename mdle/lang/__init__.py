@@ -4,7 +4,8 @@ Everything outside this package (runtime, REPL, CLI, experiments, sweeps, teams)
 the language from here, never from its modules, so the modules can be reorganised freely.
 
 Inside, the stages run one way: :mod:`~mdle.lang.parser` (text to the syntax tree of
-:mod:`~mdle.lang.syntax`, with :mod:`~mdle.lang.descent` as the fast path for valid text),
+:mod:`~mdle.lang.syntax`, built by :mod:`~mdle.lang.treebuild` as lark parses; the
+grammar's words for messages and the REPL from :mod:`~mdle.lang.vocabulary`),
 :mod:`~mdle.lang.resolve` (one namespace), the checker (:mod:`~mdle.lang.check`: names,
 dimensions, structure) building the program IR of :mod:`~mdle.lang.program`, and
 :mod:`~mdle.lang.loader` tying files and imports together. :mod:`~mdle.lang.format` and
@@ -34,6 +35,7 @@ from mdle.lang.program import (
 )
 from mdle.lang.show import show_program, structure
 from mdle.lang.syntax import DefKind
+from mdle.lang.vocabulary import keywords, operator_keywords, statement_keywords
 from mdle.lang.workspace import Workspace
 
 __all__ = [
@@ -54,15 +56,18 @@ __all__ = [
     "dim_words",
     "format_source",
     "format_statement",
+    "keywords",
     "load_program",
     "load_text",
     "missing_entry",
+    "operator_keywords",
     "parse_expression",
     "parse_module",
     "plan_bundle",
     "read_source",
     "same_kind",
     "show_program",
+    "statement_keywords",
     "structure",
     "yaml_as_plan",
 ]

@@ -40,10 +40,6 @@ from mdle.lang.dimensions import (
 )
 from mdle.lang.format import format_expr
 from mdle.lang.program import INF, Interrupt, MessageUse
-from mdle.lang.treebuild import builder
-
-#: Quantity(value, dim, bare) without the frozen __init__ (see builder)
-_new_quantity = builder(Quantity)
 
 
 class DimensionChecks(ExpressionChecks):
@@ -58,7 +54,7 @@ class DimensionChecks(ExpressionChecks):
         if self._depth >= MAX_NESTING:
             self._enter(expr.span)  # reports, raises
         if type(expr) is st.Number:  # the common case, with nothing nested to count
-            return _new_quantity(expr.value, expr.dim, not expr.unit)
+            return Quantity(expr.value, expr.dim, not expr.unit)
         self._depth += 1
         try:
             return self._value(expr, env)
@@ -67,7 +63,7 @@ class DimensionChecks(ExpressionChecks):
 
     def _value(self, expr: st.Expr, env: Env) -> Value:
         if isinstance(expr, st.Number):
-            return _new_quantity(expr.value, expr.dim, not expr.unit)
+            return Quantity(expr.value, expr.dim, not expr.unit)
         if isinstance(expr, st.Name):
             if expr.name in env:
                 return env[expr.name]

@@ -27,26 +27,13 @@ from mdle.lang.check_state import _MISSING, MAX_NESTING, CheckerState, Env, _Abo
 from mdle.lang.dimensions import Quantity, Symbol, Value
 from mdle.lang.format import format_expr
 from mdle.lang.program import AtomNode, Element, Interrupt, MessageUse, Send, StringKind, StringNode
-from mdle.lang.treebuild import builder
 
 _E = TypeVar("_E", AtomNode, StringNode)
-#: Constructors of the program's nodes taking every field in order (see builder).
-_new_atom = builder(AtomNode)
-_new_string = builder(StringNode)
 
 
 def _replaced(node: _E, **changes: Any) -> _E:
-    """Return ``dataclasses.replace(node, **changes)`` without calling ``__init__``.
-
-    The program's nodes are plain frozen dataclasses (no ``__post_init__``, no slots), so
-    a copy of the fields with some changed is the same node; ``__init__`` would set each
-    field through ``object.__setattr__``, and a large plan makes thousands of them.
-    """
-    new = object.__new__(type(node))
-    fields = new.__dict__
-    fields.update(node.__dict__)
-    fields.update(changes)
-    return new
+    """Return a copy of ``node`` with some fields changed (a misspelt field is a TypeError)."""
+    return dataclasses.replace(node, **changes)
 
 
 def _own_never(e: Element) -> bool:
@@ -179,7 +166,7 @@ class StructureChecks(CheckerState):
             except _Abort:
                 failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
-        return _new_atom(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
+        return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
                          (1.0, 1.0), expr.span, tuple(sends))
 
     def _send(self, call: st.Call, env: Env) -> Send:
@@ -328,7 +315,7 @@ class StructureChecks(CheckerState):
                            f"most {MAX_NESTING}", hint="flatten the plan: fewer levels of "
                                                        "strings inside strings")
             raise _Abort
-        node = _new_string(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
+        node = StringNode(label, tuple(elements), interrupt, t, repeat, kind, expr.span)
         self._depths[id(node)] = depth
         self._keep.append(node)  # ids stay unique while the checker lives
         return node

@@ -27,7 +27,6 @@ from types import CodeType, MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
-from mdle.core.frozen import builder
 from mdle.core.units import Dim
 from mdle.lang.program import NEVER, Interrupt
 
@@ -104,24 +103,19 @@ class Typed:
         return lambda ctx: value
 
 
-#: ``Typed(kind, node, const)`` and ``Node(op, parts)`` without the frozen ``__init__``:
-#: the checker makes several of each per interrupt (see :mod:`mdle.core.frozen`).
-_typed = builder(Typed)
-_node = builder(Node)
-
 
 def _operand(t: Typed) -> Node:
-    return _node("const", (t.const,)) if t.node is None else t.node
+    return Node("const", (t.const,)) if t.node is None else t.node
 
 
 def constant(kind: Kind, value: Any) -> Typed:
     """Return a value known at check time."""
-    return _typed(kind, None, value)
+    return Typed(kind, None, value)
 
 
 def sensor_reading(spec: SensorSpec, args: Mapping[str, Any]) -> Typed:
     """Return a sensor function read each time the interrupt is tested."""
-    return _typed(spec.result, _node("sensor", (spec.fn, args)), None)
+    return Typed(spec.result, Node("sensor", (spec.fn, args)), None)
 
 
 def sensor_call(spec: SensorSpec, fixed: Mapping[str, Any],
@@ -140,7 +134,7 @@ def sensor_call(spec: SensorSpec, fixed: Mapping[str, Any],
             live.append((name, t.node))
     if not live:
         return sensor_reading(spec, MappingProxyType(args))
-    return _typed(spec.result, _node("sensor_call", (
+    return Typed(spec.result, Node("sensor_call", (
         spec.fn, MappingProxyType(args), tuple(n for n, _ in live), *(n for _, n in live))),
         None)
 
@@ -149,7 +143,7 @@ def apply(fn: Callable[..., Any], args: list[Typed], kind: Kind) -> Typed:
     """Return ``fn(*args)`` (abs, min, max): folded when every argument is constant."""
     if all(a.node is None for a in args):
         return constant(kind, fn(*(a.const for a in args)))
-    return _typed(kind, _node("fn", (fn, *(_operand(a) for a in args))), None)
+    return Typed(kind, Node("fn", (fn, *(_operand(a) for a in args))), None)
 
 
 class Remembered:
@@ -162,7 +156,7 @@ def remembered(t: Typed) -> Typed:
     """Return ``at_start(t)``: ``t`` as it was when the element started (a constant stays)."""
     if t.node is None:
         return t
-    return _typed(t.kind, _node("start", (Remembered(), t.node)), None)
+    return Typed(t.kind, Node("start", (Remembered(), t.node)), None)
 
 
 def remembers(t: Typed) -> tuple[tuple[Remembered, Fn], ...]:
@@ -189,12 +183,12 @@ def negate(op: str, a: Typed) -> Typed:
     if op == "not":
         if a.node is None:
             return constant(BOOL, not a.const)
-        return _typed(BOOL, _node("not", (_operand(a),)), None)
+        return Typed(BOOL, Node("not", (_operand(a),)), None)
     if op == "+":
         return a
     if a.node is None:
         return constant(a.kind, -a.const)
-    return _typed(a.kind, _node("neg", (_operand(a),)), None)
+    return Typed(a.kind, Node("neg", (_operand(a),)), None)
 
 
 def logic(op: str, a: Typed, b: Typed) -> Typed:
@@ -212,7 +206,7 @@ def logic(op: str, a: Typed, b: Typed) -> Typed:
             return negate("not", other) if fixed.const else other
     if op not in ("and", "or"):
         op = "xor"
-    return _typed(BOOL, _node(op, (_operand(a), _operand(b))), None)
+    return Typed(BOOL, Node(op, (_operand(a), _operand(b))), None)
 
 
 def _divide(x: float, y: float) -> float:
@@ -225,7 +219,7 @@ def compare(op: str, a: Typed, b: Typed) -> Typed:
     """Return a comparison of two numbers of the same dimension."""
     if a.node is None and b.node is None:
         return constant(BOOL, bool(_COMPARE[op](a.const, b.const)))
-    return _typed(BOOL, _node("cmp", (op, _operand(a), _operand(b))), None)
+    return Typed(BOOL, Node("cmp", (op, _operand(a), _operand(b))), None)
 
 
 def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
@@ -233,7 +227,7 @@ def arith(op: str, a: Typed, b: Typed, kind: Kind) -> Typed:
     if a.node is None and b.node is None:
         fn = _divide if op == "/" else _ARITH[op]
         return constant(kind, fn(a.const, b.const))
-    return _typed(kind, _node("arith", (op, _operand(a), _operand(b))), None)
+    return Typed(kind, Node("arith", (op, _operand(a), _operand(b))), None)
 
 
 #: Nesting depth of one generated function: deeper subtrees (a chain of named interrupts,

@@ -21,7 +21,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
+from mdle.core.errors import MdleError
 from mdle.lang import syntax as st
+from mdle.lang.hints import refine_error
+from mdle.lang.parser import parse_module
 
 __all__ = ["WIDTH", "format_source", "format_module", "format_statement", "format_expr"]
 
@@ -32,10 +35,6 @@ _INDENT = "    "
 
 def format_source(text: str, file: str = "<string>") -> str:
     """Return the canonical form of a text (raises MdleSyntaxError if it does not parse)."""
-    from mdle.core.errors import MdleError
-    from mdle.lang.hints import refine_error
-    from mdle.lang.parser import parse_module
-
     try:
         module = parse_module(text, file)
     except MdleError as err:

@@ -9,12 +9,14 @@ every file are reported together, then the check errors.
 from __future__ import annotations
 
 import contextlib
+import functools
 import gc
 import os
 import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
+from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
 from mdle.core.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
 from mdle.core.motion_limits import KnownRobot
@@ -22,8 +24,11 @@ from mdle.core.userfile import UserFileError, read_user_file
 from mdle.lang import syntax as st
 from mdle.lang.check import check_program
 from mdle.lang.hints import refine_hints
+from mdle.lang.overrides import override_defaults
 from mdle.lang.parser import normalise_newlines, parse_partial
 from mdle.lang.program import Program
+from mdle.lang.syntax import Loaded
+from mdle.lang.vocabulary import word_of
 
 __all__ = ["load_program", "load_text", "load_modules", "read_source", "plan_bundle", "Loaded"]
 
@@ -55,22 +60,16 @@ def read_source(path: str | os.PathLike[str], shown: str | None = None,
             hint="MDLe plans are plain text files; is this a binary file?")) from None
 
 
-@dataclass(frozen=True)
-class Loaded:
-    """The files of a program: modules in dependency order (imports first), their texts."""
-
-    modules: tuple[st.Module, ...]
-    sources: dict[str, str]
-    main: st.Module | None
-
-
-_IMPORT_LINE = re.compile(r'^[ \t]*import[ \t]+"([^"\n]*)"', re.M)
+@functools.lru_cache(maxsize=1)
+def _import_line() -> re.Pattern[str]:
+    """Return the pattern of an import statement on a line of its own."""
+    return re.compile(r'^[ \t]*' + word_of("IMPORT") + r'[ \t]+"([^"\n]*)"', re.M)
 
 
 def _scan_imports(text: str, file: str) -> list[st.Import]:
     """Return the imports of a file that does not parse (found line by line)."""
     out = []
-    for m in _IMPORT_LINE.finditer(text):
+    for m in _import_line().finditer(text):
         line = text.count("\n", 0, m.start()) + 1
         col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
         out.append(st.Import(m.group(1), Span(file, line, col, line, col + len(m.group(0)))))
@@ -260,8 +259,6 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
         MdleSyntaxError or CheckError, with ``.sources`` filled.
     """
     if registry is None:
-        from mdle.atoms import default_registry
-
         registry = default_registry()
     with _collector_paused():
         found = _load(text, file, base_dir, files)
@@ -270,8 +267,6 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
             raise _error(found.diagnostics + _check_errors(found, registry), loaded.sources,
                          found.syntax_failed)
         if settings:
-            from mdle.lang.overrides import override_defaults
-
             loaded = override_defaults(loaded, settings, registry)
         return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main,
                              robot=robot)

@@ -33,18 +33,19 @@ import difflib
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
+from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
-from mdle.core.errors import CheckError, Diagnostic, MdleError, Severity, Span
+from mdle.core.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
 from mdle.lang import syntax as st
+from mdle.lang.check import Checker
+from mdle.lang.check_state import _Abort
+from mdle.lang.dimensions import Symbol, dim_example, dim_words, fits, unit_for
+from mdle.lang.parser import parse_expression
 from mdle.lang.resolve import Namespace, build_namespace
+from mdle.lang.syntax import Loaded
 
-if TYPE_CHECKING:  # the loader imports this module inside load_text
-    from mdle.lang.loader import Loaded
-
-__all__ = ["Override", "parse_override", "parse_setting", "settable_parameters",
-           "apply_overrides", "override_defaults", "OVERRIDE_FILE"]
+__all__ = ["Override", "parse_override", "apply_overrides", "override_defaults", "OVERRIDE_FILE"]
 
 #: The file name messages give an override's text (``--set:1:10: error: ...``).
 OVERRIDE_FILE = "--set"
@@ -88,9 +89,6 @@ def parse_override(text: str, file: str = OVERRIDE_FILE) -> Override:
         No ``=``, a name that is not ``PARAM`` or ``DEFINITION.PARAM``, or a value that
         does not parse (the message points into ``text``, shown as file ``file``).
     """
-    from mdle.core.errors import MdleSyntaxError
-    from mdle.lang.parser import parse_expression
-
     sources = {file: text}
     whole = Span(file, 1, 1, 1, len(text) + 1)
     if "\n" in text:
@@ -154,10 +152,6 @@ def apply_overrides(modules: Sequence[st.Module], overrides: Sequence[Override],
 
 def _misfit(o: Override, target: st.Definition, ns: Namespace) -> Diagnostic | None:
     """Return why ``o``'s value cannot replace the default of ``target``'s parameter."""
-    from mdle.lang.check import Checker
-    from mdle.lang.check_state import _Abort
-    from mdle.lang.dimensions import Symbol, dim_example, dim_words, fits, unit_for
-
     param = next(p for p in target.param_list if p.name == o.param)
     note = (Diagnostic(param.span, f"`{o.param}` of `{target.name}` is declared here",
                        Severity.NOTE),)
@@ -275,30 +269,8 @@ def _replaced(module: st.Module, new: Mapping[tuple[str, str], st.Expr]) -> st.M
     return dataclasses.replace(module, statements=tuple(statements)) if changed else module
 
 
-def parse_setting(text: str) -> tuple[str, str]:
-    """Split ``NAME=VALUE`` into its two parts, each stripped.
-
-    Raises
-    ------
-    ValueError
-        No ``=``, or an empty name or value.
-    """
-    name, eq, value = text.partition("=")
-    name, value = name.strip(), value.strip()
-    if not eq or not name or not value:
-        raise ValueError(f"expected NAME=VALUE, got {text!r}")
-    return name, value
-
-
-def settable_parameters(module: st.Module) -> list[str]:
-    """Return the parameter names of the definitions in ``module``, sorted, each once."""
-    names = {p.name for d in module.statements if isinstance(d, st.Definition)
-             for p in (d.params or ())}
-    return sorted(names)
-
-
-def override_defaults(loaded: "Loaded", settings: Mapping[str, str] | Sequence[str],
-                      registry: Registry | None = None) -> "Loaded":
+def override_defaults(loaded: Loaded, settings: Mapping[str, str] | Sequence[str],
+                      registry: Registry | None = None) -> Loaded:
     """Return ``loaded`` with parameter defaults replaced by ``settings``.
 
     Parameters
@@ -316,11 +288,7 @@ def override_defaults(loaded: "Loaded", settings: Mapping[str, str] | Sequence[s
         Every override that names no parameter, does not parse or does not fit (located
         in its own text; the texts are in ``sources``).
     """
-    from mdle.lang.loader import Loaded
-
     if registry is None:
-        from mdle.atoms import default_registry
-
         registry = default_registry()
     texts = ([f"{k}={v}" for k, v in settings.items()] if isinstance(settings, Mapping)
              else list(settings))

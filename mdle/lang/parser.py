@@ -1,14 +1,8 @@
-"""Text to syntax tree: the lark LALR parser of ``grammar/mdle.lark``.
+"""Text to syntax tree: parsing with lark's LALR parser, error recovery, and errors in words.
 
-Over 500 lines: besides building trees, it recovers from syntax errors and words them,
-and both work on lark's error objects and parser state, which no other module sees.
-
-The grammar is read once through :mod:`importlib.resources` (it ships inside the
-package as ``mdle.grammar``), and the analysed parser is cached in a per-user file
-(``$XDG_CACHE_HOME/mdle``, else ``~/.cache/mdle``), so ``mdle check`` does not rebuild
-the LALR tables at every start. The tree is built during parsing by lark's LALR
-callbacks (no recursion, so 1 MB of parentheses cannot exhaust the stack); a nesting
-limit of :data:`MAX_DEPTH` keeps the later recursive stages safe.
+Over 500 lines: besides parsing whole files, expressions and fragments (with the parser
+and tree builder of :mod:`mdle.lang.treebuild`), it recovers from syntax errors and words
+them, and both work on lark's error objects and parser state, which no other module sees.
 
 Syntax errors become :class:`~mdle.core.errors.MdleSyntaxError` with file, line, column,
 the source line, a caret, what was expected in words and a hint; after an error the
@@ -18,27 +12,20 @@ several errors in one file are reported together.
 
 from __future__ import annotations
 
-import contextvars
 import difflib
 import functools
-import hashlib
-import importlib.resources
-import os
 import re
 from collections.abc import Iterator
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from mdle.core.errors import Diagnostic, MdleSyntaxError, Severity, Span
 from mdle.lang import syntax as st
-from mdle.lang.descent import Lexer, parse_valid
 from mdle.lang.syntax_errors import (
     EXAMPLES,
-    KEYWORDS,
     Label,
     character_hint,
     describe_expected,
@@ -46,16 +33,15 @@ from mdle.lang.syntax_errors import (
 )
 from mdle.lang.treebuild import (
     MAX_DEPTH,
+    PARSE_STATE,
     BuildState,
-    Prefixed,
     TooDeep,
-    deeper,
-    number,
+    lark_parser,
     over,
-    precedence,
     token_span,
     too_deep,
 )
+from mdle.lang.vocabulary import definition_keywords, keywords, statement_keywords, word_of
 
 __all__ = ["parse_module", "parse_partial", "Partial", "parse_expression", "normalise_newlines",
            "MAX_DEPTH", "MAX_ERRORS", "lark_parser", "iter_tokens", "lex_fragment"]
@@ -63,208 +49,22 @@ __all__ = ["parse_module", "parse_partial", "Partial", "parse_expression", "norm
 #: Syntax errors reported per file before giving up.
 MAX_ERRORS = 20
 
-_STATEMENT_LINE = re.compile(r"^[ \t]*(?:import|run|atom|behavior|plan|interrupt)(?![A-Za-z0-9_])",
-                             re.M)
 
-
-# --------------------------------------------------------------------------------------
-# Building the parser (once per process; the analysed tables are cached on disk)
-
-
-def _cache_file(grammar: str) -> str | None:
-    """Return a per-user cache file for the analysed grammar (None: nowhere to write)."""
-    import lark
-
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    key = hashlib.sha256(f"{grammar}{lark.__version__}".encode()).hexdigest()[:16]
-    folder = Path(base) / "mdle"
-    try:
-        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-        if not os.access(folder, os.W_OK):
-            return None
-    except OSError:
-        return None
-    return str(folder / f"grammar-{key}.lark-cache")
+@functools.lru_cache(maxsize=1)
+def _statement_line() -> re.Pattern[str]:
+    """Return the pattern of a line starting with a statement keyword (a resumption point)."""
+    return re.compile(r"^[ \t]*(?:" + "|".join(statement_keywords()) + r")(?![A-Za-z0-9_])", re.M)
 
 
 @functools.lru_cache(maxsize=1)
-def lark_parser() -> Lark:
-    """Return the LALR parser of ``mdle.lark``, built once per process (tables cached per user)."""
-    grammar = importlib.resources.files("mdle.grammar").joinpath("mdle.lark").read_text("utf-8")
-    options: dict[str, Any] = dict(parser="lalr", lexer="basic", propagate_positions=False,
-                                   start=["start", "expr_start"], maybe_placeholders=True,
-                                   transformer=_Build(),
-                                   lexer_callbacks={"COMMENT": _on_comment, "LPAR": _on_open,
-                                                    "LSQB": _on_open, "RPAR": _on_close,
-                                                    "RSQB": _on_close})
-    cache = _cache_file(grammar)
-    try:
-        return Lark(grammar, cache=cache or False, **options)
-    except OSError:  # an unreadable or unwritable cache: build without it
-        return Lark(grammar, **options)
-
-
-@functools.lru_cache(maxsize=1)
-def _fast_lexer() -> Lexer:
-    """Return the fast path's lexer, made of the reference lexer's terminals."""
-    return Lexer(lark_parser().parser.lexer.terminals)
-
-
-# --------------------------------------------------------------------------------------
-# Per-parse state (file name, comments, unit errors, nesting depth), scoped to one call
-
-_State = BuildState
-_TooDeep = TooDeep
-_Prefixed = Prefixed
-_token_span = token_span
-_deeper = deeper
-_too_deep = too_deep
-_STATE: contextvars.ContextVar[_State] = contextvars.ContextVar("mdle_parse_state")
-
-
-def _over(file: str, first: Any, last: Any) -> Span:
-    return over(file, first, last)
+def _statement_tokens() -> frozenset[str]:
+    """Return the terminals a statement starts with."""
+    return frozenset(keywords()[word] for word in statement_keywords())
 
 
 def _end(file: str, part: Any) -> tuple[int, int]:
     span = over(file, part, part)
     return span.end_line, span.end_column
-
-
-def _on_comment(token: Token) -> None:
-    state = _STATE.get(None)
-    if state is not None:
-        state.comments.append(st.Comment(str(token), _token_span(state.file, token)))
-
-
-def _on_open(token: Token) -> Token:
-    # Refuse deep nesting as soon as it is lexed: 1 MB of `(` fails in microseconds.
-    state = _STATE.get(None)
-    if state is not None:
-        state.open_brackets += 1
-        if state.open_brackets > MAX_DEPTH:
-            raise _TooDeep(_token_span(state.file, token))
-    return token
-
-
-def _on_close(token: Token) -> Token:
-    state = _STATE.get(None)
-    if state is not None and state.open_brackets > 0:
-        state.open_brackets -= 1
-    return token
-
-
-# --------------------------------------------------------------------------------------
-# The tree builder: lark LALR callbacks, one per rule alias, called as rules reduce
-
-
-@v_args(inline=True)
-class _Build(Transformer):
-    """Builds :mod:`mdle.lang.syntax` nodes as the LALR parser reduces each rule."""
-
-    def start(self, *statements: st.Statement) -> tuple[st.Statement, ...]:
-        return statements
-
-    def expr_start(self, expr: st.Expr) -> st.Expr:
-        return expr
-
-    def import_stmt(self, kw: Token, path: Token) -> st.Import:
-        state = _STATE.get()
-        node = st.Import(str(path)[1:-1], _over(state.file, kw, path))
-        state.statements.append(node)
-        return node
-
-    def run_stmt(self, kw: Token, name: Token) -> st.Run:
-        state = _STATE.get()
-        _not_keyword(name)
-        node = st.Run(str(name), _over(state.file, kw, name), _token_span(state.file, name))
-        state.statements.append(node)
-        return node
-
-    def def_head(self, kw: Token, name: Token, params: list[Any] | None
-                 ) -> tuple[Token, Token, list[Any] | None]:
-        return kw, name, params
-
-    def definition(self, head: tuple[Token, Token, list[Any] | None],
-                   body: st.Expr) -> st.Definition:
-        kw, name, params = head
-        state = _STATE.get()
-        _not_keyword(name)
-        node = st.Definition(st.DefKind(str(kw)), str(name),
-                             None if params is None else tuple(params[1:-1]), body,
-                             _over(state.file, kw, body), _token_span(state.file, name))
-        state.statements.append(node)
-        return node
-
-    def params(self, *parts: Any) -> list[Any]:
-        return list(parts)  # (LPAR, params..., RPAR): the brackets are dropped by `definition`
-
-    def param(self, name: Token, default: st.Expr | None = None) -> st.Param:
-        file = _STATE.get().file
-        _not_keyword(name)
-        return st.Param(str(name), default, _over(file, name, default if default else name))
-
-    def number(self, tok: Token) -> st.Number:
-        state = _STATE.get()
-        return number(state, str(tok), _token_span(state.file, tok))
-
-    def name(self, tok: Token) -> st.Name:
-        _not_keyword(tok)
-        return st.Name(str(tok), _token_span(_STATE.get().file, tok))
-
-    def never(self, tok: Token) -> st.Never:
-        return st.Never(_token_span(_STATE.get().file, tok))
-
-    def inf(self, tok: Token) -> st.Inf:
-        return st.Inf(_token_span(_STATE.get().file, tok))
-
-    def call(self, name: Token, lpar: Token, args: list[st.Argument] | None,
-             rpar: Token) -> st.Call:
-        state = _STATE.get()
-        _not_keyword(name)
-        args = args or []
-        node = st.Call(str(name), tuple(args), _over(state.file, name, rpar),
-                       _token_span(state.file, name))
-        return _deeper(state, node, [a.value for a in args])
-
-    def arguments(self, *args: Any) -> list[st.Argument]:
-        return [a if isinstance(a, st.Argument) else st.Argument(None, a, a.span) for a in args]
-
-    def keyword(self, name: Token, value: st.Expr) -> st.Argument:
-        _not_keyword(name)
-        return st.Argument(str(name), value, _over(_STATE.get().file, name, value))
-
-    def prefixed(self, op: Token, operand: Any) -> _Prefixed:
-        return _Prefixed(op, operand)
-
-    def expr(self, *parts: Any) -> st.Expr:
-        if len(parts) == 1 and not isinstance(parts[0], _Prefixed):
-            return parts[0]
-        return precedence(_STATE.get(), parts)
-
-    def group(self, lpar: Token, *parts: Any) -> st.Group:
-        state = _STATE.get()
-        *items, rpar, ellipsis = parts
-        node = st.Group(tuple(items), ellipsis is not None,
-                        _over(state.file, lpar, ellipsis if ellipsis is not None else rpar))
-        return _deeper(state, node, items)
-
-    def vector(self, lsqb: Token, *parts: Any) -> st.Vector:
-        state = _STATE.get()
-        *items, rsqb = parts
-        return _deeper(state, st.Vector(tuple(items), _over(state.file, lsqb, rsqb)), items)
-
-
-def _not_keyword(tok: Token) -> None:
-    # The contextual lexer reads a keyword as a NAME where only a name can stand
-    # (`atom run = ...`); keywords stay reserved everywhere.
-    word = str(tok)
-    if word in KEYWORDS:
-        state = _STATE.get()
-        state.diagnostics.append(Diagnostic(
-            _token_span(state.file, tok),
-            f"`{word}` is a keyword of MDLe and cannot be used as a name",
-            hint=f"pick another name, such as `{word}_1`"))
 
 
 # --------------------------------------------------------------------------------------
@@ -303,9 +103,6 @@ def parse_module(text: str, file: str = "<string>") -> st.Module:
         Every syntax error found (up to :data:`MAX_ERRORS`), and every unknown unit.
     """
     text = normalise_newlines(text)
-    valid = parse_valid(text, file, _fast_lexer())
-    if valid is not None:
-        return st.Module(file, tuple(valid[0]), tuple(valid[1]))
     statements, comments, diagnostics = _parse_with_recovery(text, file)
     if diagnostics:
         raise MdleSyntaxError(_sorted(diagnostics), {file: text})
@@ -336,9 +133,6 @@ def parse_partial(text: str, file: str = "<string>") -> Partial:
     defines is listed in ``unparsed`` so its uses are not reported as unknown.
     """
     text = normalise_newlines(text)
-    valid = parse_valid(text, file, _fast_lexer())
-    if valid is not None:
-        return Partial(st.Module(file, tuple(valid[0]), tuple(valid[1])), frozenset(), ())
     statements, comments, diagnostics = _parse_with_recovery(text, file)
     if not diagnostics:
         return Partial(st.Module(file, tuple(statements), tuple(comments)), frozenset(), ())
@@ -353,9 +147,17 @@ def _inside(span: Span, place: tuple[int, int]) -> bool:
     return (span.line, span.column) <= place < (span.end_line, span.end_column)
 
 
-_DEFINITION_HEAD = re.compile(r"(?<![A-Za-z0-9_])(?:atom|behavior|plan|interrupt)[ \t\f\n]+"
-                              r"([A-Za-z_][A-Za-z0-9_]*)")
-_IMPORT_WORD = re.compile(r"(?<![A-Za-z0-9_])import(?![A-Za-z0-9_])")
+@functools.lru_cache(maxsize=1)
+def _definition_head() -> re.Pattern[str]:
+    """Return the pattern of a definition's keyword and the name after it."""
+    return re.compile(r"(?<![A-Za-z0-9_])(?:" + "|".join(definition_keywords()) +
+                      r")[ \t\f\n]+([A-Za-z_][A-Za-z0-9_]*)")
+
+
+@functools.lru_cache(maxsize=1)
+def _import_word() -> re.Pattern[str]:
+    """Return the pattern of the keyword of an import statement, as a word."""
+    return re.compile(r"(?<![A-Za-z0-9_])" + word_of("IMPORT") + r"(?![A-Za-z0-9_])")
 
 
 def _defined_outside(text: str, statements: list[st.Statement],
@@ -376,8 +178,8 @@ def _defined_outside(text: str, statements: list[st.Statement],
         rest.append(text[at:max(at, begin)])
         at = max(at, end)
     rest.append(text[at:])
-    names = {m.group(1) for piece in rest for m in _DEFINITION_HEAD.finditer(piece)}
-    return frozenset(names - KEYWORDS), any(_IMPORT_WORD.search(piece) for piece in rest)
+    names = {m.group(1) for piece in rest for m in _definition_head().finditer(piece)}
+    return frozenset(names - keywords().keys()), any(_import_word().search(piece) for piece in rest)
 
 
 def parse_expression(text: str, file: str = "<repl>") -> st.Expr:
@@ -388,16 +190,16 @@ def parse_expression(text: str, file: str = "<repl>") -> st.Expr:
     MdleSyntaxError
         If the text is not one expression.
     """
-    state = _State(file)
-    token = _STATE.set(state)
+    state = BuildState(file)
+    token = PARSE_STATE.set(state)
     try:
         expr = lark_parser().parse(text, start="expr_start")
     except UnexpectedInput as err:
         raise MdleSyntaxError(_describe(err, text, file, "expr_start"), {file: text}) from None
-    except _TooDeep as err:
-        raise MdleSyntaxError(_too_deep(err.span), {file: text}) from None
+    except TooDeep as err:
+        raise MdleSyntaxError(too_deep(err.span), {file: text}) from None
     finally:
-        _STATE.reset(token)
+        PARSE_STATE.reset(token)
     if state.diagnostics:
         raise MdleSyntaxError(_sorted(state.diagnostics), {file: text})
     return expr  # type: ignore[return-value]
@@ -428,8 +230,8 @@ def _parse_with_recovery(text: str, file: str
     source = text
     errors = 0
     while True:
-        state = _State(file)
-        token = _STATE.set(state)
+        state = BuildState(file)
+        token = PARSE_STATE.set(state)
         resume_at: int | None = None
         try:
             parser.parse(source, start="start")
@@ -437,12 +239,12 @@ def _parse_with_recovery(text: str, file: str
             diagnostics.append(_describe(err, text, file, "start", source))
             errors += 1
             resume_at = _resume_offset(source, err)
-        except _TooDeep as err:
-            diagnostics.append(_too_deep(err.span))
+        except TooDeep as err:
+            diagnostics.append(too_deep(err.span))
             errors += 1
             resume_at = _resume_offset(source, None, err.span)
         finally:
-            _STATE.reset(token)
+            PARSE_STATE.reset(token)
         comments.extend(state.comments)
         diagnostics.extend(state.diagnostics)
         statements.extend(state.statements)  # those completed before an error too
@@ -479,21 +281,18 @@ def _offset_of(text: str, line: int, column: int) -> int:
     return min(len(text), offset + column - 1)
 
 
-_STATEMENT_TOKENS = frozenset({"ATOM", "BEHAVIOR", "PLAN", "INTERRUPT", "IMPORT", "RUN"})
-
-
 def _resume_offset(source: str, err: UnexpectedInput | None,
                    span: Span | None = None) -> int | None:
     at = _error_offset(source, err, span)
     tok = getattr(err, "token", None)
-    if isinstance(err, UnexpectedToken) and tok is not None and tok.type in _STATEMENT_TOKENS \
+    if isinstance(err, UnexpectedToken) and tok is not None and tok.type in _statement_tokens() \
             and tok.start_pos is not None and tok.start_pos > 0 \
             and not source[source.rfind("\n", 0, tok.start_pos) + 1:tok.start_pos].strip():
         return int(tok.start_pos)  # the statement that interrupted the broken one is fine
     line_end = source.find("\n", at)
     if line_end < 0:
         return None
-    m = _STATEMENT_LINE.search(source, line_end)
+    m = _statement_line().search(source, line_end)
     return m.start() if m else None
 
 
@@ -503,11 +302,11 @@ def _resume_offset(source: str, err: UnexpectedInput | None,
 
 def _example_parse(start: str) -> Any:
     def parse(snippet: str) -> Any:
-        token = _STATE.set(_State("<example>"))
+        token = PARSE_STATE.set(BuildState("<example>"))
         try:
             return lark_parser().parse(snippet, start=start)
         finally:
-            _STATE.reset(token)
+            PARSE_STATE.reset(token)
     return parse
 
 
@@ -529,7 +328,7 @@ def _unclosed(text: str, file: str) -> Span | None:
             stack.append(tok)
         elif tok.type in ("RPAR", "RSQB") and stack:
             stack.pop()
-    return _token_span(file, stack[-1]) if stack else None
+    return token_span(file, stack[-1]) if stack else None
 
 
 def _describe(err: UnexpectedInput, text: str, file: str, start: str,
@@ -553,10 +352,10 @@ def _describe(err: UnexpectedInput, text: str, file: str, start: str,
         found = "the end of the file"
     else:
         tok = err.token  # type: ignore[attr-defined]
-        span = _token_span(file, tok)
+        span = token_span(file, tok)
         found = describe_token(tok.type, str(tok))
         stack = getattr(getattr(err, "state", None), "value_stack", None) or []
-        if tok.type in _STATEMENT_TOKENS and stack:
+        if tok.type in _statement_tokens() and stack:
             # The next statement began before this one was complete: point just after
             # the last thing this one has, where the missing part belongs.
             line, col = _end(file, stack[-1])
@@ -569,9 +368,9 @@ def _describe(err: UnexpectedInput, text: str, file: str, start: str,
 
     # A keyword where a name was expected: say so directly.
     if not at_end and "NAME" in expected and "NUMBER" not in expected and \
-            str(err.token) in KEYWORDS:  # type: ignore[attr-defined]
+            str(err.token) in keywords():  # type: ignore[attr-defined]
         word = str(err.token)  # type: ignore[attr-defined]
-        span = _token_span(file, err.token)  # type: ignore[attr-defined]
+        span = token_span(file, err.token)  # type: ignore[attr-defined]
         return Diagnostic(span, f"`{word}` is a keyword of MDLe and cannot be used as a name",
                           hint=f"pick another name, such as `{word}_1`")
 
@@ -612,7 +411,7 @@ def _label(err: UnexpectedInput, source: str, start: str) -> Label | None:
         stack = [v[0] if isinstance(v, tuple) and v and isinstance(v[0], Token) else v
                  for v in getattr(getattr(err, "state", None), "value_stack", None) or []]
         first = next((i for i, v in enumerate(stack) if isinstance(v, Token)
-                      and v.type in _STATEMENT_TOKENS), None)
+                      and v.type in _statement_tokens()), None)
         if first is not None and first > 0 and stack[first].start_pos is not None:
             at = stack[first].start_pos
             probe = _fail(_example_parse("start"), re.sub(r"[^\n]", " ", source[:at]) + source[at:])
@@ -666,13 +465,13 @@ def _fail(parse: Any, text: str) -> UnexpectedInput | None:
         parse(text)
     except UnexpectedInput as err:
         return err
-    except _TooDeep:
+    except TooDeep:
         return None
     return None
 
 
 def _close_keyword(word: str, expected: set[str]) -> str | None:
-    candidates = [t.lower() for t in expected if t.lower() in KEYWORDS]
+    candidates = [word for word, terminal in keywords().items() if terminal in expected]
     match = difflib.get_close_matches(word, candidates, n=1, cutoff=0.7)
     return match[0] if match else None
 
@@ -682,16 +481,16 @@ def iter_tokens(text: str) -> Iterator[Token]:
 
     Stops at the first bad character (and after :data:`MAX_DEPTH` unclosed brackets).
     """
-    state = _State("<lex>")
+    state = BuildState("<lex>")
     lexer = lark_parser().lex(text, dont_ignore=False)
     while True:
-        token = _STATE.set(state)
+        token = PARSE_STATE.set(state)
         try:
             tok = next(lexer)
-        except (StopIteration, UnexpectedInput, _TooDeep):
+        except (StopIteration, UnexpectedInput, TooDeep):
             return
         finally:
-            _STATE.reset(token)
+            PARSE_STATE.reset(token)
         yield tok
 
 
@@ -705,17 +504,17 @@ def lex_fragment(text: str, opened: int = 0) -> tuple[list[Token], int, bool]:
     the open count after them, and whether lexing stopped early (a bad character, or
     more than :data:`MAX_DEPTH` brackets open), after which nothing more is lexed.
     """
-    state = _State("<lex>", open_brackets=opened)
+    state = BuildState("<lex>", open_brackets=opened)
     lexer = lark_parser().lex(text, dont_ignore=False)
     out: list[Token] = []
     while True:
-        token = _STATE.set(state)
+        token = PARSE_STATE.set(state)
         try:
             tok = next(lexer)
         except StopIteration:
             return out, state.open_brackets, False
-        except (UnexpectedInput, _TooDeep):
+        except (UnexpectedInput, TooDeep):
             return out, state.open_brackets, True
         finally:
-            _STATE.reset(token)
+            PARSE_STATE.reset(token)
         out.append(tok)

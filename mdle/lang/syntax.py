@@ -43,6 +43,7 @@ __all__ = [
     "Statement",
     "Comment",
     "Module",
+    "Loaded",
     "NO_SPAN",
     "children",
 ]
@@ -244,3 +245,16 @@ def children(expr: Expr) -> tuple[Expr, ...]:
     if isinstance(expr, (Group, Vector)):
         return expr.items
     return ()
+
+
+@dataclass(frozen=True)
+class Loaded:
+    """The files of a program: modules in dependency order (imports first), their texts.
+
+    (Made by :func:`mdle.lang.loader.load_modules`; here so the loader and the parameter
+    overrides, which both take and give it, need not import each other.)
+    """
+
+    modules: tuple[Module, ...]
+    sources: dict[str, str]
+    main: Module | None

@@ -3,8 +3,9 @@
 lark reports a syntax error as a parser state and an unexpected token. This module
 turns that into words a robot programmer uses: :data:`EXAMPLES` maps each kind of
 mistake to a few bad snippets that fail in the same parser state
-(``UnexpectedInput.match_examples``), and :data:`TERMINAL_WORDS` names every terminal
-of ``grammar/mdle.lark``. Each label is tested (tests/language/test_language_syntax.py).
+(``UnexpectedInput.match_examples``), and :func:`terminal_words` names every terminal
+of ``grammar/mdle.lark`` (the keywords as the grammar has them, from
+:mod:`mdle.lang.vocabulary`). Each label is tested (tests/language/test_language_syntax.py).
 """
 
 from __future__ import annotations
@@ -12,26 +13,20 @@ from __future__ import annotations
 import unicodedata
 from dataclasses import dataclass
 
+from mdle.lang.vocabulary import keywords, statement_keywords
+
 __all__ = [
     "Label",
     "EXAMPLES",
     "TERMINAL_WORDS",
-    "KEYWORDS",
-    "STATEMENT_KEYWORDS",
+    "terminal_words",
     "describe_token",
     "describe_expected",
     "character_hint",
 ]
 
-#: Words reserved by the grammar; none can name a definition or parameter.
-KEYWORDS: frozenset[str] = frozenset(
-    {"import", "run", "atom", "behavior", "plan", "interrupt", "never", "inf", "and", "or",
-     "xor", "not"})
-
-#: Keywords that start a statement, in the order messages list them.
-STATEMENT_KEYWORDS: tuple[str, ...] = ("atom", "behavior", "plan", "interrupt", "import", "run")
-
-#: Every terminal of the grammar, in words (messages never show a terminal's name).
+#: Every terminal of the grammar but the keywords, in words (messages never show a
+#: terminal's name); a keyword's terminal is its word (:func:`terminal_words`).
 TERMINAL_WORDS: dict[str, str] = {
     "NAME": "a name",
     "NUMBER": "a number such as `1 m` or `10 s`",
@@ -47,8 +42,12 @@ TERMINAL_WORDS: dict[str, str] = {
     "RSQB": "`]`",
     "_COMMA": "`,`",
     "$END": "the end of the file",
-    **{k.upper(): f"`{k}`" for k in KEYWORDS},
 }
+
+
+def terminal_words() -> dict[str, str]:
+    """Return every terminal of the grammar in words: :data:`TERMINAL_WORDS` and the keywords."""
+    return {**TERMINAL_WORDS, **{terminal: f"`{word}`" for word, terminal in keywords().items()}}
 
 
 @dataclass(frozen=True)
@@ -84,7 +83,6 @@ _IMPORT = Label("expected a file name in double quotes after `import`",
                 'for example `import "common.mdle"`')
 _RUN = Label("expected the name of an atom, behavior or plan after `run`",
              "for example `run main`")
-_CHAINED = Label("comparisons do not chain", "write `0 m < x and x < 10 m`")
 _ASSIGN = Label("`=` gives a default or a keyword argument; it does not compare",
                 "to compare two values write `==`")
 _MISSING_VALUE = Label("expected a value here: a number such as `1 m`, a name, a call or `(`")
@@ -244,7 +242,7 @@ def describe_token(type_: str, value: str) -> str:
         return f"the number `{shown}`"
     if type_ == "STRING":
         return f"the text {shown}"
-    if value in KEYWORDS:
+    if value in keywords():
         return f"the keyword `{value}`"
     return f"`{shown}`"
 
@@ -253,9 +251,10 @@ def describe_expected(expected: set[str] | frozenset[str]) -> str:
     """Return the set of acceptable terminals in words, short enough for one line."""
     names = set(expected)
     parts: list[str] = []
-    statement = {k.upper() for k in STATEMENT_KEYWORDS}
+    words = keywords()
+    statement = {words[k] for k in statement_keywords()}
     if statement <= names:
-        parts.append("a statement (`atom`, `behavior`, `plan`, `interrupt`, `import`, `run`)")
+        parts.append("a statement (" + ", ".join(f"`{k}`" for k in statement_keywords()) + ")")
         names -= statement
     operators = {"AND", "OR", "XOR", "COMPARE", "ADD_OP", "MUL_OP"}
     if len(names & operators) >= 3:
@@ -265,8 +264,9 @@ def describe_expected(expected: set[str] | frozenset[str]) -> str:
     if values <= names:
         parts.append("a value (a number, a name or `(`)")
         names -= values | {"NEVER", "INF", "NOT", "ADD_OP", "LSQB"}
+    described = terminal_words()
     for n in sorted(names):
-        parts.append(TERMINAL_WORDS.get(n, n.lower()))
+        parts.append(described.get(n, n.lower()))
     if not parts:
         return "nothing more"
     return parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " or " + parts[-1]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from typing import Any
 
+from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
 from mdle.core.errors import CheckError, Diagnostic, MdleError
 from mdle.core.motion_limits import KnownRobot
@@ -57,8 +58,6 @@ class Workspace:
 
     def __init__(self, registry: Registry | None = None) -> None:
         if registry is None:
-            from mdle.atoms import default_registry
-
             registry = default_registry()
         self.registry = registry
         self._defs: dict[str, st.Definition] = {}

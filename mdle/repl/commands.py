@@ -35,8 +35,9 @@ from mdle.console.output import print_diagnostics
 from mdle.console.signals import ends_session
 from mdle.core.errors import Diagnostic, MdleError
 from mdle.core.pose import Pose
-from mdle.core.ranges import COORDINATE, MAX_SEED
+from mdle.core.ranges import COORDINATE
 from mdle.core.userfile import file_fault, file_fault_words
+from mdle.lang import keywords, statement_keywords
 from mdle.repl import views
 from mdle.repl.reports import RunReport
 from mdle.repl.session import ReplError, Session
@@ -45,10 +46,11 @@ from mdle.runtime.events import ended_how
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 
-#: First words of an input that defines something (rather than running an element).
-DEFINITION_KEYWORDS = ("atom", "behavior", "plan", "interrupt", "import", "run")
-#: Every MDLe keyword (completion, highlighting).
-KEYWORDS = DEFINITION_KEYWORDS + ("never", "inf", "and", "or", "xor", "not")
+#: First words of an input that defines something (rather than running an element): the
+#: grammar's statement keywords.
+DEFINITION_KEYWORDS = statement_keywords()
+#: Every MDLe keyword (completion, highlighting), as the grammar has them.
+KEYWORDS = tuple(keywords())
 
 
 @dataclass(frozen=True)
@@ -453,6 +455,7 @@ class Repl:
                        "a real robot has no random seed and always runs at the pace of the "
                        "wall clock")
         if what == "seed":
+            from mdle.cli.options import MAX_SEED
 
             seed = _int(value, "the seed")
             if not 0 <= seed <= MAX_SEED:

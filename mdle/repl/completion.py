@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterable, Iterator
 from prompt_toolkit.completion import CompleteEvent, Completer, Completion, PathCompleter
 from prompt_toolkit.document import Document
 
+from mdle.lang import DefKind
 from mdle.repl.commands import COMMANDS, DEFINITION_KEYWORDS, KEYWORDS, Repl
 
 __all__ = ["UNITS", "MdleCompleter"]
@@ -191,7 +192,9 @@ def _starting(word: str, items: Iterable[tuple[str, ...]]) -> Iterator[Completio
         yield Completion(text, -len(word), display=display, display_meta=meta)
 
 
-_DEF_HEAD = re.compile(r"^\s*(?:atom|behavior|plan|interrupt)\s+[A-Za-z_]\w*\s*\(([^)]*)\)\s*=")
+#: The head of a definition with parameters (its keywords are the grammar's: DefKind's).
+_DEF_HEAD = re.compile(r"^\s*(?:" + "|".join(k.value for k in DefKind) +
+                       r")\s+[A-Za-z_]\w*\s*\(([^)]*)\)\s*=")
 
 
 def _own_params(before: str) -> list[str]:

@@ -1,6 +1,6 @@
 """Highlighting of MDLe input in the REPL: a small pygments lexer.
 
-(pygments is already installed as a dependency of rich.)
+(pygments is already installed as a dependency of rich.) The keywords are the grammar's.
 """
 
 from __future__ import annotations
@@ -20,9 +20,14 @@ from pygments.token import (
     Whitespace,
 )
 
-from mdle.repl.commands import DEFINITION_KEYWORDS
+from mdle.lang import keywords, operator_keywords, statement_keywords
 
 __all__ = ["MdleLexer"]
+
+_STATEMENTS = statement_keywords()
+_OPERATORS = operator_keywords()
+#: The other keywords stand for values (`never`, `inf`).
+_CONSTANTS = tuple(k for k in keywords() if k not in _STATEMENTS and k not in _OPERATORS)
 
 
 class MdleLexer(RegexLexer):
@@ -38,9 +43,9 @@ class MdleLexer(RegexLexer):
             (r"#.*?$", Comment.Single),
             (r"\s+", Whitespace),
             (r'"[^"\n]*"', String),
-            (words(DEFINITION_KEYWORDS, suffix=r"\b"), Keyword.Declaration),
-            (words(("never", "inf"), suffix=r"\b"), Keyword.Constant),
-            (words(("and", "or", "xor", "not"), suffix=r"\b"), Operator.Word),
+            (words(_STATEMENTS, suffix=r"\b"), Keyword.Declaration),
+            (words(_CONSTANTS, suffix=r"\b"), Keyword.Constant),
+            (words(_OPERATORS, suffix=r"\b"), Operator.Word),
             (r"(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", Number, "unit"),
             (r"[A-Za-z_][A-Za-z0-9_]*(?=\s*\()", Name.Function),
             (r"[A-Za-z_][A-Za-z0-9_]*", Name),
@@ -50,8 +55,8 @@ class MdleLexer(RegexLexer):
             (r".", Text),
         ],
         "unit": [
-            ((r"[ \t]*(?!(?:and|or|xor|not|never|inf|import|run|atom|behavior|plan|interrupt)"
-              r"\b)[A-Za-z_][A-Za-z0-9_]*(?:[ \t]*/[ \t]*[A-Za-z_][A-Za-z0-9_]*)?"),
+            ((r"[ \t]*(?!(?:" + "|".join(keywords()) +
+              r")\b)[A-Za-z_][A-Za-z0-9_]*(?:[ \t]*/[ \t]*[A-Za-z_][A-Za-z0-9_]*)?"),
              Keyword.Type, "#pop"),
             default("#pop"),
         ],

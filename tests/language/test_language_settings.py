@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import pytest
-
 from mdle.core.errors import CheckError
+
 from mdle.lang import AtomNode, Program, load_text
-from mdle.lang.overrides import parse_setting
 
 
 def atom(p: Program, name: str) -> AtomNode:
@@ -59,10 +58,3 @@ def test_a_value_that_does_not_parse_names_the_setting() -> None:
     (d,) = err.value.diagnostics
     assert d.span is not None and (d.span.file, d.span.column) == ("--set", 8)
     assert err.value.sources["--set"] == "rc=1 m m"
-
-
-def test_parse_setting() -> None:
-    assert parse_setting("rc=0.8 m") == ("rc", "0.8 m")
-    for bad in ("rc", "=1", "rc="):
-        with pytest.raises(ValueError):
-            parse_setting(bad)

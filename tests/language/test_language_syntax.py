@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import pytest
-
 from mdle.core.errors import Diagnostic, MdleSyntaxError, Span, render_diagnostic
+
 from mdle.lang import load_text
 from mdle.lang.parser import MAX_ERRORS, parse_expression, parse_module
-from mdle.lang.syntax_errors import EXAMPLES, TERMINAL_WORDS
+from mdle.lang.syntax_errors import EXAMPLES, terminal_words
 
 CASES = [(label.message, snippet) for label, snippets in EXAMPLES.items() for snippet in snippets]
 
@@ -135,7 +135,7 @@ def test_terminal_words_cover_the_grammar() -> None:
     from mdle.lang.parser import lark_parser
 
     names = {t.name for t in lark_parser().terminals} - {"COMMENT", "WHITESPACE"}
-    assert names <= set(TERMINAL_WORDS)
+    assert names <= set(terminal_words())
 
 
 def test_load_text_reports_syntax_errors_with_sources() -> None:
