@@ -455,7 +455,6 @@ class Repl:
                        "a real robot has no random seed and always runs at the pace of the "
                        "wall clock")
         if what == "seed":
-            from mdle.cli.options import MAX_SEED
 
             seed = _int(value, "the seed")
             if not 0 <= seed <= MAX_SEED:

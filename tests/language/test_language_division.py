@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 
 import pytest
+
 from mdle.core.errors import MdleSyntaxError
 from mdle.core.units import LENGTH, NONE, SPEED, TIME, TURN_RATE
-
 from mdle.lang import format_source, load_text
 from mdle.lang import syntax as st
 from mdle.lang.parser import parse_expression, parse_module

@@ -15,8 +15,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from mdle.core.units import UNITS
 
+from mdle.core.units import UNITS
 from mdle.lang import load_text
 from mdle.lang import syntax as st
 from mdle.lang.check_structure import _replaced

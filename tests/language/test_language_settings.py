@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import pytest
-from mdle.core.errors import CheckError
 
+from mdle.core.errors import CheckError
 from mdle.lang import AtomNode, Program, load_text
 
 

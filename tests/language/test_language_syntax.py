@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import pytest
-from mdle.core.errors import Diagnostic, MdleSyntaxError, Span, render_diagnostic
 
+from mdle.core.errors import Diagnostic, MdleSyntaxError, Span, render_diagnostic
 from mdle.lang import load_text
 from mdle.lang.parser import MAX_ERRORS, parse_expression, parse_module
 from mdle.lang.syntax_errors import EXAMPLES, terminal_words
