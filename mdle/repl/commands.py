@@ -35,7 +35,7 @@ from mdle.console.output import print_diagnostics
 from mdle.console.signals import ends_session
 from mdle.core.errors import Diagnostic, MdleError
 from mdle.core.pose import Pose
-from mdle.core.ranges import COORDINATE
+from mdle.core.ranges import COORDINATE, MAX_SEED
 from mdle.core.userfile import file_fault, file_fault_words
 from mdle.lang import keywords, statement_keywords
 from mdle.repl import views
@@ -455,7 +455,6 @@ class Repl:
                        "a real robot has no random seed and always runs at the pace of the "
                        "wall clock")
         if what == "seed":
-
             seed = _int(value, "the seed")
             if not 0 <= seed <= MAX_SEED:
                 raise ReplError(f"a seed is a whole number from 0 to {MAX_SEED}, got {value}")
