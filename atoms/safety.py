@@ -34,7 +34,7 @@ def _arc(speed: float, rate: float, lookahead: float, samples: int) -> list[comp
     """
     length = speed * lookahead
     c = rate / speed
-    if abs(c) < 1e-200:  # straight (and -1 / c stays finite below)
+    if abs(c) < 1e-9:  # straight (within 1e-10 m over a few metres)
         return [complex(length * (k + 1) / samples, 0.0) for k in range(samples)]
     h = c * length / samples
     step, p, scale = complex(math.cos(h), math.sin(h)), 1.0 + 0.0j, complex(0.0, -1.0 / c)
