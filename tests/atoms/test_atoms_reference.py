@@ -173,3 +173,67 @@ def test_side_fit_with_two_distinct_abscissae_uses_the_minimum_norm_solution(
     p1 = 0.5 * np.array([math.cos(b[1]), math.sin(b[1])])
     assert view.side.hit and abs(view.side.kappa) < 1e-9
     assert view.side.beta == pytest.approx(math.atan2(*(p1 - p0)[::-1]), abs=1e-9)
+
+
+def _next_nearest_reference(z: np.ndarray, fitted: np.ndarray) -> tuple[float, float] | None:
+    """The next face one point at a time: range and bearing of the nearest qualifying point.
+
+    A point qualifies when it is not fitted, lies less than 45 deg left of the heading, and
+    is the nearest of the 10 points on either side of it or lies on another surface than the
+    first fitted point (surfaces: runs of points less than ``JUMP`` apart).
+    """
+    from mdle.atoms import closest as C
+
+    m = z.size
+    d = np.abs(z)
+    surface = [0] * m
+    for i in range(1, m):
+        surface[i] = surface[i - 1] + (abs(z[i] - z[i - 1]) > C.JUMP)
+    own = surface[int(np.flatnonzero(fitted)[0])]
+    best = None
+    for k in range(m):
+        window = d[max(0, k - C.WINDOW):k + C.WINDOW + 1]
+        qualifies = (d[k] <= window.min() or surface[k] != own) and not fitted[k] \
+            and z[k].imag < z[k].real and d[k] > 0
+        if qualifies and (best is None or d[k] < d[best]):
+            best = k
+    return None if best is None else (float(d[best]), float(np.angle(z[best])))
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_next_face_matches_the_one_point_at_a_time_reference(seed: int) -> None:
+    from mdle.atoms import closest as C
+
+    rng = np.random.default_rng(seed)
+    bearings = np.radians(np.arange(-90.0, 90.5, 1.0))
+    # poles and walls at random, some beams missing: several surfaces, gaps in the list
+    r = np.full(bearings.size, np.inf)
+    for _ in range(int(rng.integers(1, 5))):
+        c = complex(rng.uniform(-1.0, 3.0), rng.uniform(-2.5, 2.5))
+        rho = rng.uniform(0.05, 0.6)
+        u = np.exp(1j * bearings)
+        b = (u.conjugate() * c).real
+        disc = b * b - abs(c) ** 2 + rho * rho
+        hit = np.where(disc >= 0, b - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+        r = np.minimum(r, np.where(hit > 0, hit, np.inf))
+    r *= 1.0 + rng.normal(0.0, 0.008, r.shape)
+    r[rng.random(r.size) < 0.05] = np.inf
+    ok = np.isfinite(r)
+    if ok.sum() < 3:
+        return
+    z = r[ok] * np.exp(1j * bearings[ok])
+    z = np.round(z, 3)  # millimetre points: ties between equal ranges are common
+    d2 = (z * z.conjugate()).real
+    fitted = np.zeros(z.size, dtype=bool)
+    first = int(rng.integers(0, z.size))
+    fitted[first:first + int(rng.integers(1, 12))] = True
+    ray = C.next_nearest(z, d2, fitted)
+    want = _next_nearest_reference(z, fitted)
+    if want is None:
+        assert not ray.hit
+    else:
+        assert ray.hit and ray.r == pytest.approx(want[0], abs=1e-12)
+        # the ray's tangent is perpendicular to the line of sight: beta = bearing + pi/2
+        assert math.remainder(ray.beta - want[1] - math.pi / 2, 2 * math.pi) \
+            == pytest.approx(0.0, abs=1e-12)
+
