@@ -34,17 +34,17 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
+from mdle.core.units import ANGLE, CURVATURE, LENGTH
+
 from mdle.atoms.memo import ByIdentity
 from mdle.atoms.ray_fits import front_ray as _front_ray
 from mdle.atoms.ray_fits import side_ray as _side_ray
 from mdle.atoms.registry import Args, Context, Param, sensor
 from mdle.atoms.steering import MISS, Ray
-from mdle.units import ANGLE, CURVATURE, LENGTH
 
 if TYPE_CHECKING:
     import numpy as np
-
-    from mdle.backend import Scan
+    from mdle.core.backend import Scan
 
 __all__ = ["Side", "BoundaryView", "boundary_view", "cached_view", "cached_beams",
            "parse_side", "boundary_range", "boundary_curvature", "boundary_tangent", "SIDES"]
@@ -207,7 +207,7 @@ def boundary_view(scan: "Scan | None", side: Side | str = Side.RIGHT,
     Example: a wall 0.5 m to the right, parallel to the heading, seven beams.
 
     >>> import numpy as np
-    >>> from mdle.backend import Scan
+    >>> from mdle.core.backend import Scan
     >>> b = np.radians([-90.0, -80, -70, -60, -50, -40, 0])
     >>> r = np.append(0.5 / np.sin(-b[:6]), 10.0)
     >>> v = boundary_view(Scan(r, b, r < 10, 0.0, 10.0), "right", windows=(1,))

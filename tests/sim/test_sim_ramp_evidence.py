@@ -14,9 +14,9 @@ import math
 from pathlib import Path
 
 import numpy as np
+from mdle.fit.recording import read_recording
 
 from mdle.sim.profiles import robot_profile
-from mdle.sim.recording import read_recording
 
 SESSION = Path(__file__).resolve().parents[1] / "data" / "recordings" / "amrisim-2026-11-28"
 
