@@ -34,17 +34,16 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
+from mdle.core.units import ANGLE, CURVATURE, LENGTH
+
 from mdle.atoms.memo import ByIdentity
 from mdle.atoms.ray_fits import front_ray as _front_ray
 from mdle.atoms.ray_fits import side_ray as _side_ray
 from mdle.atoms.registry import Args, Context, Param, sensor
 from mdle.atoms.steering import MISS, Ray
-from mdle.core.frozen import builder
-from mdle.core.units import ANGLE, CURVATURE, LENGTH
 
 if TYPE_CHECKING:
     import numpy as np
-
     from mdle.core.backend import Scan
 
 __all__ = ["Side", "BoundaryView", "boundary_view", "cached_view", "cached_beams",
@@ -177,8 +176,6 @@ def _layout_of(bearings: Any, left: bool, side_span: float, windows: tuple[Any, 
 _layouts = ByIdentity(_layout_of, size=32)
 
 
-#: A fast constructor (a frozen dataclass's ``__init__`` costs about a microsecond).
-_view = builder(BoundaryView)
 #: What :func:`atoms.estimators.beam_points` returns: points, mask, ranges.
 Beams = tuple["np.ndarray", "np.ndarray", "np.ndarray"]
 
@@ -232,7 +229,7 @@ def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span:
     import numpy as np
 
     if scan is None or scan.ranges.size == 0:
-        return _view(MISS, MISS, False, math.inf if scan is None else scan.max_range)
+        return BoundaryView(MISS, MISS, False, math.inf if scan is None else scan.max_range)
     lay, wins = _layouts(scan.bearings, left, side_span,
                          windows if type(windows) is tuple else tuple(windows))
     if scan.tangents is not None and scan.curvatures is not None:
@@ -253,7 +250,7 @@ def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span:
     side_hit, front_hit = with_side and math.isfinite(r0), math.isfinite(rc)
     side_ray = front = MISS
     if not (side_hit or front_hit):  # neither ray's own beam saw a surface: nothing to read
-        return _view(front, side_ray, False, scan.max_range)
+        return BoundaryView(front, side_ray, False, scan.max_range)
     z = z_all[lay.take]
     if left:
         z = z.conjugate()  # mirrored: y -> -y (the beam order is reversed by take)
@@ -275,7 +272,7 @@ def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span:
             ray = _front_full(np.asarray(scan.ranges, dtype=float), bearings,
                               np.asarray(scan.valid, dtype=bool), left, lay.c, rc, wins)
         front = ray
-    return _view(front, side_ray, False, scan.max_range)
+    return BoundaryView(front, side_ray, False, scan.max_range)
 
 
 def _oracle_view(scan: "Scan", lay: _Layout, left: bool) -> BoundaryView:

@@ -240,11 +240,15 @@ def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray
     low = np.minimum(low[:-5], low[5:])
     ok = d2 <= low
     # points of other surfaces (beyond a depth jump) count too: in the list of valid points
-    # a surface's neighbours across a gap in the scan can hide its local minimum
-    seg = np.empty(m, dtype=np.intp)
-    seg[0] = 0
-    np.cumsum(abs(z[1:] - z[:-1]) > JUMP, out=seg[1:])
-    ok |= seg != seg[int(fitted.argmax())]  # the surface of the face followed
+    # a surface's neighbours across a gap in the scan can hide its local minimum. The
+    # surface of the face followed runs between the jumps on either side of its first
+    # fitted point (found in the jumps' bytes: a cumulative sum of them costs more)
+    f = int(fitted.argmax())
+    cut = (abs(z[1:] - z[:-1]) > JUMP).tobytes()  # cut[i]: a jump between points i, i + 1
+    hi = cut.find(1, f)
+    ok[:cut.rfind(1, 0, f) + 1] = True
+    if hi >= 0:
+        ok[hi + 1:] = True
     ok &= z.imag < z.real  # less than 45 deg left of the heading
     ok = np.greater(ok, fitted)  # and not the face followed (ok and not fitted)
     k = int(np.where(ok, d2, math.inf).argmin())

@@ -45,7 +45,7 @@ Example: five beams on a wall 1 m ahead (x = 1), seen from -20 to +20 degrees.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -62,12 +62,9 @@ __all__ = [
     "points_of",
     "surfaces",
     "smooth_positions",
-    "menger",
     "classical_curvature",
     "geometric_curvature",
     "averaged_curvature",
-    "estimate_scan",
-    "principal_direction",
     "DEFAULT_WINDOWS",
 ]
 
@@ -354,34 +351,6 @@ def smooth_positions(s: Surfaces, sigma: float = 1.0, truncate: float = 3.0) -> 
     return Surfaces(sm, s.valid, s.start, s.end, s.reach)
 
 
-def menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
-    """Compute the signed curvature of the circle through three points (Heron/Menger, eq. 10).
-
-    ``4 * area / (a b c)``, with the area from the cross product (exactly Heron's value, but
-    without its cancellation for thin triangles) and the sign of the turn ``p0 -> p1 -> p2``
-    (left turn positive). Collinear points give 0; coincident points NaN.
-
-    Parameters
-    ----------
-    p0, p1, p2 : (..., 2) float arrays, metres
-
-    Returns
-    -------
-    (...,) float array, 1/m
-
-    >>> float(menger(np.array([1.0, 0]), np.array([0.0, 1]), np.array([-1.0, 0])).round(9))
-    1.0
-    """
-    ux, uy = p1[..., 0] - p0[..., 0], p1[..., 1] - p0[..., 1]
-    vx, vy = p2[..., 0] - p1[..., 0], p2[..., 1] - p1[..., 1]
-    cx, cy = p2[..., 0] - p0[..., 0], p2[..., 1] - p0[..., 1]
-    den = np.sqrt((ux * ux + uy * uy) * (vx * vx + vy * vy) * (cx * cx + cy * cy))
-    good = den > 0
-    out = np.full(np.shape(den), np.nan)
-    np.divide(2.0 * (ux * vy - uy * vx), den, out=out, where=good)
-    return out
-
-
 @lru_cache(maxsize=64)
 def _window_index(n: int, windows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Build the index arrays of every window for an N-beam scan, memoised and read-only.
@@ -555,73 +524,3 @@ def averaged_curvature(s: Surfaces, windows: int | Sequence[int] = DEFAULT_WINDO
     Estimate with (N,) arrays.
     """
     return geometric_curvature(s, windows)
-
-
-_METHODS: dict[str, Callable[[Surfaces, int | Sequence[int]], Estimate]] = {
-    "classical": classical_curvature, "geometric": geometric_curvature,
-    "averaged": averaged_curvature}
-
-
-def estimate_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None = None, *,
-                  method: str = "averaged", windows: int | Sequence[int] = DEFAULT_WINDOWS,
-                  sigma: float = 0.0) -> Estimate:
-    """Estimate per-beam curvature and tangent from a scan's arrays in one call.
-
-    Parameters
-    ----------
-    ranges, bearings : (N,) float arrays, metres and radians
-    valid : (N,) bool array, optional
-    method : {"averaged", "geometric", "classical"}
-    windows : int or sequence of int, beams
-    sigma : float, beams
-        Gaussian smoothing of the positions first (0: none).
-
-    Returns
-    -------
-    Estimate
-
-    Raises
-    ------
-    ValueError
-        For an unknown ``method`` (a programming error, not a tick-path condition).
-    """
-    try:
-        fn = _METHODS[method]
-    except KeyError:
-        raise ValueError(f"unknown curvature method {method!r}; "
-                         f"choose one of {', '.join(_METHODS)}") from None
-    s = surfaces(ranges, bearings, valid)
-    if sigma > 0:
-        s = smooth_positions(s, sigma)
-    return fn(s, windows)
-
-
-def principal_direction(points: np.ndarray) -> float:
-    """Return the direction of the total-least-squares line through points, first -> last.
-
-    The points are centred (and the fit is scale-free), so the answer does not depend on how
-    far they are from the origin. NaN for fewer than two distinct points.
-
-    Parameters
-    ----------
-    points : (M, 2) float array, metres, in traversal order
-
-    Returns
-    -------
-    float, radians
-
-    >>> round(float(np.degrees(principal_direction(np.array([[0.0, 0], [1, 1], [2, 2.0]])))), 6)
-    45.0
-    """
-    p = np.asarray(points, dtype=float)
-    if p.shape[0] < 2 or not np.all(np.isfinite(p)):
-        return float("nan")
-    q = p - p.mean(0)
-    sxx, syy, sxy = (q[:, 0] ** 2).sum(), (q[:, 1] ** 2).sum(), (q[:, 0] * q[:, 1]).sum()
-    if sxx + syy <= 0:
-        return float("nan")
-    ang = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
-    d = p[-1] - p[0]
-    if np.cos(ang) * d[0] + np.sin(ang) * d[1] < 0:
-        ang += np.pi
-    return float(np.arctan2(np.sin(ang), np.cos(ang)))

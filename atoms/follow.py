@@ -20,13 +20,13 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from mdle.core.backend import Command
+from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
+
 from mdle.atoms import closest, safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
 from mdle.atoms.latency import STILL, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
-from mdle.core.backend import Command
-from mdle.core.frozen import builder
-from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 if TYPE_CHECKING:
     from mdle.atoms.latency import Predictor
@@ -236,10 +236,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "safety": float(u != u_law or v != v_law),
         "predicted_clearance": clearance if clearance < math.inf else -1.0,
     }
-    return _command(v, u)
-
-
-_command = builder(Command)
+    return Command(v, u)
 
 
 def _nearest_on_side(z: Any) -> tuple[float, float] | None:

@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 
 from mdle.atoms.steering import MISS, Ray, wrap
 
-__all__ = ["Predictor", "shift_front", "shift_side", "compose", "STILL"]
+__all__ = ["Predictor", "PoseAt", "CommandSent", "shift_front", "shift_side", "compose",
+           "STILL"]
 
 Pose3 = tuple[float, float, float]
 
@@ -64,6 +65,28 @@ def _ramp(cur: float, target: float, rate: float, dt: float) -> float:
     return target if abs(target - cur) <= step else cur + math.copysign(step, target - cur)
 
 
+@dataclass(frozen=True)
+class PoseAt:
+    """An odometry pose and when it was read."""
+
+    time: float
+    """Backend time (s)."""
+    pose: Pose3
+    """``(x, y, theta)`` in the law's frame (m, m, rad)."""
+
+
+@dataclass(frozen=True)
+class CommandSent:
+    """A command and when it was sent."""
+
+    time: float
+    """Backend time (s)."""
+    v: float
+    """Speed (m/s)."""
+    u: float
+    """Turn rate in the law's frame (rad/s)."""
+
+
 @dataclass
 class Predictor:
     """Odometry and command history of one atom, and the prediction made from it.
@@ -71,31 +94,31 @@ class Predictor:
     Times are on the backend's clock (s), poses ``(x, y, theta)`` in the law's frame.
     """
 
-    poses: deque[tuple[float, Pose3]] = field(default_factory=deque)
-    commands: deque[tuple[float, float, float]] = field(default_factory=deque)
+    poses: deque[PoseAt] = field(default_factory=deque)
+    commands: deque[CommandSent] = field(default_factory=deque)
 
     def record_pose(self, time: float, pose: Pose3) -> None:
         """Remember the odometry pose at ``time`` (once per tick, before :meth:`predict`)."""
-        self.poses.append((time, pose))
-        while self.poses[0][0] < time - _HISTORY:
+        self.poses.append(PoseAt(time, pose))
+        while self.poses[0].time < time - _HISTORY:
             self.poses.popleft()
 
     def record_command(self, time: float, v: float, u: float) -> None:
         """Remember the command sent at ``time`` (m/s, rad/s)."""
-        self.commands.append((time, v, u))
-        while len(self.commands) > 1 and self.commands[1][0] <= time - _HISTORY:
+        self.commands.append(CommandSent(time, v, u))
+        while len(self.commands) > 1 and self.commands[1].time <= time - _HISTORY:
             self.commands.popleft()
 
     def pose_at(self, time: float) -> Pose3 | None:
         """Return the odometry pose at ``time``, interpolated; None outside the history."""
         poses = self.poses
-        if not poses or time < poses[0][0] - 1e-9 or time > poses[-1][0] + 1e-9:
+        if not poses or time < poses[0].time - 1e-9 or time > poses[-1].time + 1e-9:
             return None
         later = poses[-1]
         for item in reversed(poses):  # the scan is recent: search from the newest
-            if item[0] <= time:
-                t0, p0 = item
-                t1, p1 = later
+            if item.time <= time:
+                t0, p0 = item.time, item.pose
+                t1, p1 = later.time, later.pose
                 if t1 <= t0:
                     return p0
                 w = (time - t0) / (t1 - t0)
@@ -105,9 +128,9 @@ class Predictor:
         return None
 
     def _command_at(self, time: float, default: tuple[float, float]) -> tuple[float, float]:
-        for t, v, u in reversed(self.commands):
-            if t <= time + 1e-9:
-                return (v, u)
+        for c in reversed(self.commands):
+            if c.time <= time + 1e-9:
+                return (c.v, c.u)
         return default
 
     def predict(self, now: float, stamp: float, pose: Pose3, v: float, omega: float,

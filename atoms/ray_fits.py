@@ -12,16 +12,11 @@ import math
 from typing import TYPE_CHECKING
 
 from mdle.atoms.steering import MISS, Ray
-from mdle.core.frozen import builder
 
 if TYPE_CHECKING:
     import numpy as np
 
 __all__ = ["side_ray", "front_ray"]
-
-#: A fast constructor (a frozen dataclass's ``__init__`` costs about a microsecond).
-_ray = builder(Ray)
-
 
 def side_ray(z: "np.ndarray", r0: float) -> "Ray":
     """Fit the side ray to the first surface's beams 0..n (beam 0 at -90 deg), all valid.
@@ -78,7 +73,7 @@ def side_ray(z: "np.ndarray", r0: float) -> "Ray":
         kappa = 2.0 * c2 / (1.0 + slope * slope) ** 1.5
     else:
         slope, kappa = _side_fit_lstsq(q, ang)
-    return _ray(True, r0, ang + math.atan(slope), float(kappa))
+    return Ray(True, r0, ang + math.atan(slope), float(kappa))
 
 
 def _side_fit_lstsq(q: "np.ndarray", ang: float) -> tuple[float, float]:
@@ -145,11 +140,11 @@ def front_ray(z: "np.ndarray", c: int, right: int, left: int, r0: float,
             k_sum += 2.0 * cross / den
             count += 1
         if count:
-            return _ray(True, r0, math.atan2(ty, tx), k_sum / count)
+            return Ray(True, r0, math.atan2(ty, tx), k_sum / count)
     m = min(max(right, left), max(windows))
     if m >= 1:
         if not exact and min(left, right) >= max(windows):
             return None  # both capped: the side with the longer surface is not known here
         chord = complex(z[c + m] - z[c] if left >= right else z[c] - z[c - m])
-        return _ray(True, r0, math.atan2(chord.imag, chord.real), 0.0)
-    return _ray(True, r0, math.pi / 2.0, 0.0)  # an isolated return: a surface facing the robot
+        return Ray(True, r0, math.atan2(chord.imag, chord.real), 0.0)
+    return Ray(True, r0, math.pi / 2.0, 0.0)  # an isolated return: a surface facing the robot

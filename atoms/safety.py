@@ -20,26 +20,21 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["safety_filter", "filter_complex", "as_complex"]
-
-
-def as_complex(points: "np.ndarray") -> "np.ndarray":
-    """Return robot-frame points (M, 2) as complex numbers (M,), sharing memory if it can."""
-    import numpy as np
-
-    return np.ascontiguousarray(points, dtype=float).view(np.complex128).ravel()
+__all__ = ["filter_complex"]
 
 
 def _arc(speed: float, rate: float, lookahead: float, samples: int) -> list[complex]:
     """Return the ``samples`` points after the start of the arc at ``(speed, rate)``.
 
-    The arc lasts ``lookahead`` seconds; its samples are equally spaced along it. On a
-    curve they are ``(e^(i c s) - 1) / (i c)`` at arc lengths ``s``, the powers of one unit
-    step (a product each instead of a sine and a cosine).
+    The arc lasts ``lookahead`` seconds; its samples are equally spaced along it, at arc
+    lengths ``s = k L / samples`` (``L = speed lookahead``). On a curve of curvature ``c``
+    they are ``(e^(i c s) - 1) / (i c)``, the powers of one unit step (a product each, in
+    plain floats: the law's own arc is checked every tick, and a few numpy calls would cost
+    more than the arithmetic); on a straight arc, ``s``. The heading at a sample is ``c s``.
     """
     length = speed * lookahead
     c = rate / speed
-    if abs(c) < 1e-9:
+    if abs(c) < 1e-9:  # straight (within 1e-10 m over a few metres)
         return [complex(length * (k + 1) / samples, 0.0) for k in range(samples)]
     h = c * length / samples
     step, p, scale = complex(math.cos(h), math.sin(h)), 1.0 + 0.0j, complex(0.0, -1.0 / c)
@@ -55,9 +50,8 @@ def _own_clearance(near: "np.ndarray", speed: float, rate: float, lookahead: flo
     """Return the clearance (m, before the body radius) of the one arc at ``(speed, rate)``.
 
     ``near``: the scan points (complex, (M,)). The common case of every tick (the law's own
-    arc is admissible), without the candidate bookkeeping of :func:`_arc_clearance`: the few
-    samples in plain floats, one broadcast subtraction for every sample-to-point offset, its
-    modulus, and the smallest found by ``argmin`` (a reduction ufunc costs five times more).
+    arc is admissible), without the side bookkeeping of :func:`_arc_clearance`: one
+    broadcast subtraction for every sample-to-point offset, its modulus, and the smallest.
     """
     import numpy as np
 
@@ -69,22 +63,17 @@ def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookah
                    samples: int) -> tuple["np.ndarray", "np.ndarray"]:
     """Compute the clearance (m, before the body radius) of arcs at ``speed`` and ``rates``.
 
-    ``near``: the scan points (complex, (M,)). Each arc lasts ``lookahead`` seconds and is
-    sampled at ``samples`` points after the start, ``(e^(i c s) - 1) / (i c)`` at arc length
-    ``s`` (curvature ``c``; a straight arc takes a curvature of 1e-200, for which that is
-    ``s`` to the last bit). Returns the clearances (K,) and, for each arc, on which side of
-    it its nearest scan point lies: the sign of the cross product of the arc's heading there
-    with the point (K,), positive on the left.
+    ``near``: the scan points (complex, (M,)); the arcs are :func:`_arc`'s. Returns the
+    clearances (K,) and, for each arc, on which side of it its nearest scan point lies: the
+    sign of the cross product of the arc's heading there with the point (K,), positive on
+    the left.
     """
     import numpy as np
 
-    length = speed * lookahead
-    c = rates / speed                                            # (K,) curvature of each arc
-    c[c == 0.0] = 1e-200
-    th = np.multiply.outer(c, np.arange(1, samples + 1) * (length / samples))  # (K, S)
-    arc = np.exp(1j * th)
-    arc -= 1.0
-    arc *= (-1j / c)[:, None]
+    # the few candidate arcs of a tick whose own arc failed: one arc at a time is cheap enough
+    arc = np.array([_arc(speed, float(u), lookahead, samples) for u in rates])   # (K, S)
+    s = np.arange(1, samples + 1) * (speed * lookahead / samples)  # arc lengths (S,)
+    th = np.multiply.outer(rates / speed, s)                       # headings there (K, S)
     d = np.subtract(near, arc.reshape(-1, 1)).reshape(rates.size, -1)  # (K, S * M): to points
     re, im = d.real, d.imag
     d2 = re * re
@@ -125,7 +114,41 @@ _FEW = 8
 def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: float,
                    margin: float, lookahead: float, candidates: int = 25, samples: int = 8,
                    side: int = -1) -> tuple[float, float, float]:
-    """Apply :func:`safety_filter` to scan points as complex numbers ``z`` (M,)."""
+    """Apply the full-scan safety layer: keep ``(v, u)`` unless its arc nears the scan.
+
+    The arc the robot drives at ``(v, u)`` over ``lookahead`` seconds is sampled and its
+    clearance (distance to the nearest scan point minus the body ``radius``) computed. It is
+    admissible if that is at least ``margin``, or, when the robot is already closer than
+    ``margin``, if the arc gets no closer than it is now. An admissible command stands.
+    Otherwise the turn rate is replaced by the admissible one nearest to ``u`` among
+    ``candidates`` rates over +-umax whose nearest scan point lies on the followed ``side``
+    (-1 right, +1 left): the followed side wins, so a robot that meets a face at an awkward
+    angle is never deflected along it with the obstacle on its blind side. Such a rate is
+    sought at full speed, else at half, a quarter, and finally the robot turns on the spot
+    towards the followed side (which never gets closer and puts what is ahead on that
+    side); so it also never drives into a dead end it cannot turn out of (a
+    constant-speed unicycle cannot turn round in a wedge narrower than its turning circle).
+    Only scan points within reach of the arc (its length, the radius, the margin and 5 cm)
+    are read; with none, the clearance is ``inf``.
+
+    Parameters
+    ----------
+    z : (M,) complex array, metres
+        Robot-frame scan points ``x + iy`` (valid beams only).
+    v, u : float
+        The law's speed (m/s) and turn rate (rad/s).
+    umax : float, rad/s
+    radius, margin : float, metres
+    lookahead : float, seconds
+    candidates, samples : int
+    side : int
+        The followed side: -1 right, +1 left.
+
+    Returns
+    -------
+    (v, u, clearance)
+        The command to send and the predicted clearance of the law's own arc (m).
+    """
     import numpy as np
 
     if z.shape[0] == 0 or v <= 0 or lookahead <= 0:
@@ -147,43 +170,3 @@ def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: flo
         if pick is not None:
             return v * factor, pick, own
     return 0.0, -side * umax, own  # turn on the spot towards the followed side
-
-
-def safety_filter(points: "np.ndarray", v: float, u: float, umax: float, radius: float,
-                  margin: float, lookahead: float, candidates: int = 25,
-                  samples: int = 8, side: int = -1) -> tuple[float, float, float]:
-    """Apply the full-scan safety layer: keep ``(v, u)`` unless its arc nears the scan.
-
-    The arc the robot drives at ``(v, u)`` over ``lookahead`` seconds is sampled and its
-    clearance (distance to the nearest scan point minus the body ``radius``) computed. It is
-    admissible if that is at least ``margin``, or, when the robot is already closer than
-    ``margin``, if the arc gets no closer than it is now. An admissible command stands.
-    Otherwise the turn rate is replaced by the admissible one nearest to ``u`` among
-    ``candidates`` rates over +-umax whose nearest scan point lies on the followed ``side``
-    (-1 right, +1 left): the followed side wins, so a robot that meets a face at an awkward
-    angle is never deflected along it with the obstacle on its blind side. Such a rate is
-    sought at full speed, else at half, a quarter, and finally the robot turns on the spot
-    towards the followed side (which never gets closer and puts what is ahead on that
-    side); so it also never drives into a dead end it cannot turn out of (a
-    constant-speed unicycle cannot turn round in a wedge narrower than its turning circle).
-    Only scan points within reach of the arc (its length, the radius, the margin and 5 cm)
-    are read; with none, the clearance is ``inf``.
-
-    Parameters
-    ----------
-    points : (M, 2) float array, metres
-        Robot-frame scan points (valid beams only).
-    v, u : float
-        The law's speed (m/s) and turn rate (rad/s).
-    umax : float, rad/s
-    radius, margin : float, metres
-    lookahead : float, seconds
-    candidates, samples : int
-
-    Returns
-    -------
-    (v, u, clearance)
-        The command to send and the predicted clearance of the law's own arc (m).
-    """
-    return filter_complex(as_complex(points), v, u, umax, radius, margin, lookahead,
-                          candidates, samples, side)

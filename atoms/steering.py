@@ -14,18 +14,18 @@ The pieces:
 
 * :func:`clf_law`: the CLF split law (curvature feedforward ``-B/A`` plus damping of the angle
   terms), with the concave clamps;
-* :func:`follow_law`: grazing-ray rejection, the front-range gate with its linear blend, and the
-  front floor (a soft emergency left turn);
+* grazing-ray rejection, the front-range gate with its linear blend, and the front floor (a
+  soft emergency left turn), applied by :func:`step` to the rays of each tick;
 * :func:`corner_law`: circling a remembered vertex (corner mode);
 * :func:`step`: one tick with the mode state machine (follow, corner, search) and odometry
   memory: a boundary seen once and lost is searched for, never abandoned;
 
 The full-scan safety layer that :mod:`atoms.follow` puts on top of the law is
-:func:`atoms.safety.safety_filter`.
+:func:`atoms.safety.filter_complex`.
 
 >>> g = Gains()
 >>> side = Ray(True, 0.5, 0.0, -1.0)            # on a circle of radius 1, rc = 0.5 away
->>> round(follow_law(MISS, side, 1.0, 0.5, g), 6)  # offset-curve rate v k / (1 - k rc)
+>>> round(step(MISS, side, (0.0, 0.0, 0.0), 0.0, 0.02, Memory(), 1.0, 0.5, g), 6)
 -0.666667
 """
 
@@ -34,8 +34,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
-
-from mdle.core.frozen import builder
 
 if TYPE_CHECKING:
     from collections.abc import Callable
@@ -46,9 +44,9 @@ __all__ = [
     "MISS",
     "Gains",
     "Memory",
+    "SideHit",
     "f_gain",
     "clf_law",
-    "follow_law",
     "corner_law",
     "step",
     "wrap",
@@ -83,8 +81,6 @@ class Ray:
 
 #: A ray that saw nothing (the paper's virtual boundary takes over).
 MISS = Ray(False)
-#: Ray's constructor without the frozen ``__init__``'s per-field ``object.__setattr__``.
-_ray = builder(Ray)
 
 
 @dataclass(frozen=True)
@@ -173,6 +169,21 @@ class Gains:
     scaled_damping: bool = True
 
 
+@dataclass(frozen=True)
+class SideHit:
+    """The last valid side hit, as corner mode reads it (odometry frame of the law)."""
+
+    r: float
+    """Side range (m)."""
+    tangent: float
+    """World angle of the boundary's tangent there (rad)."""
+    x: float
+    """Where the side ray hit (m)."""
+    y: float
+    t: float
+    """Local time of the hit (s)."""
+
+
 @dataclass
 class Memory:
     """Per-atom state of the law: the mode, the corner memory and the curvature filter.
@@ -181,8 +192,8 @@ class Memory:
     """
 
     mode: str = FOLLOW
-    last_side: tuple[float, float, float, float, float] | None = None
-    """(rs, world tangent angle, world x, world y, time) of the last valid side hit."""
+    last_side: SideHit | None = None
+    """The last valid side hit (None: none yet)."""
     corner: tuple[float, float] = (0.0, 0.0)
     """The point circled in corner and search mode (odometry frame, m)."""
     turned: float = 0.0
@@ -283,7 +294,7 @@ def _valid_front(front: Ray, rc: float, g: Gains) -> Ray:
     b0 = wrap(front.beta)
     if math.sin(b0) <= g.s_min or front.r > g.front_gate * rc:
         return MISS
-    return front if b0 == front.beta else _ray(True, front.r, b0, front.kappa)
+    return front if b0 == front.beta else Ray(True, front.r, b0, front.kappa)
 
 
 def _valid_side(side: Ray, g: Gains) -> Ray:
@@ -292,30 +303,7 @@ def _valid_side(side: Ray, g: Gains) -> Ray:
     bs = wrap(side.beta)
     if math.cos(bs) <= g.c_min:
         return MISS
-    return side if bs == side.beta else _ray(True, side.r, bs, side.kappa)
-
-
-def follow_law(front: Ray, side: Ray, v: float, rc: float, g: Gains,
-               umax: float | None = None) -> float:
-    """Apply grazing rejection, the front gate and blend, the CLF law and the front floor.
-
-    Parameters
-    ----------
-    front, side : Ray
-        Raw rays (right-hand convention); grazing hits and far front hits count as misses.
-    v : float, m/s
-    rc : float, m
-    g : Gains
-    umax : float, rad/s, optional (default ``g.umax``)
-
-    Returns
-    -------
-    float, rad/s
-    """
-    umax = g.umax if umax is None else umax
-    front = _valid_front(front, rc, g)
-    side = _valid_side(side, g)
-    return _blend_and_floor(front, side, v, rc, g, umax)
+    return side if bs == side.beta else Ray(True, side.r, bs, side.kappa)
 
 
 def _blend_and_floor(front: Ray, side: Ray, v: float, rc: float, g: Gains, umax: float) -> float:
@@ -389,18 +377,18 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
             mem.kappa = side.kappa
         else:
             mem.kappa += (side.kappa - mem.kappa) * min(1.0, dt / g.tau)
-        side = _ray(True, side.r, side.beta, mem.kappa)
+        side = Ray(True, side.r, side.beta, mem.kappa)
     mem.last_rs = side.r if side.hit else math.nan
     mem.time = t
 
     last = mem.last_side
     if mem.mode == FOLLOW and not front.hit and last is not None \
-            and last[0] < g.corner_reach * rc:
-        lost = (not side.hit or side.r - last[0] > g.corner_jump * rc
-                or wrap(theta + side.beta - last[1]) < -g.corner_turn_jump)
+            and last.r < g.corner_reach * rc:
+        lost = (not side.hit or side.r - last.r > g.corner_jump * rc
+                or wrap(theta + side.beta - last.tangent) < -g.corner_turn_jump)
         if lost:
             mem.mode = CORNER
-            mem.corner = (last[2], last[3])
+            mem.corner = (last.x, last.y)
             mem.turned = 0.0
     if mem.mode == FOLLOW and not front.hit and not side.hit and mem.seen is not None \
             and _abeam_or_behind(mem.seen, x, y, theta, g.search_ahead):
@@ -443,7 +431,7 @@ def step(front: Ray, side: Ray, pose: tuple[float, float, float], t: float, dt: 
     if side.hit:
         ang = theta - math.pi / 2.0
         sx, sy = x + side.r * math.cos(ang), y + side.r * math.sin(ang)
-        mem.last_side = (side.r, theta + side.beta, sx, sy, t)
+        mem.last_side = SideHit(side.r, theta + side.beta, sx, sy, t)
         mem.seen, mem.seen_at = (sx, sy), t
     elif front.hit:
         mem.seen = (x + front.r * math.cos(theta), y + front.r * math.sin(theta))

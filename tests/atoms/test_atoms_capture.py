@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
+from mdle.core.backend import Observation
+from mdle.core.pose import Pose
 
 from mdle.atoms import safety
 from mdle.atoms import steering as S
 from mdle.atoms.follow import FollowState, lost
 from mdle.atoms.registry import Context
-from mdle.core.backend import Observation
-from mdle.core.pose import Pose
 from mdle.lang import load_text
 from mdle.runtime import run
 from mdle.runtime.events import Cause
@@ -21,6 +21,11 @@ from mdle.runtime.scripted import ScriptedBackend
 from tests.atoms.conftest import cast_line, make_scan
 
 G = S.Gains()
+
+
+def _z(points: np.ndarray) -> np.ndarray:
+    """Robot-frame points (M, 2) as complex numbers (M,), as the safety layer reads them."""
+    return points[:, 0] + 1j * points[:, 1]
 
 
 def _nearest_side(points: np.ndarray, v: float, u: float, horizon: float) -> float:
@@ -42,7 +47,7 @@ def test_safety_layer_passes_a_post_on_the_followed_side(side: int) -> None:
     # a thin post just off the heading on the *blind* side: the nearest escape would pass it
     # there; the followed side wins and the robot swings round it the other way
     post = np.array([[0.35, -0.02 * side]])
-    v, u, own = safety.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5, side=side)
+    v, u, own = safety.filter_complex(_z(post), 1.0, 0.0, 3.0, 0.0, 0.05, 0.5, side=side)
     assert own < 0.05
     assert u * side < 0  # right-hand following turns left, and the other way round
     assert _nearest_side(post, v, u, 0.5) * side > 0
@@ -56,7 +61,7 @@ def test_safety_layer_never_slides_along_a_face_with_the_obstacle_on_the_blind_s
     direction = np.array([[math.cos(math.radians(60)), math.sin(math.radians(60))]])
     face = np.array([[0.6, 0.0]]) + s * direction
     face = face[np.hypot(face[:, 0], face[:, 1]) < 8.0]
-    v, u, _ = safety.safety_filter(face, 1.0, 3.0, 3.0, 0.0, 0.15, 0.8, side=-1)
+    v, u, _ = safety.filter_complex(_z(face), 1.0, 3.0, 3.0, 0.0, 0.15, 0.8, side=-1)
     assert u > 0
     if v > 0:
         assert _nearest_side(face, v, u, 0.8) < 0
@@ -66,8 +71,9 @@ def test_safety_layer_turns_on_the_spot_towards_the_followed_side() -> None:
     # walls all round: no arc is admissible at any speed
     a = np.linspace(0.0, 2 * math.pi, 200, endpoint=False)
     ring = 0.3 * np.stack((np.cos(a), np.sin(a)), axis=1)
-    assert safety.safety_filter(ring, 1.0, -1.0, 3.0, 0.0, 0.15, 0.8, side=-1)[:2] == (0.0, 3.0)
-    assert safety.safety_filter(ring, 1.0, 1.0, 3.0, 0.0, 0.15, 0.8, side=1)[:2] == (0.0, -3.0)
+    z = _z(ring)
+    assert safety.filter_complex(z, 1.0, -1.0, 3.0, 0.0, 0.15, 0.8, side=-1)[:2] == (0.0, 3.0)
+    assert safety.filter_complex(z, 1.0, 1.0, 3.0, 0.0, 0.15, 0.8, side=1)[:2] == (0.0, -3.0)
 
 
 def test_a_robot_that_never_saw_the_boundary_drives_straight_on() -> None:

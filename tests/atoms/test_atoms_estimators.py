@@ -7,9 +7,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
+from mdle.core.backend import Scan
 
 from mdle.atoms import estimators as E
-from mdle.core.backend import Scan
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Case, Raycast
@@ -179,21 +179,10 @@ def test_isolated_return_and_out_of_range_beams(raycast: Raycast) -> None:
     assert not E.averaged_curvature(s).valid.any()
 
 
-def test_principal_direction_is_centred_and_oriented() -> None:
-    p = np.array([[5.0, 5.0], [5.0, 4.0], [5.0, 3.0]]) + 1000.0  # far from the origin
-    assert np.isclose(E.principal_direction(p), -np.pi / 2)
-    assert np.isnan(E.principal_direction(p[:1]))
-    assert np.isnan(E.principal_direction(np.array([[1.0, 1.0], [1.0, 1.0]])))
-
-
-def test_estimate_scan_rejects_unknown_method() -> None:
-    with pytest.raises(ValueError, match="classical"):
-        E.estimate_scan(np.ones(5), np.zeros(5), method="spline")
-
-
-def test_estimate_scan_smoothing_keeps_shapes(raycast: Raycast) -> None:
+def test_smoothing_keeps_shapes(raycast: Raycast) -> None:
+    # as the curvature experiment smooths: positions first, then the geometric estimate
     scan = raycast.catalogue["circle_R1"].scan
-    est = E.estimate_scan(scan.ranges, scan.bearings, scan.valid, method="geometric",
-                          windows=(4, 5, 6), sigma=1.0)
+    s = E.smooth_positions(E.surfaces(scan.ranges, scan.bearings, scan.valid), 1.0)
+    est = E.geometric_curvature(s, (4, 5, 6))
     assert est.curvature.shape == (181,)
     assert np.nanmax(np.abs(est.curvature + 1.0)) < 0.1  # a cut kernel bends surface ends

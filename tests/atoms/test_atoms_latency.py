@@ -28,9 +28,9 @@ def test_a_scan_stamped_now_to_the_clocks_rounding_means_no_motion() -> None:
     assert now != 46.5 and abs(now - 46.5) < 1e-9
     p.record_pose(46.4, (13.9, 4.6, 9.2))
     p.record_pose(now, (13.93, 4.61, 9.22))
-    moved, pose = p.predict(now, 46.5, p.poses[-1][1], 0.3, 0.2, 0.0, math.inf, math.inf)
+    moved, pose = p.predict(now, 46.5, p.poses[-1].pose, 0.3, 0.2, 0.0, math.inf, math.inf)
     assert moved == (0.0, 0.0, 0.0)
-    assert pose == p.poses[-1][1]
+    assert pose == p.poses[-1].pose
 
 
 def test_commands_in_flight_act_after_the_latency_with_the_ramp() -> None:

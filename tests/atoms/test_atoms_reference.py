@@ -13,10 +13,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
+from mdle.core.backend import Scan
 
 from mdle.atoms import estimators as E
 from mdle.atoms.boundary import boundary_view
-from mdle.core.backend import Scan
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Raycast
@@ -28,6 +28,25 @@ def _noisy_scene(raycast: Raycast, seed: int, centre: tuple[float, float] = (1.5
     rng = np.random.default_rng(seed)
     r = np.minimum(raycast.line((0.0, -0.6), (0.0, -1.0)), raycast.circle(centre, radius))
     return raycast.scan(r * (1.0 + rng.normal(0.0, 0.008, r.shape)))
+
+
+def _menger(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray) -> np.ndarray:
+    """Signed curvature of the circle through three points: 4 area / (a b c), left turn +.
+
+    Collinear points give 0, coincident points NaN (the estimators mark those invalid).
+    """
+    ux, uy = p1[..., 0] - p0[..., 0], p1[..., 1] - p0[..., 1]
+    vx, vy = p2[..., 0] - p1[..., 0], p2[..., 1] - p1[..., 1]
+    cx, cy = p2[..., 0] - p0[..., 0], p2[..., 1] - p0[..., 1]
+    den = np.sqrt((ux * ux + uy * uy) * (vx * vx + vy * vy) * (cx * cx + cy * cy))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0, 2.0 * (ux * vy - uy * vx) / den, np.nan)
+
+
+def test_menger_reference_on_a_unit_circle() -> None:
+    k = _menger(np.array([1.0, 0.0]), np.array([0.0, 1.0]), np.array([-1.0, 0.0]))
+    assert float(k) == pytest.approx(1.0, abs=1e-12)
+    assert np.isnan(_menger(np.zeros(2), np.zeros(2), np.ones(2)))
 
 
 def _reference_geometric(pts: np.ndarray, start: np.ndarray, end: np.ndarray,
@@ -42,7 +61,7 @@ def _reference_geometric(pts: np.ndarray, start: np.ndarray, end: np.ndarray,
         ok = (idx - w >= start) & (idx + w <= end)
         lo, hi = np.clip(idx - w, 0, n - 1), np.clip(idx + w, 0, n - 1)
         p0, p1, p2 = pts[lo], pts[idx], pts[hi]
-        k = E.menger(p0, p1, p2)
+        k = _menger(p0, p1, p2)
         ok &= np.isfinite(k)
         u = p1 - p0
         half = np.arcsin(np.clip(0.5 * np.hypot(u[:, 0], u[:, 1]) * np.where(ok, k, 0), -1, 1))
@@ -154,3 +173,67 @@ def test_side_fit_with_two_distinct_abscissae_uses_the_minimum_norm_solution(
     p1 = 0.5 * np.array([math.cos(b[1]), math.sin(b[1])])
     assert view.side.hit and abs(view.side.kappa) < 1e-9
     assert view.side.beta == pytest.approx(math.atan2(*(p1 - p0)[::-1]), abs=1e-9)
+
+
+def _next_nearest_reference(z: np.ndarray, fitted: np.ndarray) -> tuple[float, float] | None:
+    """The next face one point at a time: range and bearing of the nearest qualifying point.
+
+    A point qualifies when it is not fitted, lies less than 45 deg left of the heading, and
+    is the nearest of the 10 points on either side of it or lies on another surface than the
+    first fitted point (surfaces: runs of points less than ``JUMP`` apart).
+    """
+    from mdle.atoms import closest as C
+
+    m = z.size
+    d = np.abs(z)
+    surface = [0] * m
+    for i in range(1, m):
+        surface[i] = surface[i - 1] + (abs(z[i] - z[i - 1]) > C.JUMP)
+    own = surface[int(np.flatnonzero(fitted)[0])]
+    best = None
+    for k in range(m):
+        window = d[max(0, k - C.WINDOW):k + C.WINDOW + 1]
+        qualifies = (d[k] <= window.min() or surface[k] != own) and not fitted[k] \
+            and z[k].imag < z[k].real and d[k] > 0
+        if qualifies and (best is None or d[k] < d[best]):
+            best = k
+    return None if best is None else (float(d[best]), float(np.angle(z[best])))
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_next_face_matches_the_one_point_at_a_time_reference(seed: int) -> None:
+    from mdle.atoms import closest as C
+
+    rng = np.random.default_rng(seed)
+    bearings = np.radians(np.arange(-90.0, 90.5, 1.0))
+    # poles and walls at random, some beams missing: several surfaces, gaps in the list
+    r = np.full(bearings.size, np.inf)
+    for _ in range(int(rng.integers(1, 5))):
+        c = complex(rng.uniform(-1.0, 3.0), rng.uniform(-2.5, 2.5))
+        rho = rng.uniform(0.05, 0.6)
+        u = np.exp(1j * bearings)
+        b = (u.conjugate() * c).real
+        disc = b * b - abs(c) ** 2 + rho * rho
+        hit = np.where(disc >= 0, b - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+        r = np.minimum(r, np.where(hit > 0, hit, np.inf))
+    r *= 1.0 + rng.normal(0.0, 0.008, r.shape)
+    r[rng.random(r.size) < 0.05] = np.inf
+    ok = np.isfinite(r)
+    if ok.sum() < 3:
+        return
+    z = r[ok] * np.exp(1j * bearings[ok])
+    z = np.round(z, 3)  # millimetre points: ties between equal ranges are common
+    d2 = (z * z.conjugate()).real
+    fitted = np.zeros(z.size, dtype=bool)
+    first = int(rng.integers(0, z.size))
+    fitted[first:first + int(rng.integers(1, 12))] = True
+    ray = C.next_nearest(z, d2, fitted)
+    want = _next_nearest_reference(z, fitted)
+    if want is None:
+        assert not ray.hit
+    else:
+        assert ray.hit and ray.r == pytest.approx(want[0], abs=1e-12)
+        # the ray's tangent is perpendicular to the line of sight: beta = bearing + pi/2
+        assert math.remainder(ray.beta - want[1] - math.pi / 2, 2 * math.pi) \
+            == pytest.approx(0.0, abs=1e-12)
+

@@ -15,6 +15,17 @@ if TYPE_CHECKING:
     from tests.atoms.conftest import LoopResult, World2D
 
 G = S.Gains()
+
+
+def _law(front: S.Ray, side: S.Ray, v: float, rc: float, g: S.Gains,
+         umax: float | None = None) -> float:
+    """The two-ray law's turn rate for one tick from a fresh start (no memory yet)."""
+    return S.step(front, side, (0.0, 0.0, 0.0), 0.0, 0.01, S.Memory(), v, rc, g, umax)
+
+
+def _z(points: np.ndarray) -> np.ndarray:
+    """Robot-frame points (M, 2) as complex numbers (M,), as the safety layer reads them."""
+    return points[:, 0] + 1j * points[:, 1]
 ARGS = dict(side="right", rc=0.5, v=1.0, zeta=1.0, kf=0.5, umax=math.inf, tau=0.2, margin=0.15,
             lookahead=0.8, latency=math.inf)
 
@@ -23,13 +34,13 @@ ARGS = dict(side="right", rc=0.5, v=1.0, zeta=1.0, kf=0.5, umax=math.inf, tau=0.
 @pytest.mark.parametrize("rc", [0.5, 1.0])
 def test_on_the_target_set_u_is_the_offset_curve_rate(kappa: float, rc: float) -> None:
     side = S.Ray(True, rc, 0.0, kappa)
-    u = S.follow_law(S.MISS, side, 1.0, rc, G, umax=100.0)
+    u = _law(S.MISS, side, 1.0, rc, G, umax=100.0)
     assert u == pytest.approx(kappa / (1.0 - kappa * rc), rel=1e-12, abs=1e-12)
 
 
 def test_concave_side_curvature_is_clamped() -> None:
     # kappa rs >= 1: the offset curve does not exist; the clamp keeps 1 - k rs >= 0.2
-    u = S.follow_law(S.MISS, S.Ray(True, 0.5, 0.0, 5.0), 1.0, 0.5, G, umax=100.0)
+    u = _law(S.MISS, S.Ray(True, 0.5, 0.0, 5.0), 1.0, 0.5, G, umax=100.0)
     kc = 0.8 / 0.5
     assert u == pytest.approx(kc / (1 - kc * 0.5))
 
@@ -60,33 +71,33 @@ def test_clf_decreases_along_the_law_when_the_front_misses() -> None:
 @pytest.mark.parametrize("b0", [0.3, 1.0, math.pi / 2, 2.5])
 def test_an_obstacle_ahead_turns_the_robot_left(b0: float) -> None:
     front = S.Ray(True, 1.0, b0, 0.0)
-    assert S.follow_law(front, S.MISS, 1.0, 0.5, G) > 0
+    assert _law(front, S.MISS, 1.0, 0.5, G) > 0
 
 
 def test_front_floor_turns_fully_left_close_to_a_wall() -> None:
     front = S.Ray(True, 0.3, math.pi / 2, 0.0)   # wall 0.3 m ahead, square on
     side = S.Ray(True, 0.5, 0.0, -1.0)           # even with the side asking for a right turn
-    assert S.follow_law(front, side, 1.0, 0.5, G) == pytest.approx(G.umax)
+    assert _law(front, side, 1.0, 0.5, G) == pytest.approx(G.umax)
 
 
 def test_grazing_and_far_front_hits_count_as_misses() -> None:
     side = S.Ray(True, 0.6, 0.1, 0.0)
-    base = S.follow_law(S.MISS, side, 1.0, 0.5, G)
-    assert S.follow_law(S.Ray(True, 1.0, 0.01, 0.0), side, 1.0, 0.5, G) == base   # grazing
-    assert S.follow_law(S.Ray(True, 5.0, 1.5, 0.0), side, 1.0, 0.5, G) == base    # beyond 3 rc
-    assert S.follow_law(S.MISS, S.Ray(True, 0.5, 1.55, 0.0), 1.0, 0.5, G) == 0.0  # side grazing
+    base = _law(S.MISS, side, 1.0, 0.5, G)
+    assert _law(S.Ray(True, 1.0, 0.01, 0.0), side, 1.0, 0.5, G) == base   # grazing
+    assert _law(S.Ray(True, 5.0, 1.5, 0.0), side, 1.0, 0.5, G) == base    # beyond 3 rc
+    assert _law(S.MISS, S.Ray(True, 0.5, 1.55, 0.0), 1.0, 0.5, G) == 0.0  # side grazing
 
 
 def test_front_blend_is_continuous_at_the_gate() -> None:
     side = S.Ray(True, 0.6, 0.1, -0.5)
     gate = G.front_gate * 0.5
-    inside = S.follow_law(S.Ray(True, gate - 1e-9, 1.2, 0.0), side, 1.0, 0.5, G)
-    outside = S.follow_law(S.Ray(True, gate + 1e-9, 1.2, 0.0), side, 1.0, 0.5, G)
+    inside = _law(S.Ray(True, gate - 1e-9, 1.2, 0.0), side, 1.0, 0.5, G)
+    outside = _law(S.Ray(True, gate + 1e-9, 1.2, 0.0), side, 1.0, 0.5, G)
     assert inside == pytest.approx(outside, abs=1e-6)
 
 
 def test_saturation_at_the_given_limit() -> None:
-    u = S.follow_law(S.MISS, S.Ray(True, 5.0, 1.2, -3.0), 1.0, 0.5, G, umax=0.7)
+    u = _law(S.MISS, S.Ray(True, 5.0, 1.2, -3.0), 1.0, 0.5, G, umax=0.7)
     assert abs(u) <= 0.7
 
 
@@ -108,11 +119,11 @@ def test_corner_law_on_the_circle_is_the_circling_rate() -> None:
     assert S.corner_law(0.5, 0.0, 1.0, 0.5, G, 10.0) == pytest.approx(-2.0)
 
 
-def test_safety_filter_keeps_a_clear_arc_and_replaces_a_blocked_one() -> None:
+def test_safety_layer_keeps_a_clear_arc_and_replaces_a_blocked_one() -> None:
     far = np.array([[5.0, 5.0]])
-    assert safety.safety_filter(far, 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (1.0, 0.2, math.inf)
+    assert safety.filter_complex(_z(far), 1.0, 0.2, 3.0, 0.0, 0.05, 0.5) == (1.0, 0.2, math.inf)
     post = np.array([[0.35, 0.02]])  # a thin post just left of straight ahead, followed side
-    v, u, own = safety.safety_filter(post, 1.0, 0.0, 3.0, 0.0, 0.05, 0.5, side=1)
+    v, u, own = safety.filter_complex(_z(post), 1.0, 0.0, 3.0, 0.0, 0.05, 0.5, side=1)
     assert own < 0.05
     assert v == 1.0 and u != 0.0
     # the chosen arc really clears the post
@@ -121,11 +132,11 @@ def test_safety_filter_keeps_a_clear_arc_and_replaces_a_blocked_one() -> None:
     assert np.min(np.hypot(*(path - post[0]).T)) >= 0.05
 
 
-def test_safety_filter_slows_down_in_a_dead_end() -> None:
+def test_safety_layer_slows_down_in_a_dead_end() -> None:
     # a narrow wedge ahead, opening towards the robot: no arc at full speed escapes it
     t = np.linspace(0.0, 2.0, 200)[:, None]
     walls = np.vstack((np.hstack((t, 0.2 - 0.1 * t)), np.hstack((t, -0.2 + 0.1 * t))))
-    v, u, own = safety.safety_filter(walls[walls[:, 0] > 0.1], 1.0, 0.0, 3.0, 0.0, 0.15, 0.8)
+    v, u, own = safety.filter_complex(_z(walls[walls[:, 0] > 0.1]), 1.0, 0.0, 3.0, 0.0, 0.15, 0.8)
     assert own < 0.15
     assert v < 1.0  # slowed (or stopped to turn on the spot) rather than driving on
 
@@ -161,17 +172,6 @@ def test_closed_loop_square_noisy_scan_uses_corner_mode(world2d: World2D) -> Non
     assert 0.02 < np.mean(res.modes) < 0.4
 
 
-def test_own_arc_clearance_fast_path_equals_the_candidate_computation() -> None:
-    rng = np.random.default_rng(0)
-    for _ in range(300):
-        pts = rng.uniform(-2.0, 2.0, (int(rng.integers(1, 80)), 2))
-        v = float(rng.uniform(0.1, 1.0))
-        u = 0.0 if rng.random() < 0.2 else float(rng.uniform(-3.0, 3.0))
-        z = safety.as_complex(pts)
-        slow = safety._arc_clearance(z, v, np.array([u]), 0.8, 8)[0][0]
-        assert safety._own_clearance(z, v, u, 0.8, 8) == pytest.approx(slow, abs=1e-12)
-
-
 def _arcs_brute(pts: np.ndarray, v: float, rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Clearance and nearest-point side of each arc (0.8 s, 8 samples), one arc at a time."""
     clear, cross = [], []
@@ -187,13 +187,26 @@ def _arcs_brute(pts: np.ndarray, v: float, rates: np.ndarray) -> tuple[np.ndarra
     return np.array(clear), np.array(cross)
 
 
+def test_own_arc_clearance_equals_the_candidate_computation_and_one_arc_at_a_time() -> None:
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        pts = rng.uniform(-2.0, 2.0, (int(rng.integers(1, 80)), 2))
+        v = float(rng.uniform(0.1, 1.0))
+        u = 0.0 if rng.random() < 0.2 else float(rng.uniform(-3.0, 3.0))
+        z = _z(pts)
+        own = safety._own_clearance(z, v, u, 0.8, 8)
+        assert own == pytest.approx(safety._arc_clearance(z, v, np.array([u]), 0.8, 8)[0][0],
+                                    abs=1e-12)
+        assert own == pytest.approx(_arcs_brute(pts, v, np.array([u]))[0][0], abs=1e-12)
+
+
 def test_candidate_arcs_clearance_and_side_match_one_arc_at_a_time() -> None:
     rng = np.random.default_rng(1)
     rates = np.linspace(-3.0, 3.0, 25)  # the straight arc (rate 0) among them
     for _ in range(50):
         pts = rng.uniform(-1.5, 1.5, (int(rng.integers(1, 60)), 2))
         v = float(rng.uniform(0.1, 1.0))
-        clear, cross = safety._arc_clearance(safety.as_complex(pts), v, rates, 0.8, 8)
+        clear, cross = safety._arc_clearance(_z(pts), v, rates, 0.8, 8)
         want_clear, want_cross = _arcs_brute(pts, v, rates)
         assert clear == pytest.approx(want_clear, abs=1e-12)
         assert cross == pytest.approx(want_cross, abs=1e-12)
@@ -214,7 +227,7 @@ def test_admissible_rate_tried_nearest_first_is_the_nearest_admissible() -> None
         ok = (clear - 0.1 >= need) & (cross * side > 0)
         want = float(rates[np.flatnonzero(ok)[np.argmin(np.abs(rates[ok] - u))]]) \
             if ok.any() else None
-        got = safety._admissible(safety.as_complex(pts), v, rates, u, 0.8, 8, 0.1, need, side)
+        got = safety._admissible(_z(pts), v, rates, u, 0.8, 8, 0.1, need, side)
         assert got == want
         found += want is not None and abs(want - u) > 0.5
     assert found > 20  # the rest, not only the few nearest, were needed and searched
