@@ -34,16 +34,16 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
-from mdle.core.units import ANGLE, CURVATURE, LENGTH
-
 from mdle.atoms.memo import ByIdentity
 from mdle.atoms.ray_fits import front_ray as _front_ray
 from mdle.atoms.ray_fits import side_ray as _side_ray
 from mdle.atoms.registry import Args, Context, Param, sensor
 from mdle.atoms.steering import MISS, Ray
+from mdle.core.units import ANGLE, CURVATURE, LENGTH
 
 if TYPE_CHECKING:
     import numpy as np
+
     from mdle.core.backend import Scan
 
 __all__ = ["Side", "BoundaryView", "boundary_view", "cached_view", "cached_beams",

@@ -20,13 +20,12 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from mdle.core.backend import Command
-from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
-
 from mdle.atoms import closest, safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
 from mdle.atoms.latency import STILL, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
+from mdle.core.backend import Command
+from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 if TYPE_CHECKING:
     from mdle.atoms.latency import Predictor

@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
-from mdle.core.backend import Observation
-from mdle.core.pose import Pose
 
 from mdle.atoms import safety
 from mdle.atoms import steering as S
 from mdle.atoms.follow import FollowState, lost
 from mdle.atoms.registry import Context
+from mdle.core.backend import Observation
+from mdle.core.pose import Pose
 from mdle.lang import load_text
 from mdle.runtime import run
 from mdle.runtime.events import Cause

@@ -7,9 +7,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pytest
-from mdle.core.backend import Scan
 
 from mdle.atoms import estimators as E
+from mdle.core.backend import Scan
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Case, Raycast

@@ -14,8 +14,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-from mdle.fit.recording import read_recording
 
+from mdle.fit.recording import read_recording
 from mdle.sim.profiles import robot_profile
 
 SESSION = Path(__file__).resolve().parents[1] / "data" / "recordings" / "amrisim-2026-11-28"
