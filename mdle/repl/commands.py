@@ -35,7 +35,7 @@ from mdle.backend import Pose
 from mdle.cli.output import print_diagnostics
 from mdle.cli.signals import ends_session
 from mdle.errors import Diagnostic, MdleError
-from mdle.ranges import COORDINATE
+from mdle.ranges import COORDINATE, HEADING
 from mdle.repl import views
 from mdle.repl.reports import RunReport
 from mdle.repl.session import ReplError, Session
@@ -350,7 +350,7 @@ class Repl:
                                 "(metres, metres, degrees)")
             x = _coordinate(args[0], "x")
             y = _coordinate(args[1], "y")
-            th = math.radians(_finite(args[2], "theta")) if len(args) == 3 else 0.0
+            th = _heading(args[2], "theta") if len(args) == 3 else 0.0
             pose = Pose(x, y, th)
         here = self.session.reset(pose)
         if not self.session.simulated:
@@ -522,6 +522,15 @@ def _number(text: str, what: str) -> float:
 def _coordinate(text: str, what: str) -> float:
     value = _finite(text, what)
     problem = COORDINATE.problem(value, text)
+    if problem is not None:
+        raise ReplError(f"{what}: {problem}")
+    return value
+
+
+def _heading(text: str, what: str) -> float:
+    """Read a heading in degrees, returned in radians."""
+    value = math.radians(_finite(text, what))
+    problem = HEADING.problem(value, text)
     if problem is not None:
         raise ReplError(f"{what}: {problem}")
     return value

@@ -91,6 +91,13 @@ def test_coordinates_far_beyond_any_world_are_refused(where: str) -> None:
     assert "must be within" in refused(where)
 
 
+@pytest.mark.parametrize(("where", "key"), [("start: {x: 0, y: 0, theta: 1e308}\n", "start.theta"),
+                                            ("start: [0, 0, -400]\n", "start[2]")])
+def test_absurd_start_headings_are_refused_at_their_key(where: str, key: str) -> None:
+    msg = refused(where)
+    assert key in msg and "a heading must be from -360 to 360 deg" in msg and "w.yaml:1:" in msg
+
+
 def test_start_pose_touching_an_obstacle_is_refused() -> None:
     # Pioneer radius 0.26 m: a wall face exactly 0.26 m away touches the body.
     text = ("robot: {radius: 0.26}\nstart: {x: 0, y: 0}\nobstacles:\n"
