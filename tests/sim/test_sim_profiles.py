@@ -287,8 +287,8 @@ def test_the_server_loop_fast_path_equals_the_piecewise_one() -> None:
     """One integration per tick (no odometry noise) gives what a piece per instant gives."""
 
     class Pieces(SimBackend):
-        def _advance_cycled(self, t1: float) -> None:
-            self._advance_cycled_pieces(t1)
+        def _advance_cycled(self, t1: float, last: bool = True) -> None:
+            self._advance_cycled_pieces(t1, last)
 
     world = World("empty", robot=robot_profile("pioneer-p3dx"))
     fast, slow = SimBackend(world, seed=5), Pieces(world, seed=5)
