@@ -8,7 +8,6 @@ runs, and writes the CSV.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import sys
 from collections.abc import Sequence
@@ -111,6 +110,14 @@ def run(args: argparse.Namespace) -> int:
         return output.EXIT_USAGE
     from mdle.experiments.generated import study_specs
 
+    if args.csv is not None:  # before the work: a folder we can write
+        from mdle.cli.csv_output import check_csv_output, write_failed
+        from mdle.userfile import UserFileError
+
+        try:
+            check_csv_output("--csv", args.csv)
+        except UserFileError as err:
+            return write_failed("mdle experiment random-starts", err)
     total = len(study_specs(cfg))
     out = args.out / "random-starts-generated" if getattr(args, "resume", False) else None
     try:
@@ -121,13 +128,14 @@ def run(args: argparse.Namespace) -> int:
                   "again to resume", file=sys.stderr)
         raise
     if args.csv is not None:
+        from mdle.cli.csv_output import write_failed
+        from mdle.userfile import UserFileError
+
         try:
             write_csv(rows, args.csv)
-        except OSError as e:
-            print(f"mdle experiment random-starts: cannot write {args.csv}: {e.strerror}",
-                  file=sys.stderr)
+        except UserFileError as err:
             _print_tables(cfg, rows, sys.stdout)
-            return output.EXIT_INPUT
+            return write_failed("mdle experiment random-starts", err)
     _print_tables(cfg, rows, sys.stdout)
     if args.csv is not None:
         print(f"wrote {args.csv} ({len(rows)} runs)")
@@ -260,16 +268,17 @@ _DEGREES = ("theta0", "incidence")
 
 
 def write_csv(rows: Sequence[Row], path: Path) -> None:
-    """Write one line per run; angles in degrees (``*_deg``), everything else SI."""
-    if not rows:
-        path.write_text("", encoding="utf-8")
-        return
-    names = [f"{k}_deg" if k in _DEGREES else k for k in rows[0]]
-    with path.open("w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(names)
-        for r in rows:
-            w.writerow([_cell(k, v) for k, v in r.items()])
+    """Write one line per run, whole or not at all; angles in degrees (``*_deg``), else SI.
+
+    Raises
+    ------
+    UserFileError
+        The file cannot be written (:func:`mdle.cli.csv_output.write_csv_output`).
+    """
+    from mdle.cli.csv_output import write_csv_output
+
+    names = [f"{k}_deg" if k in _DEGREES else k for k in rows[0]] if rows else []
+    write_csv_output(path, names, ([_cell(k, v) for k, v in r.items()] for r in rows))
 
 
 def _cell(key: str, value: Any) -> Any:

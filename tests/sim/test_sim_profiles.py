@@ -280,7 +280,7 @@ def test_cli_robots_list_show_and_fit_a_trace(tmp_path: Path) -> None:
     assert again.max_accel == pytest.approx(p3.max_accel, rel=0.1)
     assert again.max_turn_accel == pytest.approx(p3.max_turn_accel, rel=0.1)
     out = mdle("robots", "fit", "missing.csv")
-    assert out.returncode == 1 and "recording not found" in out.stderr
+    assert out.returncode == 1 and "cannot read recording" in out.stderr
 
 
 def test_the_server_loop_fast_path_equals_the_piecewise_one() -> None:

@@ -8,7 +8,9 @@ a tick covered more ground, and a slow rate moved the contact by tenths of a met
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -27,7 +29,7 @@ obstacles:
 AHEAD = "atom ahead = (go(1.2 m/s), stalled, 20 s)\nplan main = ((ahead), never, 30 s)\n"
 
 
-def _contacts(tmp_path: Path, rate: str) -> dict[str, dict[str, object]]:
+def _contacts(tmp_path: Path, rate: str) -> dict[str, Mapping[str, Any]]:
     d = tmp_path / rate
     d.mkdir()
     (d / "duel.world.yaml").write_text(WORLD)
