@@ -18,7 +18,11 @@ work; a long call into C that holds the interpreter (shapely's union of thousand
 polygons, matplotlib's drawing of a long path) is cut into pieces.
 
 On a busy machine the latency includes waiting for a core: compare phases with each
-other, and with the same run of ``--phases idle`` (a command that sleeps).
+other, and with the same run of ``--phases idle`` (a command that sleeps). ``--stalls``
+measures what no load changes instead: each phase runs to its end in a process whose
+SIGPROF timer fires every 5 ms of CPU, and the longest CPU stretch between two runs of
+its Python handler is printed (a signal waits at most that long, in CPU time), with
+where the interpreter resumed.
 """
 
 from __future__ import annotations
@@ -52,7 +56,7 @@ class Phase:
 
 def big_plan(path: Path, lines: int) -> None:
     """Write a plan of ``lines`` atom definitions and a run of the first."""
-    body = "".join(f"atom a{i} = (go(0.3 m/s), range < {1 + i % 7} m, {1 + i % 5} s)\n"
+    body = "".join(f"atom a{i} = (go(0.3 m/s), range(0 deg) < {1 + i % 7} m, {1 + i % 5} s)\n"
                    for i in range(lines))
     path.write_text(body + "run a0\n")
 
@@ -226,12 +230,47 @@ def _spread(times: list[float]) -> str:
     return f"{1000 * statistics.median(got):.0f}/{1000 * max(got):.0f} ms"
 
 
+def probe(argv: list[str]) -> None:
+    """Run ``mdle argv`` in this process; print its longest CPU stretches without a handler."""
+    import traceback
+
+    stalls: list[tuple[float, str]] = []
+    last = [time.process_time()]
+
+    def tick(signum: int, frame: object) -> None:
+        gap = time.process_time() - last[0]
+        if gap > 0.02:
+            where = traceback.format_stack(frame, limit=2)[-1].strip().splitlines()[0]  # type: ignore[arg-type]
+            stalls.append((gap, where))
+        last[0] = time.process_time()  # the handler's own time is not a stall
+
+    signal.signal(signal.SIGPROF, tick)
+    signal.setitimer(signal.ITIMER_PROF, 0.005, 0.005)
+    from mdle.cli import main as mdle_main
+
+    out = sys.stdout
+    try:
+        with open(os.devnull, "w") as sys.stdout:  # mdle's own output is not the point
+            code = mdle_main(argv)
+    finally:
+        signal.setitimer(signal.ITIMER_PROF, 0, 0)
+        sys.stdout = out
+    stalls.sort(reverse=True)
+    worst = ", ".join(f"{1000 * g:.0f} ms ({w})" for g, w in stalls[:2]) or "none over 20 ms"
+    print(f"exit {code}, {time.process_time():.2f} s CPU; longest: {worst}")
+
+
 def main() -> None:
     """Measure every phase (or those named) ``--repeat`` times."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--phases", nargs="+", default=None)
+    ap.add_argument("--stalls", action="store_true")
+    ap.add_argument("--probe", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.probe is not None:
+        probe(a.probe)
+        return
     srv, _ = silent_robot()
     with tempfile.TemporaryDirectory(prefix="mdle-interrupts-") as tmp:
         folder = Path(tmp)
@@ -239,6 +278,14 @@ def main() -> None:
         chosen = [p for p in phases(folder, srv.getsockname()[1])
                   if a.phases is None or p.name in a.phases]
         for phase in chosen:
+            if a.stalls:
+                if phase.argv[0] == sys.executable or phase.name == "robot-connect":
+                    continue  # nothing of mdle's to probe / waits, does not compute
+                print(f"{phase.name:17} ", end="", flush=True)
+                subprocess.run([sys.executable, __file__, "--probe", *phase.argv], cwd=folder,
+                               env=dict(os.environ, MPLBACKEND="Agg"), check=False,
+                               stderr=subprocess.DEVNULL)
+                continue
             runs = [interrupt(phase.argv, phase.delay, folder) for _ in range(a.repeat)]
             codes = sorted({r.code for r in runs})
             last = runs[-1].stderr.strip().splitlines()[-1] if runs[-1].stderr.strip() else ""

@@ -36,8 +36,8 @@ import numpy as np
 
 from mdle.sim.world import World
 
-__all__ = ["DISTANCE", "GAP", "INCIDENCE", "PASS", "Start", "blind_side_starts",
-           "collision_starts", "tangential_starts"]
+__all__ = ["DISTANCE", "GAP", "INCIDENCE", "PASS", "Start", "StartsError",
+           "blind_side_starts", "collision_starts", "tangential_starts"]
 
 #: Distance from the robot's centre to the nearest boundary at a start, metres.
 DISTANCE = (3.0, 8.0)
@@ -52,6 +52,10 @@ PASS = (0.45, 1.2)
 _BATCH = 64          # candidates drawn at once
 _MAX_BATCHES = 200   # bounded search (a start is found in the first batch in practice)
 
+
+
+class StartsError(ValueError):
+    """A shape offers fewer starts of the kind asked for than were asked for."""
 
 @dataclass(frozen=True)
 class Start:
@@ -152,7 +156,7 @@ def collision_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
                                 incidence=inc, ahead=float(hit.ranges[0])))
             if len(starts) == n:
                 return starts
-    raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} collision-course "
+    raise StartsError(f"world `{world.name}`: found only {len(starts)} of {n} collision-course "
                      "starts 3-8 m from the obstacles")
 
 
@@ -194,7 +198,7 @@ def blind_side_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
                                 float(theta[i]), True, float(dist[i]), gap=float(gap[i])))
             if len(starts) == n:
                 return starts
-    raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} blind-side "
+    raise StartsError(f"world `{world.name}`: found only {len(starts)} of {n} blind-side "
                      "starts 3-8 m from the obstacles")
 
 
@@ -241,5 +245,5 @@ def tangential_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,
                                 float(dist[i]), gap=float(gap[i])))
             if len(starts) == n:
                 return starts
-    raise ValueError(f"world `{world.name}`: found only {len(starts)} of {n} tangential "
+    raise StartsError(f"world `{world.name}`: found only {len(starts)} of {n} tangential "
                      "starts")

@@ -110,7 +110,7 @@ def folder(tmp_path: Path) -> Path:
 
 
 def test_checking_a_plan_of_60000_lines(folder: Path) -> None:
-    body = "".join(f"atom a{i} = (go(0.3 m/s), range < {1 + i % 7} m, {1 + i % 5} s)\n"
+    body = "".join(f"atom a{i} = (go(0.3 m/s), range(0 deg) < {1 + i % 7} m, {1 + i % 5} s)\n"
                    for i in range(60_000))
     (folder / "big.mdle").write_text(body + "run a0\n")
     _interrupted(interrupt_inside(["check", "big.mdle"], folder, cpu=1.5))

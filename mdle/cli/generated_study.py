@@ -76,9 +76,13 @@ def config_from(args: argparse.Namespace) -> "StudyConfig | str":
         kf=args.kf, duration=args.duration, blind=args.blind_side, tolerance=args.tolerance,
         suite=getattr(args, "suite", None) or c.suite,
         tangential=getattr(args, "tangential", None) or c.tangential)
+    from mdle.sweep.spec import MAX_AXIS
+
     checks = [
-        (cfg.shapes >= 1, f"--shapes must be at least 1, got {cfg.shapes}"),
-        (cfg.starts >= 1, f"--starts must be at least 1, got {cfg.starts}"),
+        (1 <= cfg.shapes <= MAX_AXIS,
+         f"--shapes must be at least 1 and at most {MAX_AXIS:,}, got {cfg.shapes}"),
+        (1 <= cfg.starts <= MAX_AXIS,
+         f"--starts must be at least 1 and at most {MAX_AXIS:,}, got {cfg.starts}"),
         (cfg.seed >= 0, f"--seed must be >= 0, got {cfg.seed}"),
         (math.isfinite(cfg.rate) and cfg.rate > 0, f"--rate must be > 0 Hz, got {cfg.rate:g}"),
         (math.isfinite(cfg.v) and cfg.v > 0, f"--v must be > 0 m/s, got {cfg.v:g}"),
@@ -90,7 +94,8 @@ def config_from(args: argparse.Namespace) -> "StudyConfig | str":
         (cfg.tolerance is None or cfg.tolerance > 0,
          f"--tolerance must be > 0 m, got {cfg.tolerance}"),
         (args.jobs is None or args.jobs >= 1, f"--jobs must be at least 1, got {args.jobs}"),
-        (cfg.tangential >= 0, f"--tangential must be >= 0, got {cfg.tangential}"),
+        (0 <= cfg.tangential <= MAX_AXIS,
+         f"--tangential must be from 0 to {MAX_AXIS:,}, got {cfg.tangential}"),
     ]
     for ok, message in checks:
         if not ok:
@@ -109,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"mdle experiment random-starts: {cfg}", file=sys.stderr)
         return output.EXIT_USAGE
     from mdle.experiments.generated import study_specs
+    from mdle.sim.starts import StartsError
 
     if args.csv is not None:  # before the work: a folder we can write
         from mdle.cli.csv_output import check_csv_output, write_failed
@@ -118,7 +124,12 @@ def run(args: argparse.Namespace) -> int:
             check_csv_output("--csv", args.csv)
         except UserFileError as err:
             return write_failed("mdle experiment random-starts", err)
-    total = len(study_specs(cfg))
+    try:
+        total = len(study_specs(cfg))
+    except StartsError as err:  # more starts asked of a shape than it offers
+        print(f"mdle experiment random-starts: {err}: ask for fewer (--starts, --tangential)",
+              file=sys.stderr)
+        return output.EXIT_USAGE
     out = args.out / "random-starts-generated" if getattr(args, "resume", False) else None
     try:
         rows = _run_with_progress(cfg, args.jobs, total, out)

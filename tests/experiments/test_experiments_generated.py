@@ -106,6 +106,10 @@ def test_cli_runs_a_small_study_and_writes_one_csv_row_per_run(
     (["--generated", "--rate", "-1"], "--rate: the rate must be from 0.001 to 1,000 Hz"),
     (["--generated", "--robot", "pioner"], "unknown robot profile"),
     (["--generated", "--jobs", "0"], "--jobs must be at least 1"),
+    (["--generated", "--shapes", "100000000"], "--shapes must be at least 1 and at most 100,000"),
+    (["--generated", "--starts", "100000000"], "--starts must be at least 1 and at most 100,000"),
+    # more than the first shape offers: was "internal error: ValueError" (exit 70)
+    (["--generated", "--starts", "20000"], "of 20000 collision-course starts"),
     (["--generated", "--runs", "5"], "--runs is for the paper shapes"),
     (["--shapes", "3"], "--shapes needs --generated"),
     (["--blind-side"], "--blind-side needs --generated"),
