@@ -234,6 +234,9 @@ def probe(argv: list[str]) -> None:
     """Run ``mdle argv`` in this process; print its longest CPU stretches without a handler."""
     import traceback
 
+    # benchmarks/mcap.py would stand for the mcap package: mdle is imported without it
+    here = Path(__file__).resolve().parent
+    sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != here]
     stalls: list[tuple[float, str]] = []
     last = [time.process_time()]
 
@@ -279,8 +282,8 @@ def main() -> None:
                   if a.phases is None or p.name in a.phases]
         for phase in chosen:
             if a.stalls:
-                if phase.argv[0] == sys.executable or phase.name == "robot-connect":
-                    continue  # nothing of mdle's to probe / waits, does not compute
+                if phase.name in ("idle", "robot-connect", "sweep", "experiment"):
+                    continue  # waits (on a robot, on workers), or runs for hours to its end
                 print(f"{phase.name:17} ", end="", flush=True)
                 subprocess.run([sys.executable, __file__, "--probe", *phase.argv], cwd=folder,
                                env=dict(os.environ, MPLBACKEND="Agg"), check=False,
