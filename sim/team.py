@@ -1,5 +1,10 @@
 """Several simulated robots in one world, advanced together in simulated time.
 
+Over 500 lines: one simulation step of several robots, whose parts (moving in pieces
+where robots could meet, their contacts, the scans that see each other, the radio)
+share the team's arrays and the order of one tick; split, each part would reach into
+the others' state.
+
 :class:`TeamSim` holds one :class:`Member` per robot. Each member is a full
 :class:`sim.backend.SimBackend` (its own profile, ladar, noise and seed) that also sees
 the others: its ladar's rays meet their discs (:func:`sim.crowd.cast_discs`, one
