@@ -40,8 +40,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
+from mdle.core.errors import WorldError
 
-from mdle.errors import WorldError
 from mdle.sim.interruptible import call_interruptibly
 
 if TYPE_CHECKING:
@@ -118,9 +118,10 @@ def read_map_info(path: str | os.PathLike[str]) -> MapInfo:
     WorldError
         Unreadable, not YAML, a missing or unknown key, or a bad value (file, line, key).
     """
+    from mdle.core.userfile import UserFileError, read_user_file
+
     from mdle.sim.yaml_doc import _Doc, _yaml_value
     from mdle.sim.yaml_values import _mapping, _number, _show, _string
-    from mdle.userfile import UserFileError, read_user_file
 
     file = str(path)
     try:
@@ -176,7 +177,7 @@ def read_image(path: str | os.PathLike[str]) -> np.ndarray:
     WorldError
         Unreadable, not an image, or larger than :data:`MAX_MAP_CELLS`.
     """
-    from mdle.userfile import UserFileError, read_user_file
+    from mdle.core.userfile import UserFileError, read_user_file
 
     try:
         data = read_user_file(path)

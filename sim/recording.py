@@ -19,9 +19,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from mdle.errors import MdleError
-from mdle.userfile import UserFileError, read_user_file
+from mdle.core.errors import MdleError
+from mdle.core.userfile import UserFileError, read_user_file
 
 __all__ = ["CSV_COLUMNS", "Recording", "read_recording"]
 
@@ -124,7 +123,7 @@ def _from_csv(p: Path) -> Recording:
 
 
 def _from_trace(p: Path) -> Recording:
-    from mdle.trace import read_trace
+    from mdle.record.load import read_trace
 
     trace = read_trace(p)
     if not trace.samples:

@@ -32,10 +32,11 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from mdle.core.backend import Scan, TickClock, plain_scan
+from mdle.core.errors import BackendError, WorldError
+from mdle.core.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
+from mdle.core.pose import Pose
 
-from mdle.backend import Pose, Scan, TickClock, plain_scan
-from mdle.errors import BackendError, WorldError
-from mdle.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from mdle.sim.backend import SimBackend, SimEvent
 from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlude, occlusions
 from mdle.sim.ladar import settle_rows

@@ -23,8 +23,8 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+from mdle.core.pose import Pose
 
-from mdle.backend import Pose
 from mdle.sim.distance import nearest_boundary
 from mdle.sim.ladar import LMS200, LadarProfile
 from mdle.sim.raycast import RayCaster, RayHits

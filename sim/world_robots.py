@@ -8,9 +8,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from mdle.backend import Pose
-from mdle.errors import WorldError
-from mdle.ranges import HEADING
+from mdle.core.errors import WorldError
+from mdle.core.pose import Pose
+from mdle.core.ranges import HEADING
+
 from mdle.sim.yaml_doc import _Doc
 from mdle.sim.yaml_values import _integer, _mapping, _number, _show, _string
 

@@ -1,4 +1,4 @@
-"""CSV files in and out of the commands go through mdle.userfile like every user file.
+"""CSV files in and out of the commands go through mdle.core.userfile like every user file.
 
 ``experiment navigation --csv`` opened its file with plain ``open``: naming the plan
 overwrote it after the whole study, and a failing disk lost half a table. ``robots fit``
@@ -33,7 +33,7 @@ def test_navigation_csv_naming_the_plan_is_refused_before_the_study(
 def test_a_full_disk_under_the_csv_keeps_the_old_file_and_exits_74(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
         capsys: pytest.CaptureFixture[str]) -> None:
-    import mdle.userfile
+    import mdle.core.userfile
 
     out = tmp_path / "runs.csv"
     out.write_text("old,table\n1,2\n")
@@ -41,7 +41,7 @@ def test_a_full_disk_under_the_csv_keeps_the_old_file_and_exits_74(
     def full(fd: int) -> None:
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(mdle.userfile.os, "fsync", full)
+    monkeypatch.setattr(mdle.core.userfile.os, "fsync", full)
     code = main([*GENERATED, "--csv", str(out)])
     captured = capsys.readouterr()
     assert code == 74, captured.err

@@ -93,7 +93,7 @@ def _interrupted(end: Ending) -> None:
 def _whole_or_none(trace: Path) -> None:
     """A run's trace is whole (header to end record), or was never begun."""
     if trace.exists():
-        from mdle.trace import read_trace
+        from mdle.record.load import read_trace
 
         t = read_trace(trace)
         assert t.end is not None and not t.truncated

@@ -1,4 +1,4 @@
-"""Every number a user gives is checked against one range with one message (mdle/ranges.py).
+"""Every number a user gives is checked against one range with one message (mdle/core/ranges.py).
 
 ``--rate 1e-308`` was an internal error (exit 70), ``--rate 5e-324`` a message that did
 not name the option, and ``--start 1e308,0,0`` a run where the robot "moved" 0 m.
@@ -10,9 +10,9 @@ import math
 from pathlib import Path
 
 import pytest
+from mdle.core.ranges import COORDINATE, HEADING, RATE
 
 from mdle.cli import main
-from mdle.ranges import COORDINATE, HEADING, RATE
 
 
 @pytest.mark.parametrize("value", [0.001, 1.0, 1000.0])

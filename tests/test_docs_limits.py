@@ -15,8 +15,7 @@ import re
 from pathlib import Path
 
 import pytest
-
-from mdle.cli import output
+from mdle.console import output
 
 PAGE = (Path(__file__).resolve().parents[1] / "docs" / "limits.md").read_text(encoding="utf-8")
 
@@ -38,12 +37,12 @@ def test_every_exit_code_of_the_command_line_is_in_the_table() -> None:
     ("100,000 each (`mdle.sweep.spec.MAX_AXIS`)", "mdle.sweep.spec:MAX_AXIS"),
     ("| runs in one study | 10,000,000 |", "mdle.sweep.spec:_MAX_RUNS"),
     ("| a seed | 0 to 2**63 - 1", "mdle.sweep.spec:MAX_STUDY_SEED"),
-    ("| control rate | 0.001 to 1,000 Hz", "mdle.ranges:RATE"),
-    ("| start coordinates | within 1,000,000 m", "mdle.ranges:COORDINATE"),
-    ("| start heading | -360 to 360 degrees", "mdle.ranges:HEADING"),
-    ("within 1,000,000,000 s", "mdle.ros.export:MAX_TIME"),
-    ("A trace keeps 16 KiB free", "mdle.trace:RESERVE_BYTES"),
-    ("At most **64 MB** per file", "mdle.userfile:MAX_FILE_BYTES"),
+    ("| control rate | 0.001 to 1,000 Hz", "mdle.core.ranges:RATE"),
+    ("| start coordinates | within 1,000,000 m", "mdle.core.ranges:COORDINATE"),
+    ("| start heading | -360 to 360 degrees", "mdle.core.ranges:HEADING"),
+    ("within 1,000,000,000 s", "mdle.record.export:MAX_TIME"),
+    ("A trace keeps 16 KiB free", "mdle.record.trace:RESERVE_BYTES"),
+    ("At most **64 MB** per file", "mdle.core.userfile:MAX_FILE_BYTES"),
     ("| obstacles listed in one world | 250,000", "mdle.sim.world_obstacles:MAX_OBSTACLES"),
     ("| obstacles other than circles | 20,000", "mdle.sim.world_obstacles:MAX_SHAPES"),
 ])

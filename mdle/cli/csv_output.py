@@ -2,7 +2,7 @@
 
 A CSV option is checked against the command's inputs before any work (an output never
 replaces an input), its folder is proved writable then too, and the table is written
-whole at the end through :func:`mdle.userfile.write_user_file`: a temporary file renamed
+whole at the end through :func:`mdle.core.userfile.write_user_file`: a temporary file renamed
 into place, so a full disk leaves the old file or none, never half a table. A fault of
 the machine ends the command with exit 74, a refused file (a FIFO, a folder) with 1.
 """
@@ -16,9 +16,9 @@ import sys
 from collections.abc import Iterable, Sequence
 from typing import Any
 
-from mdle.cli import output
 from mdle.cli.clobber import refuse_clobbering
-from mdle.userfile import UserFileError, writable_folder, write_user_file
+from mdle.console import output
+from mdle.core.userfile import UserFileError, writable_folder, write_user_file
 
 __all__ = ["check_csv_output", "csv_text", "write_csv_output", "write_failed"]
 
@@ -60,7 +60,7 @@ def write_csv_output(path: str | os.PathLike[str], header: Sequence[str],
     Raises
     ------
     UserFileError
-        The file cannot be written; :attr:`~mdle.userfile.UserFileError.fault` tells a
+        The file cannot be written; :attr:`~mdle.core.userfile.UserFileError.fault` tells a
         fault of the machine from a refused path.
     """
     write_user_file(path, csv_text(header, rows))

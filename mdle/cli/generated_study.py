@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from mdle.cli import output
+from mdle.console import output
 
 if TYPE_CHECKING:  # numpy and the simulator load only when a study runs (mdle check stays light)
     from mdle.experiments.generated import Row, StudyConfig
@@ -60,7 +60,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def config_from(args: argparse.Namespace) -> "StudyConfig | str":
     """Build the study's configuration from the options, or return what is wrong with them."""
-    from mdle.errors import WorldError
+    from mdle.core.errors import WorldError
     from mdle.experiments.generated import StudyConfig
     from mdle.sim.profiles import robot_profile
 
@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
 
     if args.csv is not None:  # before the work: a folder we can write
         from mdle.cli.csv_output import check_csv_output, write_failed
-        from mdle.userfile import UserFileError
+        from mdle.core.userfile import UserFileError
 
         try:
             check_csv_output("--csv", args.csv)
@@ -140,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
         raise
     if args.csv is not None:
         from mdle.cli.csv_output import write_failed
-        from mdle.userfile import UserFileError
+        from mdle.core.userfile import UserFileError
 
         try:
             write_csv(rows, args.csv)

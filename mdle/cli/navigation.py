@@ -14,7 +14,7 @@ import argparse
 import dataclasses
 import sys
 
-from mdle.cli import output
+from mdle.console import output
 
 __all__ = ["run_navigation_study"]
 
@@ -37,7 +37,7 @@ def run_navigation_study(args: argparse.Namespace) -> int:
         return output.EXIT_INPUT
     if args.csv is not None:  # before the work: never over the plan, a folder we can write
         from mdle.cli.csv_output import check_csv_output, write_failed
-        from mdle.userfile import UserFileError
+        from mdle.core.userfile import UserFileError
 
         try:
             check_csv_output("--csv", args.csv, [("the plan", str(plan))])
@@ -48,7 +48,7 @@ def run_navigation_study(args: argparse.Namespace) -> int:
         runs = run_study(seeds, robots, plan, jobs=args.jobs or 1, step=lambda run: step())
     if args.csv is not None:
         from mdle.cli.csv_output import write_csv_output, write_failed
-        from mdle.userfile import UserFileError
+        from mdle.core.userfile import UserFileError
 
         fields = [fl.name for fl in dataclasses.fields(runs[0])] if runs else []
         try:

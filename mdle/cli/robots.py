@@ -96,10 +96,10 @@ def _show(args: argparse.Namespace) -> int:
 
 def _fit(args: argparse.Namespace) -> int:
     from mdle.cli.clobber import refuse_clobbering
-    from mdle.errors import MdleError
-    from mdle.sim.fit import fit_profile
+    from mdle.core.errors import MdleError
+    from mdle.fit.profile import fit_profile
+    from mdle.fit.recording import read_recording
     from mdle.sim.profiles import robot_profile
-    from mdle.sim.recording import read_recording
     from mdle.sim.robot_yaml import dump_robot
 
     refuse_clobbering([("-o", args.output)], [("the recording", r) for r in args.recordings])
@@ -129,7 +129,7 @@ def _fit(args: argparse.Namespace) -> int:
     text = dump_robot(profile, comment)
     if args.output:
         from mdle.cli.csv_output import write_failed
-        from mdle.userfile import UserFileError, write_user_file
+        from mdle.core.userfile import UserFileError, write_user_file
 
         try:
             write_user_file(args.output, text)

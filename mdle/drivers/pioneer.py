@@ -3,7 +3,7 @@
 Over 500 lines: one backend class, whose handshake, reader thread, keep-alive, dead-man
 switch and goodbye share one connection state under one lock (the codec is arcos.py).
 
-:class:`PioneerBackend` implements :class:`mdle.backend.Backend` on the wall clock. The
+:class:`PioneerBackend` implements :class:`mdle.core.backend.Backend` on the wall clock. The
 connection is synchronised (SYNC0, SYNC1, SYNC2 with retries, per baud rate on serial
 lines), opened, and the motors enabled; then a reader thread owns the incoming stream:
 it decodes SIPs into odometry, reassembles the simulators' laser scans, sends a PULSE
@@ -21,7 +21,7 @@ over, the peer's last packets drained) before it is released. The SIGTERM handle
 the exit hook are in place before the first motor command, so a signal while connecting
 also stops the robot; the handler is the driver's only when SIGTERM had none (under
 mdle's command line its signal guard owns SIGTERM and ends runs cleanly). Stale data or
-a lost connection raise :class:`~mdle.errors.BackendError` after a best-effort stop; the
+a lost connection raise :class:`~mdle.core.errors.BackendError` after a best-effort stop; the
 runtime stops the robot at the end of every run.
 """
 
@@ -35,13 +35,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
-from mdle.backend import ClockMode, Command, Observation, Pose, RobotLimits, Scan
+from mdle.core.backend import ClockMode, Command, Observation, RobotLimits, Scan
+from mdle.core.errors import BackendError
+from mdle.core.exit_hooks import ExitHooks, register_exit_hooks
+from mdle.core.pose import Pose
 from mdle.drivers import arcos, arcos_laser
 from mdle.drivers.arcos import Cmd, OdometryState, PacketReader, RobotParams, SyncInfo
 from mdle.drivers.limits import check_limits, check_robot_params
 from mdle.drivers.transport import Transport, TransportClosed, read_or_fail
-from mdle.errors import BackendError
-from mdle.exit_hooks import ExitHooks, register_exit_hooks
 
 __all__ = ["PioneerBackend", "PioneerOptions", "ScanSource", "limits_from_params"]
 
@@ -160,7 +161,7 @@ class _Shared:
 
 
 class PioneerBackend:
-    """A Pioneer over an ARCOS connection, as a wall-clock :class:`~mdle.backend.Backend`.
+    """A Pioneer over an ARCOS connection, as a wall-clock :class:`~mdle.core.backend.Backend`.
 
     Parameters
     ----------

@@ -31,17 +31,17 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import IO
 
-from mdle.backend import Pose
-from mdle.cli.output import print_diagnostics
-from mdle.cli.signals import ends_session
-from mdle.errors import Diagnostic, MdleError
-from mdle.ranges import COORDINATE, HEADING
+from mdle.console.output import print_diagnostics
+from mdle.console.signals import ends_session
+from mdle.core.errors import Diagnostic, MdleError
+from mdle.core.pose import Pose
+from mdle.core.ranges import COORDINATE, HEADING
+from mdle.core.userfile import file_fault, file_fault_words
 from mdle.repl import views
 from mdle.repl.reports import RunReport
 from mdle.repl.session import ReplError, Session
 from mdle.runtime import Observer
 from mdle.runtime.events import ended_how
-from mdle.userfile import file_fault, file_fault_words
 
 __all__ = ["COMMANDS", "DEFINITION_KEYWORDS", "KEYWORDS", "Command", "Repl", "classify"]
 

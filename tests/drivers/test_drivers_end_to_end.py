@@ -12,11 +12,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pytest
+from mdle.core.errors import BackendError
 
 from mdle.drivers import open_backend
 from mdle.drivers.arcos import Cmd
 from mdle.drivers.pioneer import PioneerOptions
-from mdle.errors import BackendError
 from mdle.lang import load_text
 from mdle.runtime import Cause, element_of, run
 
@@ -276,7 +276,7 @@ def test_ctrl_c_while_a_robot_never_answers_ends_at_once(fake_robot: FakeRobot,
     assert "interrupted while connecting" in err and "Traceback" not in err
     assert latency < 2.0  # generous: benchmarks/interrupts.py measures the answer
     assert {r.cmd for r in fake.received} == {Cmd.SYNC0}  # no STOP or CLOSE to no one
-    from mdle.trace import read_trace
+    from mdle.record.load import read_trace
 
     trace = read_trace(tmp_path / "run.jsonl")  # whole: header to end record
     assert trace.end is not None and not trace.truncated

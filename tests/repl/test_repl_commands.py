@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mdle.core.pose import Pose
 
-from mdle.backend import Pose
 from mdle.repl.commands import COMMANDS, Repl, classify
 from mdle.repl.session import Session
 
@@ -312,9 +312,10 @@ def test_exact_sensing_scan_and_a_world_file(tmp_path: Path) -> None:
 def test_a_failing_control_law_is_reported_and_the_session_goes_on() -> None:
     import types
 
+    from mdle.core.backend import Command
+
     from mdle.atoms import default_registry
     from mdle.atoms.registry import Registry, control_law
-    from mdle.backend import Command
 
     @control_law()
     def explode(args: object, ctx: object, state: object) -> Command:

@@ -9,15 +9,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mdle.core.backend import Command
+from mdle.core.errors import WorldError
+from mdle.fit.profile import fit_profile, run_clock
+from mdle.fit.recording import read_recording
 
-from mdle.backend import Command
-from mdle.errors import WorldError
 from mdle.sim.backend import SimBackend
-from mdle.sim.fit import fit_profile, run_clock
-from mdle.sim.profiles import list_robots, robot_profile
-from mdle.sim.recording import read_recording
+from mdle.sim.profiles import list_robots, parse_robot, robot_profile
 from mdle.sim.robot import RunClock
-from mdle.sim.robot_yaml import dump_robot, parse_robot
+from mdle.sim.robot_yaml import dump_robot
 from mdle.sim.world import World
 from mdle.sim.world_yaml import parse_world
 
@@ -241,7 +241,7 @@ def test_fit_finds_the_server_loop_and_the_firmware_ramps() -> None:
 
 
 def test_recording_errors_name_the_place(tmp_path: Path) -> None:
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
 
     bad = tmp_path / "bad.csv"
     bad.write_text("t_s,v_mps,omega_radps,cmd_v_mps\n0,0,0,0\n")

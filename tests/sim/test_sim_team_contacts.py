@@ -13,8 +13,9 @@ import dataclasses
 import math
 
 import pytest
+from mdle.core.backend import Command
+from mdle.core.pose import Pose
 
-from mdle.backend import Command, Pose
 from mdle.sim.ladar import ladar_profile
 from mdle.sim.profiles import robot_profile
 from mdle.sim.shapes import Rectangle

@@ -3,7 +3,7 @@
 Deep nesting, aliases that refer to themselves or expand exponentially ("billion
 laughs"), numbers too large for a float, names too long for a file system, absurd rates
 and coordinates, and a start pose touching an obstacle. Each must end in a
-:class:`~mdle.errors.WorldError` naming the place, never a RecursionError,
+:class:`~mdle.core.errors.WorldError` naming the place, never a RecursionError,
 OverflowError, OSError or a hang. Costs are pinned by sizes, not wall-clock time.
 """
 
@@ -14,9 +14,9 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from mdle.core.errors import WorldError
+from mdle.core.pose import Pose
 
-from mdle.backend import Pose
-from mdle.errors import WorldError
 from mdle.sim import load_world
 from mdle.sim.world_yaml import MAX_YAML_DEPTH, parse_world
 

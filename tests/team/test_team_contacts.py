@@ -13,9 +13,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from mdle.record.load import read_trace
 
 from mdle.cli import main
-from mdle.trace import read_trace
 
 WORLD = """\
 name: duel
