@@ -359,15 +359,23 @@ class SimBackend:
         if dt == 0.0:
             return 0.0
         t1 = self._ticks.advance(dt)   # whole ticks: no drift over long runs
-        if not self._timed:
-            self._step(t1, True)
-        elif self._cycled:
-            self._advance_cycled(t1)
-        else:
-            self._advance_timed(t1)
+        self._advance_to(t1, True)
         return 0.0
 
-    def _advance_cycled(self, t1: float) -> None:
+    def _advance_to(self, t1: float, last: bool) -> None:
+        """Move to time ``t1``: the tick's end (``last``) or an instant inside it.
+
+        A team cuts a tick where two robots could meet (:class:`sim.team.TeamSim`); only
+        the ``last`` piece takes an oracle scan and measures the exact clearance.
+        """
+        if not self._timed:
+            self._step(t1, last)
+        elif self._cycled:
+            self._advance_cycled(t1, last)
+        else:
+            self._advance_timed(t1, last)
+
+    def _advance_cycled(self, t1: float, last: bool = True) -> None:
         """Move to ``t1`` through the server loop's instants (``control_cycle`` profiles).
 
         At a motion instant the speeds take one ramp step towards the command the server
@@ -378,7 +386,7 @@ class SimBackend:
         """
         prof = self.profile
         if prof.odometry.enabled:
-            self._advance_cycled_pieces(t1)
+            self._advance_cycled_pieces(t1, last)
             return
         cycle, window, pending = prof.control_cycle, prof.input_window, self._pending
         t = self._t
@@ -409,12 +417,12 @@ class SimBackend:
         if t1 > t:
             phases.append(new_phase(Phase, (t1 - t, v, 0.0, w, 0.0)))
         if phases:
-            self._step(t1, True, held=(phases, v, w, mark))
+            self._step(t1, last, held=(phases, v, w, mark))
         else:
             self._v, self._w = v, w
         self._release_scans(t1)
 
-    def _advance_cycled_pieces(self, t1: float) -> None:
+    def _advance_cycled_pieces(self, t1: float, last: bool = True) -> None:
         """:meth:`_advance_cycled` a piece at a time (odometry noise draws per piece)."""
         prof = self.profile
         cycle, window, pending = prof.control_cycle, prof.input_window, self._pending
@@ -439,9 +447,9 @@ class SimBackend:
                 continue
             if t >= t1 - _EPS:
                 break
-            final = at >= t1 - _EPS
+            ends = at >= t1 - _EPS
             self._cmd = Command(self._v, self._w)   # held: constant speeds until `at`
-            self._step(t1 if final else at, final)
+            self._step(t1 if ends else at, ends and last)
         self._release_scans(t1)
 
     def _following_report(self, now: float) -> float:
@@ -458,7 +466,7 @@ class SimBackend:
             nxt += prof.report_slip.draw(self._slip_rng)
         return nxt
 
-    def _advance_timed(self, t1: float) -> None:
+    def _advance_timed(self, t1: float, last: bool = True) -> None:
         """Move to ``t1`` in pieces cut where a report is due; queued commands switch inside."""
         pending = self._pending
         cycle = self.profile.sip_cycle
@@ -481,7 +489,7 @@ class SimBackend:
             switches = []
             while pending and pending[0][0] < end - _EPS:
                 switches.append(pending.popleft())
-            self._step(end, final, switches)
+            self._step(end, final and last, switches)
         self._release_scans(t1)
 
     def _release_scans(self, t1: float) -> None:

@@ -42,6 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from mdle.core.errors import WorldError
+from mdle.sim.interruptible import call_interruptibly
 from mdle.sim.shapes import Parts
 
 if TYPE_CHECKING:
@@ -296,7 +297,9 @@ def outline(occupied: np.ndarray, resolution: float, origin: tuple[float, float,
     boxes = shapely.box(x0 + a[first] * resolution, y0 + (rows - 1 - bottom) * resolution,
                         x0 + b[first] * resolution, y0 + (rows - top) * resolution)
     # Simplified even at 0: that drops the corners the union leaves on straight edges.
-    merged = shapely.simplify(shapely.union_all(boxes), tol, preserve_topology=True)
+    # Seconds in GEOS for a large map: run so that Ctrl-C still cuts it.
+    merged = call_interruptibly(
+        lambda: shapely.simplify(shapely.union_all(boxes), tol, preserve_topology=True))
     if yaw != 0.0:
         merged = affinity.rotate(merged, yaw, origin=(x0, y0), use_radians=True)
     parts = [g for g in shapely.get_parts(merged) if g.geom_type == "Polygon" and g.area > 0]

@@ -37,8 +37,8 @@ import numpy as np
 
 from mdle.sim.world import World
 
-__all__ = ["DISTANCE", "GAP", "INCIDENCE", "PASS", "Start", "blind_side_starts",
-           "collision_starts", "tangential_starts"]
+__all__ = ["DISTANCE", "GAP", "INCIDENCE", "PASS", "Start", "StartsError",
+           "blind_side_starts", "collision_starts", "tangential_starts"]
 
 #: Distance from the robot's centre to the nearest boundary at a start, metres.
 DISTANCE = (3.0, 8.0)
@@ -53,6 +53,10 @@ PASS = (0.45, 1.2)
 _BATCH = 64          # candidates drawn at once
 _MAX_BATCHES = 200   # bounded search (a start is found in the first batch in practice)
 
+
+
+class StartsError(ValueError):
+    """A shape offers fewer starts of the kind asked for than were asked for."""
 
 @dataclass(frozen=True)
 class Start:
@@ -121,7 +125,7 @@ def _take(n: int, candidates: Iterator[Start], world: World, what: str) -> list[
         found.append(replace(start, index=len(found)))
         if len(found) == n:
             return found
-    raise ValueError(f"world `{world.name}`: found only {len(found)} of {n} {what}")
+    raise StartsError(f"world `{world.name}`: found only {len(found)} of {n} {what}")
 
 
 def collision_starts(world: World, n: int, seed: int | tuple[int, ...] = 0,

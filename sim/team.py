@@ -1,5 +1,10 @@
 """Several simulated robots in one world, advanced together in simulated time.
 
+Over 500 lines: one simulation step of several robots, whose parts (moving in pieces
+where robots could meet, their contacts, the scans that see each other, the radio)
+share the team's arrays and the order of one tick; split, each part would reach into
+the others' state.
+
 :class:`TeamSim` holds one :class:`Member` per robot. Each member is a full
 :class:`sim.backend.SimBackend` (its own profile, ladar, noise and seed) that also sees
 the others: its ladar's rays meet their discs (:func:`sim.crowd.cast_discs`, one
@@ -11,7 +16,11 @@ they are at that moment (so two robots never overlap), then the radio delivers w
 sent during the tick (at the next tick, so the order of the robots never matters).
 
 A robot that touches another stalls, like at a wall; both records name the other
-robot (obstacle kind ``robot``).
+robot (obstacle kind ``robot``). Robots moving one after the other would meet late, or
+pass through each other's paths unseen, when both move far in one tick: so a step is cut
+where two robots could first meet (their gap over the sum of bounds of their speeds:
+conservative advancement), and the robots move together piece by piece. Where no two
+robots can meet within the tick (the usual case) the step is one piece.
 """
 
 from __future__ import annotations
@@ -33,7 +42,15 @@ from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlude, 
 from mdle.sim.ladar import settle_rows
 from mdle.sim.world import RobotPlace, World
 
-__all__ = ["RobotPlace", "Member", "Radio", "TeamSim"]
+__all__ = ["RobotPlace", "Member", "Radio", "TeamSim", "TOUCHING", "MAX_PIECES"]
+
+#: Robots whose bodies are closer than this (m) are in contact: their sweeps meet each
+#: other, and the step is no longer cut for them. A contact is found within this distance
+#: of where it happens, so its time within TOUCHING / (closing speed).
+TOUCHING = 1e-3
+#: At most this many pieces in one tick; the rest of a tick is then one piece (robots
+#: grazing each other at slightly more than TOUCHING would cut a tick very fine).
+MAX_PIECES = 200
 
 #: The arrays of a scan whose casting waits for the end of the team's step (never read:
 #: the team replaces the scan before anyone observes it).
@@ -41,6 +58,31 @@ _LATER = np.zeros(0)
 _LATER.setflags(write=False)
 _LATER_VALID = np.zeros(0, dtype=bool)
 _LATER_VALID.setflags(write=False)
+
+
+@dataclass(frozen=True)
+class FanShape:
+    """A ladar's even fan of beams, as the team's one-pass casts take it."""
+
+    step: float       # between beams, rad
+    beams: int
+    max_range: float  # m
+    own: int          # the robot's own disc in the team's discs
+
+
+@dataclass(frozen=True)
+class PendingScan:
+    """A scan taken during the team's step, finished once every robot has moved.
+
+    ``ox``, ``oy``: the ladar's origin (m); ``first``: the world angle of its first beam.
+    """
+
+    member: "Member"
+    scan: Scan
+    ox: float
+    oy: float
+    first: float
+    fan: FanShape
 
 
 @dataclass(frozen=True)
@@ -173,14 +215,18 @@ class Member(SimBackend):
         self._clear = self._collider.clearance(self._x, self._y)
         self._scan = self._take_scan(self._x, self._y, self._th, self._t)
         lad = self._ladar
-        # (step between beams, beams, max range, own disc), for the team's batched scans
-        self._fan_shape = (float(lad.bearings[1] - lad.bearings[0]) if len(lad.bearings) > 1
-                           else 1.0, len(lad.bearings), lad.profile.max_range, self.index)
+        self._fan_shape = FanShape(float(lad.bearings[1] - lad.bearings[0])
+                                   if len(lad.bearings) > 1 else 1.0, len(lad.bearings),
+                                   lad.profile.max_range, self.index)
         self._batched = self._fan is not None
         self._cast_later = self._fan is not None and self._fan.batchable()
 
-    def move(self, dt: float, others_moved: float) -> None:
-        """Advance ``dt``, the other robots standing where they are now.
+    def begin_tick(self, dt: float) -> float:
+        """Count a tick of ``dt`` on this robot's clock; return the time the tick ends."""
+        return self._ticks.advance(dt)
+
+    def move_to(self, t1: float, others_moved: float, last: bool) -> None:
+        """Move to time ``t1`` (``last``: the tick's end), the others standing where they are.
 
         ``others_moved`` bounds how far any other robot has moved since this one's last
         step: its clearance then is at least the last one less that (the walls stay), and
@@ -189,7 +235,20 @@ class Member(SimBackend):
         c, owner = self._clear
         self._clear = (c - others_moved, owner)
         self._clear_bound = True
-        SimBackend.advance(self, dt)
+        self._advance_to(t1, last)
+
+    def speed_bound(self) -> float:
+        """Return a bound of the body's speed (m/s) until the tick ends.
+
+        The speed ramps between the speed now and the commands held or queued (the
+        commands of the tick are all given before it moves), never beyond them.
+        """
+        bound = max(abs(self._v), abs(self._cmd.v))
+        if self._cycled:
+            bound = max(bound, abs(self._desired.v))
+        for _, cmd in self._pending:
+            bound = max(bound, abs(cmd.v))
+        return bound
 
     def _settled_clearance(self, x: float, y: float) -> tuple[float, int]:
         # the walls only: the team adds the others, for every robot at once, once all
@@ -235,7 +294,7 @@ class Member(SimBackend):
             else:
                 ranges, hit = self._fan.cast(ox, oy, first)
                 scan = plain_scan(ranges, lad.bearings, hit, stamp, lad.profile.max_range)
-            self.team.pending.append((self, scan, (ox, oy, first, *self._fan_shape)))
+            self.team.pending.append(PendingScan(self, scan, ox, oy, first, self._fan_shape))
             return scan  # its ranges are final once the team has occluded and settled it
         angles = lad.world_angles(th)
         t, which = cast_discs(ox, oy, angles, discs, self.index, which=self._oracle)
@@ -340,9 +399,8 @@ class TeamSim:
         r = self.discs.r
         self._touch = r[:, None] + r[None, :]   # centre distance at which two robots touch
         self._rows = np.arange(n)
-        #: scans taken during a step, finished at its end: (member, scan, (ox, oy, first
-        #: beam's angle, step between beams, beams, max range, own disc))
-        self.pending: list[tuple[Member, Scan, tuple[float, ...]]] = []
+        #: scans taken during a step, finished at its end
+        self.pending: list[PendingScan] = []
         #: True during :meth:`step`: scans are then cast at its end, all in one pass
         self.stepping = False
         for m in self.members:  # the first scans see the others too
@@ -366,13 +424,47 @@ class TeamSim:
         self.radio.deliver(self.time, [m.box for m in self.members], sent_at)
 
     def _move_all(self, dt: float) -> None:
-        """Move the robots one after the other, each seeing the others where they are."""
+        """Move the robots through the tick, in pieces where two of them could meet.
+
+        Each piece ends before any two robots not yet in contact could touch (their gap
+        over the sum of their speed bounds), so moving them one after the other within a
+        piece never misses a contact or finds it late; robots in contact meet in their
+        sweeps, as at a wall.
+        """
+        ends = [m.begin_tick(dt) for m in self.members]
+        t = self.time
+        for piece in range(MAX_PIECES + 1):
+            horizon = self._horizon()
+            last = piece == MAX_PIECES or t + horizon >= ends[0]
+            self._move_piece(ends if last else [t + horizon] * len(ends), last)
+            if last:
+                return
+            t += horizon
+
+    def _horizon(self) -> float:
+        """Return how long (s) every robot can move before two not in contact could touch."""
+        n = len(self.members)
+        if n < 2:
+            return math.inf
+        speed = np.array([m.speed_bound() for m in self.members])
+        gaps = np.abs(self._z[:, None] - self._z)
+        gaps -= self._touch                   # the sums of the radii, pair by pair
+        closing = speed[:, None] + speed[None, :]
+        apart = (gaps >= TOUCHING) & (closing > 0.0)
+        apart.flat[::n + 1] = False           # not oneself
+        if not apart.any():
+            return math.inf
+        return float((gaps[apart] / closing[apart]).min())
+
+    def _move_piece(self, ends: list[float], last: bool) -> None:
+        """Move the robots one after the other to ``ends``, each seeing the others there."""
         pos = self._pos
         moved = self._moved
         for i, m in enumerate(self.members):
             before = len(m.events)
             x0, y0 = m._x, m._y
-            m.move(dt, max(moved))  # its own last step too: a bound, not the least one
+            # its own last step too in the bound: a bound, not the least one
+            m.move_to(ends[i], max(moved), last)
             moved[i] = math.hypot(m._x - x0, m._y - y0)
             pos[i, 0], pos[i, 1] = m._x, m._y
             self._z[i] = complex(m._x, m._y)
@@ -412,28 +504,33 @@ class TeamSim:
         pending, self.pending = self.pending, []
         if not pending:
             return
-        # One column per field of `pending`'s rows, each contiguous: x, y, first beam's
-        # angle, step between beams, beams, max range, own disc.
-        c = np.array(list(zip(*(p[2] for p in pending), strict=True)))
-        beams_n, own = c[4].astype(np.intp), c[6].astype(np.intp)
-        scans = (c[0], c[1], c[2], c[3], beams_n, c[5], own, self.discs)
+        # One contiguous array per field of the pending scans
+        ox = np.array([p.ox for p in pending])
+        oy = np.array([p.oy for p in pending])
+        first_angle = np.array([p.first for p in pending])
+        step = np.array([p.fan.step for p in pending])
+        beams_n = np.array([p.fan.beams for p in pending], dtype=np.intp)
+        max_range = np.array([p.fan.max_range for p in pending])
+        own = np.array([p.fan.own for p in pending], dtype=np.intp)
+        scans = (ox, oy, first_angle, step, beams_n, max_range, own, self.discs)
         groups: dict[tuple[Any, ...], list[int]] = {}
         alone = []
-        for k, (m, scan, _) in enumerate(pending):
-            if scan.ranges is _LATER:
+        for k, p in enumerate(pending):
+            m = p.member
+            if p.scan.ranges is _LATER:
                 # one profile object and mount per group (an id: no dataclass hash per scan)
                 groups.setdefault((id(m._ladar.profile), m._ladar.mount), []).append(k)
             else:
                 alone.append(k)
         cuts = None     # every scan's cuts, found when a group or a lone scan needs them
         for ks in groups.values():
-            first = pending[ks[0]][0]
+            first = pending[ks[0]].member
             assert first._fan is not None
             if len(ks) == len(pending):     # every scan (the usual case): rows are scans
-                ranges, valid = first._fan.cast_many(c[0], c[1], c[2])
+                ranges, valid = first._fan.cast_many(ox, oy, first_angle)
                 occlude(*scans, ranges, valid)
             else:
-                ranges, valid = first._fan.cast_many(c[0, ks], c[1, ks], c[2, ks])
+                ranges, valid = first._fan.cast_many(ox[ks], oy[ks], first_angle[ks])
                 scan_i, beam, t = cuts = cuts or occlusions(*scans)
                 row = np.full(len(pending), -1)
                 row[ks] = np.arange(len(ks))
@@ -442,16 +539,16 @@ class TeamSim:
                 rows, beams = r[mine], beam[mine]
                 np.minimum.at(ranges, (rows, beams), t[mine])
                 valid[rows, beams] = True
-            settle_rows([pending[k][0]._ladar for k in ks], ranges, valid)
+            settle_rows([pending[k].member._ladar for k in ks], ranges, valid)
             for j, k in enumerate(ks):
-                m, old, _ = pending[k]
+                m, old = pending[k].member, pending[k].scan
                 m.replace_scan(old, plain_scan(ranges[j], old.bearings, valid[j], old.stamp,
                                                old.max_range))
         if alone:
             scan_i, beam, t = cuts = cuts or occlusions(*scans)
             bounds = np.searchsorted(scan_i, np.arange(len(pending) + 1))
             for k in alone:
-                m, scan, _ = pending[k]
+                m, scan = pending[k].member, pending[k].scan
                 a, b = int(bounds[k]), int(bounds[k + 1])
                 if b > a:
                     np.minimum.at(scan.ranges, beam[a:b], t[a:b])

@@ -10,6 +10,7 @@ from typing import Any
 
 from mdle.core.errors import WorldError
 from mdle.core.pose import Pose
+from mdle.core.ranges import HEADING
 from mdle.sim.yaml_doc import _Doc
 from mdle.sim.yaml_values import _integer, _mapping, _number, _show, _string
 
@@ -98,4 +99,7 @@ def _start(doc: _Doc, path: str, v: Any) -> Pose:
         x = _number(doc, f"{path}.x", m["x"], coordinate=True)
         y = _number(doc, f"{path}.y", m["y"], coordinate=True)
         th = _number(doc, f"{path}.theta", m.get("theta", 0.0), unit="deg")
+    problem = HEADING.problem(math.radians(th), f"{th:g}")
+    if problem is not None:
+        raise doc.fail(f"{path}[2]" if isinstance(v, list) else f"{path}.theta", problem)
     return Pose(x, y, math.radians(th))

@@ -6,12 +6,13 @@ not name the option, and ``--start 1e308,0,0`` a run where the robot "moved" 0 m
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
 
 from mdle.cli import main
-from mdle.core.ranges import COORDINATE, RATE
+from mdle.core.ranges import COORDINATE, HEADING, RATE
 
 
 @pytest.mark.parametrize("value", [0.001, 1.0, 1000.0])
@@ -23,6 +24,11 @@ def test_rates_in_range_pass(value: float) -> None:
                                    float("nan")])
 def test_rates_out_of_range_say_the_range(value: float) -> None:
     assert RATE.problem(value, "X") == "the rate must be from 0.001 to 1,000 Hz, got X"
+
+
+@pytest.mark.parametrize("degrees", [-360.0, -90.0, 0.0, 359.5, 360.0])
+def test_headings_within_one_turn_pass(degrees: float) -> None:
+    assert HEADING.problem(math.radians(degrees)) is None
 
 
 def test_coordinates_share_the_world_files_bound() -> None:
@@ -48,6 +54,16 @@ def plan(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
                                "1,000,000 m, got 1e308"),
     (["--start", "0,-2000km,0"], "Y of --start: unknown unit"),
     (["--start", "0,-2e8cm,0"], "Y of --start: a coordinate must be from"),
+    (["--start", "0,0,1e308"], "THETA of --start: a heading must be from -360 to 360 deg, "
+                               "got 1e308"),
+    (["--start", "0,0,1e400"], "THETA of --start: a heading must be from -360 to 360 deg, "
+                               "got 1e400"),
+    (["--start", "0,0,-361"], "THETA of --start: a heading must be from -360 to 360 deg, "
+                              "got -361"),
+    (["--start", "0,0,7 rad"], "THETA of --start: a heading must be from -360 to 360 deg, "
+                               "got 7 rad"),
+    (["--start", "1e400,0,0"], "X of --start: a coordinate must be from -1,000,000 to "
+                               "1,000,000 m, got 1e400"),
 ])
 def test_run_options_out_of_range_are_usage_errors(
         plan: Path, argv: list[str], message: str, capsys: pytest.CaptureFixture[str]) -> None:
@@ -59,3 +75,7 @@ def test_run_options_out_of_range_are_usage_errors(
 def test_experiment_rate_is_checked_the_same_way(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["experiment", "random-starts", "--rate", "1e-308"]) == 2
     assert "argument --rate: the rate must be from 0.001 to 1,000 Hz" in capsys.readouterr().err
+
+
+def test_a_start_heading_of_a_whole_turn_runs(plan: Path) -> None:
+    assert main(["run", "p.mdle", "-q", "--world", "empty", "--start", "0,0,-360"]) == 0

@@ -10,6 +10,7 @@ and the constants from drifting apart.
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
@@ -39,6 +40,7 @@ def test_every_exit_code_of_the_command_line_is_in_the_table() -> None:
     ("| a seed | 0 to 2**63 - 1", "mdle.sweep.spec:MAX_STUDY_SEED"),
     ("| control rate | 0.001 to 1,000 Hz", "mdle.core.ranges:RATE"),
     ("| start coordinates | within 1,000,000 m", "mdle.core.ranges:COORDINATE"),
+    ("| start heading | -360 to 360 degrees", "mdle.core.ranges:HEADING"),
     ("within 1,000,000,000 s", "mdle.record.export:MAX_TIME"),
     ("A trace keeps 16 KiB free", "mdle.record.trace:RESERVE_BYTES"),
     ("At most **64 MB** per file", "mdle.core.userfile:MAX_FILE_BYTES"),
@@ -59,6 +61,10 @@ def test_each_budget_on_the_page_is_the_code_s(text: str, value: str) -> None:
     }
     if name == "RATE":
         assert (constant.low, constant.high, constant.unit) == (0.001, 1000.0, "Hz")
+    elif name == "HEADING":
+        assert constant.problem(math.radians(360.0)) is None
+        assert constant.problem(math.radians(360.001)) is not None
+        assert constant.problem(math.radians(-360.001)) is not None
     elif name == "COORDINATE":
         assert (constant.low, constant.high, constant.unit) == (-1e6, 1e6, "m")
     else:

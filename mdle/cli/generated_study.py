@@ -8,7 +8,6 @@ runs, and writes the CSV.
 from __future__ import annotations
 
 import argparse
-import csv
 import math
 import sys
 from collections.abc import Sequence
@@ -77,9 +76,13 @@ def config_from(args: argparse.Namespace) -> "StudyConfig | str":
         kf=args.kf, duration=args.duration, blind=args.blind_side, tolerance=args.tolerance,
         suite=getattr(args, "suite", None) or c.suite,
         tangential=getattr(args, "tangential", None) or c.tangential)
+    from mdle.sweep.spec import MAX_AXIS
+
     checks = [
-        (cfg.shapes >= 1, f"--shapes must be at least 1, got {cfg.shapes}"),
-        (cfg.starts >= 1, f"--starts must be at least 1, got {cfg.starts}"),
+        (1 <= cfg.shapes <= MAX_AXIS,
+         f"--shapes must be at least 1 and at most {MAX_AXIS:,}, got {cfg.shapes}"),
+        (1 <= cfg.starts <= MAX_AXIS,
+         f"--starts must be at least 1 and at most {MAX_AXIS:,}, got {cfg.starts}"),
         (cfg.seed >= 0, f"--seed must be >= 0, got {cfg.seed}"),
         (math.isfinite(cfg.rate) and cfg.rate > 0, f"--rate must be > 0 Hz, got {cfg.rate:g}"),
         (math.isfinite(cfg.v) and cfg.v > 0, f"--v must be > 0 m/s, got {cfg.v:g}"),
@@ -91,7 +94,8 @@ def config_from(args: argparse.Namespace) -> "StudyConfig | str":
         (cfg.tolerance is None or cfg.tolerance > 0,
          f"--tolerance must be > 0 m, got {cfg.tolerance}"),
         (args.jobs is None or args.jobs >= 1, f"--jobs must be at least 1, got {args.jobs}"),
-        (cfg.tangential >= 0, f"--tangential must be >= 0, got {cfg.tangential}"),
+        (0 <= cfg.tangential <= MAX_AXIS,
+         f"--tangential must be from 0 to {MAX_AXIS:,}, got {cfg.tangential}"),
     ]
     for ok, message in checks:
         if not ok:
@@ -110,8 +114,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"mdle experiment random-starts: {cfg}", file=sys.stderr)
         return output.EXIT_USAGE
     from mdle.experiments.generated import study_specs
+    from mdle.sim.starts import StartsError
 
-    total = len(study_specs(cfg))
+    if args.csv is not None:  # before the work: a folder we can write
+        from mdle.cli.csv_output import check_csv_output, write_failed
+        from mdle.core.userfile import UserFileError
+
+        try:
+            check_csv_output("--csv", args.csv)
+        except UserFileError as err:
+            return write_failed("mdle experiment random-starts", err)
+    try:
+        total = len(study_specs(cfg))
+    except StartsError as err:  # more starts asked of a shape than it offers
+        print(f"mdle experiment random-starts: {err}: ask for fewer (--starts, --tangential)",
+              file=sys.stderr)
+        return output.EXIT_USAGE
     out = args.out / "random-starts-generated" if getattr(args, "resume", False) else None
     try:
         rows = _run_with_progress(cfg, args.jobs, total, out)
@@ -121,13 +139,14 @@ def run(args: argparse.Namespace) -> int:
                   "again to resume", file=sys.stderr)
         raise
     if args.csv is not None:
+        from mdle.cli.csv_output import write_failed
+        from mdle.core.userfile import UserFileError
+
         try:
             write_csv(rows, args.csv)
-        except OSError as e:
-            print(f"mdle experiment random-starts: cannot write {args.csv}: {e.strerror}",
-                  file=sys.stderr)
+        except UserFileError as err:
             _print_tables(cfg, rows, sys.stdout)
-            return output.EXIT_INPUT
+            return write_failed("mdle experiment random-starts", err)
     _print_tables(cfg, rows, sys.stdout)
     if args.csv is not None:
         print(f"wrote {args.csv} ({len(rows)} runs)")
@@ -260,16 +279,17 @@ _DEGREES = ("theta0", "incidence")
 
 
 def write_csv(rows: Sequence[Row], path: Path) -> None:
-    """Write one line per run; angles in degrees (``*_deg``), everything else SI."""
-    if not rows:
-        path.write_text("", encoding="utf-8")
-        return
-    names = [f"{k}_deg" if k in _DEGREES else k for k in rows[0]]
-    with path.open("w", newline="", encoding="utf-8") as f:
-        w = csv.writer(f)
-        w.writerow(names)
-        for r in rows:
-            w.writerow([_cell(k, v) for k, v in r.items()])
+    """Write one line per run, whole or not at all; angles in degrees (``*_deg``), else SI.
+
+    Raises
+    ------
+    UserFileError
+        The file cannot be written (:func:`mdle.cli.csv_output.write_csv_output`).
+    """
+    from mdle.cli.csv_output import write_csv_output
+
+    names = [f"{k}_deg" if k in _DEGREES else k for k in rows[0]] if rows else []
+    write_csv_output(path, names, ([_cell(k, v) for k, v in r.items()] for r in rows))
 
 
 def _cell(key: str, value: Any) -> Any:

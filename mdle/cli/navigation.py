@@ -11,7 +11,6 @@ collisions per robot (:mod:`mdle.experiments.navigation`); exit 3 if any run col
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import sys
 
@@ -36,16 +35,27 @@ def run_navigation_study(args: argparse.Namespace) -> int:
         print(f"mdle experiment navigation: --nav-plan {plan}: no such file{where}",
               file=sys.stderr)
         return output.EXIT_INPUT
+    if args.csv is not None:  # before the work: never over the plan, a folder we can write
+        from mdle.cli.csv_output import check_csv_output, write_failed
+        from mdle.core.userfile import UserFileError
+
+        try:
+            check_csv_output("--csv", args.csv, [("the plan", str(plan))])
+        except UserFileError as err:
+            return write_failed("mdle experiment navigation", err)
     seeds = range(args.seed, args.seed + worlds)
     with steps("navigation", worlds * len(robots)) as step:
         runs = run_study(seeds, robots, plan, jobs=args.jobs or 1, step=lambda run: step())
     if args.csv is not None:
-        with open(args.csv, "w", newline="") as f:
-            fields = [fl.name for fl in dataclasses.fields(runs[0])] if runs else []
-            writer = csv.DictWriter(f, fieldnames=fields)
-            writer.writeheader()
-            for r in runs:
-                writer.writerow(dataclasses.asdict(r))
+        from mdle.cli.csv_output import write_csv_output, write_failed
+        from mdle.core.userfile import UserFileError
+
+        fields = [fl.name for fl in dataclasses.fields(runs[0])] if runs else []
+        try:
+            write_csv_output(args.csv, fields,
+                             ([getattr(r, name) for name in fields] for r in runs))
+        except UserFileError as err:
+            return write_failed("mdle experiment navigation", err)
     print_table(sys.stdout, f"navigation: {plan.name} over {worlds} seeded cluttered worlds "
                 f"(seeds {seeds.start}-{seeds.stop - 1}), 10 Hz",
                 COLUMNS, summary_rows(runs),

@@ -128,12 +128,13 @@ def _fit(args: argparse.Namespace) -> int:
                f"`{base.name}`.")
     text = dump_robot(profile, comment)
     if args.output:
+        from mdle.cli.csv_output import write_failed
         from mdle.core.userfile import UserFileError, write_user_file
 
         try:
             write_user_file(args.output, text)
-        except UserFileError as err:
-            raise MdleError(str(err)) from None
+        except UserFileError as err:  # a full disk: 74, a refused path: 1
+            return write_failed("mdle robots fit", err)
         print(f"profile `{args.name}` written to {args.output}")
     else:
         print(text, end="")

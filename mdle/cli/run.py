@@ -38,7 +38,7 @@ from mdle.cli.recorders import recorders
 from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.console import output
 from mdle.console.signals import SignalGuard, interruption_of, signal_name
-from mdle.core.ranges import COORDINATE
+from mdle.core.ranges import COORDINATE, HEADING
 
 if TYPE_CHECKING:
     from mdle.record.trace import TraceWriter
@@ -126,10 +126,9 @@ def start_pose(text: str) -> tuple[float, float, float]:
     Raises
     ------
     argparse.ArgumentTypeError
-        Not three comma-separated numbers, or a unit of the wrong kind.
+        Not three comma-separated numbers, a unit of the wrong kind, or a number out of
+        range (a coordinate beyond 1e6 m, a heading beyond one turn, inf, nan).
     """
-    import math
-
     from mdle.core.units import ANGLE, LENGTH, unit_value
 
     parts = text.split(",")
@@ -154,9 +153,7 @@ def start_pose(text: str) -> tuple[float, float, float]:
             raise argparse.ArgumentTypeError(f"{name} of --start is {kind}, got "
                                              f"{part.strip()!r}")
         value = float(m.group(1)) * factor
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{name} of --start must be finite")
-        problem = COORDINATE.problem(value, part.strip()) if dim == LENGTH else None
+        problem = (COORDINATE if dim == LENGTH else HEADING).problem(value, part.strip())
         if problem is not None:
             raise argparse.ArgumentTypeError(f"{name} of --start: {problem}")
         out.append(value)

@@ -34,12 +34,22 @@ _KINDS = ((stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISCHR, "a character de
 
 
 class UserFileError(Exception):
-    """A user's file cannot be read (or written); ``reason`` says why (``no such file``)."""
+    """A user's file cannot be read (or written); ``reason`` says why (``no such file``).
 
-    def __init__(self, path: str, reason: str, verb: str = "read") -> None:
+    ``code`` is the OSError's errno when the machine failed (a full disk): :attr:`fault`.
+    """
+
+    def __init__(self, path: str, reason: str, verb: str = "read",
+                 code: int | None = None) -> None:
         super().__init__(f"cannot {verb} `{path}`: {reason}")
         self.path = path
         self.reason = reason
+        self.code = code
+
+    @property
+    def fault(self) -> bool:
+        """True for a fault of the machine (exit 74), not a refused or mistaken file."""
+        return self.code in _FILE_FAULTS
 
 
 def _size(n: int) -> str:
@@ -103,7 +113,7 @@ def read_user_file(path: str | os.PathLike[str], limit: int = MAX_FILE_BYTES) ->
         except OSError as err:  # EIO from a failing disk, a file vanished from a share
             name = os.fspath(path)
             raise UserFileError(name if isinstance(name, str) else repr(name),
-                                os_reason(err)) from None
+                                os_reason(err), code=err.errno) from None
     if len(data) > limit:
         raise UserFileError(os.fspath(path) if isinstance(os.fspath(path), str) else repr(path),
                             f"it grew past {_size(limit)} while being read")
@@ -155,13 +165,13 @@ def replacing(path: str | os.PathLike[str]) -> Iterator[str]:
         os.close(fd)
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600: give what open() would
     except OSError as err:
-        raise UserFileError(name, os_reason(err), "write") from None
+        raise UserFileError(name, os_reason(err), "write", err.errno) from None
     try:
         yield tmp
         os.replace(tmp, name)
     except OSError as err:
         _remove(tmp)
-        raise UserFileError(name, os_reason(err), "write") from None
+        raise UserFileError(name, os_reason(err), "write", err.errno) from None
     except BaseException:
         _remove(tmp)
         raise
@@ -231,7 +241,7 @@ def writable_folder(path: str | os.PathLike[str]) -> None:
     except FileExistsError:
         raise UserFileError(name, "it is a file, not a folder", "write in") from None
     except OSError as err:
-        raise UserFileError(name, os_reason(err), "write in") from None
+        raise UserFileError(name, os_reason(err), "write in", err.errno) from None
 
 
 #: What the machine, not mdle, got wrong reading or writing a file: these OSErrors end a

@@ -263,7 +263,10 @@ class PioneerBackend:
             self._await_first_data()
         except BaseException:
             self._closed = True
-            self._shutdown(send=not self._lost.is_set())
+            # Before OPEN (the exit hooks come just before it) no session exists and the
+            # motors cannot run: nothing to stop, and no goodbye to wait for (a robot that
+            # never answered would hold Ctrl-C for the stream's goodbye_timeout).
+            self._shutdown(send=self._exit_hooks is not None and not self._lost.is_set())
             raise
 
     # ------------------------------------------------------------------ Backend API

@@ -12,6 +12,7 @@ were measured at that tick, before the command was sent.
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 from dataclasses import dataclass
@@ -20,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from mdle.core.errors import MdleError
+from mdle.core.userfile import UserFileError, read_user_file
 
 __all__ = ["CSV_COLUMNS", "Recording", "read_recording"]
 
@@ -63,8 +65,6 @@ def read_recording(path: str | os.PathLike[str]) -> Recording:
         times that do not increase, or fewer than 10 ticks.
     """
     p = Path(path)
-    if not p.is_file():
-        raise MdleError(f"recording not found: {p}")
     if p.suffix in (".jsonl", ".json"):
         rec = _from_trace(p)
     else:
@@ -84,8 +84,16 @@ def read_recording(path: str | os.PathLike[str]) -> Recording:
 
 
 def _from_csv(p: Path) -> Recording:
+    # read as every user file is: a regular file of bounded size (not /dev/zero or a FIFO)
     try:
-        with p.open(newline="", encoding="utf-8") as f:
+        text = read_user_file(p).decode("utf-8")
+    except UserFileError as err:  # missing, a FIFO, too large, EIO
+        raise MdleError(f"cannot read recording {p}: {err.reason}") from None
+    except UnicodeDecodeError as err:
+        raise MdleError(f"cannot read recording {p}: not UTF-8 text ({err.reason} at byte "
+                        f"{err.start})") from None
+    try:
+        with io.StringIO(text, newline="") as f:
             reader = csv.reader(f)
             header = next(reader, None)
             if header is None:
@@ -109,8 +117,8 @@ def _from_csv(p: Path) -> Recording:
                     except ValueError:
                         raise MdleError(f"{p}:{reader.line_num}: column {CSV_COLUMNS[key]}: "
                                         f"not a number: {cell!r}") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise MdleError(f"cannot read recording {p}: {err}") from None
+    except csv.Error as err:  # a NUL byte, a quote left open
+        raise MdleError(f"{p}:{reader.line_num}: not a CSV row: {err}") from None
     arrays = {k: np.asarray(v, dtype=float) for k, v in cols.items()}
     return Recording(source=str(p), **arrays)
 

@@ -35,7 +35,7 @@ from mdle.console.output import print_diagnostics
 from mdle.console.signals import ends_session
 from mdle.core.errors import Diagnostic, MdleError
 from mdle.core.pose import Pose
-from mdle.core.ranges import COORDINATE, MAX_SEED
+from mdle.core.ranges import COORDINATE, HEADING, MAX_SEED
 from mdle.core.userfile import file_fault, file_fault_words
 from mdle.lang import keywords, statement_keywords
 from mdle.repl import views
@@ -352,7 +352,7 @@ class Repl:
                                 "(metres, metres, degrees)")
             x = _coordinate(args[0], "x")
             y = _coordinate(args[1], "y")
-            th = math.radians(_finite(args[2], "theta")) if len(args) == 3 else 0.0
+            th = _heading(args[2], "theta") if len(args) == 3 else 0.0
             pose = Pose(x, y, th)
         here = self.session.reset(pose)
         if not self.session.simulated:
@@ -522,6 +522,15 @@ def _number(text: str, what: str) -> float:
 def _coordinate(text: str, what: str) -> float:
     value = _finite(text, what)
     problem = COORDINATE.problem(value, text)
+    if problem is not None:
+        raise ReplError(f"{what}: {problem}")
+    return value
+
+
+def _heading(text: str, what: str) -> float:
+    """Read a heading in degrees, returned in radians."""
+    value = math.radians(_finite(text, what))
+    problem = HEADING.problem(value, text)
     if problem is not None:
         raise ReplError(f"{what}: {problem}")
     return value

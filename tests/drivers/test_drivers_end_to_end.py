@@ -252,3 +252,31 @@ def test_sigterm_while_connecting_still_stops_and_closes(fake_robot: FakeRobot,
     assert stop[-1].t < fake.commands(Cmd.CLOSE)[-1].t
     assert "interrupted while connecting: robot stopped" in err
     assert "Traceback" not in err
+
+
+def test_ctrl_c_while_a_robot_never_answers_ends_at_once(fake_robot: FakeRobot,
+                                                        tmp_path: Path) -> None:
+    # Interrupted in the handshake, mdle said goodbye (STOP, CLOSE) to a robot that had
+    # never answered and waited goodbye_timeout for it to hang up. No session was open
+    # and the motors were never enabled: it now drops the line at once.
+    import signal
+
+    fake = fake_robot(behaviour="silent")
+    proc = _spawn_run(fake, tmp_path)
+    try:
+        assert fake.wait_for(lambda: fake.commands(Cmd.SYNC0, "sync") != [], timeout=15.0)
+        time.sleep(0.1)
+        sent = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=10.0)
+        latency = time.monotonic() - sent
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    assert "interrupted while connecting" in err and "Traceback" not in err
+    assert latency < 2.0  # generous: benchmarks/interrupts.py measures the answer
+    assert {r.cmd for r in fake.received} == {Cmd.SYNC0}  # no STOP or CLOSE to no one
+    from mdle.record.load import read_trace
+
+    trace = read_trace(tmp_path / "run.jsonl")  # whole: header to end record
+    assert trace.end is not None and not trace.truncated

@@ -72,6 +72,8 @@ def test_mistakes_print_a_message_and_keep_the_session(r: Run) -> None:
         (":reset 0 0", "overlaps"),
         (":reset a b", "x must be a number"),
         (":reset 0 1e7", "y: a coordinate must be from -1,000,000 to 1,000,000 m, got 1e7"),
+        (":reset -9 0.3 1e308", "theta: a heading must be from -360 to 360 deg, got 1e308"),
+        (":reset -9 0.3 inf", "theta must be a finite number, got `inf`"),
         (":step x", "whole number"),
         (":load /no/such/file.mdle", "no/such/file.mdle"),
         (":set speed 3", "no setting `speed`"),

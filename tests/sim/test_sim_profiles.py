@@ -280,15 +280,15 @@ def test_cli_robots_list_show_and_fit_a_trace(tmp_path: Path) -> None:
     assert again.max_accel == pytest.approx(p3.max_accel, rel=0.1)
     assert again.max_turn_accel == pytest.approx(p3.max_turn_accel, rel=0.1)
     out = mdle("robots", "fit", "missing.csv")
-    assert out.returncode == 1 and "recording not found" in out.stderr
+    assert out.returncode == 1 and "cannot read recording" in out.stderr
 
 
 def test_the_server_loop_fast_path_equals_the_piecewise_one() -> None:
     """One integration per tick (no odometry noise) gives what a piece per instant gives."""
 
     class Pieces(SimBackend):
-        def _advance_cycled(self, t1: float) -> None:
-            self._advance_cycled_pieces(t1)
+        def _advance_cycled(self, t1: float, last: bool = True) -> None:
+            self._advance_cycled_pieces(t1, last)
 
     world = World("empty", robot=robot_profile("pioneer-p3dx"))
     fast, slow = SimBackend(world, seed=5), Pieces(world, seed=5)

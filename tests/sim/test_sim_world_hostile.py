@@ -16,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from mdle.core.errors import WorldError
+from mdle.core.pose import Pose
 from mdle.sim import load_world
 from mdle.sim.world_yaml import MAX_YAML_DEPTH, parse_world
 
@@ -91,6 +92,13 @@ def test_coordinates_far_beyond_any_world_are_refused(where: str) -> None:
     assert "must be within" in refused(where)
 
 
+@pytest.mark.parametrize(("where", "key"), [("start: {x: 0, y: 0, theta: 1e308}\n", "start.theta"),
+                                            ("start: [0, 0, -400]\n", "start[2]")])
+def test_absurd_start_headings_are_refused_at_their_key(where: str, key: str) -> None:
+    msg = refused(where)
+    assert key in msg and "a heading must be from -360 to 360 deg" in msg and "w.yaml:1:" in msg
+
+
 def test_start_pose_touching_an_obstacle_is_refused() -> None:
     # Pioneer radius 0.26 m: a wall face exactly 0.26 m away touches the body.
     text = ("robot: {radius: 0.26}\nstart: {x: 0, y: 0}\nobstacles:\n"
@@ -145,3 +153,26 @@ def test_worlds_show_without_an_extension_says_what_it_needs(tmp_path: Path,
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 0 and f"world drawn to {out}.svg" in r.stdout, r.stderr
     assert (tmp_path / "picture.svg").stat().st_size > 0
+
+
+def test_point_tests_join_no_shapes(monkeypatch: pytest.MonkeyPatch) -> None:
+    # The union of 20,000 rectangles was 1.6 s of CPU in one GEOS call that Ctrl-C could
+    # not cut: the point tests now ask each shape near the point, as the union would.
+    import numpy as np
+    import shapely
+
+    from mdle.sim.shapes import Rectangle
+    from mdle.sim.world import World
+
+    shapes = tuple(Rectangle((float(i % 30), float(i // 30)), (0.8, 0.5)) for i in range(300))
+    union = shapely.union_all([s.geometry() for s in shapes])
+
+    def refused(*args: object, **kwargs: object) -> None:
+        raise AssertionError("no union is needed to test points")
+
+    monkeypatch.setattr(shapely, "union_all", refused)
+    world = World("grid", obstacles=shapes, start_pose=Pose(-5.0, -5.0, 0.0))
+    pts = np.random.default_rng(3).uniform(-1.0, 31.0, size=(2000, 2))
+    got = np.asarray(world.inside(pts))
+    assert got.tolist() == shapely.contains_xy(union, pts[:, 0], pts[:, 1]).tolist()
+    assert got.any() and not got.all()
