@@ -11,7 +11,8 @@ file's size, the CPU time (user + system) and the peak memory (max RSS) of that 
 from 40 places along a line through the circles, with the circles in a grid
 (:class:`sim.faceindex.BoxGrid`, the default above 256 circles) and testing every circle:
 the median over 5 interleaved rounds of each round's median, and the time to build the
-grid.
+grid; then a clearance query (the body's distance to the nearest circle) from the same
+places, the same way.
 """
 
 from __future__ import annotations
@@ -70,6 +71,22 @@ def _scans(world: Any) -> None:
     print(f"  scan: {got['grid']:.1f} us with the grid (built in {build * 1e3:.0f} ms), "
           f"{got['every circle']:.1f} us testing every circle "
           f"(x{got['every circle'] / got['grid']:.0f})")
+    from mdle.sim.collision import Collider
+
+    colliders = {"grid": Collider(world.parts, 0.25),
+                 "every circle": Collider(world.parts, 0.25, curve_grids=False)}
+    rounds = {name: [] for name in colliders}
+    for _ in range(5):
+        for name, collider in colliders.items():
+            times = []
+            for x, y, _ in places:
+                t = time.perf_counter()
+                collider.clearance(x, y)
+                times.append(time.perf_counter() - t)
+            rounds[name].append(statistics.median(times))
+    got = {name: statistics.median(v) * 1e6 for name, v in rounds.items()}
+    print(f"  clearance: {got['grid']:.1f} us with the grid, {got['every circle']:.1f} us "
+          f"measuring to every circle (x{got['every circle'] / got['grid']:.0f})")
 
 
 def _load(path: str, profile: bool, scans: bool = False) -> None:

@@ -12,7 +12,8 @@ from mdle.sim.raycast import COMPILED, RayCaster
 from mdle.sim.shapes import Parts, Rectangle
 
 
-def _field(seed: int, circles: int = 1500, ellipses: int = 400, arcs: int = 300) -> Parts:
+def _field(seed: int, circles: int = 1500, ellipses: int = 400, arcs: int = 300,
+           boxes: int = 20) -> Parts:
     """Curves of every kind scattered over 120 x 120 m, some overlapping, and a few boxes."""
     rng = np.random.default_rng(seed)
     tau = 2 * math.pi
@@ -31,9 +32,9 @@ def _field(seed: int, circles: int = 1500, ellipses: int = 400, arcs: int = 300)
                                          rng.uniform(0.1, 3.0, ellipses),
                                          rng.uniform(0.1, 1.0, ellipses),
                                          rng.uniform(-4, 4, ellipses), strict=True)]
-    boxes = [Rectangle((float(x), float(y)), (1.0, 0.5), 0.3).parts()
-             for x, y in rng.uniform(-50, 50, (20, 2))]
-    return Parts.concat([Parts.make(arcs=arc_list, ellipses=ell_list), *boxes])
+    rects = [Rectangle((float(x), float(y)), (1.0, 0.5), 0.3).parts()
+             for x, y in rng.uniform(-50, 50, (boxes, 2))]
+    return Parts.concat([Parts.make(arcs=arc_list, ellipses=ell_list), *rects])
 
 
 def _origins(seed: int, n: int) -> np.ndarray:
@@ -134,3 +135,21 @@ def test_a_cast_reads_the_curves_in_range_not_all_of_them() -> None:
     # a 10 m reach over 120 x 120 m: about 3 % of the area
     assert caster.arc_grid.near(0.0, 0.0, 10.0).shape[0] < 2_000
     assert caster.ellipse_grid.near(0.0, 0.0, 10.0).shape[0] < 200
+
+
+@pytest.mark.parametrize("segments", [True, False])
+def test_clearance_queries_are_the_same_with_the_curves_grid_or_without(segments: bool
+                                                                        ) -> None:
+    from mdle.sim.collision import Collider
+
+    # without segments a query has no first bound: the grid's search widens until it holds
+    # a curve as near as its reach
+    parts = _field(9, boxes=20 if segments else 0)
+    assert (parts.seg_start.shape[0] > 0) == segments
+    fast, plain = Collider(parts, 0.25), Collider(parts, 0.25, curve_grids=False)
+    for x, y in _origins(10, 300):
+        assert fast.distance(float(x), float(y)) == plain.distance(float(x), float(y))
+    assert fast._arc_grid is not None and fast._ellipse_grid is not None
+    assert plain._arc_grid is None
+    nan = fast.distance(math.nan, 0.0)
+    assert math.isnan(nan[0]) or nan == plain.distance(math.nan, 0.0)
