@@ -18,7 +18,6 @@ import yaml  # noqa: F401  (a world's text)
 
 import mdle.atoms.estimators  # noqa: F401  (imported by follow_boundary at its first tick)
 import mdle.experiments.engagement  # noqa: F401  (the following metrics)
-import mdle.lang.overrides  # noqa: F401  (a study's parameter values)
 import mdle.runtime.api  # noqa: F401
 import mdle.sim.backend  # noqa: F401
 import mdle.sim.world_yaml  # noqa: F401
@@ -30,7 +29,8 @@ from mdle.lang import load_text
 
 __all__ = ["PLAN"]
 
-#: Loaded once here: it builds the parser and the registry of every control law.
-PLAN = "atom a = (go(0.1 m/s), never, 1 s)\nrun a\n"
+#: Loaded once here, with a parameter set as a study sets one: it builds the parser and
+#: the registry of every control law, and imports the parameter overrides.
+PLAN = "atom a(v = 0.1 m/s) = (go(v), never, 1 s)\nrun a\n"
 
-load_text(PLAN, "<preload>")
+load_text(PLAN, "<preload>", settings={"v": "0.2 m/s"})
