@@ -1,36 +1,34 @@
 """What a local sweep's fork server imports and builds once, before any worker forks.
 
 A worker forked from the server starts with all of it in memory. Without it each worker
-spends its first run importing the language, the simulator's world builder, shapely and
-PyYAML, and building the language's parser: about 0.15 s of CPU a worker, paid again by
+spent its first run importing the language, the simulator's world builder, shapely and
+PyYAML, and building the language's parser: about 0.16 s of CPU a worker, paid again by
 every added worker, a part of the sweep that more workers do not shorten.
 
 Importing this module does the work (it is the fork server's preload:
-:meth:`mdle.sweep.executors.LocalExecutor.start`). tests/sweep/test_sweep_local.py
-checks that a run then imports nothing more.
+:meth:`mdle.sweep.executors.LocalExecutor.start`): it runs :data:`WARM_UP`, a run of a
+third of a second that goes the way a study's runs go (a plan with a parameter set,
+``follow_boundary`` on a scan, a world from its text, a trace kept), so whatever a run
+imports or builds once per process is there before the workers fork.
+tests/sweep/test_sweep_local.py checks that a run then imports nothing more.
 """
 
 from __future__ import annotations
 
-import numpy.random  # noqa: F401  (a run's seeded noise)
-import shapely  # noqa: F401  (a world's obstacles)
-import yaml  # noqa: F401  (a world's text)
+from mdle.sweep.tasks import RunTask
+from mdle.sweep.worker import execute
 
-import mdle.atoms.estimators  # noqa: F401  (imported by follow_boundary at its first tick)
-import mdle.experiments.engagement  # noqa: F401  (the following metrics)
-import mdle.runtime.api  # noqa: F401
-import mdle.sim.backend  # noqa: F401
-import mdle.sim.world_yaml  # noqa: F401
-import mdle.sweep.metrics  # noqa: F401
-import mdle.sweep.worker  # noqa: F401
-import mdle.sweep.worlds  # noqa: F401
-import mdle.trace  # noqa: F401  (kept traces)
-from mdle.lang import load_text
+__all__ = ["WARM_UP"]
 
-__all__ = ["PLAN"]
+#: The run the server makes; its outcome is not used (a failing run is a row, never
+#: an exception, so a server always starts).
+WARM_UP = RunTask(
+    plan_text="atom a(rc = 0.5 m) = (follow_boundary(rc = rc, v = 0.3 m/s), never, 1 s)\n"
+              "run a\n",
+    plan_files=(), entry=None, settings=(("rc", "0.6 m"),),
+    world_text="name: warm-up\nstart: {x: 0, y: 0, theta: 0}\n"
+               "obstacles:\n  - {type: circle, center: [1.5, 0], radius: 0.5}\n",
+    robot=None, sensing="scan", rate=10.0, seed=0, pose=None, until=0.3,
+    trace_fields=("side_range",), keep_trace=True)
 
-#: Loaded once here, with a parameter set as a study sets one: it builds the parser and
-#: the registry of every control law, and imports the parameter overrides.
-PLAN = "atom a(v = 0.1 m/s) = (go(v), never, 1 s)\nrun a\n"
-
-load_text(PLAN, "<preload>", settings={"v": "0.2 m/s"})
+execute(WARM_UP)
