@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from mdle.cli import output
+from mdle.console import output
 
 __all__ = ["add_parser", "run", "progress_bar"]
 
@@ -114,8 +114,8 @@ def _sweep(args: argparse.Namespace) -> int:
         executor = LocalExecutor(args.jobs)
         where = f"{executor.jobs} local processes" + (
             "" if args.jobs else f" (all {default_jobs()} cores)")
-    from mdle.errors import MdleError
-    from mdle.userfile import UserFileError, read_user_file, writable_folder
+    from mdle.core.errors import MdleError
+    from mdle.core.userfile import UserFileError, read_user_file, writable_folder
 
     try:  # read again for the results folder's copy: the file may have gone meanwhile
         spec_text = read_user_file(spec_path).decode("utf-8", "replace")
@@ -204,7 +204,7 @@ def progress_bar(where: str) -> _RichProgress:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
     from mdle.sweep.report import axes, format_summary, plot_axes
     from mdle.sweep.table import read_rows
 
@@ -232,7 +232,7 @@ def _report(args: argparse.Namespace) -> int:
                                     if isinstance(v, (int, float)) and not isinstance(v, bool)))
     base = Path(args.results)
     folder = args.plots or ((base if base.is_dir() else base.parent) / "plots")
-    from mdle.userfile import UserFileError, writable_folder
+    from mdle.core.userfile import UserFileError, writable_folder
 
     try:
         writable_folder(folder)

@@ -280,7 +280,7 @@ class DaskExecutor:
         try:
             import distributed
         except ImportError:
-            from mdle.errors import MdleError
+            from mdle.core.errors import MdleError
 
             raise MdleError("--dask needs dask.distributed: pip install 'mdle[dask]'") from None
         self._own = not isinstance(cluster, distributed.Client)
@@ -288,7 +288,7 @@ class DaskExecutor:
             try:
                 self.client = distributed.Client(cluster, timeout=f"{timeout}s")
             except (OSError, TimeoutError) as err:
-                from mdle.errors import MdleError
+                from mdle.core.errors import MdleError
 
                 raise MdleError(f"--dask {cluster}: cannot reach the scheduler ({err})"
                                 ) from None

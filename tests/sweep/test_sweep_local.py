@@ -76,7 +76,7 @@ def test_a_cut_off_last_line_is_dropped_on_resume(tiny_spec: Path, tmp_path: Pat
 
 
 def test_another_studys_table_is_refused(tiny_spec: Path, tmp_path: Path) -> None:
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
 
     study = read_study(tiny_spec)
     run_sweep(replace(study, seeds=(0,)), tmp_path / "o", jobs=1)
@@ -162,7 +162,7 @@ def test_traces_are_kept_on_request(tiny_spec: Path, tmp_path: Path) -> None:
     run_sweep(study, tmp_path / "o", jobs=2)
     traces = sorted((tmp_path / "o" / "traces").glob("*.jsonl.gz"))
     assert len(traces) == 4
-    from mdle.trace import read_trace
+    from mdle.record.load import read_trace
 
     plain = tmp_path / "t.jsonl"
     plain.write_bytes(gzip.decompress(traces[0].read_bytes()))
