@@ -10,8 +10,10 @@ geometrically; at ``CONTACT`` metres the robot stops, unless the motion leads aw
 from the obstacle. No speed can carry the robot through a wall, however thin.
 
 The distance query is exact and cheap: per-world constants in complex form (about ten
-numpy calls for all segments), nearest points on ellipses in plain floats, and in large
-worlds a list of the segments that can be nearest within 0.5 m of where it was made.
+numpy calls for all segments), nearest points on ellipses in plain floats, in large
+worlds a list of the segments that can be nearest within 0.5 m of where it was made, and
+above 256 arcs or ellipses a grid of their boxes (:class:`sim.faceindex.BoxGrid`) that
+gives those near the query.
 
 >>> from mdle.sim.shapes import Rectangle, Parts
 >>> from mdle.sim.robot import Phase
@@ -26,10 +28,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from mdle.sim.distance import ellipse_nearest, ellipse_nearest_point, nearest_boundary
+from mdle.sim.faceindex import BoxGrid
 from mdle.sim.robot import Phase, integrate
 from mdle.sim.shapes import Parts
 
@@ -45,6 +49,15 @@ _CULL_ABOVE = 256  # segments: larger worlds keep a list of the candidates near 
 _NEAR_SLACK = 0.5  # m: the list stays valid while the robot is this close to where it was made
 # 0 and 1 as 0-d arrays: a ufunc takes them far faster than Python floats
 _ZERO, _ONE = np.array(0.0), np.array(1.0)
+
+
+def _reach(distance: float) -> float:
+    """Return the half-side of a grid search holding everything within ``distance``.
+
+    Widened well beyond rounding, so that it holds every curve whose distance, as the
+    query computes it, is below ``distance``.
+    """
+    return distance * (1.0 + 1e-9) + 1e-9
 
 
 @dataclass(frozen=True)
@@ -74,11 +87,15 @@ class Collider:
         The world's primitives.
     radius : float, metres
         The body's radius (0 for a point robot).
+    curve_grids : bool
+        Where there are more than 256 arcs (or ellipses), find those near a query in a
+        grid of their boxes: the same numbers (False: measure to every one).
     """
 
-    def __init__(self, parts: Parts, radius: float) -> None:
+    def __init__(self, parts: Parts, radius: float, curve_grids: bool = True) -> None:
         self.parts = parts
         self.radius = float(radius)
+        self.curve_grids = curve_grids
         # Per-world constants in complex form (a point is x + iy): a query then costs
         # about a dozen numpy calls whatever the number of primitives.
         s0, s1 = parts.seg_start, parts.seg_end
@@ -125,37 +142,90 @@ class Collider:
                 j, best = self._remake_near(q)
             owner = int(P.seg_owner[j])
         if len(P.arc_radius):
-            w = q - self._arc_c
-            within = np.arctan2(w.imag, w.real)
-            within -= P.arc_start
-            np.mod(within, _TAU, out=within)
-            radial = np.abs(w)
-            radial -= P.arc_radius
-            np.abs(radial, out=radial)
-            ends = np.minimum(np.abs(q - self._arc_e0), np.abs(q - self._arc_e1))
-            d = np.where(within <= P.arc_sweep, radial, ends)
-            j = int(d.argmin())
-            if d[j] < best:
-                best, owner = float(d[j]), int(P.arc_owner[j])
+            idx, d = self._arcs_in_reach(q, best)
+            if d.shape[0]:
+                j = int(d.argmin())
+                if d[j] < best:
+                    best, owner = float(d[j]), int(P.arc_owner[j if idx is None else idx[j]])
         if len(P.ell_angle):
-            w = q - self._ell_c
+            # Many ellipses, and a nearest obstacle already: only those of the cells
+            # within its distance (a superset of the ones that can be nearer).
+            grid = self._ellipse_grid if math.isfinite(best) else None
+            cand = None if grid is None else grid.near(q.real, q.imag, _reach(best))
+            w = q - (self._ell_c if cand is None else self._ell_c[cand])
             lower = np.abs(w)
-            lower -= self._ell_bound
-            near = np.flatnonzero(lower < best)
+            lower -= self._ell_bound if cand is None else self._ell_bound[cand]
+            keep = np.flatnonzero(lower < best)
+            near = keep if cand is None else cand[keep]
             if near.size > _FEW_ELLIPSES:
-                de, i = self._ellipses_vectorised(w, near)
+                de, i = self._ellipses_vectorised(w[keep], near)
                 if de < best:
                     best, owner = de, i
             elif near.size:
-                local = (w * self._ell_uconj).tolist()     # the query in each frame
-                for i in near.tolist():                     # few: plain floats are fastest
+                local = (w[keep] * self._ell_uconj[near]).tolist()   # the query in each frame
+                for lq, i in zip(local, near.tolist(), strict=True):  # few: plain floats
                     a, b = self._ell_axes[i]
-                    lq = local[i]
                     ex, ey = ellipse_nearest_point(a, b, lq.real, lq.imag)
                     de = math.hypot(lq.real - ex, lq.imag - ey)
                     if de < best:
                         best, owner = de, self._ell_owner[i]
         return best, owner
+
+    @cached_property
+    def _arc_grid(self) -> BoxGrid | None:
+        """The arcs' boxes by cell, above _CULL_ABOVE arcs (built on first use)."""
+        P = self.parts
+        if not self.curve_grids or P.arc_radius.shape[0] <= _CULL_ABOVE:
+            return None
+        r = P.arc_radius[:, None]
+        return BoxGrid.build(P.arc_center - r, P.arc_center + r)
+
+    @cached_property
+    def _ellipse_grid(self) -> BoxGrid | None:
+        """The ellipses' bounding circles' boxes by cell, above _CULL_ABOVE ellipses."""
+        P = self.parts
+        if not self.curve_grids or P.ell_angle.shape[0] <= _CULL_ABOVE:
+            return None
+        r = self._ell_bound[:, None]
+        return BoxGrid.build(P.ell_center - r, P.ell_center + r)
+
+    def _arcs_in_reach(self, q: complex, best: float) -> tuple[np.ndarray | None, np.ndarray]:
+        """Return arcs (None: all) and their distances from ``q``: all that are below ``best``.
+
+        Many arcs: those of the cells within ``best`` of ``q``. With no bound yet (no
+        segments), the square searched doubles from one cell until it holds an arc as
+        near as its half-side: no arc outside it can be nearer.
+        """
+        grid = self._arc_grid
+        if grid is None:
+            return None, self._arc_distances(q, None)
+        reach = best if math.isfinite(best) else grid.cell
+        while True:
+            idx = grid.near(q.real, q.imag, _reach(reach))
+            d = self._arc_distances(q, idx)
+            if (math.isfinite(best) or idx.shape[0] == grid.size
+                    or (d.shape[0] and float(d.min()) <= reach)):
+                return idx, d
+            reach *= 2.0
+
+    def _arc_distances(self, q: complex, idx: np.ndarray | None) -> np.ndarray:
+        """Return the distances from ``q`` to arcs ``idx`` (None: all), element by element."""
+        P = self.parts
+        if idx is None:
+            c, e0, e1 = self._arc_c, self._arc_e0, self._arc_e1
+            start, radius, sweep = P.arc_start, P.arc_radius, P.arc_sweep
+        else:
+            c, e0, e1 = self._arc_c[idx], self._arc_e0[idx], self._arc_e1[idx]
+            start, radius, sweep = P.arc_start[idx], P.arc_radius[idx], P.arc_sweep[idx]
+        w = q - c
+        within = np.arctan2(w.imag, w.real)
+        within -= start
+        np.mod(within, _TAU, out=within)
+        radial = np.abs(w)
+        radial -= radius
+        np.abs(radial, out=radial)
+        ends = np.minimum(np.abs(q - e0), np.abs(q - e1))
+        return np.where(within <= sweep, radial, ends)
 
     @staticmethod
     def _buffers(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -191,8 +261,8 @@ class Collider:
         return j, best
 
     def _ellipses_vectorised(self, w: np.ndarray, near: np.ndarray) -> tuple[float, int]:
-        """Return (distance, owner) of the nearest of ellipses ``near``; ``w`` = q - centres."""
-        local = w[near] * self._ell_uconj[near]
+        """Return (distance, owner) of the nearest of ellipses ``near``; ``w`` = q - theirs."""
+        local = w * self._ell_uconj[near]
         axes = self.parts.ell_axes[near]
         ex, ey = ellipse_nearest(axes[:, 0], axes[:, 1], local.real, local.imag)
         d = np.abs(local - (ex + 1j * ey))

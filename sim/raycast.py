@@ -8,7 +8,10 @@ subtends an interval of bearings as seen from the ray origin, so only the beams 
 that interval are intersected with it (``searchsorted`` on the sorted beam angles), and
 the cost scales with the number of (beam, segment) pairs that can actually meet rather
 than with beams x segments. Segments out of range are culled by bounding box first.
-Arcs and ellipses (few per world) are intersected densely and analytically.
+Arcs and ellipses are intersected densely and analytically; where a world has more than
+256 of them, a grid of their boxes (:class:`sim.faceindex.BoxGrid`) first picks those of
+the cells within range, so a scan's cost follows the curves in view (the same numbers;
+in a ladar's fan, ellipses within rounding: a smaller matrix product).
 
 :class:`FanCaster` is the same method specialised for a ladar, whose fan of beams never
 changes: it works in the fan's own frame, where the beam directions are constants, and
@@ -44,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from mdle.sim.faceindex import FaceGrid
+from mdle.sim.faceindex import BoxGrid, FaceGrid
 from mdle.sim.shapes import Parts
 
 __all__ = ["COMPILED", "MAX_RANGE_SLACK", "FanCaster", "RayCaster", "RayHits"]
@@ -112,6 +115,18 @@ _FUSED = _numpy_complex_rounding() if _KERNEL is not None else None
 COMPILED = _FUSED is not None
 
 
+def _in_reach(grid: BoxGrid | None, x: float, y: float, max_range: float
+              ) -> np.ndarray | None:
+    """Return the curves of the cells within ``max_range`` of ``(x, y)``; None: all of them.
+
+    The square searched is widened well beyond rounding, so that it holds every curve
+    whose distance, as the cast computes it, passes the cast's own test.
+    """
+    if grid is None or not math.isfinite(max_range):
+        return None
+    return grid.near(x, y, max_range * (1.0 + 1e-9) + 1e-9)
+
+
 @dataclass(frozen=True, eq=False)
 class RayHits:
     """What a fan of rays hit (ground truth).
@@ -150,10 +165,15 @@ class RayCaster:
     ----------
     parts : Parts
         The world's boundary primitives, as :meth:`sim.shapes.Parts.concat` returns them.
+    curve_grids : bool
+        Where there are more than 256 arcs (or ellipses), index them in a grid
+        (:attr:`arc_grid`, :attr:`ellipse_grid`), so that a cast tests only those of the
+        cells in range: the same numbers (False: test the distance of every one).
     """
 
-    def __init__(self, parts: Parts) -> None:
+    def __init__(self, parts: Parts, curve_grids: bool = True) -> None:
         self.parts = parts
+        self.curve_grids = curve_grids
         s0, s1 = parts.seg_start, parts.seg_end
         self._s0 = np.ascontiguousarray(s0)
         self._edge = np.ascontiguousarray(s1 - s0)
@@ -180,6 +200,27 @@ class RayCaster:
         if self._s0.shape[0] == 0:
             return None
         return FaceGrid.build(self._s0, self._s0 + self._edge)
+
+    @cached_property
+    def arc_grid(self) -> BoxGrid | None:
+        """The arcs' boxes by cell (:class:`sim.faceindex.BoxGrid`), built on first use.
+
+        None up to ``_CULL_ABOVE`` arcs: then testing the distance of each costs less.
+        """
+        P = self.parts
+        if not self.curve_grids or P.arc_radius.shape[0] <= _CULL_ABOVE:
+            return None
+        r = P.arc_radius[:, None]
+        return BoxGrid.build(P.arc_center - r, P.arc_center + r)
+
+    @cached_property
+    def ellipse_grid(self) -> BoxGrid | None:
+        """The ellipses' boxes (their bounding circles') by cell, as :attr:`arc_grid`."""
+        P = self.parts
+        if not self.curve_grids or P.ell_angle.shape[0] <= _CULL_ABOVE:
+            return None
+        r = self._ell_bound[:, None]
+        return BoxGrid.build(P.ell_center - r, P.ell_center + r)
 
     def fan(self, rel: np.ndarray, max_range: float, compiled: bool | None = None,
             indexed: bool | None = None) -> FanCaster:
@@ -332,12 +373,21 @@ class RayCaster:
     def _arcs(self, o: np.ndarray, cos: np.ndarray, sin: np.ndarray, max_range: float,
               best: np.ndarray, kind: np.ndarray, which: np.ndarray) -> None:
         P = self.parts
-        w = P.arc_center - o
-        dist = np.hypot(w[:, 0], w[:, 1])
-        idx = np.flatnonzero(dist - P.arc_radius <= max_range)
+        # Many arcs: first those of the cells in range (a superset of the arcs within
+        # range, tested below exactly as all of them would be).
+        near = _in_reach(self.arc_grid, float(o[0]), float(o[1]), max_range)
+        if near is None:
+            w = P.arc_center - o
+            dist = np.hypot(w[:, 0], w[:, 1])
+            keep = idx = np.flatnonzero(dist - P.arc_radius <= max_range)
+        else:
+            w = P.arc_center[near] - o
+            dist = np.hypot(w[:, 0], w[:, 1])
+            keep = np.flatnonzero(dist - P.arc_radius[near] <= max_range)
+            idx = near[keep]
         if idx.size == 0:
             return
-        wx, wy = w[idx, 0], w[idx, 1]
+        wx, wy = w[keep, 0], w[keep, 1]
         tca = cos[:, None] * wx + sin[:, None] * wy              # (B, A)
         cr = cos[:, None] * wy - sin[:, None] * wx               # perpendicular offset
         disc = self._arc_r2[idx] - cr * cr
@@ -368,16 +418,23 @@ class RayCaster:
     def _ellipses(self, o: np.ndarray, cos: np.ndarray, sin: np.ndarray, max_range: float,
                   best: np.ndarray, kind: np.ndarray, which: np.ndarray) -> None:
         P = self.parts
-        w = o - P.ell_center
-        dist = np.hypot(w[:, 0], w[:, 1])
-        idx = np.flatnonzero(dist - self._ell_bound <= max_range)
+        near = _in_reach(self.ellipse_grid, float(o[0]), float(o[1]), max_range)  # as arcs
+        if near is None:
+            w = o - P.ell_center
+            dist = np.hypot(w[:, 0], w[:, 1])
+            keep = idx = np.flatnonzero(dist - self._ell_bound <= max_range)
+        else:
+            w = o - P.ell_center[near]
+            dist = np.hypot(w[:, 0], w[:, 1])
+            keep = np.flatnonzero(dist - self._ell_bound[near] <= max_range)
+            idx = near[keep]
         if idx.size == 0:
             return
         u = self._ell_u[idx]
         a, b = P.ell_axes[idx, 0], P.ell_axes[idx, 1]
         # Origin and directions in the ellipse frame, scaled to the unit circle.
-        ox = (w[idx, 0] * u[:, 0] + w[idx, 1] * u[:, 1]) / a
-        oy = (-w[idx, 0] * u[:, 1] + w[idx, 1] * u[:, 0]) / b
+        ox = (w[keep, 0] * u[:, 0] + w[keep, 1] * u[:, 1]) / a
+        oy = (-w[keep, 0] * u[:, 1] + w[keep, 1] * u[:, 0]) / b
         dx = (cos[:, None] * u[:, 0] + sin[:, None] * u[:, 1]) / a     # (B, E)
         dy = (-cos[:, None] * u[:, 1] + sin[:, None] * u[:, 0]) / b
         A = dx * dx + dy * dy
@@ -750,12 +807,24 @@ class FanCaster:
 
     def _ellipses(self, o: complex, turn: complex, t: np.ndarray) -> None:
         """Lower ``t`` (B,) to the nearest ellipse hit of each beam (exact, analytic)."""
+        centre, uconj, alpha, beta, rows = (self._ell_c, self._ell_uconj, self._ell_alpha,
+                                            self._ell_beta, self._ell_k)
+        # Many ellipses: only those of the cells in range. One farther away could only
+        # lower a beam's t to beyond the range, which the scan then reads as a miss. The
+        # product below then has fewer columns, which BLAS may round otherwise: ranges
+        # within rounding of those cast with every ellipse.
+        near = _in_reach(self.caster.ellipse_grid, o.real, o.imag, self.max_range)
+        if near is not None:
+            if near.shape[0] == 0:
+                return
+            centre, uconj, alpha, beta, rows = (centre[near], uconj[near], alpha[near],
+                                                beta[near], rows[:, near])
         # The origin in each ellipse's frame, scaled to the unit circle (conjugated).
-        v = o - self._ell_c
-        v *= self._ell_uconj
+        v = o - centre
+        v *= uconj
         oc = v.conjugate()
-        oc *= self._ell_alpha
-        v *= self._ell_beta
+        oc *= alpha
+        v *= beta
         oc += v                                     # conj(alpha v + beta conj(v))
         c = np.abs(oc)
         c *= c
@@ -763,7 +832,7 @@ class FanCaster:
         sign = np.sign(c)
         k = self._ell_turn
         k[0, 0], k[1, 0] = turn, turn.conjugate()
-        m = self._dd @ np.multiply(self._ell_k, k, out=self._ell_coef)   # (B, E)
+        m = self._dd @ np.multiply(rows, k, out=self._ell_coef if near is None else None)
         a = np.abs(m)
         a *= a                                      # |m|^2
         q = m * oc                                  # real: m . o, imaginary: cross(o, m)

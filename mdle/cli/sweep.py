@@ -94,6 +94,8 @@ def _sweep(args: argparse.Namespace) -> int:
     from mdle.sweep.executors import DaskExecutor, LocalExecutor, default_jobs
 
     spec_path = Path(args.spec)
+    if not (args.dask or args.dry_run):
+        LocalExecutor(args.jobs).start()   # the workers' server loads mdle as the study is read
     study = read_study(spec_path)
     if args.keep_traces:
         study = replace(study, keep_traces=True)

@@ -127,18 +127,29 @@ class LocalExecutor:
         """Return the process ids of the live workers (for monitoring)."""
         return [pid for pid, p in dict(self._workers).items() if p.is_alive()]
 
+    def start(self) -> None:
+        """Start the fork server now: it imports mdle while the caller reads its study.
+
+        Optional (:meth:`run` starts it otherwise). The server imports what a run needs
+        (:mod:`mdle.sweep.preload`) once, before any worker forks from it, so no worker
+        spends its first run importing: that would be paid once per worker, a part of
+        the sweep that more workers do not shorten. The server is this process's own
+        and outlives the executor (a later one reuses it).
+        """
+        import multiprocessing
+        from multiprocessing import forkserver
+
+        multiprocessing.get_context("forkserver").set_forkserver_preload(["mdle.sweep.preload"])
+        forkserver.ensure_running()
+
     def _pool(self) -> Any:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["mdle.sweep.worker", "mdle.runtime", "mdle.sim", "mdle.atoms"])
         # started now, before the first submit holds signals while the server loads mdle
-        from multiprocessing import forkserver
-
-        forkserver.ensure_running()
-        return ProcessPoolExecutor(self.jobs, mp_context=ctx, initializer=_worker_setup,
-                                   initargs=(os.getpid(),))
+        self.start()
+        return ProcessPoolExecutor(self.jobs, mp_context=multiprocessing.get_context("forkserver"),
+                                   initializer=_worker_setup, initargs=(os.getpid(),))
 
     def run(self, tasks: Iterable[Any]) -> Iterator[Outcome]:
         """Yield outcomes as runs finish; retry a run once when its worker dies."""

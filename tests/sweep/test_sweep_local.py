@@ -182,3 +182,32 @@ def test_a_sweep_over_generated_shapes(tmp_path: Path) -> None:
     for r in rows:
         assert r["status"] in ("ok", "collision") and r["follow_rc"] == 0.5
         assert r["engaged"] in (True, False) and r["distance"] > 1.0
+
+
+# A worker forked from the fork server, which imported mdle.sweep.preload, runs a task:
+# the modules the run imports beyond that (mdle's own, or its heavy dependencies) would
+# be imported again by every worker of every sweep.
+_FRESH_WORKER = """\
+import pickle, sys
+import mdle.sweep.preload
+task = pickle.loads(sys.stdin.buffer.read())
+before = set(sys.modules)
+from mdle.sweep.worker import execute
+row = execute(task).row
+print(row["status"], row["ticks"])
+print(" ".join(sorted(set(sys.modules) - before)))
+"""
+
+
+def test_the_fork_servers_preload_leaves_a_run_nothing_to_import(tiny_spec: Path) -> None:
+    import pickle
+    import subprocess
+    import sys
+
+    task = next(iter(expand(read_study(tiny_spec))))
+    out = subprocess.run([sys.executable, "-c", _FRESH_WORKER], input=pickle.dumps(task),
+                         capture_output=True, check=True, timeout=120).stdout.decode()
+    status, imported = out.splitlines()[0], out.splitlines()[1].split()
+    assert status.split()[0] == "ok" and int(status.split()[1]) >= 40
+    heavy = ("mdle", "numpy", "yaml", "shapely", "lark")
+    assert [m for m in imported if m.split(".")[0] in heavy] == []
