@@ -396,21 +396,30 @@ class TraceWriter:
         self.close()
 
 
-_LINE_HEAD = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,"omega":%.9g,'
-              '"cmd_v":%.9g,"cmd_omega":%.9g,"path":')
-
-
 class SampleFormat:
-    """Format samples as the trace's ``sample`` records, one JSON line each (fast).
+    """Format samples as the trace's ``sample`` records, one JSON line each: the one formatter.
 
-    Floats are formatted directly (9 significant digits, time in full); path strings and
-    diagnostic names are quoted once and cached. The trace writer and the MCAP recorder
-    share it, so ``/mdle/state`` carries exactly the trace's line.
+    Every value has one rule, whatever else the sample holds (docs/trace.md, "Numbers"):
+
+    * ``t``: the shortest decimal that reads back as the same double (``repr``);
+    * every other number (pose, speeds, command, lateness, scan age, clearance, true pose,
+      each diagnostic): 9 significant digits (``%.9g``); a flag among the diagnostics is
+      a number, 1 or 0;
+    * NaN and the infinities, in any field: ``null`` (strict JSON);
+    * a diagnostic that is not a number: its JSON value.
+
+    A line is one ``%`` format of a template made once per shape of line (path, flags,
+    which optional fields, diagnostic names). When every number is finite the template
+    formats the floats itself; otherwise the same template, made with ``%s`` slots, takes
+    each value already written by the rule above. Both come from :meth:`_template`, so
+    they give the same text for the same values. The trace writer and the MCAP recorder
+    share it: ``/mdle/state`` carries exactly the trace's line, and the recorder's
+    numbers are the line's (rounded by :func:`mdle.ros.rounding.round9` as a reader of
+    the line gets them, NaN where the line has ``null``).
     """
 
     def __init__(self) -> None:
         self._paths: dict[str, str] = {}
-        self._diag: dict[tuple[str, ...], str] = {}
         self._lines: dict[tuple[Any, ...], str] = {}
 
     def quoted(self, path: str) -> str:
@@ -422,36 +431,7 @@ class SampleFormat:
 
     def __call__(self, sample: Sample) -> str:
         """Return the ``sample`` record of one tick, without a line end."""
-        try:
-            return self._line(sample)
-        except (TypeError, ValueError):  # a diagnostic that is not a number
-            return _dumps(_sample_dict(sample))
-
-    def _line(self, s: Sample) -> str:
-        """Format the sample with % formatting.
-
-        Raises TypeError or ValueError for a value that is not a number (the caller then
-        falls back to :func:`json.dumps`).
-        """
-        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
-         diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
-        # one test for the fields every sample has: a sum of finite numbers is finite
-        # (short of overflow, which the slow path then handles too)
-        if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
-            return _dumps(_sample_dict(s))
-        quoted = self._paths.get(path)
-        if quoted is None:
-            quoted = self.quoted(path)
-        # time keeps every digit (hardware clocks may be large); the rest 9 significant
-        line = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,'
-                '"omega":%.9g,"cmd_v":%.9g,"cmd_omega":%.9g,"path":%s,"lateness":%.9g,'
-                '"stalled":%s'
-                % (float(t), x, y, theta, v, omega, cmd_v, cmd_omega, quoted, lateness,
-                   "true" if stalled else "false"))
-        truth = None
-        if true_x is not None and true_y is not None and true_theta is not None:
-            truth = (_number(true_x), _number(true_y), _number(true_theta))
-        return self._tail(line, scan_age, clearance, collided, truth, diag)
+        return self.line_and_numbers(sample)[0]
 
     def line_and_numbers(self, s: Sample) -> tuple[str, tuple[float, ...] | None]:
         """Return the sample line and the numbers it writes with 9 significant digits.
@@ -459,93 +439,68 @@ class SampleFormat:
         The numbers are (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
         true_theta) as the sample has them (the true pose left out when the sample has
         none; a reader of the line gets each rounded to 9 significant digits), or None
-        when a number is not finite.
-
-        The line is one ``%`` format of a template made once per shape of line (path,
-        flags, which optional fields, diagnostic names): the same text as :meth:`__call__`.
+        when a value of the line is not a finite number (the line then writes each value
+        by the same rule, and the MCAP recorder takes the numbers from the sample).
         """
-        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
-         diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
-        has_truth = False
+        tx, ty, tth = s.true_x, s.true_y, s.true_theta
+        truth = (tx, ty, tth) if tx is not None and ty is not None and tth is not None else None
+        has_truth = truth is not None
+        diag = s.diag
+        key = (s.path, not s.stalled, s.scan_age is None, s.clearance is None,
+               None if s.collided is None else not s.collided, has_truth,
+               tuple(diag) if diag else ())
+        # every number of the line but the time, in the line's order
+        values: tuple[Any, ...] = (s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega,
+                                   s.lateness)
+        if s.scan_age is not None:
+            values += (s.scan_age,)
+        if s.clearance is not None:
+            values += (s.clearance,)
+        numbers: tuple[float, ...] = (s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega)
+        if truth is not None:
+            values += truth
+            numbers += truth
+        if diag:
+            values += tuple(diag.values())
         try:
-            total = t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
-            if true_x is not None and true_y is not None and true_theta is not None:
-                has_truth = True
-                total += true_x + true_y + true_theta
-            if scan_age is not None:
-                total += scan_age
-            if clearance is not None:
-                total += clearance
-            dvalues = tuple(diag.values()) if diag else ()
-            if not isfinite(total + sum(dvalues)):
-                return self(s), None
-            key = (path, not stalled, scan_age is None, clearance is None,
-                   None if collided is None else not collided, has_truth,
-                   tuple(diag) if diag else ())
+            # a sum of finite numbers is finite (short of overflow, which goes the slow
+            # way and gives the same text)
+            fast = isfinite(s.time + sum(values))
+        except (TypeError, OverflowError):  # a value that is not a number, or a huge int
+            fast = False
+        if fast:
             template = self._lines.get(key)
             if template is None:
-                template = self._template(key)
-            args: tuple[Any, ...] = (float(t), x, y, theta, v, omega, cmd_v, cmd_omega,
-                                     lateness)
-            if scan_age is not None:
-                args += (scan_age,)
-            if clearance is not None:
-                args += (clearance,)
-            numbers: tuple[float, ...] = (x, y, theta, v, omega, cmd_v, cmd_omega)
-            if has_truth:
-                truth = (true_x, true_y, true_theta)
-                numbers += truth  # type: ignore[operator]  # not None: has_truth
-                line = template % (*args, *truth, *dvalues)
-            else:
-                line = template % (*args, *dvalues)
-        except (TypeError, ValueError):  # a diagnostic that is not a number
-            return self(s), None
-        return line, numbers
+                template = self._lines[key] = self._template(key, "%r", "%.9g")
+            return template % (float(s.time), *values), numbers
+        template = self._lines.get((key, "text"))
+        if template is None:
+            template = self._lines[(key, "text")] = self._template(key, "%s", "%s")
+        return template % (_time_text(s.time), *[_number(v) for v in values]), None
 
-    def _template(self, key: tuple[Any, ...]) -> str:
-        """Make (and keep) the ``%`` template of one shape of sample line."""
+    def _template(self, key: tuple[Any, ...], time: str, number: str) -> str:
+        """Make the ``%`` template of one shape of sample line.
+
+        ``time`` is the slot of ``t``, ``number`` the slot of every other number.
+        """
         path, running, no_age, no_clearance, not_collided, has_truth, names = key
-        parts = [_LINE_HEAD, self.quoted(path).replace("%", "%%"), ',"lateness":%.9g,"stalled":',
-                 "false" if running else "true"]
+        n = number
+        parts = ['{"type":"sample","t":', time, ',"x":', n, ',"y":', n, ',"theta":', n,
+                 ',"v":', n, ',"omega":', n, ',"cmd_v":', n, ',"cmd_omega":', n,
+                 ',"path":', self.quoted(path).replace("%", "%%"), ',"lateness":', n,
+                 ',"stalled":', "false" if running else "true"]
         if not no_age:
-            parts.append(',"scan_age":%.9g')
+            parts += [',"scan_age":', n]
         if not no_clearance:
-            parts.append(',"clearance":%.9g')
+            parts += [',"clearance":', n]
         if not_collided is not None:
             parts.append(',"collided":false' if not_collided else ',"collided":true')
         if has_truth:
-            parts.append(',"true_x":%.9g,"true_y":%.9g,"true_theta":%.9g')
+            parts += [',"true_x":', n, ',"true_y":', n, ',"true_theta":', n]
         if names:
             parts.append(',"diag":{%s}' % ",".join(
-                [self.quoted(k).replace("%", "%%") + ":%.9g" for k in names]))
-        template = self._lines[key] = "".join(parts) + "}"
-        return template
-
-    def _tail(self, line: str, scan_age: Any, clearance: Any, collided: Any,
-              truth: tuple[str, str, str] | None, diag: Mapping[str, Any]) -> str:
-        """Append the optional fields to a sample line and close it."""
-        if scan_age is not None:
-            line += ',"scan_age":' + _number(scan_age)
-        if clearance is not None:
-            line += ',"clearance":' + _number(clearance)
-        if collided is not None:
-            line += ',"collided":true' if collided else ',"collided":false'
-        if truth is not None:
-            line += ',"true_x":' + truth[0] + ',"true_y":' + truth[1] + ',"true_theta":' + truth[2]
-        if diag:
-            # one format for all values, the keys' template made once per set of names
-            keys = tuple(diag)
-            template = self._diag.get(keys)
-            if template is None:
-                template = self._diag[keys] = ',"diag":{%s}}' % ",".join(
-                    [self.quoted(k).replace("%", "%%") + ":%.9g" for k in keys])
-            values = tuple(diag.values())
-            if isfinite(sum(values)):
-                return line + template % values
-            q = self.quoted
-            line += ',"diag":{%s}' % ",".join([q(k) + ":" + _number(d)
-                                               for k, d in diag.items()])
-        return line + "}"
+                [self.quoted(k).replace("%", "%%") + ":" + n for k in names]))
+        return "".join(parts) + "}"
 
 
 def laser_mount(backend: object) -> tuple[float, float, float]:
@@ -677,26 +632,22 @@ class LaserRecords:
 
 
 def _number(value: Any) -> str:
-    """Format a finite number with 9 significant digits, NaN and infinities as ``null``."""
-    return "%.9g" % value if isfinite(value) else "null"
+    """Write a number with 9 significant digits, NaN and infinities as ``null``.
+
+    Anything that is not a number (a diagnostic may be) as its JSON value.
+    """
+    try:
+        return "%.9g" % value if isfinite(value) else "null"
+    except (TypeError, ValueError, OverflowError):  # not a float, or an int beyond one
+        return _dumps(value)
 
 
-def _sample_dict(s: Sample) -> dict[str, Any]:
-    d: dict[str, Any] = {"type": "sample", "t": s.time, "x": s.x, "y": s.y, "theta": s.theta,
-                         "v": s.v, "omega": s.omega, "cmd_v": s.cmd_v,
-                         "cmd_omega": s.cmd_omega, "path": s.path, "lateness": s.lateness,
-                         "stalled": bool(s.stalled)}
-    if s.scan_age is not None:
-        d["scan_age"] = s.scan_age
-    if s.clearance is not None:
-        d["clearance"] = s.clearance
-    if s.collided is not None:
-        d["collided"] = bool(s.collided)
-    if s.true_x is not None:
-        d.update(true_x=s.true_x, true_y=s.true_y, true_theta=s.true_theta)
-    if s.diag:
-        d["diag"] = dict(s.diag)
-    return d
+def _time_text(value: Any) -> str:
+    """Write a tick's time in full (the shortest repr that reads back), ``null`` if not finite."""
+    try:
+        return repr(float(value)) if isfinite(value) else "null"
+    except (TypeError, ValueError, OverflowError):
+        return _dumps(value)
 
 
 @dataclass(frozen=True)
