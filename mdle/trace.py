@@ -28,7 +28,7 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from math import isfinite
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any, NamedTuple
 
 from mdle.backend import Scan
 from mdle.errors import Diagnostic, MdleError, Span
@@ -43,7 +43,7 @@ if TYPE_CHECKING:
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
            "TraceWriteError", "SampleFormat", "LaserRecords", "read_trace", "versions",
            "decode_ranges", "dumps", "start_record", "event_record", "end_record", "scan_ranges",
-           "encode_ranges", "laser_mount", "laser_timing"]
+           "encode_ranges", "LaserMount", "LaserTiming", "laser_mount", "laser_timing"]
 
 TRACE_FORMAT = "mdle-trace"
 TRACE_VERSION = 1
@@ -503,17 +503,32 @@ class SampleFormat:
         return "".join(parts) + "}"
 
 
-def laser_mount(backend: object) -> tuple[float, float, float]:
+class LaserMount(NamedTuple):
+    """The ladar's pose in the robot frame: m, m, rad."""
+
+    x: float = 0.0
+    y: float = 0.0
+    theta: float = 0.0
+
+
+class LaserTiming(NamedTuple):
+    """Seconds between scans and between two beams of a scan (0: unknown)."""
+
+    scan_time: float = 0.0
+    time_increment: float = 0.0
+
+
+def laser_mount(backend: object) -> LaserMount:
     """Return a backend's ladar pose in the robot frame (x, y, theta), (0, 0, 0) if unknown."""
     mount = getattr(backend, "laser_mount", None)
     try:
         x, y, th = (float(m) for m in mount)  # type: ignore[union-attr]
     except (TypeError, ValueError):
-        return (0.0, 0.0, 0.0)
-    return (x, y, th)
+        return LaserMount()
+    return LaserMount(x, y, th)
 
 
-def laser_timing(backend: object, rate: float) -> tuple[float, float]:
+def laser_timing(backend: object, rate: float) -> LaserTiming:
     """Return (scan_time, time_increment) in seconds for a backend's scans, 0 when unknown.
 
     ``scan_time`` is the time between scans: the backend's ``laser_timing`` period, or
@@ -525,13 +540,13 @@ def laser_timing(backend: object, rate: float) -> tuple[float, float]:
     try:
         period, increment = (float(v) for v in timing)  # type: ignore[union-attr]
     except (TypeError, ValueError):
-        return (0.0, 0.0)
+        return LaserTiming()
     if not (math.isfinite(period) and period >= 0 and math.isfinite(increment)
             and increment >= 0):
-        return (0.0, 0.0)
+        return LaserTiming()
     if period == 0.0 and rate > 0:
         period = 1.0 / rate
-    return (period, increment)
+    return LaserTiming(period, increment)
 
 
 def scan_ranges(scan: "Scan") -> "np.ndarray":
@@ -569,11 +584,10 @@ class LaserRecords:
     new scan. ``mount`` is the ladar's pose in the robot frame.
     """
 
-    def __init__(self, mount: tuple[float, float, float] = (0.0, 0.0, 0.0),
-                 timing: tuple[float, float] = (0.0, 0.0)) -> None:
-        self.mount = mount
-        #: (scan_time, time_increment), s: between scans and between beams (0: unknown).
-        self.timing = timing
+    def __init__(self, mount: LaserMount | None = None,
+                 timing: LaserTiming | None = None) -> None:
+        self.mount = mount if mount is not None else LaserMount()
+        self.timing = timing if timing is not None else LaserTiming()
         self.last: Scan | None = None
         self._geometry: tuple[Any, ...] | None = None
         self._bearings: Any = None
@@ -583,13 +597,14 @@ class LaserRecords:
         """Return the ``laser`` record for ``scan``'s beams."""
         b = scan.bearings
         n = len(b)
-        a0 = float(b[0]) - self.mount[2] if n else 0.0
-        a1 = float(b[-1]) - self.mount[2] if n else 0.0
+        a0 = float(b[0]) - self.mount.theta if n else 0.0
+        a1 = float(b[-1]) - self.mount.theta if n else 0.0
         return {"type": "laser", "frame": "laser", "mount": list(self.mount),
                 "angle_min": a0, "angle_max": a1,
                 "angle_increment": (a1 - a0) / (n - 1) if n > 1 else 0.0, "count": n,
                 "range_min": 0.0, "range_max": float(scan.max_range),
-                "scan_time": self.timing[0], "time_increment": self.timing[1]}
+                "scan_time": self.timing.scan_time,
+                "time_increment": self.timing.time_increment}
 
     def changed(self, scan: "Scan") -> dict[str, Any] | None:
         """Return the ``laser`` record when ``scan``'s geometry is new, else None.
