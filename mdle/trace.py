@@ -442,21 +442,20 @@ class SampleFormat:
         when a value of the line is not a finite number (the line then writes each value
         by the same rule, and the MCAP recorder takes the numbers from the sample).
         """
-        tx, ty, tth = s.true_x, s.true_y, s.true_theta
+        # the fields in Sample's order (mypy checks the names against the class)
+        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
+         diag, clearance, collided, tx, ty, tth) = s[:18]
         truth = (tx, ty, tth) if tx is not None and ty is not None and tth is not None else None
-        has_truth = truth is not None
-        diag = s.diag
-        key = (s.path, not s.stalled, s.scan_age is None, s.clearance is None,
-               None if s.collided is None else not s.collided, has_truth,
+        key = (path, not stalled, scan_age is None, clearance is None,
+               None if collided is None else not collided, truth is not None,
                tuple(diag) if diag else ())
+        numbers: tuple[float, ...] = (x, y, theta, v, omega, cmd_v, cmd_omega)
         # every number of the line but the time, in the line's order
-        values: tuple[Any, ...] = (s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega,
-                                   s.lateness)
-        if s.scan_age is not None:
-            values += (s.scan_age,)
-        if s.clearance is not None:
-            values += (s.clearance,)
-        numbers: tuple[float, ...] = (s.x, s.y, s.theta, s.v, s.omega, s.cmd_v, s.cmd_omega)
+        values: tuple[Any, ...] = (*numbers, lateness)
+        if scan_age is not None:
+            values += (scan_age,)
+        if clearance is not None:
+            values += (clearance,)
         if truth is not None:
             values += truth
             numbers += truth
@@ -465,18 +464,18 @@ class SampleFormat:
         try:
             # a sum of finite numbers is finite (short of overflow, which goes the slow
             # way and gives the same text)
-            fast = isfinite(s.time + sum(values))
+            fast = isfinite(t + sum(values))
         except (TypeError, OverflowError):  # a value that is not a number, or a huge int
             fast = False
         if fast:
             template = self._lines.get(key)
             if template is None:
                 template = self._lines[key] = self._template(key, "%r", "%.9g")
-            return template % (float(s.time), *values), numbers
+            return template % (float(t), *values), numbers
         template = self._lines.get((key, "text"))
         if template is None:
             template = self._lines[(key, "text")] = self._template(key, "%s", "%s")
-        return template % (_time_text(s.time), *[_number(v) for v in values]), None
+        return template % (_time_text(t), *[_number(v) for v in values]), None
 
     def _template(self, key: tuple[Any, ...], time: str, number: str) -> str:
         """Make the ``%`` template of one shape of sample line.
