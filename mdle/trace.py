@@ -451,16 +451,16 @@ class SampleFormat:
                tuple(diag) if diag else ())
         numbers: tuple[float, ...] = (x, y, theta, v, omega, cmd_v, cmd_omega)
         # every number of the line but the time, in the line's order
-        values: tuple[Any, ...] = (*numbers, lateness)
+        values: list[Any] = [x, y, theta, v, omega, cmd_v, cmd_omega, lateness]
         if scan_age is not None:
-            values += (scan_age,)
+            values.append(scan_age)
         if clearance is not None:
-            values += (clearance,)
+            values.append(clearance)
         if truth is not None:
             values += truth
             numbers += truth
         if diag:
-            values += tuple(diag.values())
+            values += diag.values()
         try:
             # a sum of finite numbers is finite (short of overflow, which goes the slow
             # way and gives the same text)
