@@ -33,7 +33,6 @@ No numpy here: :mod:`atoms.boundary` loads this module for the checker.
 from __future__ import annotations
 
 from collections.abc import Callable, Hashable
-from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
 __all__ = ["ByIdentity"]
@@ -41,18 +40,21 @@ __all__ = ["ByIdentity"]
 T = TypeVar("T")
 
 
-@dataclass(frozen=True)
 class _Entry(Generic[T]):
     """A remembered value, with the array it came from and what that array held then.
 
-    ``array`` is kept so that its ``id`` is not reused while remembered.
+    ``array`` is kept so that its ``id`` is not reused while remembered. (A slotted class,
+    not a dataclass: ``mdle check`` loads this module, and a dataclass is made by ``exec``.)
     """
 
-    array: Any
-    data: bytes
-    shape: tuple[int, ...]
-    dtype: Any
-    value: T
+    __slots__ = ("array", "data", "shape", "dtype", "value")
+
+    def __init__(self, array: Any, value: T) -> None:
+        self.array = array
+        self.data: bytes = array.tobytes()
+        self.shape: tuple[int, ...] = array.shape
+        self.dtype: Any = array.dtype
+        self.value = value
 
     def holds(self, a: Any) -> bool:
         """Whether ``a`` is the remembered array and still holds what it held."""
@@ -86,5 +88,5 @@ class ByIdentity(Generic[T]):
         if flags is not None and not flags.writeable and getattr(a, "base", 0) is None:
             if len(self._seen) >= self._size:
                 self._seen.clear()
-            self._seen[key] = _Entry(a, a.tobytes(), a.shape, a.dtype, value)
+            self._seen[key] = _Entry(a, value)
         return value
