@@ -27,19 +27,13 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from mdle.atoms import default_registry
     from mdle.atoms.registry import Context, Param, control_law, sensor
-    from mdle.backend import (
-        STOP,
-        Backend,
-        ClockMode,
-        Command,
-        Observation,
-        Pose,
-        RobotLimits,
-        Scan,
-    )
+    from mdle.core.backend import STOP, Backend, ClockMode, Command, Observation, RobotLimits, Scan
+    from mdle.core.errors import CheckError, MdleError
+    from mdle.core.pose import Pose
     from mdle.drivers import open_backend
-    from mdle.errors import CheckError, MdleError
     from mdle.lang import Program, format_source, load_program, load_text, show_program
+    from mdle.record.load import read_trace
+    from mdle.record.trace import Trace, TraceWriter
     from mdle.runtime import (
         BaseObserver,
         Cause,
@@ -52,7 +46,6 @@ if TYPE_CHECKING:
         run_named,
     )
     from mdle.sim import SimBackend, World, list_worlds, load_world
-    from mdle.trace import Trace, TraceWriter, read_trace
 
 __version__ = "0.1.0"
 
@@ -107,16 +100,16 @@ __all__ = [
 _HOME = {
     "load_program": "mdle.lang", "load_text": "mdle.lang", "Program": "mdle.lang",
     "format_source": "mdle.lang", "show_program": "mdle.lang",
-    "CheckError": "mdle.errors", "MdleError": "mdle.errors",
+    "CheckError": "mdle.core.errors", "MdleError": "mdle.core.errors",
     "run": "mdle.runtime", "run_named": "mdle.runtime", "element_of": "mdle.runtime",
     "ended_how": "mdle.runtime", "Cause": "mdle.runtime", "Scheduler": "mdle.runtime",
     "RunResult": "mdle.runtime", "Sample": "mdle.runtime", "BaseObserver": "mdle.runtime",
-    "Backend": "mdle.backend", "Observation": "mdle.backend", "Scan": "mdle.backend",
-    "Pose": "mdle.backend", "Command": "mdle.backend", "STOP": "mdle.backend",
-    "RobotLimits": "mdle.backend", "ClockMode": "mdle.backend",
+    "Backend": "mdle.core.backend", "Observation": "mdle.core.backend", "Scan": "mdle.core.backend",
+    "Pose": "mdle.core.backend", "Command": "mdle.core.backend", "STOP": "mdle.core.backend",
+    "RobotLimits": "mdle.core.backend", "ClockMode": "mdle.core.backend",
     "SimBackend": "mdle.sim", "World": "mdle.sim", "load_world": "mdle.sim",
     "list_worlds": "mdle.sim", "open_backend": "mdle.drivers",
-    "read_trace": "mdle.trace", "Trace": "mdle.trace", "TraceWriter": "mdle.trace",
+    "read_trace": "mdle.record.trace", "Trace": "mdle.record.trace", "TraceWriter": "mdle.record.trace",
     "control_law": "mdle.atoms.registry", "sensor": "mdle.atoms.registry",
     "Param": "mdle.atoms.registry", "Context": "mdle.atoms.registry",
     "default_registry": "mdle.atoms",

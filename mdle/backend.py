@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 if TYPE_CHECKING:  # numpy is only needed by those who build scans
     import numpy as np
 
-    from mdle.messages import Inbox
+    from mdle.core.messages import Inbox
 
 __all__ = [
     "Pose",

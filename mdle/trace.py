@@ -30,10 +30,10 @@ from dataclasses import dataclass, field
 from math import isfinite
 from typing import IO, TYPE_CHECKING, Any, NamedTuple
 
-from mdle.backend import Scan
-from mdle.errors import Diagnostic, MdleError, Span
+from mdle.core.backend import Scan
+from mdle.core.errors import Diagnostic, MdleError, Span
+from mdle.core.userfile import UserFileError, open_user_file, os_reason
 from mdle.runtime.events import Collision, Event, RunResult, Sample
-from mdle.userfile import UserFileError, open_user_file, os_reason
 
 if TYPE_CHECKING:
     import numpy as np
@@ -414,7 +414,7 @@ class SampleFormat:
     each value already written by the rule above. Both come from :meth:`_template`, so
     they give the same text for the same values. The trace writer and the MCAP recorder
     share it: ``/mdle/state`` carries exactly the trace's line, and the recorder's
-    numbers are the line's (rounded by :func:`mdle.ros.rounding.round9` as a reader of
+    numbers are the line's (rounded by :func:`mdle.record.rounding.round9` as a reader of
     the line gets them, NaN where the line has ``null``).
     """
 
@@ -824,7 +824,7 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
     """Read a trace written by :class:`TraceWriter`, or an MCAP recording of a run.
 
     An MCAP file (``mdle run --record``) or a rosbag2 folder holding one (``--rosbag``)
-    is read back through the mcap library (:func:`mdle.ros.read_recording`).
+    is read back through the mcap library (:func:`mdle.record.read_recording`).
 
     Raises
     ------
@@ -834,7 +834,7 @@ def read_trace(path: str | os.PathLike[str]) -> Trace:
     """
     path = os.fspath(path)
     if _is_recording(path):
-        from mdle.ros.read import read_recording
+        from mdle.record.read import read_recording
 
         return read_recording(path)
     header: dict[str, Any] | None = None

@@ -1,4 +1,4 @@
-"""SimBackend: the embedded simulator behind :class:`mdle.backend.Backend`.
+"""SimBackend: the embedded simulator behind :class:`mdle.core.backend.Backend`.
 
 Over 500 lines: one class, the simulated robot's observe/command/advance cycle, whose
 clock, kinematics, contact, scans and odometry share one state.
@@ -14,12 +14,13 @@ to where the robot was at :meth:`SimBackend.reset` (the run's start), which is
 (0, 0, 0). World coordinates are ground truth: ``Observation.truth`` and
 :attr:`SimBackend.true_pose`. The truth's exact clearance is a distance query over every
 segment, so a step that touched nothing keeps a lower bound instead, and the observation's
-truth (a :class:`mdle.backend.LazyTruth`) measures it only when read.
+truth (a :class:`mdle.core.backend.LazyTruth`) measures it only when read.
 
 >>> import math
 >>> from mdle.sim.world import World
 >>> from mdle.sim.shapes import Rectangle
->>> from mdle.backend import Command, Pose
+>>> from mdle.core.backend import Command
+>>> from mdle.core.pose import Pose
 >>> world = World("wall", obstacles=(Rectangle((3.0, 0.0), (0.1, 4.0)),))
 >>> sim = SimBackend(world, robot="ideal", ladar="lms200-ideal")
 >>> sim.command(Command(1.0, 0.0))
@@ -41,21 +42,21 @@ from functools import partial
 from typing import Any, NamedTuple
 
 import numpy as np
-
-from mdle.backend import (
+from mdle.core.backend import (
     STOP,
     ClockMode,
     Command,
     LazyTruth,
     Observation,
-    Pose,
     RobotLimits,
     Scan,
     TickClock,
     observation,
 )
-from mdle.errors import BackendError, WorldError
-from mdle.messages import Inbox
+from mdle.core.errors import BackendError, WorldError
+from mdle.core.messages import Inbox
+from mdle.core.pose import Pose
+
 from mdle.sim.collision import CONTACT, Collider
 from mdle.sim.ladar import Ladar, LadarProfile, ladar_profile
 from mdle.sim.profiles import robot_profile

@@ -18,7 +18,7 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, NamedTuple
 
-from mdle.backend import RobotLimits
+from mdle.core.backend import RobotLimits
 
 if TYPE_CHECKING:
     import numpy as np

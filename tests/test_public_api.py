@@ -43,7 +43,7 @@ def test_importing_mdle_loads_none_of_them() -> None:
     # every command imports the package: `mdle check` must not pay for the runtime,
     # the simulator's numpy or the drivers
     code = ("import sys, mdle; heavy = [m for m in ('numpy', 'mdle.runtime', 'mdle.sim', "
-            "'mdle.drivers', 'mdle.trace', 'mdle.lang') if m in sys.modules]; print(heavy)")
+            "'mdle.drivers', 'mdle.record.trace', 'mdle.lang') if m in sys.modules]; print(heavy)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, timeout=60)
     assert out.stdout.strip() == "[]"

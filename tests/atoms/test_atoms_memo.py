@@ -6,11 +6,11 @@ import math
 from typing import TYPE_CHECKING
 
 import numpy as np
+from mdle.core.backend import Scan
 
 from mdle.atoms.boundary import boundary_view
 from mdle.atoms.estimators import scan_points, valid_points
 from mdle.atoms.memo import ByIdentity
-from mdle.backend import Scan
 
 if TYPE_CHECKING:
     from tests.atoms.conftest import Raycast

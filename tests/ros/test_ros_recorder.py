@@ -10,12 +10,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from mdle.core.backend import Observation
+from mdle.record.load import read_trace
+from mdle.record.recorder import McapRecorder
+from mdle.record.trace import TraceWriter
 
-from mdle.backend import Observation
 from mdle.lang import load_text
-from mdle.ros.recorder import McapRecorder
 from mdle.runtime import Scheduler
-from mdle.trace import TraceWriter, read_trace
 
 PLAN = "atom hug = (follow_boundary(side = right, rc = 1 m, v = 1 m/s), never, 8 s)\n"
 
@@ -74,7 +75,7 @@ def test_a_robot_run_has_no_simulation_topics(tmp_path: Path, doctor: Any,
     assert all(m.msg.scan_time == 0.0 == m.msg.time_increment for m in msgs
                if m.topic == "/scan")
     # the exported trace gives the same messages
-    from mdle.ros.export import export_trace
+    from mdle.record.export import export_trace
 
     export_trace(tmp_path / "t.jsonl", tmp_path / "e.mcap")
     assert doctor(tmp_path / "e.mcap") == counts
@@ -84,8 +85,9 @@ def test_a_robot_run_has_no_simulation_topics(tmp_path: Path, doctor: Any,
 def test_a_disk_that_fills_up_ends_the_run_cleanly(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
         capsys: pytest.CaptureFixture[str], when: str) -> None:
+    from mdle.record import mcap_file
+
     from mdle.cli import main
-    from mdle.ros import mcap_file
 
     real = mcap_file.McapFile.close_chunk
     finishing: list[bool] = []
@@ -224,8 +226,7 @@ def test_a_run_with_nan_fields_gives_the_trace_s_numbers_to_the_recording(
     9 significant digits (null for those), and the recording holds the numbers of the
     trace's lines: the export of the trace gives the same messages, byte for byte."""
     from mcap.reader import make_reader
-
-    from mdle.ros.export import export_trace
+    from mdle.record.export import export_trace
 
     element = load_text(PLAN, "<test>").elements["hug"]
     header = {"program": {"element": "hug"}, "backend": "sim", "rate": 10.0}

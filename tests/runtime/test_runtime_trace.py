@@ -10,13 +10,14 @@ from types import SimpleNamespace
 from typing import Any
 
 import pytest
+from mdle.core.backend import Command
+from mdle.core.errors import MdleRuntimeError
+from mdle.record.load import read_trace
+from mdle.record.trace import TraceError, TraceWriteError, TraceWriter
 
 from mdle.atoms.registry import Context
-from mdle.backend import Command
-from mdle.errors import MdleRuntimeError
 from mdle.runtime import Cause, Scheduler, run
 from mdle.runtime.scripted import ScriptedBackend
-from mdle.trace import TraceError, TraceWriteError, TraceWriter, read_trace
 
 
 def test_trace_has_header_events_samples_and_end(ir: SimpleNamespace, tmp_path: Path) -> None:
@@ -311,7 +312,7 @@ def _sample(**changes: Any) -> Any:
 def test_the_fast_sample_line_is_the_trace_line(changes: dict[str, Any], finite: bool) -> None:
     """line_and_numbers (one template per shape of line) gives the line the trace writer
     writes, and the sample's numbers that line writes with 9 significant digits."""
-    from mdle.trace import SampleFormat
+    from mdle.record.trace import SampleFormat
 
     fmt = SampleFormat()
     s = _sample(**changes)
@@ -337,7 +338,7 @@ def test_the_fast_sample_line_is_the_trace_line(changes: dict[str, Any], finite:
 def test_every_value_of_a_sample_line_has_one_rounding(changes: dict[str, Any]) -> None:
     """t in full; every other number 9 significant digits; NaN and infinities null; a
     diagnostic that is not a number its JSON value: whatever else the line holds."""
-    from mdle.trace import SampleFormat
+    from mdle.record.trace import SampleFormat
 
     s = _sample(**changes)
     rec = json.loads(SampleFormat()(s))
