@@ -39,7 +39,7 @@ import math
 from collections import deque
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -55,7 +55,6 @@ from mdle.core.backend import (
     observation,
 )
 from mdle.core.errors import BackendError, WorldError
-from mdle.core.frozen import builder
 from mdle.core.messages import Inbox
 from mdle.core.pose import Pose
 from mdle.sim.collision import CONTACT, Collider
@@ -66,7 +65,6 @@ from mdle.sim.robot import (
     RobotProfile,
     RunClock,
     integrate,
-    new_phase,
     plan_phases,
     ramp_step,
 )
@@ -86,8 +84,43 @@ def _wrap(a: float) -> float:
     return (a + math.pi) % _TAU - math.pi
 
 
-_new_pose = builder(Pose)        # Pose(x, y, theta) without the frozen __init__'s cost
-_new_command = builder(Command)  # Command(v, omega), the same
+class _Report(NamedTuple):
+    """What the server last reported: odometry pose (m, m, rad) and speeds (m/s, rad/s)."""
+
+    x: float
+    y: float
+    theta: float
+    v: float
+    omega: float
+
+
+class _Origin(NamedTuple):
+    """The true pose the odometry frame starts at, with its heading's cosine and sine."""
+
+    x: float
+    y: float
+    cos: float
+    sin: float
+    theta: float
+
+
+class _Queued(NamedTuple):
+    """A command on its way to the robot, and the simulated time it arrives (s)."""
+
+    at: float
+    command: Command
+
+
+class _Held(NamedTuple):
+    """A server loop's pieces for one step, the speeds at its end, and its report's piece.
+
+    ``mark`` is the index of the piece at whose start the server reported (-1: none).
+    """
+
+    phases: list[Phase]
+    v_end: float
+    w_end: float
+    mark: int
 
 
 @dataclass(frozen=True)
@@ -200,12 +233,14 @@ class SimBackend:
         self._x, self._y, self._th = pose.x, pose.y, pose.theta
         # Odometry starts at (0, 0, 0) where the robot is now, as on a robot (REP-105 odom).
         self._ox = self._oy = self._oth = 0.0
-        self._origin = (pose.x, pose.y, math.cos(pose.theta), math.sin(pose.theta), pose.theta)
+        self._origin = _Origin(pose.x, pose.y, math.cos(pose.theta), math.sin(pose.theta),
+                               pose.theta)
         self._v = self._w = 0.0
         self._cmd = STOP
         self._stalled = False
         self._collided = False
-        self._clear = (clear, owner)
+        # (clearance in m, index of the nearest obstacle): sim/team.py writes it too
+        self._clear: tuple[float, int] = (clear, owner)
         self._clear_bound = False
         self.events = []
         self._reported = 0  # events already handed out in an observation's truth
@@ -223,12 +258,12 @@ class SimBackend:
         # phase of their period (the ladar does not run on the controller's clock) and
         # become readable `scan_latency` later.
         self._timed = prof.timed
-        self._pending: deque[tuple[float, Command]] = deque()
+        self._pending: deque[_Queued] = deque()
         self._sip_j = 1
-        self._report = (self._ox, self._oy, self._oth, 0.0, 0.0)
+        self._report = _Report(self._ox, self._oy, self._oth, 0.0, 0.0)
         self._scan_delay = (prof.scan_latency if prof.scan_latency.enabled and not self._oracle
                             else None)
-        self._scan_queue: list[tuple[float, Scan]] = []
+        self._scan_queue: list[tuple[float, Scan]] = []   # (readable at, scan)
         self._scan_phase = (float(self._timing_rng.uniform(0.0, self._period))
                             if self._timed and self._period > 0 else 0.0)
         self._scan_k = 0 if self._scan_phase == 0.0 else -1
@@ -293,14 +328,15 @@ class SimBackend:
             ox, oy, oth, v, w = self._report
         else:
             ox, oy, oth, v, w = self._ox, self._oy, self._oth, self._v, self._w
-        pose = _new_pose(ox, oy, (oth + _PI) % _TAU - _PI)      # theta wrapped to [-pi, pi)
+        pose = Pose(ox, oy, (oth + _PI) % _TAU - _PI)      # theta wrapped to [-pi, pi)
         theta = (self._th + _PI) % _TAU - _PI
         # The step left a bound of the clearance: measured only if read (LazyTruth).
         lazy = self._clear_bound
+        clearance, _ = self._clear          # the exact value, or a bound when lazy
         truth: dict[str, Any] = {"x": self._x, "y": self._y, "theta": theta,
                                  "collided": self._collided}
         if not lazy:
-            truth["clearance"] = self._clear[0]
+            truth["clearance"] = clearance
         # a collision since the previous observation: truth["contact"] names it
         if len(self.events) > self._reported:
             e = self.events[self._reported]
@@ -311,7 +347,7 @@ class SimBackend:
         if lazy:
             return observation(self._t, pose, v, w, self._scan, self._stalled,
                                LazyTruth(truth, partial(self._measure_clearance, self._x,
-                                                        self._y), self._clear[0]),
+                                                        self._y), clearance),
                                self.inbox)
         return observation(self._t, pose, v, w, self._scan, self._stalled, truth, self.inbox)
 
@@ -324,7 +360,8 @@ class SimBackend:
         clear = self._collider.clearance(x, y)
         if self._clear_bound and self._x == x and self._y == y:
             self._clear, self._clear_bound = clear, False
-        return clear[0]
+        distance, _ = clear
+        return distance
 
     def command(self, cmd: Command) -> None:
         """Hold ``cmd`` (clamped to the limits) until the next command."""
@@ -342,13 +379,13 @@ class SimBackend:
         if not (math.isfinite(v) and math.isfinite(w)):
             raise BackendError(f"command is not finite: v={cmd.v}, omega={cmd.omega}")
         if self._queued:
-            self._send(_new_command(v, w))
+            self._send(Command(v, w))
         else:
-            self._cmd = _new_command(v, w)
+            self._cmd = Command(v, w)
 
     def _send(self, cmd: Command) -> None:
         if self._queued:
-            self._pending.append((self._t + self.profile.command_latency, cmd))
+            self._pending.append(_Queued(self._t + self.profile.command_latency, cmd))
         else:
             self._cmd = cmd
 
@@ -399,7 +436,7 @@ class SimBackend:
             if at > t1 - _EPS:
                 break
             if at > t + _EPS:
-                phases.append(new_phase(Phase, (at - t, v, 0.0, w, 0.0)))
+                phases.append(Phase(at - t, v, 0.0, w, 0.0))
                 t = at
             if nc <= nr:
                 d = self._desired
@@ -409,15 +446,15 @@ class SimBackend:
                 nc = self._next_control = nc + cycle
             else:
                 mark = len(phases)       # the report: the pose there, these speeds
-                self._report = (0.0, 0.0, 0.0, v, w)
+                self._report = _Report(0.0, 0.0, 0.0, v, w)
                 nr = self._next_report = self._following_report(nr)
             if (nc if nc <= nr else nr) - at > window:
-                while pending and pending[0][0] <= at + _EPS:
-                    self._desired = pending.popleft()[1]
+                while pending and pending[0].at <= at + _EPS:
+                    self._desired = pending.popleft().command
         if t1 > t:
-            phases.append(new_phase(Phase, (t1 - t, v, 0.0, w, 0.0)))
+            phases.append(Phase(t1 - t, v, 0.0, w, 0.0))
         if phases:
-            self._step(t1, last, held=(phases, v, w, mark))
+            self._step(t1, last, held=_Held(phases, v, w, mark))
         else:
             self._v, self._w = v, w
         self._release_scans(t1)
@@ -439,11 +476,11 @@ class SimBackend:
                                         prof.max_turn_decel, prof.ramp, cycle)
                     nc = self._next_control = nc + cycle
                 else:
-                    self._report = (self._ox, self._oy, self._oth, self._v, self._w)
+                    self._report = _Report(self._ox, self._oy, self._oth, self._v, self._w)
                     nr = self._next_report = self._following_report(nr)
                 if (nc if nc <= nr else nr) - at > window:
-                    while pending and pending[0][0] <= at + _EPS:
-                        self._desired = pending.popleft()[1]
+                    while pending and pending[0].at <= at + _EPS:
+                        self._desired = pending.popleft().command
                 continue
             if t >= t1 - _EPS:
                 break
@@ -472,11 +509,11 @@ class SimBackend:
         cycle = self.profile.sip_cycle
         while True:
             t = self._t
-            while pending and pending[0][0] <= t + _EPS:
-                self._cmd = pending.popleft()[1]
+            while pending and pending[0].at <= t + _EPS:
+                self._cmd = pending.popleft().command
             if cycle > 0:
                 while self._sip_j * cycle <= t + _EPS:
-                    self._report = (self._ox, self._oy, self._oth, self._v, self._w)
+                    self._report = _Report(self._ox, self._oy, self._oth, self._v, self._w)
                     self._sip_j += 1
             if t >= t1 - _EPS:
                 break
@@ -487,7 +524,7 @@ class SimBackend:
             if final:
                 end = t1
             switches = []
-            while pending and pending[0][0] < end - _EPS:
+            while pending and pending[0].at < end - _EPS:
                 switches.append(pending.popleft())
             self._step(end, final and last, switches)
         self._release_scans(t1)
@@ -504,11 +541,11 @@ class SimBackend:
             self._scan_queue = kept
 
     def _step(self, t1: float, final: bool,
-              switches: list[tuple[float, Command]] | None = None,
-              held: tuple[list[Phase], float, float, int] | None = None) -> None:
+              switches: list[_Queued] | None = None,
+              held: _Held | None = None) -> None:
         """Integrate from the current time to ``t1`` (collisions, scans).
 
-        The held command changes at each ``(time, command)`` of ``switches`` (queued
+        The held command changes at each :class:`_Queued` command of ``switches`` (queued
         commands taking effect inside the step). Only the ``final`` piece of a tick takes
         an oracle scan. A piece that touched nothing leaves a lower bound of the clearance
         (the centre moved at most its reach), measured exactly when it no longer covers a
@@ -528,13 +565,13 @@ class SimBackend:
                 if self._scan_lost(k, scan_at):
                     scan_at = math.inf  # not taken: the controller never sees it
         x0, y0, th0 = self._x, self._y, self._th
-        mark, marked = -1, (0.0, 0.0, 0.0)
+        mark, marked = -1, Pose(0.0, 0.0, 0.0)   # the true pose at the report
         if held is not None:        # the server loop's pieces, and where to note the pose
-            phases, v_end, w_end, mark = held
+            phases, v_end, w_end, mark = held.phases, held.v_end, held.w_end, held.mark
         elif switches:
             phases = []
             v, w, cmd, t = self._v, self._w, self._cmd, t0
-            for ta, nxt in switches:
+            for ta, nxt in switches:    # (arrival time, command)
                 if ta > t:
                     more, v, w = plan_phases(v, w, cmd.v, cmd.omega, ta - t, self.profile)
                     phases += more
@@ -555,28 +592,28 @@ class SimBackend:
             self._scanned(self._take_scan(x, y, th, scan_at))
             scanned = True
         if mark == 0:
-            marked = (x, y, th)
+            marked = Pose(x, y, th)
         # The centre moves at most sum(|v|max * duration): if the clearance covers that,
         # nothing can be touched this step and one distance query (at the end) suffices.
         reach = 0.0
-        for dur, v0, a_v, _, _ in phases:
-            reach += max(abs(v0), abs(v0 + a_v * dur)) * dur
-        safe = clear[0] - CONTACT >= reach
+        for ph in phases:
+            reach += ph.max_abs_v * ph.duration
+        distance, _ = clear
+        safe = distance - CONTACT >= reach
         if not safe and self._clear_bound:
             clear = self._collider.clearance(x, y)   # the sweep needs the exact clearance
-            safe = clear[0] - CONTACT >= reach
+            distance, _ = clear
+            safe = distance - CONTACT >= reach
         self._clear_bound = False
         for i, ph in enumerate(phases):
             pieces = [ph]
             if not scanned and t < scan_at < t + ph.duration:
                 cut = scan_at - t
-                dur, v0, a_v, w0, a_w = ph
-                pieces = [new_phase(Phase, (cut, v0, a_v, w0, a_w)),
-                          new_phase(Phase, (dur - cut, v0 + a_v * cut, a_v, w0 + a_w * cut,
-                                             a_w))]
+                pieces = [ph._replace(duration=cut),
+                          Phase(ph.duration - cut, ph.v_at(cut), ph.a_v, ph.w_at(cut), ph.a_w)]
             for piece in pieces:
                 if safe:
-                    x, y, th = integrate(x, y, th, piece, piece[0])
+                    x, y, th = integrate(x, y, th, piece, piece.duration)
                 else:
                     r = self._collider.sweep(x, y, th, piece, clear)
                     x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
@@ -584,24 +621,25 @@ class SimBackend:
                         contact = True
                         t += r.tau
                         break
-                t += piece[0]           # its duration
+                t += piece.duration
                 if not scanned and t >= scan_at - 1e-12:
                     self._scanned(self._take_scan(x, y, th, scan_at))
                     scanned = True
             if contact:
                 break
             if mark == i + 1:
-                marked = (x, y, th)
+                marked = Pose(x, y, th)
         if safe:
             if final and not self._lazy_clearance:
                 clear = self._settled_clearance(x, y)
             else:       # a lower bound: the centre moved at most `reach`
-                clear = (clear[0] - reach, clear[1])
+                distance, obs_i = clear
+                clear = (distance - reach, obs_i)
                 self._clear_bound = True
         if contact:
             self._v = self._w = 0.0
             if not self._stalled:
-                obs_i = clear[1]
+                _, obs_i = clear
                 self.events.append(SimEvent("collision", t, x, y, obs_i,
                                             self._obstacle(obs_i)[0]))
             self._stalled = self._collided = True
@@ -615,12 +653,13 @@ class SimBackend:
         self._update_odometry(x0, y0, th0)
         if mark >= 0:
             if contact:     # the robot rests at the contact, stopped
-                self._report = (self._ox, self._oy, self._oth, 0.0, 0.0)
+                self._report = _Report(self._ox, self._oy, self._oth, 0.0, 0.0)
             else:
-                xs, ys, c0, s0, ths = self._origin
-                dx, dy = marked[0] - xs, marked[1] - ys
-                self._report = (c0 * dx + s0 * dy, c0 * dy - s0 * dx, marked[2] - ths,
-                                self._report[3], self._report[4])
+                o = self._origin
+                dx, dy = marked.x - o.x, marked.y - o.y
+                self._report = self._report._replace(
+                    x=o.cos * dx + o.sin * dy, y=o.cos * dy - o.sin * dx,
+                    theta=marked.theta - o.theta)
 
     # ------------------------------------------------------------------ extras
     @property
@@ -685,10 +724,10 @@ class SimBackend:
     def _update_odometry(self, x0: float, y0: float, th0: float) -> None:
         noise = self.profile.odometry
         if not noise.enabled:
-            x0s, y0s, c0, s0, th0s = self._origin
-            dx0, dy0 = self._x - x0s, self._y - y0s
-            self._ox, self._oy = c0 * dx0 + s0 * dy0, c0 * dy0 - s0 * dx0
-            self._oth = self._th - th0s
+            o = self._origin
+            dx0, dy0 = self._x - o.x, self._y - o.y
+            self._ox, self._oy = o.cos * dx0 + o.sin * dy0, o.cos * dy0 - o.sin * dx0
+            self._oth = self._th - o.theta
             return
         c, s = math.cos(th0), math.sin(th0)
         dx, dy = self._x - x0, self._y - y0

@@ -32,7 +32,6 @@ __all__ = [
     "RAMPS",
     "RobotProfile",
     "integrate",
-    "new_phase",
     "plan_phases",
     "ramp_rate",
     "ramp_step",
@@ -302,9 +301,6 @@ class Phase(NamedTuple):
         return max(abs(self.v0), abs(self.v0 + self.a_v * self.duration))
 
 
-#: Make a Phase from a tuple, without the named tuple's Python-level __new__ (hot paths).
-new_phase = tuple.__new__
-
 #: How the firmware ramps towards a command (the profile's ``ramp``).
 RAMPS = ("firmware", "stage")
 
@@ -383,7 +379,7 @@ def plan_phases(v: float, w: float, v_cmd: float, w_cmd: float, dt: float,
         a_w = aw if t0 < tw else 0.0
         v0 = v_cmd if t0 >= tv > 0 else v + av * t0
         w0 = w_cmd if t0 >= tw > 0 else w + aw * t0
-        phases.append(new_phase(Phase, (t1 - t0, v0, a_v, w0, a_w)))
+        phases.append(Phase(t1 - t0, v0, a_v, w0, a_w))
         t0 = t1
     v_end = v_cmd if tv <= dt else v + av * dt
     w_end = w_cmd if tw <= dt else w + aw * dt

@@ -14,7 +14,6 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-from mdle.core.frozen import builder
 from mdle.core.messages import Inbox
 from mdle.core.pose import Pose
 
@@ -171,26 +170,18 @@ def observation(time: float, pose: Pose, v: float, omega: float, scan: Scan | No
                 ) -> Observation:
     """Return ``Observation(time, pose, v, omega, scan, stalled, truth=truth, inbox=inbox)``.
 
-    For a backend's observation at every tick: a frozen dataclass's ``__init__`` assigns
-    each field through ``object.__setattr__``, which costs more than the rest of a
-    simulated observation; this fills the same fields at once (motors enabled, no
-    battery reading).
+    A backend's observation at every tick: motors enabled, no battery reading.
     """
-    # positional: the fields in order (motors enabled, no battery reading)
-    return _new_observation(time, pose, v, omega, scan, stalled, True, None, truth, inbox)
+    return Observation(time, pose, v, omega, scan, stalled, truth=truth, inbox=inbox)
 
 
 def plain_scan(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray, stamp: float,
                max_range: float) -> Scan:
-    """Return ``Scan(ranges, bearings, valid, stamp, max_range)`` (no oracle data), fast.
+    """Return ``Scan(ranges, bearings, valid, stamp, max_range)``: no oracle data.
 
-    For a simulated ladar's scan at every tick (see :func:`observation` for why).
+    A simulated ladar's or a driver's scan at every tick.
     """
-    return _new_scan(ranges, bearings, valid, stamp, max_range, None, None)  # fields in order
-
-
-_new_observation = builder(Observation)
-_new_scan = builder(Scan)
+    return Scan(ranges, bearings, valid, stamp, max_range)
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from math import isfinite
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any, NamedTuple
 
 from mdle.core.backend import Scan
 from mdle.core.errors import Diagnostic, MdleError, Span
@@ -43,7 +43,7 @@ if TYPE_CHECKING:
 __all__ = ["TRACE_FORMAT", "TRACE_VERSION", "FLUSH_PERIOD", "TraceWriter", "Trace", "TraceError",
            "TraceWriteError", "SampleFormat", "LaserRecords", "read_jsonl_trace", "versions",
            "decode_ranges", "dumps", "start_record", "event_record", "end_record", "scan_ranges",
-           "encode_ranges", "laser_mount", "laser_timing"]
+           "encode_ranges", "LaserMount", "LaserTiming", "laser_mount", "laser_timing"]
 
 TRACE_FORMAT = "mdle-trace"
 TRACE_VERSION = 1
@@ -396,21 +396,30 @@ class TraceWriter:
         self.close()
 
 
-_LINE_HEAD = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,"omega":%.9g,'
-              '"cmd_v":%.9g,"cmd_omega":%.9g,"path":')
-
-
 class SampleFormat:
-    """Format samples as the trace's ``sample`` records, one JSON line each (fast).
+    """Format samples as the trace's ``sample`` records, one JSON line each: the one formatter.
 
-    Floats are formatted directly (9 significant digits, time in full); path strings and
-    diagnostic names are quoted once and cached. The trace writer and the MCAP recorder
-    share it, so ``/mdle/state`` carries exactly the trace's line.
+    Every value has one rule, whatever else the sample holds (docs/trace.md, "Numbers"):
+
+    * ``t``: the shortest decimal that reads back as the same double (``repr``);
+    * every other number (pose, speeds, command, lateness, scan age, clearance, true pose,
+      each diagnostic): 9 significant digits (``%.9g``); a flag among the diagnostics is
+      a number, 1 or 0;
+    * NaN and the infinities, in any field: ``null`` (strict JSON);
+    * a diagnostic that is not a number: its JSON value.
+
+    A line is one ``%`` format of a template made once per shape of line (path, flags,
+    which optional fields, diagnostic names). When every number is finite the template
+    formats the floats itself; otherwise the same template, made with ``%s`` slots, takes
+    each value already written by the rule above. Both come from :meth:`_template`, so
+    they give the same text for the same values. The trace writer and the MCAP recorder
+    share it: ``/mdle/state`` carries exactly the trace's line, and the recorder's
+    numbers are the line's (rounded by :func:`mdle.record.rounding.round9` as a reader of
+    the line gets them, NaN where the line has ``null``).
     """
 
     def __init__(self) -> None:
         self._paths: dict[str, str] = {}
-        self._diag: dict[tuple[str, ...], str] = {}
         self._lines: dict[tuple[Any, ...], str] = {}
 
     def quoted(self, path: str) -> str:
@@ -422,36 +431,7 @@ class SampleFormat:
 
     def __call__(self, sample: Sample) -> str:
         """Return the ``sample`` record of one tick, without a line end."""
-        try:
-            return self._line(sample)
-        except (TypeError, ValueError):  # a diagnostic that is not a number
-            return _dumps(_sample_dict(sample))
-
-    def _line(self, s: Sample) -> str:
-        """Format the sample with % formatting.
-
-        Raises TypeError or ValueError for a value that is not a number (the caller then
-        falls back to :func:`json.dumps`).
-        """
-        (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
-         diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
-        # one test for the fields every sample has: a sum of finite numbers is finite
-        # (short of overflow, which the slow path then handles too)
-        if not isfinite(t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness):
-            return _dumps(_sample_dict(s))
-        quoted = self._paths.get(path)
-        if quoted is None:
-            quoted = self.quoted(path)
-        # time keeps every digit (hardware clocks may be large); the rest 9 significant
-        line = ('{"type":"sample","t":%r,"x":%.9g,"y":%.9g,"theta":%.9g,"v":%.9g,'
-                '"omega":%.9g,"cmd_v":%.9g,"cmd_omega":%.9g,"path":%s,"lateness":%.9g,'
-                '"stalled":%s'
-                % (float(t), x, y, theta, v, omega, cmd_v, cmd_omega, quoted, lateness,
-                   "true" if stalled else "false"))
-        truth = None
-        if true_x is not None and true_y is not None and true_theta is not None:
-            truth = (_number(true_x), _number(true_y), _number(true_theta))
-        return self._tail(line, scan_age, clearance, collided, truth, diag)
+        return self.line_and_numbers(sample)[0]
 
     def line_and_numbers(self, s: Sample) -> tuple[str, tuple[float, ...] | None]:
         """Return the sample line and the numbers it writes with 9 significant digits.
@@ -459,106 +439,95 @@ class SampleFormat:
         The numbers are (x, y, theta, v, omega, cmd_v, cmd_omega, true_x, true_y,
         true_theta) as the sample has them (the true pose left out when the sample has
         none; a reader of the line gets each rounded to 9 significant digits), or None
-        when a number is not finite.
-
-        The line is one ``%`` format of a template made once per shape of line (path,
-        flags, which optional fields, diagnostic names): the same text as :meth:`__call__`.
+        when a value of the line is not a finite number (the line then writes each value
+        by the same rule, and the MCAP recorder takes the numbers from the sample).
         """
+        # the fields in Sample's order (mypy checks the names against the class)
         (t, x, y, theta, v, omega, cmd_v, cmd_omega, path, lateness, scan_age, stalled,
-         diag, clearance, collided, true_x, true_y, true_theta) = s[:18]
-        has_truth = False
+         diag, clearance, collided, tx, ty, tth) = s[:18]
+        truth = (tx, ty, tth) if tx is not None and ty is not None and tth is not None else None
+        key = (path, not stalled, scan_age is None, clearance is None,
+               None if collided is None else not collided, truth is not None,
+               tuple(diag) if diag else ())
+        numbers: tuple[float, ...] = (x, y, theta, v, omega, cmd_v, cmd_omega)
+        # every number of the line but the time, in the line's order
+        values: list[Any] = [x, y, theta, v, omega, cmd_v, cmd_omega, lateness]
+        if scan_age is not None:
+            values.append(scan_age)
+        if clearance is not None:
+            values.append(clearance)
+        if truth is not None:
+            values += truth
+            numbers += truth
+        if diag:
+            values += diag.values()
         try:
-            total = t + x + y + theta + v + omega + cmd_v + cmd_omega + lateness
-            if true_x is not None and true_y is not None and true_theta is not None:
-                has_truth = True
-                total += true_x + true_y + true_theta
-            if scan_age is not None:
-                total += scan_age
-            if clearance is not None:
-                total += clearance
-            dvalues = tuple(diag.values()) if diag else ()
-            if not isfinite(total + sum(dvalues)):
-                return self(s), None
-            key = (path, not stalled, scan_age is None, clearance is None,
-                   None if collided is None else not collided, has_truth,
-                   tuple(diag) if diag else ())
+            # a sum of finite numbers is finite (short of overflow, which goes the slow
+            # way and gives the same text)
+            fast = isfinite(t + sum(values))
+        except (TypeError, OverflowError):  # a value that is not a number, or a huge int
+            fast = False
+        if fast:
             template = self._lines.get(key)
             if template is None:
-                template = self._template(key)
-            args: tuple[Any, ...] = (float(t), x, y, theta, v, omega, cmd_v, cmd_omega,
-                                     lateness)
-            if scan_age is not None:
-                args += (scan_age,)
-            if clearance is not None:
-                args += (clearance,)
-            numbers: tuple[float, ...] = (x, y, theta, v, omega, cmd_v, cmd_omega)
-            if has_truth:
-                truth = (true_x, true_y, true_theta)
-                numbers += truth  # type: ignore[operator]  # not None: has_truth
-                line = template % (*args, *truth, *dvalues)
-            else:
-                line = template % (*args, *dvalues)
-        except (TypeError, ValueError):  # a diagnostic that is not a number
-            return self(s), None
-        return line, numbers
+                template = self._lines[key] = self._template(key, "%r", "%.9g")
+            return template % (float(t), *values), numbers
+        template = self._lines.get((key, "text"))
+        if template is None:
+            template = self._lines[(key, "text")] = self._template(key, "%s", "%s")
+        return template % (_time_text(t), *[_number(v) for v in values]), None
 
-    def _template(self, key: tuple[Any, ...]) -> str:
-        """Make (and keep) the ``%`` template of one shape of sample line."""
+    def _template(self, key: tuple[Any, ...], time: str, number: str) -> str:
+        """Make the ``%`` template of one shape of sample line.
+
+        ``time`` is the slot of ``t``, ``number`` the slot of every other number.
+        """
         path, running, no_age, no_clearance, not_collided, has_truth, names = key
-        parts = [_LINE_HEAD, self.quoted(path).replace("%", "%%"), ',"lateness":%.9g,"stalled":',
-                 "false" if running else "true"]
+        n = number
+        parts = ['{"type":"sample","t":', time, ',"x":', n, ',"y":', n, ',"theta":', n,
+                 ',"v":', n, ',"omega":', n, ',"cmd_v":', n, ',"cmd_omega":', n,
+                 ',"path":', self.quoted(path).replace("%", "%%"), ',"lateness":', n,
+                 ',"stalled":', "false" if running else "true"]
         if not no_age:
-            parts.append(',"scan_age":%.9g')
+            parts += [',"scan_age":', n]
         if not no_clearance:
-            parts.append(',"clearance":%.9g')
+            parts += [',"clearance":', n]
         if not_collided is not None:
             parts.append(',"collided":false' if not_collided else ',"collided":true')
         if has_truth:
-            parts.append(',"true_x":%.9g,"true_y":%.9g,"true_theta":%.9g')
+            parts += [',"true_x":', n, ',"true_y":', n, ',"true_theta":', n]
         if names:
             parts.append(',"diag":{%s}' % ",".join(
-                [self.quoted(k).replace("%", "%%") + ":%.9g" for k in names]))
-        template = self._lines[key] = "".join(parts) + "}"
-        return template
-
-    def _tail(self, line: str, scan_age: Any, clearance: Any, collided: Any,
-              truth: tuple[str, str, str] | None, diag: Mapping[str, Any]) -> str:
-        """Append the optional fields to a sample line and close it."""
-        if scan_age is not None:
-            line += ',"scan_age":' + _number(scan_age)
-        if clearance is not None:
-            line += ',"clearance":' + _number(clearance)
-        if collided is not None:
-            line += ',"collided":true' if collided else ',"collided":false'
-        if truth is not None:
-            line += ',"true_x":' + truth[0] + ',"true_y":' + truth[1] + ',"true_theta":' + truth[2]
-        if diag:
-            # one format for all values, the keys' template made once per set of names
-            keys = tuple(diag)
-            template = self._diag.get(keys)
-            if template is None:
-                template = self._diag[keys] = ',"diag":{%s}}' % ",".join(
-                    [self.quoted(k).replace("%", "%%") + ":%.9g" for k in keys])
-            values = tuple(diag.values())
-            if isfinite(sum(values)):
-                return line + template % values
-            q = self.quoted
-            line += ',"diag":{%s}' % ",".join([q(k) + ":" + _number(d)
-                                               for k, d in diag.items()])
-        return line + "}"
+                [self.quoted(k).replace("%", "%%") + ":" + n for k in names]))
+        return "".join(parts) + "}"
 
 
-def laser_mount(backend: object) -> tuple[float, float, float]:
+class LaserMount(NamedTuple):
+    """The ladar's pose in the robot frame: m, m, rad."""
+
+    x: float = 0.0
+    y: float = 0.0
+    theta: float = 0.0
+
+
+class LaserTiming(NamedTuple):
+    """Seconds between scans and between two beams of a scan (0: unknown)."""
+
+    scan_time: float = 0.0
+    time_increment: float = 0.0
+
+
+def laser_mount(backend: object) -> LaserMount:
     """Return a backend's ladar pose in the robot frame (x, y, theta), (0, 0, 0) if unknown."""
     mount = getattr(backend, "laser_mount", None)
     try:
         x, y, th = (float(m) for m in mount)  # type: ignore[union-attr]
     except (TypeError, ValueError):
-        return (0.0, 0.0, 0.0)
-    return (x, y, th)
+        return LaserMount()
+    return LaserMount(x, y, th)
 
 
-def laser_timing(backend: object, rate: float) -> tuple[float, float]:
+def laser_timing(backend: object, rate: float) -> LaserTiming:
     """Return (scan_time, time_increment) in seconds for a backend's scans, 0 when unknown.
 
     ``scan_time`` is the time between scans: the backend's ``laser_timing`` period, or
@@ -570,13 +539,13 @@ def laser_timing(backend: object, rate: float) -> tuple[float, float]:
     try:
         period, increment = (float(v) for v in timing)  # type: ignore[union-attr]
     except (TypeError, ValueError):
-        return (0.0, 0.0)
+        return LaserTiming()
     if not (math.isfinite(period) and period >= 0 and math.isfinite(increment)
             and increment >= 0):
-        return (0.0, 0.0)
+        return LaserTiming()
     if period == 0.0 and rate > 0:
         period = 1.0 / rate
-    return (period, increment)
+    return LaserTiming(period, increment)
 
 
 def scan_ranges(scan: "Scan") -> "np.ndarray":
@@ -614,11 +583,10 @@ class LaserRecords:
     new scan. ``mount`` is the ladar's pose in the robot frame.
     """
 
-    def __init__(self, mount: tuple[float, float, float] = (0.0, 0.0, 0.0),
-                 timing: tuple[float, float] = (0.0, 0.0)) -> None:
-        self.mount = mount
-        #: (scan_time, time_increment), s: between scans and between beams (0: unknown).
-        self.timing = timing
+    def __init__(self, mount: LaserMount | None = None,
+                 timing: LaserTiming | None = None) -> None:
+        self.mount = mount if mount is not None else LaserMount()
+        self.timing = timing if timing is not None else LaserTiming()
         self.last: Scan | None = None
         self._geometry: tuple[Any, ...] | None = None
         self._bearings: Any = None
@@ -628,13 +596,14 @@ class LaserRecords:
         """Return the ``laser`` record for ``scan``'s beams."""
         b = scan.bearings
         n = len(b)
-        a0 = float(b[0]) - self.mount[2] if n else 0.0
-        a1 = float(b[-1]) - self.mount[2] if n else 0.0
+        a0 = float(b[0]) - self.mount.theta if n else 0.0
+        a1 = float(b[-1]) - self.mount.theta if n else 0.0
         return {"type": "laser", "frame": "laser", "mount": list(self.mount),
                 "angle_min": a0, "angle_max": a1,
                 "angle_increment": (a1 - a0) / (n - 1) if n > 1 else 0.0, "count": n,
                 "range_min": 0.0, "range_max": float(scan.max_range),
-                "scan_time": self.timing[0], "time_increment": self.timing[1]}
+                "scan_time": self.timing.scan_time,
+                "time_increment": self.timing.time_increment}
 
     def changed(self, scan: "Scan") -> dict[str, Any] | None:
         """Return the ``laser`` record when ``scan``'s geometry is new, else None.
@@ -677,26 +646,22 @@ class LaserRecords:
 
 
 def _number(value: Any) -> str:
-    """Format a finite number with 9 significant digits, NaN and infinities as ``null``."""
-    return "%.9g" % value if isfinite(value) else "null"
+    """Write a number with 9 significant digits, NaN and infinities as ``null``.
+
+    Anything that is not a number (a diagnostic may be) as its JSON value.
+    """
+    try:
+        return "%.9g" % value if isfinite(value) else "null"
+    except (TypeError, ValueError, OverflowError):  # not a float, or an int beyond one
+        return _dumps(value)
 
 
-def _sample_dict(s: Sample) -> dict[str, Any]:
-    d: dict[str, Any] = {"type": "sample", "t": s.time, "x": s.x, "y": s.y, "theta": s.theta,
-                         "v": s.v, "omega": s.omega, "cmd_v": s.cmd_v,
-                         "cmd_omega": s.cmd_omega, "path": s.path, "lateness": s.lateness,
-                         "stalled": bool(s.stalled)}
-    if s.scan_age is not None:
-        d["scan_age"] = s.scan_age
-    if s.clearance is not None:
-        d["clearance"] = s.clearance
-    if s.collided is not None:
-        d["collided"] = bool(s.collided)
-    if s.true_x is not None:
-        d.update(true_x=s.true_x, true_y=s.true_y, true_theta=s.true_theta)
-    if s.diag:
-        d["diag"] = dict(s.diag)
-    return d
+def _time_text(value: Any) -> str:
+    """Write a tick's time in full (the shortest repr that reads back), ``null`` if not finite."""
+    try:
+        return repr(float(value)) if isfinite(value) else "null"
+    except (TypeError, ValueError, OverflowError):
+        return _dumps(value)
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any
+from typing import Any, NamedTuple
 
 from mdle.atoms.registry import Context
 from mdle.core.backend import STOP, Backend, ClockMode, Command, Observation, clearance_floor
@@ -166,6 +166,21 @@ class _Frame:
         self.memory: Mapping[Any, Any] = _NO_MEMORY
 
 
+class _Check(NamedTuple):
+    """What a tick tests of an active level that can fire: its timer and its interrupt.
+
+    Copied out of the frame and its slot once per change of the stack, so that the tick
+    reads one tuple per level.
+    """
+
+    level: int
+    start: float
+    limit: float
+    test: Any
+    slot: _Slot
+    memory: Mapping[Any, Any]
+
+
 class Scheduler:
     """Runs one element on a backend, tick by tick.
 
@@ -211,10 +226,9 @@ class Scheduler:
         self._root = _Slot(element, element.label, element.label, 0)
         self._pacer = Pacer() if realtime and backend.clock is ClockMode.SIMULATED else None
         self._stack: list[_Frame] = []
-        # (level, start, limit, test, slot, memory) of each active level that can fire,
-        # outermost first; rebuilt after the stack changes (None: stale)
-        self._checks: tuple[tuple[int, float, float, Any, _Slot, Mapping[Any, Any]], ...
-                            ] | None = ()
+        # each active level that can fire, outermost first; rebuilt after the stack
+        # changes (None: stale)
+        self._checks: tuple[_Check, ...] | None = ()
         self._events: list[Event] = []
         self._terminations: list[Termination] = []
         self._ticks = 0
@@ -417,15 +431,14 @@ class Scheduler:
         if self.observers:
             trace = ctx.cache.get("trace")
             scan = obs.scan
-            # every field given, so the tuple is built directly (the named tuple's own
-            # __new__ is a Python function: a frame per tick for nothing)
-            sample = _new_sample(Sample, (
+            clearance, collided, true_x, true_y, true_theta = (
+                _truth_fields(truth) if truth else _NO_TRUTH)
+            sample = Sample(
                 now, pose.x, pose.y, pose.theta, obs.v, obs.omega, cmd.v, cmd.omega,
                 stack[-1].slot.path if stack else "", lateness,
                 None if scan is None else now - scan.stamp, obs.stalled,
                 MappingProxyType(dict(trace)) if trace else _EMPTY,
-                *(_truth_fields(truth) if truth else _NO_TRUTH), scan, contact,
-            ))
+                clearance, collided, true_x, true_y, true_theta, scan, contact)
             for o in self.observers:
                 o.on_tick(sample)
         if not running:
@@ -484,25 +497,26 @@ class Scheduler:
             checks = self._checks
             if checks is None:
                 checks = self._checks = tuple(
-                    (f.slot.level, f.start, f.slot.limit, f.slot.test, f.slot, f.memory)
+                    _Check(f.slot.level, f.start, f.slot.limit, f.slot.test, f.slot, f.memory)
                     for f in stack if f.slot.tested)
             fired = -1
             cause = Cause.TIMER
             checked: _Slot | None = None
             t = 0.0
             try:
-                for lvl, start, limit, test, checked, memory in checks:  # noqa: B007
-                    if lvl < level:
+                for check in checks:
+                    if check.level < level:
                         continue
-                    t = now - start
-                    if t >= limit:  # the timer wins when both hold
-                        fired = lvl
+                    checked = check.slot
+                    t = now - check.start
+                    if t >= check.limit:  # the timer wins when both hold
+                        fired = check.level
                         break
-                    if test is not None:
+                    if check.test is not None:
                         ctx.t = t
-                        ctx.memory = memory
-                        if test(ctx):
-                            fired = lvl
+                        ctx.memory = check.memory
+                        if check.test(ctx):
+                            fired = check.level
                             cause = Cause.INTERRUPT
                             break
             except MdleError:
@@ -748,7 +762,6 @@ def _stop_sample(obs: Observation) -> Sample:
 
 
 _NO_TRUTH = (None, None, None, None, None)
-_new_sample = tuple.__new__
 
 
 def _collision(contact: Mapping[str, Any], path: str) -> Collision:
@@ -758,7 +771,7 @@ def _collision(contact: Mapping[str, Any], path: str) -> Collision:
                      str(contact.get("kind", "")), int(contact.get("index", -1)), path)
 
 
-def _truth_fields(truth: Mapping[str, Any]) -> tuple[Any, ...]:
+def _truth_fields(truth: Mapping[str, Any]) -> tuple[Any, Any, Any, Any, Any]:
     """(clearance, collided, x, y, theta) from an observation's ground truth."""
     return (truth.get("clearance"), truth.get("collided"), truth.get("x"), truth.get("y"),
             truth.get("theta"))

@@ -105,7 +105,7 @@ def format_summary(rows: Sequence[dict[str, Any]], axis_names: Sequence[str] | N
             f"{'|d-rc| p50':>10} {'p90':>7} {'max':>7} {'closest':>8}")
     for axis in names or ["(all)"]:
         label = axis.removeprefix("param_")
-        lines += ["", f"by {label}" + (" (m)" if False else ""),
+        lines += ["", f"by {label}",
                   f"{label:>12} {head}"]
         groups = summarise(rows, axis) if axis != "(all)" else [
             {**summarise([{**r, "_": 0} for r in rows], "_")[0], "value": "all"}]

@@ -108,3 +108,24 @@ def test_valid_points_are_the_finite_rows_of_scan_points() -> None:
         got = valid_points(r, b, v)
         assert got.shape == expect.shape and np.array_equal(got, expect)
         assert np.array_equal(valid_points(r, np.array(b), v), expect)  # writable bearings
+
+
+def test_an_array_written_behind_its_flag_is_computed_again() -> None:
+    # the owner may make a read-only array writable, write and make it read-only again:
+    # the flag is the same before and after, the contents are not
+    memo, calls = _counting()
+    b = _fixed(np.arange(4.0))
+    assert memo(b, 1) == 6.0
+    b.setflags(write=True)
+    b[0] = 10.0
+    b.setflags(write=False)
+    assert memo(b, 1) == 16.0 and len(calls) == 2
+    assert memo(b, 1) == 16.0 and len(calls) == 2  # and remembered again as it is now
+
+
+def test_an_array_reshaped_in_place_is_computed_again() -> None:
+    memo = ByIdentity(lambda a: a.shape)
+    b = _fixed(np.arange(4.0))
+    assert memo(b) == (4,)
+    b.shape = (2, 2)  # same bytes, same flag, another array to any function of it
+    assert memo(b) == (2, 2)

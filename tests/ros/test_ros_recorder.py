@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import errno
+import json
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -198,3 +199,60 @@ def test_ticks_are_encoded_in_batches_and_an_event_flushes_them(tmp_path: Path,
     assert doctor(tmp_path / "r.mcap")["/odom"] == 21
     back = read_trace(tmp_path / "r.mcap")
     assert len(back.samples) == 21 and back.end is not None
+
+
+class _Gappy(_Robot):
+    """The simulator, with ground truth, whose speed and turn-rate readings are missing
+    (NaN) every third tick and whose true clearance is infinite every seventh."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._k = 0
+
+    def observe(self) -> Observation:
+        obs = self._sim.observe()
+        self._k += 1
+        if self._k % 3 == 0:
+            obs = replace(obs, v=math.nan, omega=math.nan)
+        if self._k % 7 == 0:
+            obs = replace(obs, truth={**obs.truth, "clearance": math.inf})
+        return obs
+
+
+def test_a_run_with_nan_fields_gives_the_trace_s_numbers_to_the_recording(
+        tmp_path: Path) -> None:
+    """One formatter: a sample with a NaN or an infinity writes every other number with
+    9 significant digits (null for those), and the recording holds the numbers of the
+    trace's lines: the export of the trace gives the same messages, byte for byte."""
+    from mcap.reader import make_reader
+
+    from mdle.record.export import export_trace
+
+    element = load_text(PLAN, "<test>").elements["hug"]
+    header = {"program": {"element": "hug"}, "backend": "sim", "rate": 10.0}
+    rec = McapRecorder(tmp_path / "r.mcap", header)
+    trace = TraceWriter(tmp_path / "t.jsonl", header)
+    sch = Scheduler(element, _Gappy(), 10.0, [trace, rec])
+    while sch.tick():
+        pass
+    lines = [json.loads(line) for line in (tmp_path / "t.jsonl").read_text().splitlines()]
+    samples = [r for r in lines if r["type"] == "sample"]
+    gappy = [r for r in samples if r["v"] is None]
+    assert len(gappy) >= 20 and any(r["clearance"] is None for r in samples)
+    for r in samples:
+        numbers = [r[k] for k in ("x", "y", "v", "omega", "cmd_v", "cmd_omega", "lateness",
+                                  "scan_age", "clearance", "true_x", "true_y", "true_theta")]
+        numbers += list(r.get("diag", {}).values())
+        for n in numbers:
+            if isinstance(n, float):
+                assert len(repr(n).lstrip("-").replace(".", "").split("e")[0]
+                           .lstrip("0")) <= 9, r
+    export_trace(tmp_path / "t.jsonl", tmp_path / "e.mcap")
+
+    def messages(p: Path) -> list[tuple[str, int, bytes]]:
+        with open(p, "rb") as f:
+            found = [(c.topic, m.sequence, m.data)
+                     for _, c, m in make_reader(f).iter_messages(log_time_order=False)]
+        return sorted(found)
+
+    assert messages(tmp_path / "e.mcap") == messages(tmp_path / "r.mcap")

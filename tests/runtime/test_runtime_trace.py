@@ -327,3 +327,29 @@ def test_the_fast_sample_line_is_the_trace_line(changes: dict[str, Any], finite:
                 keys += ["true_x", "true_y", "true_theta"]
             assert values == tuple(getattr(s, k) for k in keys)
             assert tuple(float("%.9g" % v) for v in values) == tuple(rec[k] for k in keys)
+
+
+@pytest.mark.parametrize("changes", [
+    {}, {"v": math.nan}, {"x": math.inf, "true_y": -math.inf},
+    {"diag": {"side_range": math.nan, "mode": 2.0, "u": 0.1234567891234}},
+    {"diag": {"label": "not a number", "side_range": 1.0000000004}},
+    {"clearance": math.nan, "stalled": True},
+])
+def test_every_value_of_a_sample_line_has_one_rounding(changes: dict[str, Any]) -> None:
+    """t in full; every other number 9 significant digits; NaN and infinities null; a
+    diagnostic that is not a number its JSON value: whatever else the line holds."""
+    from mdle.record.trace import SampleFormat
+
+    s = _sample(**changes)
+    rec = json.loads(SampleFormat()(s))
+    assert rec["t"] == s.time  # every digit
+    for key in ("x", "y", "theta", "v", "omega", "cmd_v", "cmd_omega", "lateness",
+                "scan_age", "clearance", "true_x", "true_y", "true_theta"):
+        value = getattr(s, key)
+        assert rec[key] == (float("%.9g" % value) if math.isfinite(value) else None), key
+    for name, value in s.diag.items():
+        if isinstance(value, str):
+            assert rec["diag"][name] == value
+        else:
+            assert rec["diag"][name] == (float("%.9g" % value) if math.isfinite(value)
+                                         else None), name
