@@ -45,14 +45,18 @@ class Interrupt:
     ``source`` is the canonical text (for ``mdle show``, traces and messages);
     ``never`` marks the interrupt that never fires, so the runtime can skip it.
     ``remember`` lists the values the condition reads as they were when the element
-    started (``at_start(...)``): a key, and the function the runtime evaluates once, at
-    the start, to store under it in ``ctx.memory``.
+    started (``at_start(...)``, and the first reading of ``lowest``, ``highest``,
+    ``ever``): a key, and the function the runtime evaluates once, at the start, to
+    store under it in ``ctx.memory``, inner before outer. ``track`` lists the running
+    memories (``lowest(e)``...): a key, the function read, and the fold that joins
+    each tick's reading to the value held, applied before each test.
     """
 
     test: Callable[[Context], bool]
     source: str
     never: bool = False
     remember: tuple[tuple[Any, Callable[[Context], Any]], ...] = ()
+    track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...] = ()
     #: The conditions joined by a top-level ``or`` (``at_goal or stalled``): each one's
     #: text and test, so that the runtime can say which fired. Empty for one condition.
     parts: tuple[tuple[str, Callable[[Context], bool]], ...] = ()

@@ -81,7 +81,7 @@ class _Slot:
 
     __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "limit",
                  "test", "source", "_children", "repeat", "step", "start", "args", "alpha_v",
-                 "alpha_w", "law", "span", "tested", "sends", "remember")
+                 "alpha_w", "law", "span", "tested", "sends", "remember", "track")
 
     def __init__(self, node: Element, path: str, label: str, level: int) -> None:
         self.node = node
@@ -100,6 +100,8 @@ class _Slot:
         # the values the interrupt reads as they were at the start (at_start): evaluated
         # once when the element starts, kept in its frame
         self.remember = () if self.test is None else node.interrupt.remember
+        # the running memories (lowest, highest, ever): folded before each test
+        self.track = () if self.test is None else node.interrupt.track
         self.span: Span | None = node.span
         self._children: tuple[_Slot, ...] | None = ()
         self.repeat = False
@@ -138,6 +140,18 @@ class _Slot:
         """Drop the child slots of a string that has ended (made again if it restarts)."""
         if not self.is_atom and self._children:
             self._children = None
+
+
+def _fold(track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...],
+          ctx: Context, memory: Any) -> None:
+    """Join this tick's readings to the running memories, inner before outer.
+
+    Every tick the element runs, whatever its condition would skip; a second test in
+    the same tick (after an element ended) folds the same readings again, which
+    changes nothing.
+    """
+    for key, read, fold in track:
+        memory[key] = fold(memory[key], read(ctx))
 
 
 def _child_slots(node: StringNode, path: str, level: int) -> list[_Slot]:
@@ -500,6 +514,8 @@ class Scheduler:
                     if test is not None:
                         ctx.t = t
                         ctx.memory = memory
+                        if checked.track:
+                            _fold(checked.track, ctx, memory)
                         if test(ctx):
                             fired = lvl
                             cause = Cause.INTERRUPT

@@ -44,6 +44,8 @@ def ends(text: str, until: float = 10.0) -> list[tuple[str, str, float]]:
     "clear(bearing_to(8 m, 0 m), min(dist_to(8 m, 0 m), 3 m))",
     "dist_to(8 m, 0 m) < at_start(dist_to(8 m, 0 m)) - 0.5 m",
     "abs(theta - at_start(theta)) > 90 deg",
+    "ever(x > 1 m) and dist_to(8 m, 0 m) < lowest(dist_to(8 m, 0 m)) + 0.1 m",
+    "highest(dist_to(at_start(x), at_start(y))) > 1 m and lowest(range(0 deg)) < 0.5 m",
 ])
 def test_expressions_read_each_tick_check_clean(condition: str) -> None:
     program = load_text(f"atom a = (go(0.3 m/s), {condition}, 20 s)\nrun a\n")
@@ -64,6 +66,10 @@ def test_expressions_read_each_tick_check_clean(condition: str) -> None:
     ("abs(x, y) > 1 m", "`abs` takes one value, found 2"),
     ("at_start(at_start(x)) > 1 m", "`at_start` inside `at_start`: the inner one adds nothing"),
     ("at_start(x) > 1 s", "cannot compare a length with a time"),
+    ("ever(x) and stalled", "`ever` needs a condition, found a length"),
+    ("lowest(stalled) > 0", "`lowest` needs a number, found a condition"),
+    ("highest(x, y) > 1 m", "`highest` takes one value, found 2"),
+    ("lowest(x) > 1 s", "cannot compare a length with a time"),
 ])
 def test_mistakes_in_expressions_get_one_message(condition: str, message: str) -> None:
     got, _ = error(f"atom a = (go(0.3 m/s), {condition}, 20 s)\nrun a\n")
@@ -153,6 +159,61 @@ def test_a_string_remembers_at_its_own_start() -> None:
     text = ("atom leg = (go(1 m/s), never, 0.3 s)\n"
             "plan main = ((leg, leg, leg, leg)..., x > at_start(x) + 0.65 m, 10 s)\n")
     assert ends(text)[-1] == ("main", "interrupt", 0.7)
+
+
+# ------------------------------------------------------------------ lowest, highest, ever
+
+
+def test_highest_and_lowest_follow_the_whole_run_of_the_element() -> None:
+    # out 1 m, then back: the string ends 0.5 m short of the farthest x it reached
+    text = ("atom out = (go(1 m/s), never, 1 s)\natom back = (go(-1 m/s), never, 5 s)\n"
+            "plan main = ((out, back), x < highest(x) - 0.45 m, 10 s)\n")
+    assert ends(text)[-1] == ("main", "interrupt", 1.5)
+    text = text.replace("x < highest(x) - 0.45 m", "lowest(x) < -0.25 m")
+    assert ends(text)[-1] == ("main", "interrupt", 2.3)
+
+
+def test_running_memories_are_read_at_every_tick_whatever_and_skips() -> None:
+    # `t > 1.2 s and ...` reads the right side only from 1.2 s on (x = 0.8 m): highest
+    # still holds the 1 m reached at 1 s, so the string ends at x = 0.5 m, not 0.3 m
+    text = ("atom out = (go(1 m/s), never, 1 s)\natom back = (go(-1 m/s), never, 5 s)\n"
+            "plan main = ((out, back), t > 1.2 s and x < highest(x) - 0.45 m, 10 s)\n")
+    assert ends(text)[-1] == ("main", "interrupt", 1.5)
+
+
+def test_ever_latches_a_condition_that_held_at_some_tick() -> None:
+    text = ("atom out = (go(1 m/s), never, 1 s)\natom back = (go(-1 m/s), never, 5 s)\n"
+            "plan main = ((out, back), ever(x > 0.75 m) and x < 0.25 m, 10 s)\n")
+    assert ends(text)[-1] == ("main", "interrupt", 1.8)
+    # the same without ever can never hold: the string runs to its end
+    assert ends(text.replace("ever(x > 0.75 m)", "x > 0.75 m"))[-1] == ("main", "completed", 6.0)
+
+
+def test_each_run_of_an_element_starts_its_running_memories_afresh() -> None:
+    text = ("atom step = (go(1 m/s), highest(x) - lowest(x) > 0.45 m, 10 s)\n"
+            "plan main = ((step, step, step), never, 10 s)\n")
+    assert ends(text)[:3] == [("main/step", "interrupt", 0.5), ("main/step#2", "interrupt", 1.0),
+                              ("main/step#3", "interrupt", 1.5)]
+
+
+def test_running_memories_evaluate_the_same_in_generated_code_and_closures() -> None:
+    from mdle.lang import conditions
+
+    program = load_text("atom a = (go(1 m/s), ever(x > 1 m) and dist_to(8 m, 0 m) < "
+                        "lowest(dist_to(8 m, 0 m)) + 0.1 m or highest(range(0 deg)) > "
+                        "at_start(x), 10 s)\nrun a\n")
+    interrupt = program.elements["a"].interrupt
+    assert [fold for _, _, fold in interrupt.track] == [
+        conditions.FOLDS[n] for n in ("ever", "lowest", "highest")]
+    node = interrupt.__dict__["_node"]
+    ctx = Context(Observation(0.0, Pose(1.5, 0.5, 0.2), scan=_wall_scan(3.0)), 0.0, 0.1, LIMITS)
+    ctx.memory = {key: fn(ctx) for key, fn in interrupt.remember}
+    generated = conditions._compile(node, as_bool=True)
+    interpreted = conditions._interpret(node, as_bool=True)
+    assert generated(ctx) is interpreted(ctx) is True
+    for held in ctx.memory:
+        ctx.memory[held] = 0.0 if ctx.memory[held] is not True else False
+    assert generated(ctx) is interpreted(ctx) is False
 
 
 def test_huge_expressions_evaluate_the_new_nodes_as_the_generated_code_does() -> None:
