@@ -240,9 +240,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     from mdle.errors import Diagnostic, MdleError
+    from mdle.installed_laws import registry_option
     from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
-    from mdle.userlaws import laws_option
 
     if args.plot:
         writable_output(args.plot, "--plot", (".png", ".svg", ".pdf"))
@@ -258,9 +258,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     check_ros2_options(args)
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
         else known_robot(None, None, args.robot if args.backend == "ros2" else None)
+    registry = registry_option(args.laws)
     try:
-        program = load_program(args.plan, laws_option(args.laws), settings=args.overrides,
-                               robot=robot)
+        program = load_program(args.plan, registry, settings=args.overrides, robot=robot)
     except MdleError as err:
         from mdle.lang import yaml_as_plan
 
