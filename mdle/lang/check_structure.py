@@ -15,17 +15,28 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from types import MappingProxyType
 from typing import Any, TypeVar
 
 from mdle.atoms.registry import LawSpec
 from mdle.errors import Diagnostic, Severity, Span
+from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
 from mdle.lang.check_state import _MISSING, MAX_NESTING, CheckerState, Env, _Abort, _freeze, _short
-from mdle.lang.dimensions import Quantity, Symbol, Value
+from mdle.lang.dimensions import Quantity, Symbol, Value, show_value
 from mdle.lang.format import format_expr
-from mdle.lang.program import AtomNode, Element, Interrupt, MessageUse, Send, StringKind, StringNode
+from mdle.lang.program import (
+    AtomNode,
+    Element,
+    Interrupt,
+    LiveArg,
+    LiveArgs,
+    MessageUse,
+    Send,
+    StringKind,
+    StringNode,
+)
 from mdle.lang.treebuild import builder
 from mdle.messages import POSE_CHANNEL
 
@@ -162,15 +173,20 @@ class StructureChecks(CheckerState):
         law = self._lookup(u.name)
         assert isinstance(law, LawSpec)
         failed = False
+        given = u.args if isinstance(u, st.Call) else ()
+        read: dict[str, cond.Typed] = {}  # the arguments read while the atom runs
+        outer, self._live_args = self._live_args, (
+            read if any(self._is_live(a.value, env) for a in given) else None)
         try:
-            args = self.bind(u.name, self._slots_of_spec(law), u.args if isinstance(u, st.Call)
-                             else (), env, u.span)
+            args = self.bind(u.name, self._slots_of_spec(law), given, env, u.span)
             self._note_names(law, args, u.span)
         except _Abort:
             failed = True
         else:
             if self._scaling is not expr:  # a scaled atom is checked once scaled
                 self._within_limits(law, args, u)
+        finally:
+            self._live_args = outer
         sends: list[Send] = []
         for item in expr.items[3:]:
             assert isinstance(item, st.Call)
@@ -179,8 +195,30 @@ class StructureChecks(CheckerState):
             except _Abort:
                 failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
+        live = None if failed or not read else self._live(law, read, given, env)
         return _new_atom(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
-                         (1.0, 1.0), expr.span, tuple(sends))
+                         (1.0, 1.0), expr.span, tuple(sends), live)
+
+    def _live(self, law: LawSpec, read: dict[str, cond.Typed], given: Sequence[st.Argument],
+              env: Env) -> LiveArgs | None:
+        """Compile the arguments of ``law`` read while the atom runs (constants stay fixed)."""
+        shown = {k: show_value(v) for k, v in env.items()
+                 if not (isinstance(v, Quantity) and math.isnan(v.value))}
+        texts = {}
+        for i, a in enumerate(given):
+            name = a.name if a.name is not None else (
+                law.params[i].name if i < len(law.params) else None)
+            if name is not None:
+                texts[name] = format_expr(a.value, shown)
+        parts = {name: t for name, t in read.items() if not t.is_const}
+        if not parts:
+            return None
+        memory = cond.all_memories(list(parts.values()))
+        return LiveArgs(
+            tuple(LiveArg(name, texts.get(name, name), t.call(), law.param(name))
+                  for name, t in parts.items()),
+            tuple((m.key, m.read) for m in memory),
+            tuple((m.key, m.read, m.fold) for m in memory if m.fold is not None))
 
     def _send(self, call: st.Call, env: Env) -> Send:
         """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on."""

@@ -242,6 +242,15 @@ def memories(t: Typed) -> tuple[Memory, ...]:
     return tuple(found)
 
 
+def all_memories(parts: list[Typed]) -> tuple[Memory, ...]:
+    """Return what several expressions remember (a node they share, once), inner first."""
+    found: dict[int, Memory] = {}
+    for t in parts:
+        for m in memories(t):
+            found.setdefault(id(m.key), m)
+    return tuple(found.values())
+
+
 def remembers(t: Typed) -> tuple[tuple[Remembered, Fn], ...]:
     """Return each value a condition remembers at the start: its key and its function."""
     return tuple((m.key, m.read) for m in memories(t))

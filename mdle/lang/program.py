@@ -28,6 +28,8 @@ __all__ = [
     "MessageUse",
     "NEVER",
     "AtomNode",
+    "LiveArg",
+    "LiveArgs",
     "StringNode",
     "StringKind",
     "Element",
@@ -111,13 +113,43 @@ class StringKind(enum.Enum):
 
 
 @dataclass(frozen=True)
+class LiveArg:
+    """A control law's argument read while its atom runs: ``theta`` of ``heading(theta + 90 deg)``.
+
+    ``read(ctx)`` evaluates it (SI), ``text`` is its canonical text, ``param`` the law's
+    parameter it is given to (its declared range is checked at each reading).
+    """
+
+    name: str
+    text: str
+    read: Callable[[Context], Any]
+    param: Any
+
+
+@dataclass(frozen=True)
+class LiveArgs:
+    """The arguments of an atom's control law that are read while it runs.
+
+    ``args`` lists them; ``remember`` and ``track`` are what their expressions remember
+    (``at_start``, ``lowest``...), as for :class:`Interrupt`: evaluated when the atom
+    starts, and folded at each tick before the arguments are read.
+    """
+
+    args: tuple[LiveArg, ...]
+    remember: tuple[tuple[Any, Callable[[Context], Any]], ...] = ()
+    track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...] = ()
+
+
+@dataclass(frozen=True)
 class AtomNode:
     """An atom sigma = (U, xi, T), instantiated and ready to run.
 
     ``label`` names it in element paths (``patrol/cruise``): the atom's name, or the
     control law's name for an atom written inline. ``args`` are the law's arguments in
     SI (defaults filled in). ``scale`` is the scaled atom's alpha for the (v, omega)
-    channels; the timer already includes beta.
+    channels; the timer already includes beta. ``live`` holds the arguments read while
+    the atom runs (an expression of sensor functions, ``at_start``...), whose place in
+    ``args`` is a NaN; None when every argument is fixed.
     """
 
     label: str
@@ -128,6 +160,7 @@ class AtomNode:
     scale: tuple[float, float] = (1.0, 1.0)
     span: Span | None = None
     sends: tuple[Send, ...] = ()
+    live: LiveArgs | None = None
 
 
 @dataclass(frozen=True)
