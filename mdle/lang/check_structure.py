@@ -188,20 +188,26 @@ class StructureChecks(CheckerState):
         finally:
             self._live_args = outer
         sends: list[Send] = []
+        sent: list[cond.Typed] = []  # the values sent, for what they remember
         for item in expr.items[3:]:
             assert isinstance(item, st.Call)
             try:
-                sends.append(self._send(item, env))
+                sends.append(self._send(item, env, sent))
             except _Abort:
                 failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
-        live = None if failed or not read else self._live(law, read, given, env)
+        live = None if failed or not (read or sent) else self._live(law, read, given, env,
+                                                                    sent)
         return _new_atom(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
                          (1.0, 1.0), expr.span, tuple(sends), live)
 
     def _live(self, law: LawSpec, read: dict[str, cond.Typed], given: Sequence[st.Argument],
-              env: Env) -> LiveArgs | None:
-        """Compile the arguments of ``law`` read while the atom runs (constants stay fixed)."""
+              env: Env, sent: list[cond.Typed]) -> LiveArgs | None:
+        """Compile the arguments of ``law`` read while the atom runs (constants stay fixed).
+
+        What they and the values the atom sends remember (``send(gap, x - at_start(x))``)
+        is kept with them, for each run of the atom.
+        """
         shown = {k: show_value(v) for k, v in env.items()
                  if not (isinstance(v, Quantity) and math.isnan(v.value))}
         texts = {}
@@ -211,17 +217,20 @@ class StructureChecks(CheckerState):
             if name is not None:
                 texts[name] = format_expr(a.value, shown)
         parts = {name: t for name, t in read.items() if not t.is_const}
-        if not parts:
+        memory = cond.all_memories([*parts.values(), *sent])
+        if not parts and not memory:
             return None
-        memory = cond.all_memories(list(parts.values()))
         return LiveArgs(
             tuple(LiveArg(name, texts.get(name, name), t.call(), law.param(name))
                   for name, t in parts.items()),
             tuple((m.key, m.read) for m in memory),
             tuple((m.key, m.read, m.fold) for m in memory if m.fold is not None))
 
-    def _send(self, call: st.Call, env: Env) -> Send:
-        """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on."""
+    def _send(self, call: st.Call, env: Env, sent: list[cond.Typed]) -> Send:
+        """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on.
+
+        The value's typed expression is appended to ``sent``.
+        """
         args = call.args
         if not args or args[0].name is not None or not isinstance(args[0].value, st.Name) \
                 or any(a.name is not None for a in args):
@@ -255,6 +264,7 @@ class StructureChecks(CheckerState):
                        f"`received({channel})`, or send a number such as `range(0 deg)`")
             raise _Abort
         self._use(MessageUse("send", channel, t.dim, call.span))
+        sent.append(t)
         return Send(channel, t.call(), t.dim, f"send({channel}, {format_expr(args[1].value)})",
                     call.span)
 

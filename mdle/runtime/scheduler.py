@@ -420,6 +420,7 @@ class Scheduler:
             if slot.alpha_v != 1.0 or slot.alpha_w != 1.0:
                 cmd = Command(cmd.v * slot.alpha_v, cmd.omega * slot.alpha_w)
             if slot.sends and self._radio is not None:
+                ctx.memory = frame.arg_memory  # what the values sent remember
                 self._send(slot, ctx, now)
         else:
             cmd = STOP
