@@ -71,6 +71,6 @@ def test_a_value_sent_may_remember_where_its_atom_started(tmp_path: Path) -> Non
     red = ("atom tell = (go(0.5 m/s), never, 3 s, send(gap, x - at_start(x)))\n"
            "plan main = (((go(0.5 m/s), never, 2 s), tell), never, 10 s)\n")
     blue = "plan main = (((stop, message(gap) > 0.2 m, 8 s)), never, 10 s)\n"
-    (end,) = [(e.cause.value, e.time) for e in _run(tmp_path, red, blue)["blue"].events
+    (end,) = [e for e in _run(tmp_path, red, blue)["blue"].events
               if e.kind.value == "end" and e.path == "main/stop"]
-    assert end[0] == "interrupt" and 2.3 < end[1] < 2.8, end
+    assert end.cause is not None and end.cause.value == "interrupt" and 2.3 < end.time < 2.8
