@@ -102,8 +102,11 @@ class _Slot:
         # the values the interrupt reads as they were at the start (at_start): evaluated
         # once when the element starts, kept in its frame
         self.remember = () if self.test is None else node.interrupt.remember
-        # the running memories (lowest, highest, ever): folded before each test
+        # the running memories (lowest, highest, ever): folded before each test, by the
+        # test itself (the levels without any pay nothing)
         self.track = () if self.test is None else node.interrupt.track
+        if self.track and self.test is not None:
+            self.test = _folding(self.track, self.test)
         self.span: Span | None = node.span
         self._children: tuple[_Slot, ...] | None = ()
         self.repeat = False
@@ -157,6 +160,15 @@ def _fold(track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any],
     """
     for key, read, fold in track:
         memory[key] = fold(memory[key], read(ctx))
+
+
+def _folding(track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...],
+             test: Callable[[Context], bool]) -> Callable[[Context], bool]:
+    """Return ``test`` that first folds this tick's readings into ``ctx.memory``."""
+    def folded(ctx: Context) -> bool:
+        _fold(track, ctx, ctx.memory)
+        return test(ctx)
+    return folded
 
 
 def _child_slots(node: StringNode, path: str, level: int) -> list[_Slot]:
@@ -523,8 +535,6 @@ class Scheduler:
                     if test is not None:
                         ctx.t = t
                         ctx.memory = memory
-                        if checked.track:
-                            _fold(checked.track, ctx, memory)
                         if test(ctx):
                             fired = lvl
                             cause = Cause.INTERRUPT
