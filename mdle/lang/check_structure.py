@@ -216,7 +216,8 @@ class StructureChecks(CheckerState):
                 law.params[i].name if i < len(law.params) else None)
             if name is not None:
                 texts[name] = format_expr(a.value, shown)
-        parts = {name: t for name, t in read.items() if not t.is_const}
+        # all of them, a constant too (`lowest(1 m/s)`): its place in the args is a NaN
+        parts = dict(read)
         memory = cond.all_memories([*parts.values(), *sent])
         if not parts and not memory:
             return None

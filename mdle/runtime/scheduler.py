@@ -26,9 +26,7 @@ from typing import Any
 from mdle.atoms.registry import Context
 from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose, clearance_floor
 from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
-from mdle.lang import AtomNode, Element, Send, StringNode
-from mdle.lang.dimensions import Quantity, show_value
-from mdle.lang.program import LiveArgs
+from mdle.lang import AtomNode, Element, LiveArgs, Quantity, Send, StringNode, show_value
 from mdle.runtime.events import (
     Cause,
     Collision,

@@ -262,6 +262,11 @@ def test_at_start_in_a_law_s_argument_is_taken_when_the_atom_starts() -> None:
     assert _commanded(chase)[5:8] == [1.0, 1.1, 1.21]
 
 
+def test_a_law_s_argument_that_folds_to_a_constant_is_that_constant() -> None:
+    text = "atom a = (go(at_start(0.5 m/s) + lowest(0.25 m/s)), never, 0.3 s)\nrun a\n"
+    assert _commanded(text)[:3] == [0.75] * 3
+
+
 def test_a_running_memory_in_a_law_s_argument_is_folded_each_tick() -> None:
     # highest(x) follows x as it grows: the speed stays 0.5 m/s (not falling as x grows)
     text = "atom a = (go((highest(x) - x + 0.5 m) / 1 s), never, 0.5 s)\nrun a\n"
