@@ -25,6 +25,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import mdle
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
 from mdle.errors import Diagnostic, MdleError, Span
 
@@ -33,8 +34,9 @@ __all__ = ["GROUP", "installed_laws", "registry_option"]
 #: The entry point group a package declares its laws in.
 GROUP = "mdle.laws"
 
-#: Where mdle's own code lives (its folders may be symlinks)
-_MDLE = tuple(os.path.realpath(Path(__file__).parent / d) + os.sep
+#: Where mdle's own code lives (the package's folder, and those it links to), wherever
+#: this module stands in it
+_MDLE = tuple(os.path.realpath(Path(mdle.__file__).parent / d) + os.sep
               for d in (".", "atoms", "sim", "grammar"))
 #: Python's standard library (importlib), and where packages are installed (which may lie
 #: inside it, as in a pyenv interpreter)
