@@ -11,7 +11,7 @@ function. In the package's ``pyproject.toml``::
 :func:`installed_laws` loads every such entry point; :func:`registry_option` adds a
 ``--laws FILE.py`` on top. Whatever goes wrong (an entry point that fails to import, a
 wrong spec, one that declares nothing, a name that is taken) is an
-:class:`~mdle.errors.MdleError` naming the entry point and its package, located at the
+:class:`~mdle.core.errors.MdleError` naming the entry point and its package, located at the
 line that failed, else at the line of ``entry_points.txt`` that declares it.
 """
 
@@ -27,7 +27,7 @@ from typing import Any
 
 import mdle
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
-from mdle.errors import Diagnostic, MdleError, Span
+from mdle.core.errors import Diagnostic, MdleError, Span
 
 __all__ = ["GROUP", "installed_laws", "registry_option"]
 
@@ -49,7 +49,7 @@ def registry_option(laws: str | None) -> Registry | None:
 
     None (the shipped registry) when no package declares laws and ``--laws`` is not given.
     """
-    from mdle.userlaws import load_laws
+    from mdle.atoms.userlaws import load_laws
 
     installed = installed_laws()
     if laws is None:
@@ -94,7 +94,7 @@ def installed_laws() -> Registry | None:
 
 def _load(ep: importlib.metadata.EntryPoint, what: str) -> Registry:
     """Import one entry point and return what it declares (checked)."""
-    from mdle.userlaws import check_spec
+    from mdle.atoms.userlaws import check_spec
 
     try:
         target: Any = ep.load()

@@ -4,7 +4,7 @@ The file declares them with the decorators the shipped ones use
 (``@control_law(...)``, ``@sensor(...)`` of :mod:`mdle.atoms.registry`);
 :func:`load_laws` runs it and returns the shipped registry with them added, for
 ``mdle check``, ``mdle run`` and ``mdle repl``. Whatever goes wrong is an
-:class:`~mdle.errors.MdleError` naming the file, and the line where the file failed.
+:class:`~mdle.core.errors.MdleError` naming the file, and the line where the file failed.
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ import os
 import traceback
 
 from mdle.atoms.registry import REQUIRED, LawSpec, Registry, SensorSpec
-from mdle.errors import Diagnostic, MdleError, Span
-from mdle.units import Dim
+from mdle.core.errors import Diagnostic, MdleError, Span
+from mdle.core.units import Dim
 
 __all__ = ["load_laws", "laws_option", "check_spec"]
 
@@ -90,7 +90,7 @@ def check_spec(spec: LawSpec | SensorSpec, name: str) -> None:
     for p in spec.params:
         problem = None
         if not isinstance(p.dim, Dim):
-            problem = (f"its dimension is `{p.dim!r}`: give a dimension of mdle.units "
+            problem = (f"its dimension is `{p.dim!r}`: give a dimension of mdle.core.units "
                        "(LENGTH, SPEED, ...)")
         elif not (p.default is REQUIRED or isinstance(p.default, (int, float, str))):
             problem = f"its default `{p.default!r}` is not a number in SI units or a symbol"

@@ -20,8 +20,8 @@ LAWS = '''\
 import math
 
 from mdle.atoms.registry import Param, control_law, sensor
-from mdle.backend import Command
-from mdle.units import LENGTH, SPEED
+from mdle.core.backend import Command
+from mdle.core.units import LENGTH, SPEED
 
 
 @control_law(Param("v", SPEED, 0.3), Param("grow", LENGTH, 0.2))
@@ -98,7 +98,7 @@ def test_an_entry_point_naming_one_decorated_function(tmp_path: Path) -> None:
 def test_laws_file_beside_installed_laws_and_a_clash_between_them(tmp_path: Path) -> None:
     site = install(tmp_path / "site")
     (tmp_path / "mine.py").write_text(
-        "from mdle.atoms.registry import sensor\nfrom mdle.units import TIME\n\n\n"
+        "from mdle.atoms.registry import sensor\nfrom mdle.core.units import TIME\n\n\n"
         "@sensor(result=TIME)\ndef clock(args, ctx):\n    return ctx.t\n")
     (tmp_path / "p.mdle").write_text(
         "atom a = (spiral(v = 0.3 m/s), from_start > 5 m or clock > 2 s, 1 min)\nrun a\n")

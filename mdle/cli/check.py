@@ -19,9 +19,9 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from mdle.errors import Diagnostic, MdleError
+    from mdle.core.errors import Diagnostic, MdleError
+    from mdle.core.motion_limits import KnownRobot
     from mdle.lang import Program
-    from mdle.motion_limits import KnownRobot
 
 __all__ = ["add_parser", "run", "expand_paths"]
 
@@ -70,7 +70,7 @@ def expand_paths(paths: list[str]) -> list[str]:
 def _load(path: str, args: argparse.Namespace,
           robots: dict[tuple[str, ...], KnownRobot]) -> Program | MdleError:
     from mdle.cli.options import known_robot
-    from mdle.errors import MdleError
+    from mdle.core.errors import MdleError
     from mdle.lang import load_program
 
     try:
@@ -92,7 +92,7 @@ def _is_world_file(path: str) -> bool:
     Only the keys at column 0 are looked at (no YAML is loaded here): the file is read
     whole later, with the size and nesting limits, by whichever reader it goes to.
     """
-    from mdle.userfile import UserFileError, read_user_file
+    from mdle.core.userfile import UserFileError, read_user_file
 
     try:
         text = read_user_file(path).decode("utf-8", "replace")
@@ -114,8 +114,8 @@ def _check_world(path: str, quiet: bool) -> None:
 
 def _check_team(path: str, quiet: bool) -> int:
     """Check a team file and its plans (MdleError on errors); returns the warnings."""
-    from mdle.cli.output import print_diagnostics
-    from mdle.teamfile import load_team, read_team
+    from mdle.console.output import print_diagnostics
+    from mdle.team.file import load_team, read_team
 
     if _is_world_file(path):
         _check_world(path, quiet)
@@ -131,9 +131,9 @@ def _check_team(path: str, quiet: bool) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Check each file; returns the exit code."""
-    from mdle.cli.output import EXIT_INPUT, EXIT_OK, print_diagnostics
-    from mdle.errors import MdleError
-    from mdle.frames import FRAME_NOTE, reads_pose
+    from mdle.cli.frames import FRAME_NOTE, reads_pose
+    from mdle.console.output import EXIT_INPUT, EXIT_OK, print_diagnostics
+    from mdle.core.errors import MdleError
     from mdle.lang import missing_entry
 
     files = expand_paths(args.files)

@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     """Start the session; returns the exit code."""
     import math
 
-    from mdle.cli import output
+    from mdle.console import output
     from mdle.repl.commands import Repl
     from mdle.repl.session import DEFAULT_UNTIL, Session
 
@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
                                                       else args.until)
     interactive = sys.stdin.isatty() and sys.stdout.isatty() and not args.plain
     if args.backend == "sim" and (args.connect or args.laser or args.yes):
-        from mdle.errors import Diagnostic, MdleError
+        from mdle.core.errors import Diagnostic, MdleError
 
         given = next(f for f, v in (("--connect", args.connect), ("--laser", args.laser),
                                     ("--yes", args.yes)) if v)
@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     live = None
     try:
         if args.foxglove:
-            from mdle.ros.live import FoxgloveServer, LiveRuns, parse_address
+            from mdle.view.foxglove import FoxgloveServer, LiveRuns, parse_address
 
             live = LiveRuns(FoxgloveServer(*parse_address(args.foxglove)))
             repl.run_observers.append(live)
@@ -129,9 +129,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSession:
     """Connect to the robot the options name and wrap it in a REPL session."""
+    from mdle.core.errors import Diagnostic, MdleError
     from mdle.drivers import open_backend
     from mdle.drivers.pioneer import PioneerBackend
-    from mdle.errors import Diagnostic, MdleError
     from mdle.repl.robot import RobotSession
 
     if not args.connect:

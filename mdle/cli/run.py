@@ -24,7 +24,6 @@ import tempfile
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from mdle.cli import output
 from mdle.cli.clobber import refuse_clobbering, run_inputs, run_outputs
 from mdle.cli.options import (
     DEFAULT_RATE,
@@ -37,13 +36,14 @@ from mdle.cli.options import (
 )
 from mdle.cli.recorders import recorders
 from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
-from mdle.cli.signals import SignalGuard, interruption_of, signal_name
-from mdle.ranges import COORDINATE
+from mdle.console import output
+from mdle.console.signals import SignalGuard, interruption_of, signal_name
+from mdle.core.ranges import COORDINATE
 
 if TYPE_CHECKING:
-    from mdle.live import LiveView
+    from mdle.record.trace import TraceWriter
     from mdle.runtime import RunResult, Scheduler
-    from mdle.trace import TraceWriter
+    from mdle.view.live import LiveView
 
 __all__ = ["add_parser", "run", "world_beside"]
 
@@ -130,7 +130,7 @@ def start_pose(text: str) -> tuple[float, float, float]:
     """
     import math
 
-    from mdle.units import ANGLE, LENGTH, unit_value
+    from mdle.core.units import ANGLE, LENGTH, unit_value
 
     parts = text.split(",")
     if len(parts) != 3:
@@ -197,8 +197,8 @@ def run(args: argparse.Namespace) -> int:
     while the plan and world load, deferred while the trace and scheduler are made and
     while everything closes, and stops the scheduler while it ticks.
     """
-    from mdle.ros.recorder import RecordingError  # imports none of the mcap extra
-    from mdle.trace import TraceWriteError
+    from mdle.record.recorder import RecordingError  # imports none of the mcap extra
+    from mdle.record.trace import TraceWriteError
 
     if args.team or args.robot_plan:
         from mdle.cli.team import run_team
@@ -239,7 +239,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
-    from mdle.errors import Diagnostic, MdleError
+    from mdle.core.errors import Diagnostic, MdleError
     from mdle.installed_laws import registry_option
     from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
@@ -249,7 +249,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.trace:
         writable_output(args.trace, "--trace")
     if args.record or args.rosbag:
-        from mdle.ros import require
+        from mdle.record import require
 
         require("--record" if args.record else "--rosbag")
     if args.start is not None and args.backend != "sim":
@@ -274,10 +274,10 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     if args.overrides:
         parts.header["overrides"] = list(args.overrides)
     parts.backend, parts.world = _open_backend(args, parts.header)
-    from mdle.ros.describe import body_header  # the body and odometry noise, for recordings
+    from mdle.record.describe import body_header  # the body and odometry noise, for recordings
 
     parts.header.update(body_header(parts.backend))
-    from mdle.frames import FRAME_NOTE, reads_pose
+    from mdle.cli.frames import FRAME_NOTE, reads_pose
 
     if not args.quiet and reads_pose(program):
         where = ""
@@ -301,7 +301,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
             raise MdleError(err.diagnostics) from None
         parts.observers += parts.recorders
         if not args.quiet:
-            from mdle.live import LiveView
+            from mdle.view.live import LiveView
 
             parts.live = LiveView()
             parts.observers.append(parts.live)
@@ -325,7 +325,7 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
             failed = True
     lost = parts.live.output_lost if parts.live is not None else None
     if args.plot:
-        from mdle.plot import plot_trace
+        from mdle.view.plot import plot_trace
 
         assert parts.trace_path is not None
         plot_trace(parts.trace_path, args.plot, world=parts.world)
@@ -363,8 +363,8 @@ def _header(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _open_trace(path: str, header: dict[str, Any]) -> TraceWriter:
-    from mdle.errors import Diagnostic, MdleError
-    from mdle.trace import TraceWriter
+    from mdle.core.errors import Diagnostic, MdleError
+    from mdle.record.trace import TraceWriter
 
     if "\x00" in path:  # open() would raise ValueError, not OSError
         raise MdleError(Diagnostic(None, f"cannot write the trace `{path!r}`: the name holds "
@@ -443,7 +443,7 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
 
     Fills the header's world, seed and robot.
     """
-    from mdle.errors import Diagnostic, MdleError
+    from mdle.core.errors import Diagnostic, MdleError
 
     if args.backend == "ros2":  # mdle/cli/ros2.py
         return open_ros2_backend(args, args.rate, header), None
@@ -493,7 +493,7 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
     if args.robot:
         kwargs["robot"] = args.robot
     if args.start is not None:
-        from mdle.backend import Pose
+        from mdle.core.pose import Pose
 
         world = dataclasses.replace(world, start_pose=Pose(*args.start))
         header["start"] = {"x": args.start[0], "y": args.start[1], "theta": args.start[2]}

@@ -14,7 +14,9 @@ from collections.abc import Callable, Mapping
 from types import MappingProxyType
 
 from mdle.atoms.registry import BOOL, LawSpec, SensorSpec
-from mdle.errors import Diagnostic, Severity, Span
+from mdle.core.errors import Diagnostic, Severity, Span
+from mdle.core.motion_limits import excess
+from mdle.core.units import NONE, TIME, TURN_RATE
 from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
 from mdle.lang.check_expressions import ExpressionChecks, disjuncts, overload
@@ -39,8 +41,6 @@ from mdle.lang.dimensions import (
 from mdle.lang.format import format_expr
 from mdle.lang.program import INF, Interrupt, MessageUse
 from mdle.lang.treebuild import builder
-from mdle.motion_limits import excess
-from mdle.units import NONE, TIME, TURN_RATE
 
 #: Quantity(value, dim, bare) without the frozen __init__ (see builder)
 _new_quantity = builder(Quantity)

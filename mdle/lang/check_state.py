@@ -17,7 +17,9 @@ from types import MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import LawSpec, Param, SensorSpec
-from mdle.errors import Diagnostic, Severity, Span
+from mdle.core.errors import Diagnostic, Severity, Span
+from mdle.core.motion_limits import KnownRobot
+from mdle.core.units import Dim
 from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
 from mdle.lang.dimensions import Quantity, Symbol, Value
@@ -25,8 +27,6 @@ from mdle.lang.expansion import ExpansionBudget
 from mdle.lang.format import format_expr
 from mdle.lang.program import Element, Interrupt, MessageUse
 from mdle.lang.resolve import Namespace
-from mdle.motion_limits import KnownRobot
-from mdle.units import Dim
 
 #: Deepest nesting of elements and interrupts, counting through named definitions.
 MAX_NESTING = 120

@@ -20,7 +20,8 @@ from types import MappingProxyType
 from typing import Any, TypeVar
 
 from mdle.atoms.registry import LawSpec
-from mdle.errors import Diagnostic, Severity, Span
+from mdle.core.errors import Diagnostic, Severity, Span
+from mdle.core.messages import POSE_CHANNEL
 from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
 from mdle.lang.check_state import _MISSING, MAX_NESTING, CheckerState, Env, _Abort, _freeze, _short
@@ -38,7 +39,6 @@ from mdle.lang.program import (
     StringNode,
 )
 from mdle.lang.treebuild import builder
-from mdle.messages import POSE_CHANNEL
 
 _E = TypeVar("_E", AtomNode, StringNode)
 #: Constructors of the program's nodes taking every field in order (see builder).

@@ -27,9 +27,9 @@ from types import CodeType, MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import BOOL, Context, SensorSpec
-from mdle.frozen import builder
+from mdle.core.frozen import builder
+from mdle.core.units import Dim
 from mdle.lang.program import NEVER, Interrupt
-from mdle.units import Dim
 
 __all__ = ["Typed", "constant", "sensor_reading", "sensor_call", "negate", "logic", "compare",
            "arith", "apply", "remembered", "tracked", "to_interrupt", "BUILTINS", "FOLDS"]
@@ -129,7 +129,7 @@ class Typed:
 
 
 #: ``Typed(kind, node, const)`` and ``Node(op, parts)`` without the frozen ``__init__``:
-#: the checker makes several of each per interrupt (see :mod:`mdle.frozen`).
+#: the checker makes several of each per interrupt (see :mod:`mdle.core.frozen`).
 _typed = builder(Typed)
 _node = builder(Node)
 

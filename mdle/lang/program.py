@@ -19,8 +19,8 @@ from types import MappingProxyType
 from typing import Any, Union
 
 from mdle.atoms.registry import Args, Context, LawSpec
-from mdle.errors import Diagnostic, Span
-from mdle.units import Dim
+from mdle.core.errors import Diagnostic, Span
+from mdle.core.units import Dim
 
 __all__ = [
     "Interrupt",

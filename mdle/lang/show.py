@@ -18,8 +18,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from mdle.core.units import NONE, Dim
 from mdle.lang.program import AtomNode, Element, Program, StringNode
-from mdle.units import NONE, Dim
 
 __all__ = ["Structure", "structure", "show_element", "show_program", "format_time"]
 

@@ -24,8 +24,9 @@ from types import MappingProxyType
 from typing import Any
 
 from mdle.atoms.registry import Context
-from mdle.backend import STOP, Backend, ClockMode, Command, Observation, Pose, clearance_floor
-from mdle.errors import Diagnostic, MdleError, MdleRuntimeError, Span
+from mdle.core.backend import STOP, Backend, ClockMode, Command, Observation, clearance_floor
+from mdle.core.errors import Diagnostic, MdleError, MdleRuntimeError, Span
+from mdle.core.pose import Pose
 from mdle.lang import AtomNode, Element, LiveArgs, Quantity, Send, StringNode, show_value
 from mdle.runtime.events import (
     Cause,

@@ -7,12 +7,13 @@ import math
 
 import numpy as np
 import pytest
+from mdle.core.backend import Observation, RobotLimits, Scan
+from mdle.core.errors import CheckError
+from mdle.core.pose import Pose
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Context
 from mdle.atoms.sensors import bearing_to_point, clear
-from mdle.backend import Observation, Pose, RobotLimits, Scan
-from mdle.errors import CheckError
 from mdle.lang import format_source, load_text
 from mdle.runtime import run_named
 from mdle.runtime.scripted import ScriptedBackend
@@ -84,9 +85,10 @@ def test_a_definition_s_arguments_stay_fixed() -> None:
 
 
 def test_a_law_s_parameter_declared_fixed_takes_no_reading() -> None:
+    from mdle.core.backend import Command
+    from mdle.core.units import LENGTH
+
     from mdle.atoms.registry import Param, Registry, control_law
-    from mdle.backend import Command
-    from mdle.units import LENGTH
 
     @control_law(Param("d", LENGTH, fixed=True))
     def hold(args: object, ctx: Context, state: object) -> Command:
@@ -290,7 +292,7 @@ def test_mdle_show_prints_a_law_s_argument_as_written() -> None:
 
 
 def test_a_reading_outside_the_parameter_s_range_ends_the_run_with_a_located_error() -> None:
-    from mdle.errors import MdleRuntimeError
+    from mdle.core.errors import MdleRuntimeError
 
     # goto's speed must be more than 0: x / 1 s is 0 at the start
     program = load_text("atom a = (goto(1 m, 0 m, v = x / 1 s), never, 1 s)\nrun a\n", "t.mdle")

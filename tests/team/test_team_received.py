@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from mdle.team.file import load_team, read_team
+from mdle.team.run import TeamRun
+
 from mdle.runtime import Recorder
 from mdle.sim.team import TeamSim
-from mdle.teamfile import load_team, read_team
-from mdle.teamrun import TeamRun
 
 WORLD = """\
 name: duel
