@@ -18,11 +18,14 @@ from mdle.atoms.registry import REQUIRED, LawSpec, Registry, SensorSpec
 from mdle.core.errors import Diagnostic, MdleError, Span
 from mdle.core.units import Dim
 
-__all__ = ["load_laws", "laws_option"]
+__all__ = ["load_laws", "laws_option", "check_spec"]
 
 
-def load_laws(path: str | os.PathLike[str]) -> Registry:
+def load_laws(path: str | os.PathLike[str], base: Registry | None = None) -> Registry:
     """Return the shipped control laws and sensor functions with those of ``path``.
+
+    ``base`` is the registry they join (None: the shipped one; the installed packages'
+    laws, :mod:`mdle.installed_laws`, when there are any).
 
     Raises
     ------
@@ -52,20 +55,23 @@ def load_laws(path: str | os.PathLike[str]) -> Registry:
         raise MdleError(Diagnostic(None, f"`{name}`: {exc}")) from None
     declared: list[LawSpec | SensorSpec] = [*user.laws.values(), *user.sensors.values()]
     for declared_spec in declared:
-        _check_spec(declared_spec, name)
+        check_spec(declared_spec, name)
     if not user.laws and not user.sensors:
         raise MdleError(Diagnostic(
             None, f"`{name}` declares no control law or sensor function",
             hint="decorate them with `@control_law(...)` or `@sensor(...)` from "
                  "mdle.atoms.registry"))
     shipped = default_registry()
+    known = shipped if base is None else base
     for n in (*user.laws, *user.sensors):
-        if n in shipped.laws or n in shipped.sensors:
+        if n in known.laws or n in known.sensors:
+            owner = ("a shipped" if n in shipped.laws or n in shipped.sensors
+                     else "an installed package's")  # an mdle.laws entry point's
+            kind = "control law" if n in known.laws else "sensor function"
             raise MdleError(Diagnostic(
-                None, f"`{n}` of `{name}` is already a shipped "
-                      f"{'control law' if n in shipped.laws else 'sensor function'}",
+                None, f"`{n}` of `{name}` is already {owner} {kind}",
                 hint=f"give it another name, such as `my_{n}` (`name=` in its decorator)"))
-    return shipped.merged(user)
+    return known.merged(user)
 
 
 def laws_option(path: str | None) -> Registry | None:
@@ -73,7 +79,7 @@ def laws_option(path: str | None) -> Registry | None:
     return None if path is None else load_laws(path)
 
 
-def _check_spec(spec: LawSpec | SensorSpec, name: str) -> None:
+def check_spec(spec: LawSpec | SensorSpec, name: str) -> None:
     """Refuse a declaration the checker could not use, at the line of its function."""
     fn = spec.step if isinstance(spec, LawSpec) else spec.fn
     try:

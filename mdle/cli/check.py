@@ -137,10 +137,9 @@ def run(args: argparse.Namespace) -> int:
     from mdle.lang import missing_entry
 
     files = expand_paths(args.files)
-    if args.laws:
-        from mdle.atoms.userlaws import load_laws
+    from mdle.installed_laws import registry_option
 
-        args.registry = load_laws(args.laws)
+    args.registry = registry_option(args.laws)  # installed packages' laws, --laws
     robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once
     teams = (".yaml", ".yml")  # a team file (its plans are checked with it)
     results = {path: _load(path, args, robots) for path in files if not path.endswith(teams)}

@@ -92,11 +92,11 @@ def run(args: argparse.Namespace) -> int:
     elif args.backend == "pioneer":
         session = _robot_session(args, until)
     else:
-        from mdle.atoms.userlaws import laws_option
+        from mdle.installed_laws import registry_option
 
         session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
                           sensing=args.sensing, realtime=args.realtime,
-                          registry=laws_option(args.laws))
+                          registry=registry_option(args.laws))
     repl = Repl(session, debug=getattr(args, "debug", False))
     live = None
     try:

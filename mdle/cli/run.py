@@ -236,8 +236,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
-    from mdle.atoms.userlaws import laws_option
     from mdle.core.errors import Diagnostic, MdleError
+    from mdle.installed_laws import registry_option
     from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
 
@@ -255,9 +255,9 @@ def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     check_ros2_options(args)
     robot = known_robot(args.plan, args.world, args.robot) if args.backend == "sim" \
         else known_robot(None, None, args.robot if args.backend == "ros2" else None)
+    registry = registry_option(args.laws)
     try:
-        program = load_program(args.plan, laws_option(args.laws), settings=args.overrides,
-                               robot=robot)
+        program = load_program(args.plan, registry, settings=args.overrides, robot=robot)
     except MdleError as err:
         from mdle.lang import yaml_as_plan
 

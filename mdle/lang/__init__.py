@@ -16,7 +16,7 @@ is the REPL's incremental program.
 from __future__ import annotations
 
 from mdle.lang.check import check_program, missing_entry
-from mdle.lang.dimensions import dim_words, same_kind
+from mdle.lang.dimensions import Quantity, dim_words, same_kind, show_value
 from mdle.lang.format import format_source, format_statement
 from mdle.lang.hints import yaml_as_plan
 from mdle.lang.loader import Loaded, load_program, load_text, plan_bundle, read_source
@@ -27,6 +27,8 @@ from mdle.lang.program import (
     AtomNode,
     Element,
     Interrupt,
+    LiveArg,
+    LiveArgs,
     MessageUse,
     Program,
     Send,
@@ -45,9 +47,12 @@ __all__ = [
     "DefKind",
     "Element",
     "Interrupt",
+    "LiveArg",
+    "LiveArgs",
     "Loaded",
     "MessageUse",
     "Program",
+    "Quantity",
     "Send",
     "StringKind",
     "StringNode",
@@ -68,6 +73,7 @@ __all__ = [
     "same_kind",
     "show_program",
     "statement_keywords",
+    "show_value",
     "structure",
     "yaml_as_plan",
 ]

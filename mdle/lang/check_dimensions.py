@@ -73,8 +73,9 @@ class DimensionChecks(ExpressionChecks):
             if target is not None:
                 self.error(expr.span, f"expected a fixed value, but `{expr.name}` is "
                            f"{_kind_name(target)}",
-                           hint="arguments and timers are fixed when an element starts; "
-                                "sensor readings belong in interrupts")
+                           hint="a definition's arguments and timers are fixed when an "
+                                "element starts; sensor readings belong in interrupts and in "
+                                "a control law's arguments")
                 raise _Abort
             return Symbol(expr.name)
         if isinstance(expr, st.Inf):

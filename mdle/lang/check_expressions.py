@@ -38,8 +38,9 @@ class ExpressionChecks(CheckerState):
             return expr.name not in env and isinstance(self._lookup(expr.name), SensorSpec)
         if isinstance(expr, st.Call):
             if expr.name in cond.BUILTINS and expr.name not in env:
-                return expr.name == "at_start" or any(self._is_live(a.value, env)
-                                                      for a in expr.args)
+                # at_start, lowest, highest, ever: kept by the element, never fixed
+                remembers = expr.name == "at_start" or expr.name in cond.FOLDS
+                return remembers or any(self._is_live(a.value, env) for a in expr.args)
             return isinstance(self._lookup(expr.name), SensorSpec)
         if isinstance(expr, st.Binary):
             return self._is_live(expr.left, env) or self._is_live(expr.right, env)
@@ -77,7 +78,7 @@ class ExpressionChecks(CheckerState):
         return Quantity(math.nan, slot.dim)
 
     def _builtin(self, expr: st.Call, env: Env) -> cond.Typed:
-        """``abs(e)``, ``min(a, b, ...)``, ``max(a, b, ...)`` and ``at_start(e)``."""
+        """``abs``, ``min``, ``max``, ``at_start``, ``lowest``, ``highest`` and ``ever``."""
         name = expr.name
         low, high = cond.BUILTINS[name]
         named = [a for a in expr.args if a.name is not None]
@@ -100,6 +101,16 @@ class ExpressionChecks(CheckerState):
             finally:
                 self._remembering = False
             return cond.remembered(t)
+        if name in cond.FOLDS:  # a running memory: lowest(e), highest(e), ever(c)
+            t = self.condition(expr.args[0].value, env)
+            if (name == "ever") != t.is_bool:
+                needs = "a condition" if name == "ever" else "a number"
+                found = "a condition" if t.is_bool else dim_words(t.dim)
+                self.error(expr.args[0].span, f"`{name}` needs {needs}, found {found}",
+                           hint="`ever(c)`: c has held at some tick; `lowest(e)`, "
+                                "`highest(e)`: the least or greatest e so far")
+                raise _Abort
+            return cond.tracked(name, t)
         parts = [self.condition(a.value, env) for a in expr.args]
         for a, t in zip(expr.args, parts, strict=True):
             if t.is_bool:

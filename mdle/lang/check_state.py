@@ -256,6 +256,10 @@ class CheckerState(ABC):
         """Type an argument read each tick (:mod:`~mdle.lang.check_dimensions`)."""
 
     @abstractmethod
+    def _is_live(self, expr: st.Expr, env: Env) -> bool:
+        """Tell whether ``expr`` reads a sensor function (:mod:`~mdle.lang.check_expressions`)."""
+
+    @abstractmethod
     def slots_of(self, d: st.Definition) -> list[_Slot]:
         """Return a definition's parameters (:mod:`~mdle.lang.check_names`)."""
 

@@ -15,18 +15,29 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from types import MappingProxyType
 from typing import Any, TypeVar
 
 from mdle.atoms.registry import LawSpec
 from mdle.core.errors import Diagnostic, Severity, Span
 from mdle.core.messages import POSE_CHANNEL
+from mdle.lang import conditions as cond
 from mdle.lang import syntax as st
 from mdle.lang.check_state import _MISSING, MAX_NESTING, CheckerState, Env, _Abort, _freeze, _short
-from mdle.lang.dimensions import Quantity, Symbol, Value
+from mdle.lang.dimensions import Quantity, Symbol, Value, show_value
 from mdle.lang.format import format_expr
-from mdle.lang.program import AtomNode, Element, Interrupt, MessageUse, Send, StringKind, StringNode
+from mdle.lang.program import (
+    AtomNode,
+    Element,
+    Interrupt,
+    LiveArg,
+    LiveArgs,
+    MessageUse,
+    Send,
+    StringKind,
+    StringNode,
+)
 
 _E = TypeVar("_E", AtomNode, StringNode)
 
@@ -149,28 +160,65 @@ class StructureChecks(CheckerState):
         law = self._lookup(u.name)
         assert isinstance(law, LawSpec)
         failed = False
+        given = u.args if isinstance(u, st.Call) else ()
+        read: dict[str, cond.Typed] = {}  # the arguments read while the atom runs
+        outer, self._live_args = self._live_args, (
+            read if any(self._is_live(a.value, env) for a in given) else None)
         try:
-            args = self.bind(u.name, self._slots_of_spec(law), u.args if isinstance(u, st.Call)
-                             else (), env, u.span)
+            args = self.bind(u.name, self._slots_of_spec(law), given, env, u.span)
             self._note_names(law, args, u.span)
         except _Abort:
             failed = True
         else:
             if self._scaling is not expr:  # a scaled atom is checked once scaled
                 self._within_limits(law, args, u)
+        finally:
+            self._live_args = outer
         sends: list[Send] = []
+        sent: list[cond.Typed] = []  # the values sent, for what they remember
         for item in expr.items[3:]:
             assert isinstance(item, st.Call)
             try:
-                sends.append(self._send(item, env))
+                sends.append(self._send(item, env, sent))
             except _Abort:
                 failed = True
         interrupt, t = self._ending(xi, timer, env, failed)
+        live = None if failed or not (read or sent) else self._live(law, read, given, env,
+                                                                    sent)
         return AtomNode(law.name, law, MappingProxyType(self._plain(args)), interrupt, t,
-                         (1.0, 1.0), expr.span, tuple(sends))
+                        (1.0, 1.0), expr.span, tuple(sends), live)
 
-    def _send(self, call: st.Call, env: Env) -> Send:
-        """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on."""
+    def _live(self, law: LawSpec, read: dict[str, cond.Typed], given: Sequence[st.Argument],
+              env: Env, sent: list[cond.Typed]) -> LiveArgs | None:
+        """Compile the arguments of ``law`` read while the atom runs (constants stay fixed).
+
+        What they and the values the atom sends remember (``send(gap, x - at_start(x))``)
+        is kept with them, for each run of the atom.
+        """
+        shown = {k: show_value(v) for k, v in env.items()
+                 if not (isinstance(v, Quantity) and math.isnan(v.value))}
+        texts = {}
+        for i, a in enumerate(given):
+            name = a.name if a.name is not None else (
+                law.params[i].name if i < len(law.params) else None)
+            if name is not None:
+                texts[name] = format_expr(a.value, shown)
+        # all of them, a constant too (`lowest(1 m/s)`): its place in the args is a NaN
+        parts = dict(read)
+        memory = cond.all_memories([*parts.values(), *sent])
+        if not parts and not memory:
+            return None
+        return LiveArgs(
+            tuple(LiveArg(name, texts.get(name, name), t.call(), law.param(name))
+                  for name, t in parts.items()),
+            tuple((m.key, m.read) for m in memory),
+            tuple((m.key, m.read, m.fold) for m in memory if m.fold is not None))
+
+    def _send(self, call: st.Call, env: Env, sent: list[cond.Typed]) -> Send:
+        """Check ``send(channel, value)`` or ``send(pose)``, an atom's fourth part on.
+
+        The value's typed expression is appended to ``sent``.
+        """
         args = call.args
         if not args or args[0].name is not None or not isinstance(args[0].value, st.Name) \
                 or any(a.name is not None for a in args):
@@ -204,6 +252,7 @@ class StructureChecks(CheckerState):
                        f"`received({channel})`, or send a number such as `range(0 deg)`")
             raise _Abort
         self._use(MessageUse("send", channel, t.dim, call.span))
+        sent.append(t)
         return Send(channel, t.call(), t.dim, f"send({channel}, {format_expr(args[1].value)})",
                     call.span)
 

@@ -31,12 +31,35 @@ from mdle.core.units import Dim
 from mdle.lang.program import NEVER, Interrupt
 
 __all__ = ["Typed", "constant", "sensor_reading", "sensor_call", "negate", "logic", "compare",
-           "arith", "apply", "remembered", "to_interrupt", "BUILTINS"]
+           "arith", "apply", "remembered", "tracked", "to_interrupt", "BUILTINS", "FOLDS"]
 
 #: Functions of numbers a condition may call, by name: how many arguments each takes
-#: (low, high). ``at_start(e)`` is the value ``e`` had when the element started.
+#: (low, high). ``at_start(e)`` is the value ``e`` had when the element started;
+#: ``lowest(e)``, ``highest(e)`` and ``ever(c)`` what ``e`` or ``c`` has been over the
+#: element's run so far (:data:`FOLDS`).
 BUILTINS: Mapping[str, tuple[int, float]] = {
-    "abs": (1, 1), "min": (2, math.inf), "max": (2, math.inf), "at_start": (1, 1)}
+    "abs": (1, 1), "min": (2, math.inf), "max": (2, math.inf), "at_start": (1, 1),
+    "lowest": (1, 1), "highest": (1, 1), "ever": (1, 1)}
+
+
+def _lower(held: Any, new: Any) -> Any:
+    """Return the lesser of the two; a NaN held so far gives way to any reading."""
+    return new if new < held or held != held else held
+
+
+def _higher(held: Any, new: Any) -> Any:
+    """Return the greater of the two; a NaN held so far gives way to any reading."""
+    return new if new > held or held != held else held
+
+
+def _either(held: Any, new: Any) -> bool:
+    """Return True once either has held."""
+    return bool(held or new)
+
+
+#: The running memories: how each folds this tick's reading into the value it holds.
+FOLDS: Mapping[str, Callable[[Any, Any], Any]] = MappingProxyType(
+    {"lowest": _lower, "highest": _higher, "ever": _either})
 
 Kind = Any  # Dim (a number), None (a number of unknown dimension) or BOOL (a condition)
 Fn = Callable[[Context], Any]
@@ -60,7 +83,8 @@ class Node:
     arguments, names of the arguments read each tick, then their nodes), ``const``
     (value), ``not`` or ``neg`` (operand), ``cmp`` or ``arith`` (operator, left, right),
     ``and``, ``or``, ``xor`` (left, right), ``fn`` (a Python function of numbers, then its
-    operands), or ``start`` (a :class:`Remembered` key, the node it remembers).
+    operands), ``start`` (a :class:`Remembered` key, the node it remembers) or ``track``
+    (a :class:`Remembered` key, the fold of :data:`FOLDS`, the node it follows).
     """
 
     op: str
@@ -147,7 +171,10 @@ def apply(fn: Callable[..., Any], args: list[Typed], kind: Kind) -> Typed:
 
 
 class Remembered:
-    """The key of one ``at_start(...)``: where an element keeps the value it remembers."""
+    """The key of one ``at_start``, ``lowest``, ``highest`` or ``ever``.
+
+    Where an element keeps the value it remembers.
+    """
 
     __slots__ = ()
 
@@ -159,23 +186,68 @@ def remembered(t: Typed) -> Typed:
     return Typed(t.kind, Node("start", (Remembered(), t.node)), None)
 
 
-def remembers(t: Typed) -> tuple[tuple[Remembered, Fn], ...]:
-    """Return each ``at_start`` of a condition: its key and its expression compiled."""
+def tracked(name: str, t: Typed) -> Typed:
+    """Return ``lowest(t)``, ``highest(t)`` or ``ever(t)`` (a constant stays)."""
+    if t.node is None:
+        return t
+    return Typed(t.kind, Node("track", (Remembered(), FOLDS[name], t.node)), None)
+
+
+@dataclass(frozen=True)
+class Memory:
+    """One value an element remembers: evaluated at its start, and folded each tick.
+
+    ``read(ctx)`` evaluates the expression remembered; ``fold`` is None for
+    ``at_start`` (kept as it was at the start), else how this tick's reading joins the
+    value held (:data:`FOLDS`).
+    """
+
+    key: Remembered
+    read: Fn
+    fold: Callable[[Any, Any], Any] | None
+
+
+def memories(t: Typed) -> tuple[Memory, ...]:
+    """Return what a condition remembers, inner before outer.
+
+    ``lowest(dist_to(at_start(x), at_start(y)))`` needs the two start values before its
+    first reading: the order is the order of evaluation, at the start and each tick.
+    """
     if t.node is None:
         return ()
-    found: dict[int, tuple[Remembered, Fn]] = {}
-    seen = set()
-    stack = [t.node]
+    found: list[Memory] = []
+    seen: set[int] = set()
+    stack: list[tuple[Node, bool]] = [(t.node, False)]
     while stack:
-        n = stack.pop()
+        n, parts_done = stack.pop()
+        if parts_done:
+            if n.op == "start":
+                found.append(Memory(n.parts[0], _compile(n.parts[1], as_bool=False), None))
+            elif n.op == "track":
+                inner = n.parts[2]
+                found.append(Memory(n.parts[0], _compile(inner, as_bool=n.parts[1] is _either),
+                                    n.parts[1]))
+            continue
         if id(n) in seen:
             continue
         seen.add(id(n))
-        if n.op == "start":
-            found[id(n)] = (n.parts[0], _compile(n.parts[1], as_bool=False))
-            continue  # the checker refuses at_start inside at_start
-        stack.extend(p for p in n.parts if isinstance(p, Node))
+        stack.append((n, True))
+        stack.extend((p, False) for p in reversed(n.parts) if isinstance(p, Node))
+    return tuple(found)
+
+
+def all_memories(parts: list[Typed]) -> tuple[Memory, ...]:
+    """Return what several expressions remember (a node they share, once), inner first."""
+    found: dict[int, Memory] = {}
+    for t in parts:
+        for m in memories(t):
+            found.setdefault(id(m.key), m)
     return tuple(found.values())
+
+
+def remembers(t: Typed) -> tuple[tuple[Remembered, Fn], ...]:
+    """Return each value a condition remembers at the start: its key and its function."""
+    return tuple((m.key, m.read) for m in memories(t))
 
 
 def negate(op: str, a: Typed) -> Typed:
@@ -324,7 +396,7 @@ class _Source:
             return f"{self.bind('s', p[0])}({{**{self.bind('a', p[1])}, {read}}}, ctx)"
         if op == "fn":
             return f"{self.bind('f', p[0])}({', '.join(self.value(x) for x in p[1:])})"
-        if op == "start":  # evaluated when the element started (Interrupt.remember)
+        if op in ("start", "track"):  # kept by the element (Interrupt.remember, .track)
             return f"ctx.memory[{self.bind('r', p[0])}]"
         if op == "not":
             return f"(not {self.value(p[0])})"
@@ -398,7 +470,7 @@ def _node_closure(n: Node, made: Mapping[int, MFn]) -> MFn:
     if op == "fn":
         f0, operands = p[0], [part(x) for x in p[1:]]
         return lambda ctx, m: f0(*(o(ctx, m) for o in operands))
-    if op == "start":  # evaluated when the element started (Interrupt.remember)
+    if op in ("start", "track"):  # kept by the element (Interrupt.remember, .track)
         key = p[0]
         return lambda ctx, m: ctx.memory[key]
     if op == "not":
@@ -550,9 +622,18 @@ class _Deferred(Interrupt):
         return _compile(self.__dict__["_node"], as_bool=True)
 
     @functools.cached_property
+    def _memories(self) -> tuple[Memory, ...]:
+        return memories(Typed(BOOL, self.__dict__["_node"]))
+
+    @functools.cached_property
     def remember(self) -> tuple[tuple[Any, Fn], ...]:
-        """Each ``at_start`` of the condition, compiled (see :class:`Interrupt`)."""
-        return remembers(Typed(BOOL, self.__dict__["_node"]))
+        """What the condition remembers, compiled, as read at the start (:class:`Interrupt`)."""
+        return tuple((m.key, m.read) for m in self._memories)
+
+    @functools.cached_property
+    def track(self) -> tuple[tuple[Any, Fn, Callable[[Any, Any], Any]], ...]:
+        """The running memories (``lowest``...), with their folds (:class:`Interrupt`)."""
+        return tuple((m.key, m.read, m.fold) for m in self._memories if m.fold is not None)
 
     @functools.cached_property
     def source(self) -> str:

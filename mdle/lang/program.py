@@ -28,6 +28,8 @@ __all__ = [
     "MessageUse",
     "NEVER",
     "AtomNode",
+    "LiveArg",
+    "LiveArgs",
     "StringNode",
     "StringKind",
     "Element",
@@ -45,14 +47,18 @@ class Interrupt:
     ``source`` is the canonical text (for ``mdle show``, traces and messages);
     ``never`` marks the interrupt that never fires, so the runtime can skip it.
     ``remember`` lists the values the condition reads as they were when the element
-    started (``at_start(...)``): a key, and the function the runtime evaluates once, at
-    the start, to store under it in ``ctx.memory``.
+    started (``at_start(...)``, and the first reading of ``lowest``, ``highest``,
+    ``ever``): a key, and the function the runtime evaluates once, at the start, to
+    store under it in ``ctx.memory``, inner before outer. ``track`` lists the running
+    memories (``lowest(e)``...): a key, the function read, and the fold that joins
+    each tick's reading to the value held, applied before each test.
     """
 
     test: Callable[[Context], bool]
     source: str
     never: bool = False
     remember: tuple[tuple[Any, Callable[[Context], Any]], ...] = ()
+    track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...] = ()
     #: The conditions joined by a top-level ``or`` (``at_goal or stalled``): each one's
     #: text and test, so that the runtime can say which fired. Empty for one condition.
     parts: tuple[tuple[str, Callable[[Context], bool]], ...] = ()
@@ -107,13 +113,43 @@ class StringKind(enum.Enum):
 
 
 @dataclass(frozen=True)
+class LiveArg:
+    """A control law's argument read while its atom runs: ``theta`` of ``heading(theta + 90 deg)``.
+
+    ``read(ctx)`` evaluates it (SI), ``text`` is its canonical text, ``param`` the law's
+    parameter it is given to (its declared range is checked at each reading).
+    """
+
+    name: str
+    text: str
+    read: Callable[[Context], Any]
+    param: Any
+
+
+@dataclass(frozen=True)
+class LiveArgs:
+    """The arguments of an atom's control law that are read while it runs.
+
+    ``args`` lists them; ``remember`` and ``track`` are what their expressions remember
+    (``at_start``, ``lowest``...), as for :class:`Interrupt`: evaluated when the atom
+    starts, and folded at each tick before the arguments are read.
+    """
+
+    args: tuple[LiveArg, ...]
+    remember: tuple[tuple[Any, Callable[[Context], Any]], ...] = ()
+    track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...] = ()
+
+
+@dataclass(frozen=True)
 class AtomNode:
     """An atom sigma = (U, xi, T), instantiated and ready to run.
 
     ``label`` names it in element paths (``patrol/cruise``): the atom's name, or the
     control law's name for an atom written inline. ``args`` are the law's arguments in
     SI (defaults filled in). ``scale`` is the scaled atom's alpha for the (v, omega)
-    channels; the timer already includes beta.
+    channels; the timer already includes beta. ``live`` holds the arguments read while
+    the atom runs (an expression of sensor functions, ``at_start``...), whose place in
+    ``args`` is a NaN; None when every argument is fixed.
     """
 
     label: str
@@ -124,6 +160,7 @@ class AtomNode:
     scale: tuple[float, float] = (1.0, 1.0)
     span: Span | None = None
     sends: tuple[Send, ...] = ()
+    live: LiveArgs | None = None
 
 
 @dataclass(frozen=True)

@@ -93,7 +93,8 @@ def _show_arg(value: object, dim: Dim) -> str:
 
 
 def _atom_text(a: AtomNode) -> str:
-    args = ", ".join(f"{p.name} = {_show_arg(a.args[p.name], p.dim)}"
+    live = {} if a.live is None else {arg.name: arg.text for arg in a.live.args}
+    args = ", ".join(f"{p.name} = {live.get(p.name) or _show_arg(a.args[p.name], p.dim)}"
                      for p in a.law.params if p.name in a.args)
     text = f"{a.law.name}({args})"
     if a.scale != (1.0, 1.0):

@@ -27,7 +27,7 @@ from mdle.atoms.registry import Context
 from mdle.core.backend import STOP, Backend, ClockMode, Command, Observation, clearance_floor
 from mdle.core.errors import Diagnostic, MdleError, MdleRuntimeError, Span
 from mdle.core.pose import Pose
-from mdle.lang import AtomNode, Element, Send, StringNode
+from mdle.lang import AtomNode, Element, LiveArgs, Quantity, Send, StringNode, show_value
 from mdle.runtime.events import (
     Cause,
     Collision,
@@ -82,7 +82,7 @@ class _Slot:
 
     __slots__ = ("node", "path", "label", "level", "kind", "is_atom", "timer", "limit",
                  "test", "source", "_children", "repeat", "step", "start", "args", "alpha_v",
-                 "alpha_w", "law", "span", "tested", "sends", "remember")
+                 "alpha_w", "law", "span", "tested", "sends", "remember", "track", "live")
 
     def __init__(self, node: Element, path: str, label: str, level: int) -> None:
         self.node = node
@@ -101,6 +101,11 @@ class _Slot:
         # the values the interrupt reads as they were at the start (at_start): evaluated
         # once when the element starts, kept in its frame
         self.remember = () if self.test is None else node.interrupt.remember
+        # the running memories (lowest, highest, ever): folded before each test, by the
+        # test itself (the levels without any pay nothing)
+        self.track = () if self.test is None else node.interrupt.track
+        if self.track and self.test is not None:
+            self.test = _folding(self.track, self.test)
         self.span: Span | None = node.span
         self._children: tuple[_Slot, ...] | None = ()
         self.repeat = False
@@ -111,8 +116,11 @@ class _Slot:
         self.alpha_w = 1.0
         self.law = ""
         self.sends: tuple[Send, ...] = ()
+        # the law's arguments read while the atom runs (None: all fixed)
+        self.live: LiveArgs | None = None
         if isinstance(node, AtomNode):
             self.sends = node.sends
+            self.live = node.live
             self.is_atom = True
             self.kind = "atom"
             self.step = node.law.step
@@ -141,6 +149,27 @@ class _Slot:
             self._children = None
 
 
+def _fold(track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...],
+          ctx: Context, memory: Any) -> None:
+    """Join this tick's readings to the running memories, inner before outer.
+
+    Every tick the element runs, whatever its condition would skip; a second test in
+    the same tick (after an element ended) folds the same readings again, which
+    changes nothing.
+    """
+    for key, read, fold in track:
+        memory[key] = fold(memory[key], read(ctx))
+
+
+def _folding(track: tuple[tuple[Any, Callable[[Context], Any], Callable[[Any, Any], Any]], ...],
+             test: Callable[[Context], bool]) -> Callable[[Context], bool]:
+    """Return ``test`` that first folds this tick's readings into ``ctx.memory``."""
+    def folded(ctx: Context) -> bool:
+        _fold(track, ctx, ctx.memory)
+        return test(ctx)
+    return folded
+
+
 def _child_slots(node: StringNode, path: str, level: int) -> list[_Slot]:
     seen: dict[str, int] = {}
     out = []
@@ -154,7 +183,7 @@ def _child_slots(node: StringNode, path: str, level: int) -> list[_Slot]:
 class _Frame:
     """A running element: its slot, start time, position in its string, atom state."""
 
-    __slots__ = ("slot", "start", "index", "state", "pass_tick", "memory")
+    __slots__ = ("slot", "start", "index", "state", "pass_tick", "memory", "arg_memory")
 
     def __init__(self, slot: _Slot, start: float, tick: int) -> None:
         self.slot = slot
@@ -164,6 +193,8 @@ class _Frame:
         self.pass_tick = tick
         #: what the element's interrupt remembered when it started (at_start)
         self.memory: Mapping[Any, Any] = _NO_MEMORY
+        #: what the atom's live law arguments remember (at_start, lowest...)
+        self.arg_memory: dict[Any, Any] = {}
 
 
 class _Check(NamedTuple):
@@ -403,8 +434,9 @@ class Scheduler:
             frame = stack[-1]
             slot = frame.slot
             ctx.t = now - frame.start
+            args = slot.args if slot.live is None else self._read_args(frame, ctx, fold=True)
             try:
-                cmd = slot.step(slot.args, ctx, frame.state)
+                cmd = slot.step(args, ctx, frame.state)
             except MdleError:
                 raise
             except Exception as exc:
@@ -413,6 +445,7 @@ class Scheduler:
             if slot.alpha_v != 1.0 or slot.alpha_w != 1.0:
                 cmd = Command(cmd.v * slot.alpha_v, cmd.omega * slot.alpha_w)
             if slot.sends and self._radio is not None:
+                ctx.memory = frame.arg_memory  # what the values sent remember
                 self._send(slot, ctx, now)
         else:
             cmd = STOP
@@ -577,10 +610,15 @@ class Scheduler:
             if slot.remember:
                 frame.memory = self._remember(slot, ctx)
             if slot.is_atom:
+                args = slot.args
+                if slot.live is not None:
+                    ctx.t = 0.0
+                    frame.arg_memory = self._remember_args(slot, ctx)
+                    args = self._read_args(frame, ctx, fold=False)
                 if slot.start is not None:
                     ctx.t = 0.0
                     try:
-                        frame.state = slot.start(slot.args, ctx)
+                        frame.state = slot.start(args, ctx)
                     except MdleError:
                         raise
                     except Exception as exc:
@@ -606,6 +644,56 @@ class Scheduler:
                 raise _failure(f"interrupt `{slot.source}` of `{slot.path}` failed to "
                                "remember its start values", slot.span, exc) from exc
         return memory
+
+    @staticmethod
+    def _remember_args(slot: _Slot, ctx: Context) -> dict[Any, Any]:
+        """Evaluate what the live arguments of ``slot``'s law remember, at its start."""
+        assert slot.live is not None
+        memory: dict[Any, Any] = {}
+        ctx.memory = memory
+        for key, fn in slot.live.remember:
+            try:
+                memory[key] = fn(ctx)
+            except MdleError:
+                raise
+            except Exception as exc:
+                raise _failure(f"the arguments of `{slot.law}` in `{slot.path}` failed to "
+                               "remember their start values", slot.span, exc) from exc
+        return memory
+
+    @staticmethod
+    def _read_args(frame: _Frame, ctx: Context, fold: bool) -> dict[str, Any]:
+        """Return the law's arguments with those read each tick read now (at ``ctx.t``).
+
+        ``fold`` joins this tick's readings to the running memories first (not at the
+        start, whose readings are their first values). A value outside the parameter's
+        declared range ends the run with an error naming it.
+        """
+        slot = frame.slot
+        live = slot.live
+        assert live is not None
+        ctx.memory = frame.arg_memory
+        args = dict(slot.args)
+        name = ""
+        try:
+            if fold and live.track:
+                _fold(live.track, ctx, frame.arg_memory)
+            for arg in live.args:
+                name = arg.text
+                args[arg.name] = arg.read(ctx)
+        except MdleError:
+            raise
+        except Exception as exc:
+            raise _failure(f"`{name}`, an argument of `{slot.law}` in `{slot.path}`, failed "
+                           f"at t = {ctx.t:.3f} s", slot.span, exc) from exc
+        for arg in live.args:
+            value = args[arg.name]
+            if arg.param is not None and not arg.param.accepts(float(value)):
+                raise MdleRuntimeError(Diagnostic(
+                    slot.span, f"`{arg.name}` of `{slot.law}` in `{slot.path}` is "
+                    f"{show_value(Quantity(float(value), arg.param.dim))} at t = {ctx.t:.3f} s "
+                    f"(`{arg.text}`): it must be {arg.param.range_words()} (SI units)"))
+        return args
 
     @staticmethod
     def _which(slot: _Slot | None, ctx: Context) -> str | None:

@@ -12,7 +12,7 @@ from mdle import sim
 from mdle.cli import main
 from mdle.experiments.navigation import GAP, generate_world, run_navigation
 from mdle.lang import load_program
-from mdle.runtime import Cause, run_named
+from mdle.runtime import Cause, EventKind, Recorder, run_named
 from mdle.sim.world_yaml import parse_world, read_world
 
 NAV = Path(__file__).resolve().parents[2] / "plans" / "nav"
@@ -31,11 +31,12 @@ def _run(plan: Path, until: float) -> tuple[object, object]:
 
 
 def test_the_library_has_its_plans_each_with_a_world() -> None:
-    assert {p.stem for p in PLANS} == {"bug2", "leave-clear", "patrol"}
+    assert {p.stem for p in PLANS} == {"bug1", "bug2", "leave-clear", "patrol"}
     assert all(p.with_suffix(".world.yaml").is_file() for p in PLANS)
 
 
-@pytest.mark.parametrize("name, goal", [("bug2", (10.0, 0.0)), ("leave-clear", (9.0, 1.0))])
+@pytest.mark.parametrize("name, goal", [("bug1", (10.0, 0.0)), ("bug2", (10.0, 0.0)),
+                                        ("leave-clear", (9.0, 1.0))])
 def test_each_goal_seeking_plan_reaches_its_goal_in_its_world(name: str,
                                                               goal: tuple[float, float]) -> None:
     _, result = _run(NAV / f"{name}.mdle", until=300.0)
@@ -45,6 +46,33 @@ def test_each_goal_seeking_plan_reaches_its_goal_in_its_world(name: str,
     assert goal_end, result.termination  # type: ignore[attr-defined]
     end = result.events[-1].pose  # type: ignore[attr-defined]
     assert math.hypot(end.x - goal[0], end.y - goal[1]) < 0.35
+
+
+def test_bug1_goes_round_each_obstacle_and_leaves_at_its_point_nearest_the_goal() -> None:
+    program = load_program(NAV / "bug1.mdle")
+    backend = sim.SimBackend(read_world(NAV / "bug1.world.yaml"), seed=1)
+    recorder = Recorder()
+    try:
+        result = run_named(program, None, backend, rate=10, until=300.0, observers=[recorder])
+    finally:
+        backend.close()
+    assert not result.collided
+    starts = [e for e in result.events if e.path.startswith("main/bug1/hug")
+              and e.kind is EventKind.START]
+    ends = [t for t in result.terminations if t.path.startswith("main/bug1/hug")]
+    assert len(starts) == len(ends) == 2  # one per obstacle of the world
+    assert all(t.cause is Cause.INTERRUPT for t in ends)
+    for start, end in zip(starts, ends, strict=True):
+        path = [(s.x, s.y) for s in recorder.samples if start.time <= s.time <= end.time]
+        goal = [math.hypot(10.0 - x, y) for x, y in path]
+        hit = (start.pose.x, start.pose.y)
+        away = [math.hypot(x - hit[0], y - hit[1]) for x, y in path]
+        back = next(i for i, d in enumerate(away) if d < 0.6 and max(away[:i + 1]) > 1.5)
+        # it came back to the hit point, then left within 0.1 m of the least distance
+        # to the goal of the whole turn, and nowhere nearer the goal than that
+        assert back < len(path) - 1
+        assert goal[-1] < min(goal[:back + 1]) + 0.1
+        assert min(goal[:back + 1]) < goal[0] - 1.0
 
 
 def test_the_patrol_reaches_every_waypoint_in_turn() -> None:

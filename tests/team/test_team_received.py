@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mdle.runtime import Recorder
-from mdle.sim.team import TeamSim
 from mdle.team.file import load_team, read_team
 from mdle.team.run import TeamRun
+
+from mdle.runtime import Recorder
+from mdle.sim.team import TeamSim
 
 WORLD = """\
 name: duel
@@ -63,3 +64,14 @@ def test_a_message_each_tick_ends_each_wait_a_tick_apart(tmp_path: Path) -> None
     ends = _hold_ends(rec["blue"])
     assert ends == [("main/hold", "interrupt", 0.1), ("main/hold#2", "interrupt", 0.2),
                     ("main/hold#3", "interrupt", 0.3)]
+
+
+def test_a_value_sent_may_remember_where_its_atom_started(tmp_path: Path) -> None:
+    # red drives 2 s, then sends how far it has gone since `tell` started: 0 at first,
+    # over 0.2 m about 0.4 s later (at 0.5 m/s); blue waits for that
+    red = ("atom tell = (go(0.5 m/s), never, 3 s, send(gap, x - at_start(x)))\n"
+           "plan main = (((go(0.5 m/s), never, 2 s), tell), never, 10 s)\n")
+    blue = "plan main = (((stop, message(gap) > 0.2 m, 8 s)), never, 10 s)\n"
+    (end,) = [e for e in _run(tmp_path, red, blue)["blue"].events
+              if e.kind.value == "end" and e.path == "main/stop"]
+    assert end.cause is not None and end.cause.value == "interrupt" and 2.3 < end.time < 2.8
