@@ -25,7 +25,7 @@ def load_laws(path: str | os.PathLike[str], base: Registry | None = None) -> Reg
     """Return the shipped control laws and sensor functions with those of ``path``.
 
     ``base`` is the registry they join (None: the shipped one; the installed packages'
-    laws, :mod:`mdle.installed_laws`, when there are any).
+    laws, :mod:`mdle.atoms.installed_laws`, when there are any).
 
     Raises
     ------

@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     from mdle.lang import missing_entry
 
     files = expand_paths(args.files)
-    from mdle.installed_laws import registry_option
+    from mdle.atoms.installed_laws import registry_option
 
     args.registry = registry_option(args.laws)  # installed packages' laws, --laws
     robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once

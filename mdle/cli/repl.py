@@ -92,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
     elif args.backend == "pioneer":
         session = _robot_session(args, until)
     else:
-        from mdle.installed_laws import registry_option
+        from mdle.atoms.installed_laws import registry_option
 
         session = Session(args.world, seed=args.seed, until=until, robot=args.robot,
                           sensing=args.sensing, realtime=args.realtime,

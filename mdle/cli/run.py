@@ -236,8 +236,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
+    from mdle.atoms.installed_laws import registry_option
     from mdle.core.errors import Diagnostic, MdleError
-    from mdle.installed_laws import registry_option
     from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
 

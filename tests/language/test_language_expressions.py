@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
-from mdle.core.backend import Observation, RobotLimits, Scan
-from mdle.core.errors import CheckError
-from mdle.core.pose import Pose
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Context
 from mdle.atoms.sensors import bearing_to_point, clear
+from mdle.core.backend import Observation, RobotLimits, Scan
+from mdle.core.errors import CheckError
+from mdle.core.pose import Pose
 from mdle.lang import format_source, load_text
 from mdle.runtime import run_named
 from mdle.runtime.scripted import ScriptedBackend
@@ -85,10 +85,9 @@ def test_a_definition_s_arguments_stay_fixed() -> None:
 
 
 def test_a_law_s_parameter_declared_fixed_takes_no_reading() -> None:
+    from mdle.atoms.registry import Param, Registry, control_law
     from mdle.core.backend import Command
     from mdle.core.units import LENGTH
-
-    from mdle.atoms.registry import Param, Registry, control_law
 
     @control_law(Param("d", LENGTH, fixed=True))
     def hold(args: object, ctx: Context, state: object) -> Command:

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from mdle.team.file import load_team, read_team
-from mdle.team.run import TeamRun
-
 from mdle.runtime import Recorder
 from mdle.sim.team import TeamSim
+from mdle.team.file import load_team, read_team
+from mdle.team.run import TeamRun
 
 WORLD = """\
 name: duel
