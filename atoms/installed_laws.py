@@ -25,7 +25,6 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-import mdle
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
 from mdle.core.errors import Diagnostic, MdleError, Span
 
@@ -34,9 +33,10 @@ __all__ = ["GROUP", "installed_laws", "registry_option"]
 #: The entry point group a package declares its laws in.
 GROUP = "mdle.laws"
 
-#: Where mdle's own code lives (the package's folder, and those it links to), wherever
-#: this module stands in it
-_MDLE = tuple(os.path.realpath(Path(mdle.__file__).parent / d) + os.sep
+#: Where mdle's own code lives (the package's folder, and those it links to). This module
+#: is imported as mdle/atoms/installed_laws.py (through the link in a checkout), so two
+#: folders up is the package's.
+_MDLE = tuple(os.path.realpath(Path(__file__).parent.parent / d) + os.sep
               for d in (".", "atoms", "sim", "grammar"))
 #: Python's standard library (importlib), and where packages are installed (which may lie
 #: inside it, as in a pyenv interpreter)
