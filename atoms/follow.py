@@ -22,8 +22,9 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.atoms import closest, safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
-from mdle.atoms.latency import STILL, shift_front, shift_side
+from mdle.atoms.latency import STILL, Predictor, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
+from mdle.atoms.steering import Gains, Memory
 from mdle.core.backend import Command
 from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
@@ -58,9 +59,6 @@ class FollowState:
 
 def start_follow(args: Args, ctx: Context) -> FollowState:
     """Make the per-atom state when a ``follow_boundary`` atom starts."""
-    from mdle.atoms.latency import Predictor
-    from mdle.atoms.steering import Gains, Memory
-
     umax = min(float(args["umax"]), ctx.limits.max_turn_rate)
     kf = float(args["kf"])
     # critical damping of e'' + (mu/2) e' + 2 kf v^2 e = 0 at this speed (docs/steering.md):

@@ -25,6 +25,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from mdle.atoms import default_registry
 from mdle.atoms.registry import LawSpec, Registry, SensorSpec
 from mdle.core.errors import Diagnostic, MdleError, Span
 
@@ -70,7 +71,6 @@ def installed_laws() -> Registry | None:
                     key=lambda ep: (ep.name, ep.value))
     if not points:
         return None
-    from mdle.atoms import default_registry
 
     registry = default_registry()
     owner: dict[str, str] = {}  # each name declared by an entry point: which one

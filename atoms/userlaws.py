@@ -14,6 +14,7 @@ import inspect
 import os
 import traceback
 
+from mdle.atoms import default_registry
 from mdle.atoms.registry import REQUIRED, LawSpec, Registry, SensorSpec
 from mdle.core.errors import Diagnostic, MdleError, Span
 from mdle.core.units import Dim
@@ -34,8 +35,6 @@ def load_laws(path: str | os.PathLike[str], base: Registry | None = None) -> Reg
         syntax error: located at its line), declares nothing, or declares a name the
         shipped registry has.
     """
-    from mdle.atoms import default_registry
-
     name = os.fspath(path)
     if not os.path.isfile(name):
         raise MdleError(Diagnostic(None, f"--laws {name}: no such file"))

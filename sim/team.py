@@ -40,6 +40,7 @@ from mdle.core.pose import Pose
 from mdle.sim.backend import SimBackend, SimEvent
 from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlude, occlusions
 from mdle.sim.ladar import settle_rows
+from mdle.sim.raycast import RayHits
 from mdle.sim.world import RobotPlace, World
 
 __all__ = ["RobotPlace", "Member", "Radio", "TeamSim", "TOUCHING", "MAX_PIECES"]
@@ -318,8 +319,6 @@ def _same_contact(a: SimEvent, b: SimEvent, label: str | None = None) -> bool:
 def _occluded(hits: Any, ox: float, oy: float, angles: np.ndarray, t: np.ndarray,
               which: np.ndarray | None, discs: Discs) -> Any:
     """Return ray hits with the discs in front of the walls (tangents, curvature too)."""
-    from mdle.sim.raycast import RayHits
-
     closer = t < hits.ranges
     if not closer.any():
         return hits

@@ -160,3 +160,68 @@ def test_a_long_module_says_why_at_its_top(path: Path) -> None:
     assert _says_why(path), \
         f"{name} has {_lines(path)} lines: split it, or say why in its docstring's " \
         "second paragraph (`Over 500 lines: ...`)"
+
+
+def _loads_at_import(tree: ast.Module) -> Iterator[str]:
+    """Yield the modules a module's top level loads (with their packages), not those
+    imported only for type checking."""
+    def walk(body: list[ast.stmt]) -> Iterator[ast.stmt]:
+        for node in body:
+            if isinstance(node, ast.If):
+                test = ast.unparse(node.test)
+                if test not in ("TYPE_CHECKING", "typing.TYPE_CHECKING"):
+                    yield from walk(node.body)
+                yield from walk(node.orelse)
+            elif isinstance(node, ast.Try):
+                yield from walk(node.body)
+            else:
+                yield node
+
+    for node in walk(tree.body):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+        for name in names:
+            parts = name.split(".")
+            yield from (".".join(parts[:k]) for k in range(1, len(parts) + 1))
+
+
+def test_an_import_inside_a_function_defers_a_module() -> None:
+    """An import inside a function is there for start-up time: it must defer a module the
+    module's own top-level imports do not load already (else it belongs at the top)."""
+    trees = {_module_name(p): ast.parse(p.read_text(encoding="utf-8")) for p in _every_module()}
+    loads = {m: set(_loads_at_import(t)) for m, t in trees.items()}
+    closure: dict[str, set[str]] = {}
+
+    def loaded(m: str) -> set[str]:
+        if m not in closure:
+            seen: set[str] = set()
+            stack = [m]
+            while stack:
+                x = stack.pop()
+                if x not in seen:
+                    seen.add(x)
+                    stack.extend(loads.get(x, ()))
+            closure[m] = seen
+        return closure[m]
+
+    wrong = []
+    for m, tree in sorted(trees.items()):
+        for fn in ast.walk(tree):
+            if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            for node in ast.walk(fn):
+                if isinstance(node, ast.Import):
+                    targets = [a.name for a in node.names]
+                elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                    targets = [f"{node.module}.{a.name}" if f"{node.module}.{a.name}" in trees
+                               else node.module for a in node.names]
+                else:
+                    continue
+                guarded = any(isinstance(t, ast.Try) and node in ast.walk(t)
+                              for t in ast.walk(fn))
+                if not guarded and all(t in loaded(m) for t in targets):
+                    wrong.append(f"{m}:{node.lineno}: {ast.unparse(node)}")
+    assert not wrong, "already loaded at import; move to the top:\n" + "\n".join(wrong)

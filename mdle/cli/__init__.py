@@ -9,13 +9,17 @@ anything else, so a signal at any moment ends mdle with 128 + its number and a m
 
 from __future__ import annotations
 
+import importlib
+
 # Only what the signal handlers need is imported before they are installed.
 import os
+import signal
 import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from mdle.console.signals import SignalGuard
+from mdle import __version__
+from mdle.console.signals import SIGNALS, SignalGuard
 
 if TYPE_CHECKING:
     import argparse
@@ -30,9 +34,7 @@ COMMANDS: tuple[str, ...] = ("check", "fmt", "show", "run", "plot", "export", "r
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser with every subcommand."""
     import argparse
-    import importlib
 
-    from mdle import __version__
 
     parser = argparse.ArgumentParser(
         prog="mdle",
@@ -103,10 +105,6 @@ def _hold_signals_to_the_end() -> None:
     resets only the handlers it installed), and ignoring is process-wide, whichever
     thread a signal lands on.
     """
-    import signal
-
-    from mdle.console.signals import SIGNALS
-
     for sig in SIGNALS:
         try:
             signal.signal(sig, signal.SIG_IGN)

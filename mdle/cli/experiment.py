@@ -27,6 +27,7 @@ from typing import Any
 from mdle.cli import generated_study
 from mdle.cli.options import hertz
 from mdle.console import output
+from mdle.core.errors import MdleError
 
 __all__ = ["add_parser", "run"]
 
@@ -82,7 +83,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"mdle experiment {args.name}: {misplaced}", file=sys.stderr)
         return output.EXIT_USAGE
     if args.name == "curvature" or getattr(args, "resume", False):
-        from mdle.core.errors import MdleError
         from mdle.core.userfile import UserFileError, writable_folder
 
         try:  # before the computing: its results go there

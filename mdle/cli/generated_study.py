@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from mdle.console import output
+from mdle.core.errors import WorldError
 
 if TYPE_CHECKING:  # numpy and the simulator load only when a study runs (mdle check stays light)
     from mdle.experiments.generated import Row, StudyConfig
@@ -60,7 +61,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def config_from(args: argparse.Namespace) -> "StudyConfig | str":
     """Build the study's configuration from the options, or return what is wrong with them."""
-    from mdle.core.errors import WorldError
     from mdle.experiments.generated import StudyConfig
     from mdle.sim.profiles import robot_profile
 

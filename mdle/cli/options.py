@@ -11,7 +11,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from mdle.core.ranges import MAX_SEED
+from mdle.core.ranges import MAX_SEED, RATE
 
 if TYPE_CHECKING:
     from mdle.core.motion_limits import KnownRobot
@@ -139,8 +139,6 @@ def seed(text: str) -> int:
 
 def hertz(text: str) -> float:
     """Read a control rate in Hz (an argparse ``type``), in the range every input shares."""
-    from mdle.core.ranges import RATE
-
     try:
         value = float(text)
     except ValueError:

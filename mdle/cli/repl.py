@@ -9,11 +9,12 @@ question), and every way out stops the robot and closes the connection.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from typing import TYPE_CHECKING, Any
 
 from mdle.cli.options import add_simulation_options, positive_seconds
-from mdle.cli.ros2 import add_ros2_options, check_ros2_options
+from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 
 if TYPE_CHECKING:
     from mdle.repl.robot import RobotSession
@@ -68,8 +69,6 @@ def add_parser(subparsers: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Start the session; returns the exit code."""
-    import math
-
     from mdle.console import output
     from mdle.repl.commands import Repl
     from mdle.repl.session import DEFAULT_UNTIL, Session
@@ -169,7 +168,6 @@ def _robot_session(args: argparse.Namespace, until: float | None) -> RobotSessio
 
 def _ros2_session(args: argparse.Namespace, until: float | None) -> RobotSession:
     """Connect to the ROS 2 robot the options name and wrap it in a REPL session."""
-    from mdle.cli.ros2 import open_ros2_backend
     from mdle.repl.robot import RobotSession
 
     backend = open_ros2_backend(args, 10.0, {})

@@ -38,6 +38,7 @@ from mdle.cli.recorders import recorders
 from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.console import output
 from mdle.console.signals import SignalGuard, interruption_of, signal_name
+from mdle.core.errors import Diagnostic, MdleError
 from mdle.core.ranges import COORDINATE, HEADING
 
 if TYPE_CHECKING:
@@ -237,7 +238,6 @@ def run(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, guard: SignalGuard, parts: _Parts) -> int:
     from mdle.atoms.installed_laws import registry_option
-    from mdle.core.errors import Diagnostic, MdleError
     from mdle.lang import load_program
     from mdle.runtime import Scheduler, element_of
 
@@ -360,7 +360,6 @@ def _header(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _open_trace(path: str, header: dict[str, Any]) -> TraceWriter:
-    from mdle.core.errors import Diagnostic, MdleError
     from mdle.record.trace import TraceWriter
 
     if "\x00" in path:  # open() would raise ValueError, not OSError
@@ -440,8 +439,6 @@ def _open_backend(args: argparse.Namespace, header: dict[str, Any]) -> tuple[Any
 
     Fills the header's world, seed and robot.
     """
-    from mdle.core.errors import Diagnostic, MdleError
-
     if args.backend == "ros2":  # mdle/cli/ros2.py
         return open_ros2_backend(args, args.rate, header), None
     if args.backend == "pioneer":

@@ -14,10 +14,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from mdle.console import output
+from mdle.core.errors import MdleError
 
 __all__ = ["add_parser", "run", "progress_bar"]
 
@@ -88,7 +90,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from dataclasses import replace
 
     from mdle.sweep import read_study, run_sweep
     from mdle.sweep.executors import DaskExecutor, LocalExecutor, default_jobs
@@ -114,7 +115,6 @@ def _sweep(args: argparse.Namespace) -> int:
         executor = LocalExecutor(args.jobs)
         where = f"{executor.jobs} local processes" + (
             "" if args.jobs else f" (all {default_jobs()} cores)")
-    from mdle.core.errors import MdleError
     from mdle.core.userfile import UserFileError, read_user_file, writable_folder
 
     try:  # read again for the results folder's copy: the file may have gone meanwhile
@@ -204,7 +204,6 @@ def progress_bar(where: str) -> _RichProgress:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from mdle.core.errors import MdleError
     from mdle.sweep.report import axes, format_summary, plot_axes
     from mdle.sweep.table import read_rows
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 __all__ = ["BACKEND_KINDS", "open_backend"]
 
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from mdle.core.errors import BackendError
@@ -66,8 +67,6 @@ def open_backend(kind: str, connect: str, laser: str | None = None, *, rate: flo
         Unknown kind, malformed URL, an option unknown or out of its range (checked
         before anything is opened), nothing answering, missing pyserial, ...
     """
-    from dataclasses import replace
-
     from mdle.drivers.arcos import ROBOT_PARAMS
     from mdle.drivers.limits import LASER_MAX_RANGE, ROBOT_PARAM_RANGES, read_number
     from mdle.drivers.lms200_driver import Lms200Driver, Lms200Options

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -237,8 +238,6 @@ def table_rows(runs: Sequence[FollowRun]) -> list[tuple[str, str, int, int, floa
     |d - rc| (m), engaged runs (mean |d - rc| over the second half below
     :data:`ENGAGED_ERR`).
     """
-    from collections import defaultdict
-
     by: dict[tuple[str, str], list[FollowRun]] = defaultdict(list)
     for r in runs:
         by[(r.world, r.sensing)].append(r)

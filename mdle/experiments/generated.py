@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -249,8 +249,6 @@ def replay_files(spec: RunSpec) -> tuple[str, str]:
     rate and sensing to pass: ``mdle run NAME.mdle --rate R --sensing S`` with the world
     saved beside it as ``NAME.world.yaml``.
     """
-    from dataclasses import replace
-
     from mdle.core.pose import Pose
     from mdle.sim.generated import generate_shape
     from mdle.sim.profiles import robot_profile

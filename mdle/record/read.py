@@ -11,6 +11,7 @@ mount from ``/tf_static``). A file cut off by a kill is read up to its last whol
 from __future__ import annotations
 
 import base64
+import contextlib
 import json
 import math
 import os
@@ -18,6 +19,8 @@ import struct
 from typing import Any
 
 from mdle.core.errors import Diagnostic, Span
+from mdle.core.userfile import UserFileError, open_user_file, os_reason
+from mdle.record import MissingExtraError, require
 from mdle.record.trace import TRACE_FORMAT, TRACE_VERSION, Trace, TraceError
 
 __all__ = ["read_recording"]
@@ -38,8 +41,6 @@ def read_recording(path: str | os.PathLike[str]) -> Trace:
         The MCAP libraries are missing, the file is not MCAP, or it is not an mdle
         recording (no ``/mdle/state`` topic).
     """
-    from mdle.record import MissingExtraError, require
-
     path = os.fspath(path)
     try:
         require("reading an MCAP recording")
@@ -53,7 +54,6 @@ def read_recording(path: str | os.PathLike[str]) -> Trace:
         if found is None:
             raise _error(path, "no .mcap file in this rosbag2 folder")
         source = found
-    from mdle.core.userfile import UserFileError, open_user_file, os_reason
 
     try:  # a regular file only: a FIFO or a device is refused, not read until it ends
         f = open_user_file(source)
@@ -184,7 +184,6 @@ def _decoder(factory: Any, encoding: str, schema: Any) -> Any:
     The ROS 2 message parser prints ``Error processing ...`` on standard error before it
     raises on a damaged schema; the raise becomes mdle's own message, the print is dropped.
     """
-    import contextlib
     import io
 
     with contextlib.redirect_stderr(io.StringIO()):

@@ -18,12 +18,13 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from importlib import metadata
 from typing import Any
 
 import numpy as np
 
 from mdle.record.describe import diagnostic_names, footprint
-from mdle.record.markers import PathPieces
+from mdle.record.markers import PathPieces, obstacle_markers
 from mdle.record.mcap_file import McapFile
 from mdle.record.outlet import LiveSink, Outlet
 from mdle.record.tick import TickEncoder, Ticks, times_ns
@@ -106,8 +107,6 @@ def to_ns(t: float) -> int:
 
 def library_name() -> str:
     """Return the writer's name for the MCAP header (mdle and mcap versions)."""
-    from importlib import metadata
-
     parts = []
     for dist in ("mdle", "mcap"):
         try:
@@ -263,7 +262,6 @@ class RosRecording:
 
                 self.out.add(self.channels["/map"], ns, occupancy_grid(self._world, ns))
             if self._world is not None and "/obstacles" in self.channels:
-                from mdle.record.markers import obstacle_markers
 
                 self.out.add(self.channels["/obstacles"], ns,
                              obstacle_markers(self._world, ns))

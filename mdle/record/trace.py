@@ -27,6 +27,7 @@ import platform
 import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+from importlib import metadata
 from math import isfinite
 from typing import IO, TYPE_CHECKING, Any, NamedTuple
 
@@ -74,8 +75,6 @@ class TraceWriteError(MdleError):
 
 def versions() -> dict[str, str]:
     """Versions of mdle, Python and the numeric libraries, for the trace header."""
-    from importlib import metadata
-
     out = {"python": platform.python_version()}
     for dist in ("mdle", "numpy", "shapely"):
         try:

@@ -21,6 +21,7 @@ False
 
 from __future__ import annotations
 
+import difflib
 import math
 import os
 import re
@@ -37,7 +38,7 @@ from mdle.core.errors import Diagnostic, MdleError
 from mdle.core.pose import Pose
 from mdle.core.ranges import COORDINATE, HEADING, MAX_SEED
 from mdle.core.userfile import file_fault, file_fault_words
-from mdle.lang import keywords, statement_keywords
+from mdle.lang import keywords, statement_keywords, yaml_as_plan
 from mdle.repl import views
 from mdle.repl.reports import RunReport
 from mdle.repl.session import ReplError, Session
@@ -261,7 +262,6 @@ class Repl:
         name, args = words[0], words[1:]
         cmd = COMMANDS.get(name)
         if cmd is None:
-            import difflib
 
             close = difflib.get_close_matches(name, list(COMMANDS), n=1)
             raise ReplError(Diagnostic(None, f"unknown command `:{name}`",
@@ -421,7 +421,6 @@ class Repl:
         try:
             names, warnings = self.session.load(path)
         except MdleError as err:
-            from mdle.lang import yaml_as_plan
 
             raise yaml_as_plan(path, err, "to make it the session's world: "
                                f"`:world {path}`") from None

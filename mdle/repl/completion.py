@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterable, Iterator
 from prompt_toolkit.completion import CompleteEvent, Completer, Completion, PathCompleter
 from prompt_toolkit.document import Document
 
+from mdle.core.units import unit_value
 from mdle.lang import DefKind
 from mdle.repl.commands import COMMANDS, DEFINITION_KEYWORDS, KEYWORDS, Repl
 
@@ -105,8 +106,6 @@ class MdleCompleter(Completer):
         Those of the parameter's dimension when the number is an argument of a law or
         sensor, else every unit.
         """
-        from mdle.core.units import unit_value
-
         found = _enclosing_call_at(before)
         dim = None
         if found is not None:

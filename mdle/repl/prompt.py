@@ -17,12 +17,14 @@
 from __future__ import annotations
 
 import os
+import signal
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
+from prompt_toolkit import PromptSession
 from prompt_toolkit.completion import CompleteEvent
 
 from mdle.console.signals import ends_session
@@ -72,7 +74,6 @@ def make_prompt_session(repl: Repl, *, input: Input | None = None,
     output. With ``history`` False (or when the data directory cannot be created) the
     history lives in memory only.
     """
-    from prompt_toolkit import PromptSession
     from prompt_toolkit.application import get_app
     from prompt_toolkit.completion.base import get_common_complete_suffix
     from prompt_toolkit.filters import Condition, has_completions
@@ -140,8 +141,6 @@ def _ask_before_moving(repl: Repl, input: Input | None, output: Output | None) -
         return
 
     def ask(question: str) -> bool:
-        from prompt_toolkit import PromptSession
-
         try:
             answer = PromptSession[str](input=input, output=output).prompt(
                 f"{question} [y/N] ")
@@ -234,8 +233,6 @@ def ctrl_c_interrupts(stream: IO[str] | None) -> Iterator[None]:
     block, both restored after it. Without a terminal (``stream`` None, or not a tty)
     only the handler is seen to.
     """
-    import signal
-
     handler = signal.getsignal(signal.SIGINT)
     if not callable(handler):  # SIG_IGN / SIG_DFL: a run could not be stopped
         signal.signal(signal.SIGINT, signal.default_int_handler)

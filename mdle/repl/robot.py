@@ -22,12 +22,14 @@ A :class:`RobotSession` runs the same inputs as in simulation against a robot re
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 from mdle.atoms.registry import Registry
 from mdle.core.backend import Backend
 from mdle.core.errors import Diagnostic, MdleError
+from mdle.core.motion_limits import KnownRobot
 from mdle.core.pose import Pose
 from mdle.repl.reports import RunReport, StepOutcome, _side_stats
 from mdle.repl.runs import _Run
@@ -87,7 +89,6 @@ class RobotSession(Session):
         self._told_lost = False
         self._closed = False
         super().__init__(None, registry=registry, rate=rate, until=until, realtime=False)
-        from mdle.core.motion_limits import KnownRobot
 
         limits = backend.limits
         self.workspace.robot = KnownRobot(name, limits.max_speed, limits.max_reverse_speed,
@@ -258,8 +259,6 @@ class RobotSession(Session):
 
     def plot(self, out: str | os.PathLike[str]) -> str:
         """Draw the odometry path since the last reset (no world: there is none)."""
-        import tempfile
-
         from mdle.view.plot import plot_trace
 
         with tempfile.TemporaryDirectory(prefix="mdle-repl-") as tmp:

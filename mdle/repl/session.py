@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import tempfile
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
@@ -30,8 +31,9 @@ from mdle.atoms.registry import Registry
 from mdle.console.signals import ends_session
 from mdle.core.backend import Backend, Observation, RobotLimits
 from mdle.core.errors import Diagnostic, MdleError
+from mdle.core.motion_limits import KnownRobot
 from mdle.core.pose import Pose
-from mdle.lang import Element, Workspace
+from mdle.lang import DefKind, Element, Workspace, format_statement
 from mdle.repl.reports import (
     LoadedRun,
     RunReport,
@@ -168,7 +170,6 @@ class Session:
             backend.reset(pose)
         self._stop_stepping()
         self.world, self.backend = world, backend
-        from mdle.core.motion_limits import KnownRobot
 
         self.workspace.robot = KnownRobot.of(
             backend.profile, "--robot" if self._robot else f"the robot of world `{world.name}`")
@@ -245,8 +246,6 @@ class Session:
 
     def _forms(self) -> dict[str, str]:
         """Each definition's canonical text, to tell a changed definition from a retyped one."""
-        from mdle.lang import format_statement
-
         out = {}
         for name in self.workspace.names():
             d = self.workspace.definition(name)
@@ -336,10 +335,6 @@ class Session:
         plan defined last; else whatever runnable element was defined last. None when
         nothing runs without arguments.
         """
-        import re
-
-        from mdle.lang import DefKind
-
         program = self.workspace.program()
         if program.entry is not None:
             return program.entry

@@ -10,8 +10,10 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
+from mdle.atoms.registry import Context
 from mdle.core.backend import Observation
 from mdle.core.pose import Pose
+from mdle.core.units import ANGLE, CURVATURE, NONE, TURN_RATE
 from mdle.runtime.events import ended_how
 
 if TYPE_CHECKING:
@@ -89,7 +91,6 @@ def format_scan(obs: Observation, registry: Registry, limits: RobotLimits,
     import numpy as np
 
     from mdle.atoms.boundary import boundary_view
-    from mdle.atoms.registry import Context
 
     scan = obs.scan
     if scan is None or len(scan.ranges) == 0:
@@ -181,8 +182,6 @@ def _reported(v: float, report: Report | None) -> str:
 
     Angles in degrees, turn rates in rad/s (as the command above), curvatures in 1/m.
     """
-    from mdle.core.units import ANGLE, CURVATURE, NONE, TURN_RATE
-
     if report is None:
         return f"{v:.3g}"
     if report.absent is not None and v == report.absent:

@@ -19,6 +19,7 @@ from contextlib import contextmanager
 from dataclasses import replace
 from typing import Any, Protocol
 
+from mdle.core.errors import MdleError
 from mdle.sweep.worker import Outcome, execute
 
 __all__ = ["Executor", "LocalExecutor", "DaskExecutor", "Task", "lost_outcome", "default_jobs"]
@@ -280,7 +281,6 @@ class DaskExecutor:
         try:
             import distributed
         except ImportError:
-            from mdle.core.errors import MdleError
 
             raise MdleError("--dask needs dask.distributed: pip install 'mdle[dask]'") from None
         self._own = not isinstance(cluster, distributed.Client)
@@ -288,7 +288,6 @@ class DaskExecutor:
             try:
                 self.client = distributed.Client(cluster, timeout=f"{timeout}s")
             except (OSError, TimeoutError) as err:
-                from mdle.core.errors import MdleError
 
                 raise MdleError(f"--dask {cluster}: cannot reach the scheduler ({err})"
                                 ) from None

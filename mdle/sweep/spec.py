@@ -31,14 +31,16 @@ from __future__ import annotations
 import itertools
 import math
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from mdle.core.errors import MdleError, WorldError
 from mdle.core.ranges import RATE
-from mdle.core.userfile import os_reason
+from mdle.core.userfile import UserFileError, os_reason, read_user_file
 from mdle.sim.yaml_doc import _Doc, _yaml_value
 from mdle.sim.yaml_values import _closest, _integer, _mapping, _number, _show, _string
 
@@ -150,8 +152,6 @@ def read_study(path: str | os.PathLike[str]) -> Study:
     SpecError
         The file cannot be read, or what :func:`parse_study` reports.
     """
-    from mdle.core.userfile import UserFileError
-
     p = Path(path)
     try:
         text = _read_text(p)
@@ -166,8 +166,6 @@ def read_study(path: str | os.PathLike[str]) -> Study:
 
 def _read_text(path: Path) -> str:
     """Read a file the spec names (regular files of bounded size only), as UTF-8."""
-    from mdle.core.userfile import read_user_file
-
     return read_user_file(path).decode("utf-8-sig")
 
 
@@ -356,7 +354,6 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
 
     name = _string(doc, path, v)
     if name in list_worlds():
-        from importlib import resources
 
         text = resources.files("mdle.sim").joinpath("worlds", f"{name}.yaml").read_text("utf-8")
         return WorldChoice(name, text)
@@ -373,7 +370,6 @@ def _world(doc: _Doc, path: str, base: Path, v: Any) -> WorldChoice:
         raise _fail(doc, path, f"no reference world or world file `{name}`"
                     + (f" (did you mean `{hint}`?)" if hint else
                        f"; reference worlds: {', '.join(list_worlds())}"))
-    from mdle.core.userfile import UserFileError
 
     try:
         text = _read_text(p)
@@ -391,7 +387,6 @@ def _robot(doc: _Doc, path: str, base: Path, v: Any) -> RobotChoice:
     from mdle.sim.world_robots import _robot as robot_section
 
     if isinstance(v, str) and (v.endswith((".yaml", ".yml")) or "/" in v):
-        from mdle.core.userfile import UserFileError
 
         p = base / v
         try:
@@ -519,7 +514,6 @@ def _value_text(doc: _Doc, path: str, v: Any) -> str:
 
 
 def _split_unit(text: str) -> tuple[float, str] | None:
-    import re
 
     m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*", text)
     return (float(m.group(1)), m.group(2)) if m else None

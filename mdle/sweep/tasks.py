@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mdle.sweep.keys import canonical
-from mdle.sweep.spec import StartRule, Study, WorldChoice
+from mdle.sweep.spec import SpecError, StartRule, Study, WorldChoice
 
 __all__ = ["RunTask", "expand", "start_poses"]
 
@@ -122,7 +122,6 @@ def start_poses(rule: StartRule, world: WorldChoice
 def _random_poses(rule: StartRule, choice: WorldChoice) -> list[tuple[float, float, float]]:
     import numpy as np
 
-    from mdle.sweep.spec import SpecError
     from mdle.sweep.worlds import build_world
 
     world = build_world(choice.text, choice.label)

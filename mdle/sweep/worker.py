@@ -18,6 +18,9 @@ import traceback
 from dataclasses import dataclass
 from typing import Any
 
+from mdle.core.errors import MdleError
+from mdle.sim import SimBackend
+from mdle.sweep.spec import SAMPLE_FIELDS
 from mdle.sweep.tasks import RunTask
 
 __all__ = ["Outcome", "execute", "STATUSES"]
@@ -44,7 +47,6 @@ def execute(task: RunTask) -> Outcome:
         metrics, trace = _run(task)
         row.update(metrics)
     except Exception as exc:  # a run's failure is a row, never the end of the sweep
-        from mdle.core.errors import MdleError
 
         row["status"] = "error"
         if isinstance(exc, MdleError):
@@ -74,9 +76,7 @@ def _run(task: RunTask) -> tuple[dict[str, Any], bytes | None]:
     from mdle.runtime import run
     from mdle.runtime.api import element_of
     from mdle.runtime.observer import Recorder
-    from mdle.sim import SimBackend
     from mdle.sweep.metrics import field_summary, follow_atoms, follow_metrics
-    from mdle.sweep.spec import SAMPLE_FIELDS
 
     program = load_text(task.plan_text, task.labels.get("plan", "<plan>"),
                         settings=dict(task.settings), files=dict(task.plan_files),

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from mdle.sim.yaml_doc import _Doc
 from mdle.sweep.keys import canonical
 
 __all__ = ["GENERATOR_VERSION", "generated_text", "build_world"]
@@ -59,6 +60,5 @@ def build_world(text: str, label: str, robot: str | dict[str, Any] | None = None
 def robot_from(value: str | dict[str, Any], label: str) -> Any:
     """Return the robot profile a name or a profile mapping describes."""
     from mdle.sim.world_robots import _robot as robot_section
-    from mdle.sim.yaml_doc import _Doc
 
     return robot_section(_Doc(f"<robot {label}>", ""), "robot", value)

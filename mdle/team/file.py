@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections.abc import Sequence
@@ -190,8 +191,6 @@ def load_team(spec: TeamSpec, *, world: str | None = None, overrides: Sequence[s
         The world or a plan has errors, a robot is not in the world, two robots overlap,
         or the team's messages and robot names do not fit (every error, with places).
     """
-    import dataclasses
-
     from mdle import sim
     from mdle.lang import load_program
     from mdle.runtime import element_of

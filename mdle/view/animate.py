@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.core.errors import Diagnostic
 from mdle.record.trace import Trace, decode_ranges
-from mdle.view.figure_output import PlotError
+from mdle.view.figure_output import PlotError, atomic_output
 from mdle.view.plot import draw_world, robot_radius, run_pose
 
 if TYPE_CHECKING:
@@ -93,7 +93,6 @@ def animate_trace(trace: Trace, world: Any, out: str | os.PathLike[str],
     from matplotlib.figure import Figure
     from matplotlib.patches import Circle
 
-    from mdle.view.figure_output import atomic_output
 
     out = os.fspath(out)
     writer = _writer(out)

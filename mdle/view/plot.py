@@ -23,7 +23,13 @@ from mdle.record.load import read_trace
 from mdle.record.trace import Trace
 from mdle.runtime.events import Cause, ended_how
 from mdle.view.figure_output import PlotError, save_figure
-from mdle.view.plot_curvature import CURVATURE_KEYS
+from mdle.view.plot_curvature import (
+    CURVATURE_KEYS,
+    draw_curvature,
+    ladar_mount,
+    measured_curvature,
+    true_curvature,
+)
 
 if TYPE_CHECKING:
     import numpy as np
@@ -102,7 +108,6 @@ def boundary_points(trace: Trace, pose: "tuple[np.ndarray, np.ndarray, np.ndarra
     """
     import numpy as np
 
-    from mdle.view.plot_curvature import ladar_mount
 
     r = trace.column("diag.side_range")
     if not np.isfinite(r).any():
@@ -221,7 +226,6 @@ def trace_figure(trace: Trace, world: Any = None, title: str | None = None) -> "
     from matplotlib.figure import Figure
 
     from mdle.sweep.metrics import path_length
-    from mdle.view.plot_curvature import draw_curvature, measured_curvature, true_curvature
     from mdle.view.plot_nearest import (
         draw_nearest_curvature,
         is_nearest_point_trace,
