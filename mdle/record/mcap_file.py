@@ -32,7 +32,7 @@ from typing import IO
 
 import numpy as np
 
-__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile"]
+__all__ = ["MAGIC", "CHUNK_SIZE", "MAX_CHUNK_AGE", "McapFile", "MessageTally"]
 
 MAGIC = b"\x89MCAP0\r\n"
 
@@ -51,6 +51,44 @@ _INDEX_HEAD = struct.Struct("<BQHI")  # opcode, length, channel, entries' byte l
 _CHUNK_OP = 0x06
 _SLACK = 16 * 1024  # room past chunk_size for the records that fill a chunk
 _CHUNK_HEAD = struct.Struct("<BQQQQII")  # opcode, length, start, end, size, crc, name length
+
+
+class MessageTally:
+    """Messages so far: per channel, in all, and the span of their log times (ns).
+
+    A channel's count is its next message's sequence number. A recording's file keeps one,
+    and so does the outlet that feeds it (which may have no file: a live view alone).
+    """
+
+    def __init__(self) -> None:
+        self.per_channel: list[int] = [0]  # by channel id; ids start at 1
+        self.messages = 0
+        self.first = 2**64 - 1
+        self.last = 0
+
+    def add_channel(self) -> int:
+        """Count a new channel; return its id."""
+        self.per_channel.append(0)
+        return len(self.per_channel) - 1
+
+    def count(self, channel: int, n: int = 1) -> None:
+        """Count ``n`` more messages on ``channel``."""
+        self.per_channel[channel] += n
+        self.messages += n
+
+    def span(self, first: int, last: int) -> None:
+        """Widen the span of log times to hold ``first`` to ``last``."""
+        self.first = min(self.first, first)
+        self.last = max(self.last, last)
+
+    def channel_counts(self) -> dict[int, int]:
+        """Messages per channel id."""
+        return {i: n for i, n in enumerate(self.per_channel) if i}
+
+    @property
+    def time_range(self) -> tuple[int, int] | None:
+        """(first, last) log time (ns), None without messages."""
+        return (self.first, self.last) if self.messages else None
 
 
 class McapFile:
@@ -102,7 +140,7 @@ class McapFile:
         self._channels: list[object] = []
         self._metadata_index: list[object] = []
         self._chunk_index: list[object] = []
-        self._counts: list[int] = [0]         # messages per channel id (index 0 unused)
+        self.tally = MessageTally()           # of the closed chunks' spans, and every count
         # the open chunk's records: one buffer, filled in place and reused for every chunk
         self._buf = bytearray(self._chunk_size + _SLACK)
         self._used = 0
@@ -111,9 +149,6 @@ class McapFile:
         self._blocks: list[list[tuple[np.ndarray, np.ndarray]]] = [[]]
         self._chunk_start = 2**64 - 1
         self._chunk_end = 0
-        self._start = 2**64 - 1
-        self._end = 0
-        self._messages = 0
         self._close_at = clock() + self._max_age
         self.finished = False
         self._out(MAGIC)
@@ -168,7 +203,7 @@ class McapFile:
                          message_encoding=message_encoding, schema_id=schema_id,
                          metadata=dict(metadata or {}))
         self._channels.append(record)
-        self._counts.append(0)
+        self.tally.add_channel()
         self._entries.append([])
         self._blocks.append([])
         record.write(self._builder)
@@ -191,12 +226,11 @@ class McapFile:
     def add(self, channel: int, ns: int, data: bytes) -> None:
         """Add a message on ``channel`` logged at ``ns`` (nanoseconds)."""
         pos = self._reserve(31 + len(data), ns)
-        seq = self._counts[channel]
-        self._counts[channel] = seq + 1
+        seq = self.tally.per_channel[channel]
+        self.tally.count(channel)
         self._entries[channel].append((ns, pos))
         _MESSAGE.pack_into(self._buf, pos, _MESSAGE_OP, 22 + len(data), channel, seq, ns, ns)
         self._buf[pos + 31:pos + 31 + len(data)] = data
-        self._messages += 1
 
     def _reserve(self, size: int, ns: int) -> int:
         """Make room for ``size`` bytes of records logged at ``ns``; return their offset.
@@ -219,7 +253,7 @@ class McapFile:
 
     def count(self, channel: int) -> int:
         """Messages on ``channel`` so far (the next one's sequence number)."""
-        return self._counts[channel]
+        return self.tally.per_channel[channel]
 
     def add_block(self, data: bytes, index: Sequence[tuple[int, np.ndarray, np.ndarray]],
                   first: int, last: int) -> None:
@@ -235,8 +269,7 @@ class McapFile:
         self._buf[pos:pos + len(data)] = data
         for channel, times, offsets in index:
             self._blocks[channel].append((times, offsets + pos))
-            self._counts[channel] += len(times)
-            self._messages += len(times)
+            self.tally.count(channel, len(times))
 
     def tick(self) -> None:
         """Close the open chunk if it is full or has been open for ``max_age`` of wall time."""
@@ -273,8 +306,7 @@ class McapFile:
                 pieces.append(piece)
             self._used = 0
             self._chunk_start, self._chunk_end = 2**64 - 1, 0
-            self._start = min(self._start, start)
-            self._end = max(self._end, end)
+            self.tally.span(start, end)
             # one write: the chunk and its indexes reach the OS together
             self._out_all(pieces)
             size = len(data)
@@ -311,18 +343,18 @@ class McapFile:
     @property
     def message_count(self) -> int:
         """Messages added so far."""
-        return self._messages
+        return self.tally.messages
 
     def channel_counts(self) -> dict[int, int]:
         """Messages per channel id so far."""
-        return {i: n for i, n in enumerate(self._counts) if i}
+        return self.tally.channel_counts()
 
     @property
     def time_range(self) -> tuple[int, int] | None:
         """(first, last) log time of the messages so far (ns), None without messages."""
-        start = min(self._start, self._chunk_start)
-        end = max(self._end, self._chunk_end)
-        return (start, end) if self._messages else None
+        if not self.tally.messages:
+            return None
+        return (min(self.tally.first, self._chunk_start), max(self.tally.last, self._chunk_end))
 
     def finish(self) -> None:
         """Close the last chunk, write the summary and footer, close the file."""
@@ -349,7 +381,7 @@ class McapFile:
 
         span = self.time_range or (0, 0)
         stats = Statistics(
-            message_count=self._messages, schema_count=len(self._schemas),
+            message_count=self.tally.messages, schema_count=len(self._schemas),
             channel_count=len(self._channels), attachment_count=0,
             metadata_count=len(self._metadata_index), chunk_count=len(self._chunk_index),
             message_start_time=span[0], message_end_time=span[1],

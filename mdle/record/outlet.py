@@ -20,7 +20,7 @@ from typing import Protocol
 
 import numpy as np
 
-from mdle.record.mcap_file import McapFile
+from mdle.record.mcap_file import McapFile, MessageTally
 
 __all__ = ["LiveSink", "Outlet"]
 
@@ -66,10 +66,7 @@ class Outlet:
         self._schemas: dict[tuple[str, bytes], int] = {}
         self._schema_of: dict[int, tuple[str, bytes]] = {}
         self._topics: dict[str, int] = {}
-        self._counts: list[int] = [0]
-        self._start = 2**64 - 1
-        self._end = 0
-        self._messages = 0
+        self.tally = MessageTally()
         self.finished = False
 
     # ------------------------------------------------------------------ registration
@@ -92,10 +89,9 @@ class Outlet:
         if topic in self._topics:
             raise ValueError(f"the topic {topic} is registered twice")
         cid = self.file.channel(topic, schema_id, message_encoding, metadata) \
-            if self.file is not None else len(self._counts)
-        if cid != len(self._counts):
+            if self.file is not None else len(self.tally.per_channel)
+        if cid != self.tally.add_channel():
             raise AssertionError("the file's channel ids and the outlet's disagree")
-        self._counts.append(0)
         self._topics[topic] = cid
         name, data = self._schema_of[schema_id]
         for sink in self.live:
@@ -115,21 +111,14 @@ class Outlet:
 
     def count(self, channel: int) -> int:
         """Messages on ``channel`` so far (the next one's sequence number)."""
-        return self._counts[channel]
-
-    def _span(self, first: int, last: int) -> None:
-        if first < self._start:
-            self._start = first
-        if last > self._end:
-            self._end = last
+        return self.tally.per_channel[channel]
 
     def add(self, channel: int, ns: int, data: bytes) -> None:
         """Add a message on ``channel`` logged at ``ns``."""
         if self.file is not None:
             self.file.add(channel, ns, data)
-        self._counts[channel] += 1
-        self._messages += 1
-        self._span(ns, ns)
+        self.tally.count(channel)
+        self.tally.span(ns, ns)
         for sink in self.live:
             sink.add(channel, ns, data)
 
@@ -139,9 +128,8 @@ class Outlet:
         if self.file is not None:
             self.file.add_block(data, index, first, last)
         for channel, times, _ in index:
-            self._counts[channel] += len(times)
-            self._messages += len(times)
-        self._span(first, last)
+            self.tally.count(channel, len(times))
+        self.tally.span(first, last)
         if not self.live:
             return
         # the messages in the block's order: (offset, channel, log time)
@@ -165,16 +153,16 @@ class Outlet:
     @property
     def message_count(self) -> int:
         """Messages added so far."""
-        return self._messages
+        return self.tally.messages
 
     def channel_counts(self) -> dict[int, int]:
         """Messages per channel id so far."""
-        return {i: n for i, n in enumerate(self._counts) if i}
+        return self.tally.channel_counts()
 
     @property
     def time_range(self) -> tuple[int, int] | None:
         """(first, last) log time of the messages so far (ns), None without messages."""
-        return (self._start, self._end) if self._messages else None
+        return self.tally.time_range
 
     def finish(self) -> None:
         """End the file (summary, index) and stop the live sinks."""
