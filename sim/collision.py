@@ -177,8 +177,7 @@ class Collider:
         P = self.parts
         if not self.curve_grids or P.arc_radius.shape[0] <= _CULL_ABOVE:
             return None
-        r = P.arc_radius[:, None]
-        return BoxGrid.build(P.arc_center - r, P.arc_center + r)
+        return BoxGrid.of_arcs(P)
 
     @cached_property
     def _ellipse_grid(self) -> BoxGrid | None:
@@ -186,8 +185,7 @@ class Collider:
         P = self.parts
         if not self.curve_grids or P.ell_angle.shape[0] <= _CULL_ABOVE:
             return None
-        r = self._ell_bound[:, None]
-        return BoxGrid.build(P.ell_center - r, P.ell_center + r)
+        return BoxGrid.of_ellipses(P)
 
     def _arcs_in_reach(self, q: complex, best: float) -> tuple[np.ndarray | None, np.ndarray]:
         """Return arcs (None: all) and their distances from ``q``: all that are below ``best``.

@@ -22,8 +22,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from mdle.sim.shapes import Parts
 
 __all__ = ["MAX_CELLS", "PAD", "BoxGrid", "FaceGrid"]
 
@@ -162,6 +166,18 @@ class BoxGrid:
     items: np.ndarray
     size: int
     """How many boxes were indexed."""
+
+    @classmethod
+    def of_arcs(cls, parts: Parts) -> BoxGrid:
+        """Index the arcs of ``parts`` by their circles' boxes (at least one arc)."""
+        r = parts.arc_radius[:, None]
+        return cls.build(parts.arc_center - r, parts.arc_center + r)
+
+    @classmethod
+    def of_ellipses(cls, parts: Parts) -> BoxGrid:
+        """Index the ellipses of ``parts`` by their bounding circles' boxes (at least one)."""
+        r = parts.ell_axes.max(axis=1)[:, None]
+        return cls.build(parts.ell_center - r, parts.ell_center + r)
 
     @classmethod
     def build(cls, lo: np.ndarray, hi: np.ndarray, cell: float | None = None) -> BoxGrid:

@@ -210,8 +210,7 @@ class RayCaster:
         P = self.parts
         if not self.curve_grids or P.arc_radius.shape[0] <= _CULL_ABOVE:
             return None
-        r = P.arc_radius[:, None]
-        return BoxGrid.build(P.arc_center - r, P.arc_center + r)
+        return BoxGrid.of_arcs(P)
 
     @cached_property
     def ellipse_grid(self) -> BoxGrid | None:
@@ -219,8 +218,7 @@ class RayCaster:
         P = self.parts
         if not self.curve_grids or P.ell_angle.shape[0] <= _CULL_ABOVE:
             return None
-        r = self._ell_bound[:, None]
-        return BoxGrid.build(P.ell_center - r, P.ell_center + r)
+        return BoxGrid.of_ellipses(P)
 
     def fan(self, rel: np.ndarray, max_range: float, compiled: bool | None = None,
             indexed: bool | None = None) -> FanCaster:
