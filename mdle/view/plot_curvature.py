@@ -27,7 +27,7 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
 __all__ = ["CURVATURE_KEYS", "Curvature", "measured_curvature", "true_curvature",
-           "robust_limits", "draw_curvature", "side_sign", "ladar_mount"]
+           "robust_limits", "draw_curvature", "finish_panel", "side_sign", "ladar_mount"]
 
 #: Diagnostic names tried, in order, for the measured boundary curvature (1/m).
 CURVATURE_KEYS = ("side_curvature", "curvature", "boundary_curvature")
@@ -170,7 +170,18 @@ def draw_curvature(ax: "Axes", dist: "np.ndarray", measured: Curvature,
         note = "straight faces: true curvature 0; the " + (
             "exact sensor spreads each corner's turn over its side window" if exact
             else "scan's fit smears each corner over its window")
-        # beside the panel, under its legend: never over the curves
+    else:
+        note = None
+    finish_panel(ax, lo, hi, "boundary curvature at the side ray", note)
+    return clipped
+
+
+def finish_panel(ax: Axes, lo: float, hi: float, title: str, note: str | None) -> None:
+    """Give a curvature panel its limits, zero line, labels, grid, legend and title.
+
+    ``note`` (if any) stands beside the panel, under its legend: never over the curves.
+    """
+    if note is not None:
         ax.text(1.015, 0.0, textwrap.fill(note, 34), transform=ax.transAxes, va="bottom",
                 ha="left", fontsize="small", color="0.25")
     ax.set_ylim(lo, hi)
@@ -180,5 +191,4 @@ def draw_curvature(ax: "Axes", dist: "np.ndarray", measured: Curvature,
     ax.grid(True, lw=0.3, alpha=0.5)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
               fontsize="small")
-    ax.set_title("boundary curvature at the side ray", fontsize="medium")
-    return clipped
+    ax.set_title(title, fontsize="medium")

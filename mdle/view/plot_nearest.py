@@ -19,12 +19,11 @@ is followed.
 from __future__ import annotations
 
 import math
-import textwrap
 from typing import TYPE_CHECKING, Any
 
 from mdle.atoms.closest import POINT_KAPPA
 from mdle.record.trace import Trace
-from mdle.view.plot_curvature import Curvature, robust_limits
+from mdle.view.plot_curvature import Curvature, finish_panel, robust_limits
 
 if TYPE_CHECKING:
     import numpy as np
@@ -183,21 +182,12 @@ def draw_nearest_curvature(ax: "Axes", dist: "np.ndarray", measured: Curvature,
             ax.plot(dist[mask], np.full(int(mask.sum()), edge), marker, ms=4,
                     color="tab:orange", ls="none", label=label)
             label = None
+    note = None
     if truth is not None:
         t = truth[np.isfinite(truth)]
         if len(t) and bool(np.all(t == 0.0)):
             note = ("straight faces: true curvature 0; at a corner the boundary turns round a "
                     "point, and so does the model, clamped")
-            # beside the panel, under its legend: never over the curves
-            ax.text(1.015, 0.0, textwrap.fill(note, 34), transform=ax.transAxes,
-                    va="bottom", ha="left", fontsize="small", color="0.25")
-    ax.set_ylim(lo, hi)
-    ax.axhline(0.0, color="0.5", lw=0.6)
-    ax.set_xlabel("distance travelled (m)")
-    ax.set_ylabel("curvature (1/m)\nconvex negative")
-    ax.grid(True, lw=0.3, alpha=0.5)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
-              fontsize="small")
-    ax.set_title("boundary curvature at the nearest point (whole-scan model)",
-                 fontsize="medium")
+    finish_panel(ax, lo, hi, "boundary curvature at the nearest point (whole-scan model)",
+                 note)
     return panel
