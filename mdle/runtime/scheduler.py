@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, NamedTuple
@@ -210,6 +210,24 @@ class _Check(NamedTuple):
     test: Any
     slot: _Slot
     memory: Mapping[Any, Any]
+
+
+def _remembered(pairs: Iterable[tuple[Any, Callable[[Context], Any]]], ctx: Context,
+                span: Span | None, failing: str) -> dict[Any, Any]:
+    """Evaluate each ``(key, fn)`` of ``pairs`` into a fresh memory, which ``ctx`` then reads.
+
+    A plan's own error passes through; any other is reported as ``failing``, at ``span``.
+    """
+    memory: dict[Any, Any] = {}
+    ctx.memory = memory
+    for key, fn in pairs:
+        try:
+            memory[key] = fn(ctx)
+        except MdleError:
+            raise
+        except Exception as exc:
+            raise _failure(failing, span, exc) from exc
+    return memory
 
 
 class Scheduler:
@@ -632,34 +650,18 @@ class Scheduler:
     @staticmethod
     def _remember(slot: _Slot, ctx: Context) -> dict[Any, Any]:
         """Evaluate what ``slot``'s interrupt remembers, at its start (local time 0)."""
-        memory: dict[Any, Any] = {}
         ctx.t = 0.0
-        ctx.memory = memory
-        for key, fn in slot.remember:
-            try:
-                memory[key] = fn(ctx)
-            except MdleError:
-                raise
-            except Exception as exc:
-                raise _failure(f"interrupt `{slot.source}` of `{slot.path}` failed to "
-                               "remember its start values", slot.span, exc) from exc
-        return memory
+        return _remembered(slot.remember, ctx, slot.span,
+                           f"interrupt `{slot.source}` of `{slot.path}` failed to remember its "
+                           "start values")
 
     @staticmethod
     def _remember_args(slot: _Slot, ctx: Context) -> dict[Any, Any]:
         """Evaluate what the live arguments of ``slot``'s law remember, at its start."""
         assert slot.live is not None
-        memory: dict[Any, Any] = {}
-        ctx.memory = memory
-        for key, fn in slot.live.remember:
-            try:
-                memory[key] = fn(ctx)
-            except MdleError:
-                raise
-            except Exception as exc:
-                raise _failure(f"the arguments of `{slot.law}` in `{slot.path}` failed to "
-                               "remember their start values", slot.span, exc) from exc
-        return memory
+        return _remembered(slot.live.remember, ctx, slot.span,
+                           f"the arguments of `{slot.law}` in `{slot.path}` failed to "
+                           "remember their start values")
 
     @staticmethod
     def _read_args(frame: _Frame, ctx: Context, fold: bool) -> dict[str, Any]:
