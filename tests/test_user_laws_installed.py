@@ -14,29 +14,8 @@ from pathlib import Path
 
 import pytest
 
-LAWS = '''\
-"""Laws of the mdle-spiral package: a spiral, and the distance from the start."""
-
-import math
-
-from mdle.atoms.registry import Param, control_law, sensor
-from mdle.core.backend import Command
-from mdle.core.units import LENGTH, SPEED
-
-
-@control_law(Param("v", SPEED, 0.3), Param("grow", LENGTH, 0.2))
-def spiral(args, ctx, state):
-    """Drive a spiral that opens by `grow` every 10 s."""
-    radius = 0.3 + float(args["grow"]) * ctx.t / 10.0
-    v = float(args["v"])
-    return Command(v, v / radius)
-
-
-@sensor(result=LENGTH)
-def from_start(args, ctx):
-    """Return the distance from the start of the run."""
-    return math.hypot(ctx.obs.pose.x, ctx.obs.pose.y)
-'''
+#: The package's laws module (the same as a file's, tests/test_user_laws.py)
+LAWS = (Path(__file__).parent / "data" / "spiral_laws.txt").read_text(encoding="utf-8")
 
 PLAN = "atom out = (spiral(v = 0.3 m/s), from_start > 1.5 m, 1 min)\nrun out\n"
 
