@@ -8,15 +8,8 @@ import pytest
 
 from mdle.cli import main
 
-WORLD = """\
-name: duel
-robot: pioneer2dx
-robots:
-  - {name: red, start: [0, 0, 0]}
-  - {name: blue, start: [3, 0, 180]}
-obstacles:
-  - {type: wall, points: [[-3, -3], [6, -3], [6, 3], [-3, 3]], closed: true}
-"""
+#: Two robots facing each other 3 m apart in a walled room
+WORLD = (Path(__file__).parent.parent / "data" / "duel.world.yaml").read_text(encoding="utf-8")
 
 
 def _files(tmp_path: Path, plans: dict[str, str], team: str | None = None) -> Path:

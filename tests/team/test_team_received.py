@@ -9,15 +9,8 @@ from mdle.sim.team import TeamSim
 from mdle.team.file import load_team, read_team
 from mdle.team.run import TeamRun
 
-WORLD = """\
-name: duel
-robot: pioneer2dx
-robots:
-  - {name: red, start: [0, 0, 0]}
-  - {name: blue, start: [3, 0, 180]}
-obstacles:
-  - {type: wall, points: [[-3, -3], [6, -3], [6, 3], [-3, 3]], closed: true}
-"""
+#: Two robots facing each other 3 m apart in a walled room
+WORLD = (Path(__file__).parent.parent / "data" / "duel.world.yaml").read_text(encoding="utf-8")
 
 # red sends `go` at one tick only (its atom runs for exactly one tick at 10 Hz)
 ONCE = ("atom tell = (stop, never, 0.1 s, send(go, 1))\n"
