@@ -4,13 +4,15 @@ docs/figures/make_figures.py measures them from the runs it draws, writes them t
 docs/figures/numbers.json and rewrites every marked number (``0.012<!--n:KEY-->``) in the
 README and docs/*.md. Here: every marker names a number of the table and quotes it as the
 table has it, and a fresh run of every figure gives the table again (a law that changes
-makes this fail until the script is rerun).
+makes this fail until the script is rerun). And every figure the README and docs show is
+one the script makes.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import json
+import re
 import sys
 from pathlib import Path
 from types import ModuleType
@@ -89,3 +91,19 @@ def test_a_marker_is_rewritten_and_an_unknown_one_named(script: ModuleType) -> N
         "<!--block:a.report-->\n```\nnew\n```\n")
     with pytest.raises(KeyError, match=r"x\.md: no number `a\.gone`"):
         script.rewrite_numbers("1<!--n:a.gone-->", table, "x.md")
+
+
+def test_every_shown_figure_comes_from_the_figures_script() -> None:
+    module = _script()
+    made = set(module.RUNS) | {"figure4-cabinet.png", "figure5-trashcan.png",
+                               "sweep-kf-rate.png"}
+    shown = set()
+    for doc in [ROOT / "README.md", *(ROOT / "docs").glob("*.md")]:
+        shown |= {Path(p).name for p in re.findall(r"!\[[^]]*\]\(([^)]+\.png)\)",
+                                                     doc.read_text("utf-8"))}
+    assert shown and shown <= made
+    # and the script really writes those three (its own functions name them)
+    text = (FIGURES / "make_figures.py").read_text("utf-8")
+    assert "plot_figures(" in text and '"sweep-kf-rate.png"' in text
+    for name in shown:
+        assert (FIGURES / name).stat().st_size < 200_000  # kept small
