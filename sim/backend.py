@@ -57,7 +57,7 @@ from mdle.core.backend import (
 from mdle.core.errors import BackendError, WorldError
 from mdle.core.messages import Inbox
 from mdle.core.pose import Pose
-from mdle.sim.collision import CONTACT, Collider
+from mdle.sim.collision import CONTACT, Clearance, Collider
 from mdle.sim.ladar import Ladar, LadarProfile, ladar_profile
 from mdle.sim.profiles import robot_profile
 from mdle.sim.robot import (
@@ -239,8 +239,8 @@ class SimBackend:
         self._cmd = STOP
         self._stalled = False
         self._collided = False
-        # (clearance in m, index of the nearest obstacle): sim/team.py writes it too
-        self._clear: tuple[float, int] = (clear, owner)
+        # the clearance, exact or a lower bound (_clear_bound): sim/team.py writes it too
+        self._clear = Clearance(clear, owner)
         self._clear_bound = False
         self.events = []
         self._reported = 0  # events already handed out in an observation's truth
@@ -616,7 +616,7 @@ class SimBackend:
                     x, y, th = integrate(x, y, th, piece, piece.duration)
                 else:
                     r = self._collider.sweep(x, y, th, piece, clear)
-                    x, y, th, clear = r.x, r.y, r.theta, (r.clearance, r.obstacle)
+                    x, y, th, clear = r.x, r.y, r.theta, Clearance(r.clearance, r.obstacle)
                     if r.contact:  # the event's time is the contact's, inside the piece
                         contact = True
                         t += r.tau
@@ -633,13 +633,12 @@ class SimBackend:
             if final and not self._lazy_clearance:
                 clear = self._settled_clearance(x, y)
             else:       # a lower bound: the centre moved at most `reach`
-                distance, obs_i = clear
-                clear = (distance - reach, obs_i)
+                clear = Clearance(clear.distance - reach, clear.obstacle)
                 self._clear_bound = True
         if contact:
             self._v = self._w = 0.0
             if not self._stalled:
-                _, obs_i = clear
+                obs_i = clear.obstacle
                 self.events.append(SimEvent("collision", t, x, y, obs_i,
                                             self._obstacle(obs_i)[0]))
             self._stalled = self._collided = True
@@ -673,7 +672,7 @@ class SimBackend:
         return Pose(self._x, self._y, _wrap(self._th))
 
     # ------------------------------------------------------------------ internals
-    def _settled_clearance(self, x: float, y: float) -> tuple[float, int]:
+    def _settled_clearance(self, x: float, y: float) -> Clearance:
         """Return the exact clearance where a step that touched nothing ended."""
         return self._collider.clearance(x, y)
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -37,7 +38,7 @@ from mdle.sim.faceindex import BoxGrid
 from mdle.sim.robot import Phase, integrate
 from mdle.sim.shapes import Parts
 
-__all__ = ["CONTACT", "Collider", "SweepResult"]
+__all__ = ["CONTACT", "Clearance", "Collider", "SweepResult"]
 
 #: Clearance (m) at which the body counts as touching an obstacle.
 CONTACT = 1e-4
@@ -58,6 +59,13 @@ def _reach(distance: float) -> float:
     query computes it, is below ``distance``.
     """
     return distance * (1.0 + 1e-9) + 1e-9
+
+
+class Clearance(NamedTuple):
+    """How far the body is from the nearest obstacle (m), and which obstacle that is."""
+
+    distance: float
+    obstacle: int
 
 
 @dataclass(frozen=True)
@@ -267,13 +275,13 @@ class Collider:
         j = int(d.argmin())
         return float(d[j]), int(self.parts.ell_owner[near[j]])
 
-    def clearance(self, x: float, y: float) -> tuple[float, int]:
+    def clearance(self, x: float, y: float) -> Clearance:
         """Return the distance from the body (disc) to the nearest obstacle, and that obstacle."""
         d, owner = self.distance(x, y)
-        return d - self.radius, owner
+        return Clearance(d - self.radius, owner)
 
     def sweep(self, x: float, y: float, th: float, phase: Phase,
-              start_clearance: tuple[float, int] | None = None) -> SweepResult:
+              start_clearance: Clearance | None = None) -> SweepResult:
         """Move along ``phase`` from ``(x, y, th)`` until its end or first contact.
 
         ``start_clearance`` (clearance, obstacle) at the start, if already known, saves

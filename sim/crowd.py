@@ -23,7 +23,7 @@ from functools import partial
 
 import numpy as np
 
-from mdle.sim.collision import Collider
+from mdle.sim.collision import Clearance, Collider
 from mdle.sim.shapes import Parts
 
 __all__ = ["COMPILED", "Discs", "NO_DISCS", "CrowdCollider", "cast_discs", "occlude",
@@ -225,7 +225,9 @@ class CrowdCollider(Collider):
         self.skip = -1
         self._others = False  # any disc but its own?
         self._reach = np.zeros(0)  # radius of each disc plus the body's (-inf: its own)
-        self._static_at: tuple[float, float, float, int] | None = None
+        # the last static clearance asked for, and where: asked again at the same place
+        self._static_at: tuple[float, float] | None = None
+        self._static_clear = Clearance(math.inf, -1)
 
     def join(self, discs: Discs, skip: int) -> None:
         """Meet the robots at ``discs`` (a live view), except disc ``skip``, its own."""
@@ -236,16 +238,15 @@ class CrowdCollider(Collider):
         if skip >= 0:
             self._reach[skip] = -math.inf
 
-    def static_clearance(self, x: float, y: float) -> tuple[float, int]:
+    def static_clearance(self, x: float, y: float) -> Clearance:
         """Return the clearance to the nearest wall (kept: asked again at the same place)."""
-        at = self._static_at
-        if at is not None and at[0] == x and at[1] == y:
-            return at[2], at[3]
-        c, owner = super().clearance(x, y)
-        self._static_at = (x, y, c, owner)
-        return c, owner
+        if self._static_at == (x, y):
+            return self._static_clear
+        self._static_clear = super().clearance(x, y)
+        self._static_at = (x, y)
+        return self._static_clear
 
-    def clearance(self, x: float, y: float) -> tuple[float, int]:
+    def clearance(self, x: float, y: float) -> Clearance:
         """Return the clearance to the nearest wall or robot, and its index."""
         c, owner = self.static_clearance(x, y)
         d = self.discs
@@ -256,8 +257,8 @@ class CrowdCollider(Collider):
             j = int(gaps.argmin())
             gap = float(gaps[j])
             if gap < c:
-                return gap, self.robot_base + int(d.owner[j])
-        return c, owner
+                return Clearance(gap, self.robot_base + int(d.owner[j]))
+        return Clearance(c, owner)
 
     def _outward(self, x: float, y: float) -> tuple[float, float]:
         """Return the unit vector away from the nearest wall or robot."""

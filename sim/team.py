@@ -38,6 +38,7 @@ from mdle.core.errors import BackendError, WorldError
 from mdle.core.messages import POSE_CHANNEL, DeliveryRules, Inbox, Message
 from mdle.core.pose import Pose
 from mdle.sim.backend import SimBackend, SimEvent
+from mdle.sim.collision import Clearance
 from mdle.sim.crowd import NO_DISCS, CrowdCollider, Discs, cast_discs, occlude, occlusions
 from mdle.sim.ladar import settle_rows
 from mdle.sim.raycast import RayHits
@@ -233,8 +234,7 @@ class Member(SimBackend):
         step: its clearance then is at least the last one less that (the walls stay), and
         the exact clearance is measured only if that bound does not cover the step.
         """
-        c, owner = self._clear
-        self._clear = (c - others_moved, owner)
+        self._clear = Clearance(self._clear.distance - others_moved, self._clear.obstacle)
         self._clear_bound = True
         self._advance_to(t1, last)
 
@@ -251,7 +251,7 @@ class Member(SimBackend):
             bound = max(bound, abs(cmd.v))
         return bound
 
-    def _settled_clearance(self, x: float, y: float) -> tuple[float, int]:
+    def _settled_clearance(self, x: float, y: float) -> Clearance:
         # the walls only: the team adds the others, for every robot at once, once all
         # have moved (TeamSim.step)
         assert isinstance(self._collider, CrowdCollider)
@@ -489,8 +489,8 @@ class TeamSim:
         least = gaps[self._rows, near].tolist()
         base = len(self.world.obstacles)
         for m, gap, j in zip(self.members, least, near.tolist(), strict=True):
-            if gap < m._clear[0]:
-                m._clear = (gap, base + j)
+            if gap < m._clear.distance:
+                m._clear = Clearance(gap, base + j)
 
     def _settle_scans(self) -> None:
         """Cast the scans taken during the step, put the robots into them, add their noise.
