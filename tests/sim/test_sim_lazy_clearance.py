@@ -17,7 +17,7 @@ from mdle.core.pose import Pose
 from mdle.lang import load_text
 from mdle.runtime import Scheduler
 from mdle.sim.backend import SimBackend
-from mdle.sim.collision import Collider
+from mdle.sim.collision import Clearance, Collider
 from mdle.sim.shapes import Rectangle, Wall
 from mdle.sim.world import World
 
@@ -33,7 +33,7 @@ class _Counting(Collider):
 
     queries = 0
 
-    def clearance(self, x: float, y: float) -> tuple[float, int]:
+    def clearance(self, x: float, y: float) -> Clearance:
         type(self).queries += 1
         return super().clearance(x, y)
 
