@@ -120,11 +120,33 @@ def test_corrupted_packet_is_rejected_and_stream_resynchronises(packets: list[Si
                         label="garbage")
     encoded[bad] = garbage + b"\xfa\xfb" * data.draw(st.integers(0, 2)) + bytes(pkt)
     reader = PacketReader()
-    got = [arcos.decode_sip(b) for b in reader.feed(b"".join(encoded))]
+    got = _sips(reader.feed(b"".join(encoded)))
+    # The packets before the corrupted one are read as they were sent, and the stream
+    # finds its way back: the tail's last packet lies beyond the reach of any count (255
+    # bytes) that a false header in the damaged bytes could announce.
+    assert got[:bad] == packets[:bad]
+    assert got[-1] == _TAIL[-1]
+    # Nearly always the checksum rejects the damage and every other packet survives. Only
+    # a false header whose span happens to end in a matching checksum (1 in 65,536) can
+    # swallow some, as hypothesis once found: `\xfa\xfb` twice before the packet, the
+    # second pair read as a header announcing 250 bytes.
     expected = [s for i, s in enumerate(packets) if i != bad] + _TAIL
-    # the checksum catches every single-byte error, and every other packet survives
-    assert got == expected
-    assert reader.rejected > 0
+    assert (got == expected and reader.rejected > 0) or len(got) < len(expected)
+
+
+def _sips(bodies: list[bytes]) -> list[Sip]:
+    """Decode the SIPs among checked packet bodies, dropping any that do not decode.
+
+    The driver does the same (mdle/drivers/pioneer.py): a body with a valid checksum but
+    malformed content is counted and dropped, never raised.
+    """
+    out = []
+    for body in bodies:
+        try:
+            out.append(arcos.decode_sip(body))
+        except ValueError:
+            continue
+    return out
 
 
 def test_reader_skips_a_count_that_swallows_the_next_packet() -> None:
@@ -195,3 +217,26 @@ def test_odometer_relative_to_the_pose_at_connect() -> None:
     state = odo.update(_sip(1000, 2500, theta=quarter))
     assert state.x == pytest.approx(0.5) and state.y == pytest.approx(0.0, abs=1e-4)
     assert state.theta == pytest.approx(0.0)
+
+
+def test_a_false_packet_with_a_matching_checksum_costs_only_what_it_spans() -> None:
+    """The case hypothesis found: a header read inside damaged bytes, whose announced span
+    ends, by a 1-in-65,536 chance, in a matching checksum."""
+    zero = Sip(x=0, y=0, theta=0)
+    packets = [zero, zero, zero,
+               Sip(x=0, y=4563, theta=2047, left_vel=2000, right_vel=2000, battery=255,
+                   control=256, flags=723, compass=255,
+                   sonars=((15, 154), (15, 183), (15, 394), (15, 1686)), moving=True),
+               Sip(x=0, y=23808, theta=-1, left_vel=-16, right_vel=-1793, battery=246,
+                   control=-512, flags=5120, compass=210,
+                   sonars=((0, 5000), (0, 258), (0, 705)), rot_vel=767)]
+    encoded = [arcos.encode_sip(s) for s in packets + _TAIL]
+    damaged = bytearray(encoded[3])
+    damaged[2] ^= 192
+    encoded[3] = b"\xfa\xfb" * 2 + bytes(damaged)
+    reader = PacketReader()
+    bodies = reader.feed(b"".join(encoded))
+    false = [b for b in bodies if b[0] not in arcos.SIP_IDS]
+    assert len(false) == 1 and len(false[0]) == 0xFA - 2  # the span it announced
+    got = _sips(bodies)
+    assert got[:3] == packets[:3] and got[3:] == _TAIL[7:]  # what lay beyond it survives
