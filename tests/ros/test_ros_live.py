@@ -44,13 +44,18 @@ def _mdle() -> list[str]:
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "mdle"]
 
 
-async def _watch(url: str, seconds: float) -> tuple[dict[str, Any], dict[str, list[Any]]]:
-    """Subscribe to WANTED; return the advertised channels and the decoded messages."""
+async def _watch(url: str, wanted: tuple[str, ...], seconds: float,
+                 until: Any = None) -> tuple[dict[str, Any], dict[str, list[Any]]]:
+    """Subscribe to ``wanted`` on every advertisement and decode what comes.
+
+    Return the advertised channels and the decoded messages, after ``seconds`` or as soon
+    as ``until(got)`` is true, or when the server closes.
+    """
     from mcap.records import Schema
     from mcap_ros2.decoder import DecoderFactory
 
     factory = DecoderFactory()
-    got: dict[str, list[Any]] = {t: [] for t in WANTED}
+    got: dict[str, list[Any]] = {t: [] for t in wanted}
     channels: dict[str, Any] = {}
     async with websockets.connect(url, subprotocols=[PROTOCOL],
                                   proxy=None) as ws:  # loopback, never a proxy
@@ -58,10 +63,13 @@ async def _watch(url: str, seconds: float) -> tuple[dict[str, Any], dict[str, li
         subscribed: dict[int, tuple[str, Any]] = {}
         loop = asyncio.get_running_loop()
         end = loop.time() + seconds
-        while loop.time() < end:
+        while loop.time() < end and not (until is not None and until(got)):
             try:
-                frame = await asyncio.wait_for(ws.recv(), timeout=max(0.05, end - loop.time()))
-            except (asyncio.TimeoutError, websockets.ConnectionClosed):
+                frame = await asyncio.wait_for(ws.recv(),
+                                               timeout=max(0.05, min(1.0, end - loop.time())))
+            except asyncio.TimeoutError:
+                continue
+            except websockets.ConnectionClosed:
                 break
             if isinstance(frame, str):
                 op = json.loads(frame)
@@ -70,7 +78,7 @@ async def _watch(url: str, seconds: float) -> tuple[dict[str, Any], dict[str, li
                 subs = []
                 for ch in op["channels"]:
                     channels[ch["topic"]] = ch
-                    if ch["topic"] in WANTED:
+                    if ch["topic"] in wanted:
                         sub = len(subscribed) + 1
                         schema = Schema(id=sub, name=ch["schemaName"],
                                         encoding=ch["schemaEncoding"],
@@ -104,7 +112,7 @@ def test_a_client_subscribes_and_decodes_a_live_run(tmp_path: Path) -> None:
         assert line.startswith("live view: ws://127.0.0.1:"), line  # loopback by default
         url = line.split()[2]
         time.sleep(1.0)  # the run is under way: /map and /tf_static went out already
-        channels, got = asyncio.run(_watch(url, 6.0))
+        channels, got = asyncio.run(_watch(url, WANTED, 6.0))
     finally:
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
@@ -161,46 +169,6 @@ def test_bad_addresses_are_refused_with_a_message(tmp_path: Path) -> None:
         assert proc.returncode == 1 and words in proc.stderr and "Traceback" not in proc.stderr
 
 
-async def _watch_topics(url: str, wanted: tuple[str, ...], until: Any) -> dict[str, list[Any]]:
-    """Subscribe to ``wanted`` on every advertisement; decode until ``until()`` is true."""
-    from mcap.records import Schema
-    from mcap_ros2.decoder import DecoderFactory
-
-    factory = DecoderFactory()
-    got: dict[str, list[Any]] = {t: [] for t in wanted}
-    async with websockets.connect(url, subprotocols=[PROTOCOL], proxy=None) as ws:
-        subscribed: dict[int, tuple[str, Any]] = {}
-        loop = asyncio.get_running_loop()
-        end = loop.time() + 60
-        while loop.time() < end and not until(got):
-            try:
-                frame = await asyncio.wait_for(ws.recv(), timeout=1.0)
-            except asyncio.TimeoutError:
-                continue
-            if isinstance(frame, str):
-                op = json.loads(frame)
-                if op.get("op") != "advertise":
-                    continue
-                subs = []
-                for ch in op["channels"]:
-                    if ch["topic"] in wanted:
-                        sub = len(subscribed) + 1
-                        schema = Schema(id=sub, name=ch["schemaName"],
-                                        encoding=ch["schemaEncoding"],
-                                        data=ch["schema"].encode())
-                        subscribed[sub] = (ch["topic"],
-                                           factory.decoder_for(ch["encoding"], schema))
-                        subs.append({"id": sub, "channelId": ch["id"]})
-                if subs:
-                    await ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
-            else:
-                opcode, sub, _ = struct.unpack_from("<BIQ", frame)
-                if opcode == 1 and sub in subscribed:
-                    topic, decode = subscribed[sub]
-                    got[topic].append(decode(frame[13:]))
-    return got
-
-
 def _changes(active: list[Any]) -> list[str]:
     """The states of ``/mdle/active`` messages, a repeated one once."""
     states = [m.data for m in active]
@@ -221,8 +189,8 @@ def test_a_team_and_a_repl_session_are_shown_live(tmp_path: Path) -> None:
         assert line.startswith("live view: ws://127.0.0.1:"), line
         wanted = ("/leader/footprint", "/follower/footprint", "/leader/scan",
                   "/follower/mdle/active")
-        got = asyncio.run(_watch_topics(line.split()[2], wanted,
-                                        lambda g: all(len(g[t]) >= 3 for t in wanted[:3])))
+        _, got = asyncio.run(_watch(line.split()[2], wanted, 60.0,
+                                    lambda g: all(len(g[t]) >= 3 for t in wanted[:3])))
     finally:
         proc.communicate(timeout=60)
     assert proc.returncode == 0
@@ -244,8 +212,8 @@ def test_a_team_and_a_repl_session_are_shown_live(tmp_path: Path) -> None:
         repl.stdin.write("atom cruise = (go(0.2 m/s), never, 2 s)\n"
                          "atom spin = (turn(20 deg/s), never, 6 s)\ncruise\nspin\n")
         repl.stdin.flush()
-        got = asyncio.run(_watch_topics(
-            line.split()[2], ("/mdle/active", "/scan"),
+        _, got = asyncio.run(_watch(
+            line.split()[2], ("/mdle/active", "/scan"), 60.0,
             lambda g: len(_changes(g["/mdle/active"])) >= 4 and bool(g["/scan"])))
     finally:
         repl.communicate("", timeout=60)
