@@ -1,7 +1,7 @@
 """Run the fuzz tier at scale: ``python tests/fuzz/at_scale.py [--scale N] [--jobs J]``.
 
 Every fuzz test in ``tests/fuzz/`` draws ``N`` times its CI count of hostile inputs
-(``MDLE_FUZZ_SCALE``, see ``tests/fuzz/scale.py``), on ``J`` processes (pytest-xdist),
+(``MDLE_FUZZ_SCALE``, see ``tests/fuzz/conftest.py``), on ``J`` processes (pytest-xdist),
 at low priority (``nice``), with hypothesis's database kept in ``.hypothesis/`` so a
 failure found once is tried first next time. Scale 100 draws about 100,000 inputs and
 takes on the order of an hour on two cores. The exit code is pytest's: 0 when nothing

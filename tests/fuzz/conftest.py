@@ -1,4 +1,4 @@
-"""How many examples each fuzz test draws: a few in CI, many at scale.
+"""What the fuzz tests share: how many examples each draws, a few in CI, many at scale.
 
 Every fuzz test names its CI count through :func:`examples`; ``MDLE_FUZZ_SCALE=N``
 multiplies them all (``tests/fuzz/at_scale.py`` sets it and runs the tier on every

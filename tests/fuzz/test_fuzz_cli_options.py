@@ -4,8 +4,6 @@ error. (Robot and laser URLs are fuzzed with the drivers, tests/drivers.)"""
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
@@ -13,14 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mdle.cli import main
-
-HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
-_scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)
-assert _scale_spec and _scale_spec.loader
-scale = sys.modules.get("mdle_fuzz_scale") or importlib.util.module_from_spec(_scale_spec)
-if "mdle_fuzz_scale" not in sys.modules:
-    sys.modules["mdle_fuzz_scale"] = scale
-    _scale_spec.loader.exec_module(scale)
+from tests.fuzz.conftest import examples
 
 PLAN = "atom a = (arc(0.3 m/s, 20 deg/s), never, 1 s)\nplan main = ((a), never, 2 s)\nrun main\n"
 
@@ -33,7 +24,7 @@ OPTIONS = st.sampled_from(["--seed", "--rate", "--until", "--world", "--plan", "
                            "--sensing", "--laser", "--plot", "--trace"])
 
 
-@settings(max_examples=scale.examples(40), deadline=None,
+@settings(max_examples=examples(40), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(pairs=st.lists(st.tuples(OPTIONS, NUMBERS), min_size=1, max_size=3))
 def test_run_options_end_in_a_documented_code(

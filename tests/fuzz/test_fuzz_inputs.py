@@ -10,8 +10,6 @@ minute.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
 
 import pytest
@@ -22,14 +20,7 @@ from mdle.core.errors import MdleError, render_diagnostic
 from mdle.lang import load_program, read_source
 from mdle.record.load import read_trace
 from mdle.sim.world_yaml import parse_world, read_world
-
-HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
-_scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)
-assert _scale_spec and _scale_spec.loader
-scale = sys.modules.get("mdle_fuzz_scale") or importlib.util.module_from_spec(_scale_spec)
-if "mdle_fuzz_scale" not in sys.modules:
-    sys.modules["mdle_fuzz_scale"] = scale
-    _scale_spec.loader.exec_module(scale)
+from tests.fuzz.conftest import examples
 
 CORPUS = Path(__file__).resolve().parent / "corpus"
 FILES = sorted(CORPUS.iterdir())
@@ -73,7 +64,7 @@ _YAML_PIECES = ["obstacles:", "\n  - ", "{type: circle, center: [0, 0], radius: 
                 "\t", "\n", "x", ",", "'", '"', "-1", "nan", ".inf", "~", "seed: "]
 
 
-@settings(max_examples=scale.examples(120), deadline=None,
+@settings(max_examples=examples(120), deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(hs.lists(hs.sampled_from(_YAML_PIECES), max_size=40).map("".join))
 def test_world_token_soup(text: str) -> None:
@@ -84,7 +75,7 @@ def test_world_token_soup(text: str) -> None:
             render_diagnostic(d, err.sources)
 
 
-@settings(max_examples=scale.examples(80), deadline=None,
+@settings(max_examples=examples(80), deadline=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(hs.binary(max_size=400), hs.sampled_from(["plan.mdle", "world.yaml"]))
 def test_random_bytes_on_every_file_reader(tmp_path_factory: pytest.TempPathFactory,

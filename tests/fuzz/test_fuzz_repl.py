@@ -4,9 +4,7 @@ and never reports an internal error; the session goes on."""
 
 from __future__ import annotations
 
-import importlib.util
 import io
-import sys
 from pathlib import Path
 
 import pytest
@@ -16,14 +14,7 @@ from hypothesis import strategies as st
 from mdle.repl.commands import COMMANDS, Repl
 from mdle.repl.plain import run_plain
 from mdle.repl.session import Session
-
-HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
-_scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)
-assert _scale_spec and _scale_spec.loader
-scale = sys.modules.get("mdle_fuzz_scale") or importlib.util.module_from_spec(_scale_spec)
-if "mdle_fuzz_scale" not in sys.modules:
-    sys.modules["mdle_fuzz_scale"] = scale
-    _scale_spec.loader.exec_module(scale)
+from tests.fuzz.conftest import examples
 
 CORPUS = Path(__file__).parent / "corpus" / "repl"
 
@@ -60,7 +51,7 @@ def repl() -> tuple[Repl, io.StringIO, io.StringIO]:
     return r, out, err
 
 
-@settings(max_examples=scale.examples(80), deadline=None,
+@settings(max_examples=examples(80), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(text=lines())
 def test_random_lines_never_break_the_session(
@@ -78,7 +69,7 @@ def test_random_lines_never_break_the_session(
     assert "internal error" not in err.getvalue()[mark:], (text, err.getvalue()[mark:])
 
 
-@settings(max_examples=scale.examples(40), deadline=None)
+@settings(max_examples=examples(40), deadline=None)
 @given(raw=st.lists(st.binary(max_size=30), max_size=6))
 def test_random_bytes_on_a_piped_stdin(raw: list[bytes]) -> None:
     out, err = io.StringIO(), io.StringIO()

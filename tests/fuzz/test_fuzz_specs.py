@@ -10,9 +10,7 @@ at the expansion budget, without making more instances than the budget allows.
 
 from __future__ import annotations
 
-import importlib.util
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -21,14 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from mdle.core.errors import MdleError
-
-HERE = Path(__file__).resolve().parent
-_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE / "scale.py")
-assert _spec and _spec.loader
-scale = sys.modules.get("mdle_fuzz_scale") or importlib.util.module_from_spec(_spec)
-if "mdle_fuzz_scale" not in sys.modules:
-    sys.modules["mdle_fuzz_scale"] = scale
-    _spec.loader.exec_module(scale)
+from tests.fuzz.conftest import examples
 
 #: Numbers as YAML may carry them, hostile first.
 NUMBERS = st.one_of(
@@ -54,7 +45,7 @@ def _yaml(data: dict[str, Any]) -> str:
 TEAM_KEYS = st.sampled_from(["seed", "rate", "until", "messages"])
 
 
-@settings(max_examples=scale.examples(60), deadline=None,
+@settings(max_examples=examples(60), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(top=st.dictionaries(TEAM_KEYS, VALUES, max_size=3),
        messages=st.dictionaries(st.sampled_from(["range", "loss", "seed"]), NUMBERS,
@@ -78,7 +69,7 @@ STUDY_KEYS = st.sampled_from(["rates", "seeds", "starts", "worlds", "duration", 
 PLAN = "atom follow(kf = 0.5) = (go(0.3 m/s), never, 1 s)\\n"
 
 
-@settings(max_examples=scale.examples(80), deadline=None)
+@settings(max_examples=examples(80), deadline=None)
 @given(st.dictionaries(STUDY_KEYS, VALUES, max_size=3),
        st.sampled_from(["seeds", "starts.random", "parameters.random", "worlds.generated"]),
        NUMBERS)
@@ -111,7 +102,7 @@ STEPS = st.sampled_from(["a", "a + 1 cm", "a - 1 cm", "a * 2", "a * 3 + 1 cm", "
                          "a * 0", "a + a", "2 * a - 1 cm"])
 
 
-@settings(max_examples=scale.examples(40), deadline=None,
+@settings(max_examples=examples(40), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(steps=st.lists(st.tuples(STEPS, STEPS), min_size=1, max_size=30),
        default=st.sampled_from([" = 0 m", " = 1 m", ""]), used=st.booleans())

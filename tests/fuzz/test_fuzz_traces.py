@@ -4,10 +4,8 @@ wrong (exit 0 or 1), never an internal error."""
 
 from __future__ import annotations
 
-import importlib.util
 import io
 import json
-import sys
 from pathlib import Path
 
 import pytest
@@ -19,14 +17,7 @@ from mdle.core.errors import MdleError
 from mdle.record.load import read_trace
 from mdle.record.trace import TraceError
 from mdle.view.plot import trace_figure
-
-HERE_SCALE = Path(__file__).resolve().parent / "scale.py"
-_scale_spec = importlib.util.spec_from_file_location("mdle_fuzz_scale", HERE_SCALE)
-assert _scale_spec and _scale_spec.loader
-scale = sys.modules.get("mdle_fuzz_scale") or importlib.util.module_from_spec(_scale_spec)
-if "mdle_fuzz_scale" not in sys.modules:
-    sys.modules["mdle_fuzz_scale"] = scale
-    _scale_spec.loader.exec_module(scale)
+from tests.fuzz.conftest import examples
 
 CORPUS = Path(__file__).parent / "corpus" / "traces"
 PLAN = """\
@@ -98,7 +89,7 @@ def _read(tmp: Path, data: bytes) -> object:
         return None
 
 
-@settings(max_examples=scale.examples(150), deadline=None,
+@settings(max_examples=examples(150), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_mutated_traces_read_or_fail_with_a_message(
@@ -109,7 +100,7 @@ def test_mutated_traces_read_or_fail_with_a_message(
             trace.column(name)  # type: ignore[attr-defined]
 
 
-@settings(max_examples=scale.examples(20), deadline=None,
+@settings(max_examples=examples(20), deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_mutated_traces_plot_or_fail_with_a_message(
