@@ -326,8 +326,10 @@ def _extent(x: "np.ndarray", y: "np.ndarray", pts: "np.ndarray", world: Any
     """
     import numpy as np
 
-    xs = [x[np.isfinite(x)], pts[:, 0]]
-    ys = [y[np.isfinite(y)], pts[:, 1]]
+    # a sample with no finite pose (a damaged trace) places neither itself nor its boundary
+    seen = pts[np.isfinite(pts).all(axis=1)]
+    xs = [x[np.isfinite(x)], seen[:, 0]]
+    ys = [y[np.isfinite(y)], seen[:, 1]]
     geometry = getattr(world, "geometry", None)
     if geometry is not None and not geometry.is_empty:
         wx0, wy0, wx1, wy1 = geometry.bounds

@@ -115,3 +115,26 @@ def test_a_plot_that_fails_while_written_leaves_no_partial_file(
     with pytest.raises(PlotError, match="cannot write the plot .*No space left"):
         plot_trace(tmp_path / "t.jsonl", tmp_path / "p.png")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.jsonl"]
+
+
+def test_a_sample_without_a_heading_draws_no_boundary_point_and_the_rest_plots(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Found by the fuzz tier: a following sample whose `theta` key was damaged gave its
+    boundary point a NaN, and the figure a NaN height (an internal error)."""
+    (tmp_path / "p.mdle").write_text(
+        "atom f = (follow_boundary(rc = 1 m, v = 0.3 m/s), never, 1.5 s)\nrun f\n")
+    assert main(["run", str(tmp_path / "p.mdle"), "--world", "default", "-q", "--trace",
+                 str(tmp_path / "run.jsonl")]) == 0
+    lines = []
+    damaged = 0
+    for line in (tmp_path / "run.jsonl").read_bytes().splitlines():
+        rec = json.loads(line)
+        if rec["type"] == "sample" and "diag" in rec and not damaged:
+            rec[" heta"] = rec.pop("theta")
+            rec.pop("true_theta", None)
+            damaged += 1
+        lines.append(json.dumps(rec).encode())
+    assert damaged
+    code, err = _plot(tmp_path, b"\n".join(lines) + b"\n", capsys)
+    assert code == 0, err
+    assert (tmp_path / "p.png").read_bytes().startswith(b"\x89PNG")
