@@ -20,18 +20,10 @@ from mdle.sim.faceindex import PAD, FaceGrid
 from mdle.sim.raycast import COMPILED, FanCaster
 from mdle.sim.shapes import Polygon, Rectangle, Wall
 from mdle.sim.world import World
+from tests.sim.conftest import boxes_world
 
 needs_walk = pytest.mark.skipif(not COMPILED or raycast._GRID_WALK is None,
                                 reason="this install has no compiled fan cast")
-
-
-def _boxes(n: int, half: float, seed: int) -> World:
-    rng = np.random.default_rng(seed)
-    boxes = [Rectangle(tuple(rng.uniform(-half, half, 2)), tuple(rng.uniform(0.2, 1.0, 2)),
-                       float(rng.uniform(0, 3))) for _ in range(n)]
-    wall = Wall(((-half - 1, -half - 1), (half + 1, -half - 1), (half + 1, half + 1),
-                 (-half - 1, half + 1)), 0.2, True)
-    return World(f"boxes{n}", obstacles=(wall, *boxes))
 
 
 def _rooms(side: int, seed: int = 0) -> World:
@@ -93,7 +85,7 @@ def test_a_huge_sparse_world_keeps_its_cells_bounded() -> None:
 @needs_walk
 @pytest.mark.parametrize("beams", [181, 361, 7])
 @pytest.mark.parametrize("fov", [1.0, math.pi, 4.5, 2 * math.pi])
-@pytest.mark.parametrize("make", [lambda: _boxes(300, 20, 1), lambda: _rooms(6)],
+@pytest.mark.parametrize("make", [lambda: boxes_world(300, 20, 1), lambda: _rooms(6)],
                          ids=["boxes", "rooms"])
 def test_the_walk_gives_the_plain_casts_numbers_bit_for_bit(
         beams: int, fov: float, make: object) -> None:

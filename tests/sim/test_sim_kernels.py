@@ -28,6 +28,7 @@ from mdle.sim.raycast import COMPILED, FanCaster
 from mdle.sim.shapes import Circle, Curve, Ellipse, Rectangle, Wall
 from mdle.sim.team import TeamSim
 from mdle.sim.world import RobotPlace, World
+from tests.sim.conftest import boxes_world
 
 # Skips only on an install built without a C compiler: the first test below fails an
 # install that had one and did not build the loops, so these never skip unnoticed.
@@ -36,15 +37,6 @@ needs_build = pytest.mark.skipif(raycast._KERNEL is None,
 needs_kernel = pytest.mark.skipif(not COMPILED, reason="this install has no compiled fan cast")
 needs_cuts = pytest.mark.skipif(not crowd.COMPILED,
                                 reason="this install has no compiled occlusions")
-
-
-def _boxes(n: int, half: float, seed: int) -> World:
-    rng = np.random.default_rng(seed)
-    boxes = [Rectangle(tuple(rng.uniform(-half, half, 2)), tuple(rng.uniform(0.2, 1.0, 2)),
-                       float(rng.uniform(0, 3))) for _ in range(n)]
-    wall = Wall(((-half - 1, -half - 1), (half + 1, -half - 1), (half + 1, half + 1),
-                 (-half - 1, half + 1)), 0.2, True)
-    return World(f"boxes{n}", obstacles=(wall, *boxes))
 
 
 def _mixed() -> World:
@@ -80,7 +72,7 @@ def test_the_version_says_whether_the_loops_are_compiled(
 @needs_kernel
 @pytest.mark.parametrize("beams", [181, 361, 7])
 @pytest.mark.parametrize("fov", [1.0, math.pi, 4.5, 2 * math.pi])
-@pytest.mark.parametrize("make", [lambda: _boxes(25, 6, 1), lambda: _boxes(90, 15, 7),
+@pytest.mark.parametrize("make", [lambda: boxes_world(25, 6, 1), lambda: boxes_world(90, 15, 7),
                                   _mixed, _ring], ids=["100 faces", "culled", "mixed", "ring"])
 def test_compiled_and_numpy_scans_are_equal_bit_for_bit(
         beams: int, fov: float, make: Callable[[], World]) -> None:
@@ -101,7 +93,7 @@ def test_compiled_and_numpy_scans_are_equal_bit_for_bit(
 
 @needs_kernel
 def test_a_teams_batch_cast_is_the_same_on_both_paths() -> None:
-    world = _boxes(25, 6, 3)
+    world = boxes_world(25, 6, 3)
     rel = np.linspace(0.0, math.pi, 181)
     fast, ref = world.caster.fan(rel, 8.0, True), world.caster.fan(rel, 8.0, False)
     assert fast.batchable()
@@ -175,7 +167,7 @@ def _kernel_args(fan: FanCaster, ox: float, oy: float, first: float) -> list[Any
 @needs_build
 def test_the_plain_rounding_branch_matches_python_floats() -> None:
     # For a machine whose numpy rounds complex products without a fused multiply-add.
-    world = _boxes(25, 6, 2)
+    world = boxes_world(25, 6, 2)
     fan = world.caster.fan(np.linspace(0.0, math.pi, 181), 8.0)
     rng = np.random.default_rng(11)
     assert raycast._KERNEL is not None
@@ -191,7 +183,7 @@ def test_the_plain_rounding_branch_matches_python_floats() -> None:
 
 @needs_build
 def test_the_kernel_rejects_buffers_of_the_wrong_shape_or_type() -> None:
-    fan = _boxes(5, 3, 0).caster.fan(np.linspace(0.0, math.pi, 181), 8.0)
+    fan = boxes_world(5, 3, 0).caster.fan(np.linspace(0.0, math.pi, 181), 8.0)
     kernel = raycast._KERNEL
     assert kernel is not None
     good = [*_kernel_args(fan, 0.0, 0.0, 0.0), True]
@@ -220,7 +212,7 @@ def test_the_kernel_rejects_buffers_of_the_wrong_shape_or_type() -> None:
 def test_asking_for_the_compiled_cast_where_it_is_missing_says_so(
         monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(raycast, "COMPILED", False)
-    caster = _boxes(5, 3, 0).caster
+    caster = boxes_world(5, 3, 0).caster
     with pytest.raises(ValueError, match="no compiled fan cast"):
         caster.fan(np.linspace(0.0, math.pi, 181), 8.0, compiled=True)
     ranges, hit = caster.fan(np.linspace(0.0, math.pi, 181), 8.0).cast(0.0, 0.0, 0.0)
@@ -342,7 +334,7 @@ def test_hostile_numbers_never_take_the_loops_outside_their_arrays() -> None:
             ranges, valid = np.full((1, 181), 8.0), np.zeros((1, 181), bool)
             occlude(*scans, ranges, valid, compiled=True)
             assert ranges.shape == (1, 181)
-    fan = _boxes(25, 6, 1).caster.fan(np.linspace(0.0, math.pi, 181), 8.0, True)
+    fan = boxes_world(25, 6, 1).caster.fan(np.linspace(0.0, math.pi, 181), 8.0, True)
     headings = [a for a in odd if not math.isinf(a)]   # math.cos refuses an infinite one
     for x in odd:
         for first in headings:
