@@ -20,6 +20,7 @@ from hypothesis import strategies as st
 
 from mdle.core.errors import MdleError
 from tests.fuzz.conftest import examples
+from tests.language.conftest import count_instances
 
 #: Numbers as YAML may carry them, hostile first.
 NUMBERS = st.one_of(
@@ -110,17 +111,9 @@ def test_parameterised_chains_check_within_the_budget(
         steps: list[tuple[str, str]], default: str, used: bool,
         monkeypatch: pytest.MonkeyPatch) -> None:
     from mdle.lang import load_text
-    from mdle.lang.check_state import CheckerState
     from mdle.lang.expansion import MAX_EXPANSION
 
-    made = [0]
-    expand = CheckerState._expand
-
-    def counted(self: CheckerState, d: Any, call: Any) -> None:
-        made[0] += 1
-        expand(self, d, call)
-
-    monkeypatch.setattr(CheckerState, "_expand", counted)
+    made = count_instances(monkeypatch)
     lines = [f"interrupt i0(a{default}) = range(0 deg) < a"]
     lines += [f"interrupt i{k}(a{default}) = i{k - 1}({x}) or i{k - 1}({y})"
               for k, (x, y) in enumerate(steps, 1)]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -11,6 +12,7 @@ from mdle.atoms.registry import BOOL, Args, Context, Param, Registry, control_la
 from mdle.core.backend import Command, Observation, RobotLimits
 from mdle.core.pose import Pose
 from mdle.core.units import ANGLE, LENGTH, SPEED, TIME, TURN_RATE
+from mdle.lang.check_state import CheckerState
 
 REPO = Path(__file__).resolve().parents[2]
 PLANS = sorted((REPO / "plans").rglob("*.mdle"))
@@ -95,3 +97,16 @@ def make_ctx() -> Callable[..., Context]:
 def plans_dir() -> Path:
     """The repository's plans/ folder."""
     return REPO / "plans"
+
+
+def count_instances(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """Count the instances of definitions the checker makes (each passes the budget once)."""
+    made = [0]
+    expand = CheckerState._expand
+
+    def counted(self: CheckerState, d: Any, call: Any) -> None:
+        made[0] += 1
+        expand(self, d, call)
+
+    monkeypatch.setattr(CheckerState, "_expand", counted)
+    return made

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import tracemalloc
 import types
-from typing import Any
 
 import pytest
 from hypothesis import given, settings
@@ -24,6 +23,7 @@ from mdle.core.pose import Pose
 from mdle.core.units import LENGTH
 from mdle.lang import StringNode, load_text, show_program, structure
 from mdle.lang.check import never_ends
+from tests.language.conftest import count_instances
 
 CALLS: list[int] = [0]
 
@@ -127,26 +127,11 @@ def parameter_chain(n: int, step: str, default: str = " = 0 m", first: str = "a"
     return "\n".join(lines) + "\n"
 
 
-def _count_instances(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """Count the instances of definitions the checker makes (each passes the budget once)."""
-    from mdle.lang.check_state import CheckerState
-
-    made = [0]
-    expand = CheckerState._expand
-
-    def counted(self: CheckerState, d: Any, call: Any) -> None:
-        made[0] += 1
-        expand(self, d, call)
-
-    monkeypatch.setattr(CheckerState, "_expand", counted)
-    return made
-
-
 def test_a_chain_of_required_parameters_is_checked_once_per_value(
         monkeypatch: pytest.MonkeyPatch) -> None:
     # checked on its own, a definition's required parameter is NaN; NaN != NaN made every
     # lookup miss, so 16 lines made 2**17 instances (29 s at 23 lines, then MemoryError)
-    made = _count_instances(monkeypatch)
+    made = count_instances(monkeypatch)
     load_text(parameter_chain(16, "a + 1 cm", default=""), "chain.mdle", _registry())
     assert made[0] < 200, made[0]  # 17 definitions, a few values each
 
@@ -156,7 +141,7 @@ def test_the_doubling_family_at_30_lines_checks_and_runs_in_linear_work(
     from mdle import sim
     from mdle.runtime import Scheduler
 
-    made = _count_instances(monkeypatch)
+    made = count_instances(monkeypatch)
     text = parameter_chain(30, "a + 1 cm") + "atom go1 = (go(0.3 m/s), i30, 5 s)\nrun go1\n"
     tracemalloc.start()
     try:
@@ -177,7 +162,7 @@ def test_values_that_never_repeat_are_refused_at_the_budget(
         monkeypatch: pytest.MonkeyPatch) -> None:
     from mdle.lang.expansion import MAX_EXPANSION
 
-    made = _count_instances(monkeypatch)
+    made = count_instances(monkeypatch)
     text = (parameter_chain(30, "a + 1 cm", " = 1 m", "a * 3")
             + "atom go1 = (go(0.3 m/s), i30, 5 s)\nrun go1\n")
     with pytest.raises(CheckError) as err:
