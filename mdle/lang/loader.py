@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from mdle.atoms import default_registry
 from mdle.atoms.registry import Registry
-from mdle.core.collector import collector_paused
+from mdle.core.collector import collector_paused, release_in_slices
 from mdle.core.errors import CheckError, Diagnostic, MdleError, MdleSyntaxError, Severity, Span
 from mdle.core.motion_limits import KnownRobot
 from mdle.core.userfile import UserFileError, read_user_file
@@ -267,8 +267,14 @@ def load_text(text: str, file: str = "<string>", registry: Registry | None = Non
                          found.syntax_failed)
         if settings:
             loaded = override_defaults(loaded, settings, registry)
-        return check_program(loaded.modules, registry, sources=loaded.sources, main=loaded.main,
-                             robot=robot)
+        program = check_program(loaded.modules, registry, sources=loaded.sources,
+                                main=loaded.main, robot=robot)
+        # The syntax trees go a slice of statements at a time: freed at once when this
+        # returned, those of a 200,000-line plan held Ctrl-C for 0.2 s of CPU
+        statements = [s for m in (*found.loaded.modules, *loaded.modules) for s in m.statements]
+        del found, loaded
+        release_in_slices(statements)
+        return program
 
 
 def _check_errors(found: _Found, registry: Registry) -> list[Diagnostic]:
