@@ -25,7 +25,9 @@ command's own end included: what it frees, the garbage collector's passes) in a
 process whose SIGPROF timer fires every 5 ms of CPU, and prints the longest CPU
 stretches between two runs of the Python handler (a signal waits at most that long, in
 CPU time), with where the interpreter resumed, and the longest pass of the cycle
-collector. The process then ends as the console script does.
+collector. The process then ends as the console script does. A sweep and an
+experiment, which would run for hours, get a SIGINT after 20 s of it (planning the
+sweep's 600,000 runs, the first runs, and the interrupted end are measured).
 """
 
 from __future__ import annotations
@@ -181,7 +183,9 @@ def silent_robot() -> tuple[socket.socket, threading.Thread]:
 
 def phases(port: int) -> list[Phase]:
     """Return the phases; each writes its inputs into the folder it is given."""
-    study = "plan: p.mdle\nworlds: [default]\nseeds: {count: 100000}\nduration: 5\n"
+    # 600,000 runs to plan: every axis at most 100,000 (docs/limits.md)
+    study = ("plan: p.mdle\nworlds: [default, empty]\nrates: [10, 20, 50]\n"
+             "seeds: {count: 100000}\nduration: 5\n")
     return [
         Phase("idle", [sys.executable, "-c", "import time; time.sleep(30)"], None, 1.0),
         Phase("check", ["check", "big.mdle"], 2.5,
@@ -196,7 +200,7 @@ def phases(port: int) -> list[Phase]:
         Phase("compile", ["run", "string.mdle", "--world", "empty", "-q", "--trace",
                           "t-string.jsonl"], 2.0,
               inputs=lambda f: long_string_plan(f / "string.mdle", 30_000)),
-        Phase("sweep", ["sweep", "study.yaml", "--out", "sweep-out", "--jobs", "1"], None, 3.0,
+        Phase("sweep", ["sweep", "study.yaml", "--out", "sweep-out", "--jobs", "1"], None, 5.0,
               inputs=lambda f: (f / "study.yaml").write_text(study)),
         Phase("experiment", ["experiment", "random-starts", "--generated", "--shapes", "40",
                              "--jobs", "1"], 1.5),
@@ -282,11 +286,12 @@ def _where(frame: FrameType | None) -> str:
     return " < ".join(out)
 
 
-def probe(argv: list[str]) -> None:
+def probe(argv: list[str], stop: float | None = None) -> None:
     """Run ``mdle argv`` as the console script; print its longest CPU stretches without a handler.
 
     The report is printed when the command has returned, before the process ends the
-    way the console script ends it.
+    way the console script ends it. ``stop``: seconds after which the command gets a
+    SIGINT (a sweep would run for hours); its interrupted end is measured too.
     """
     # benchmarks/mcap.py would stand for the mcap package: mdle is imported without it
     here = Path(__file__).resolve().parent
@@ -315,6 +320,8 @@ def probe(argv: list[str]) -> None:
 
     out = sys.stdout
     sys.argv = ["mdle", *argv]
+    if stop is not None:
+        threading.Timer(stop, os.kill, (os.getpid(), signal.SIGINT)).start()
     try:
         with open(os.devnull, "w") as sys.stdout:  # mdle's own output is not the point
             code = mdle_main()
@@ -338,10 +345,11 @@ def main() -> None:
     ap.add_argument("--signals", nargs="+", default=["INT", "TERM"],
                     choices=["INT", "TERM", "HUP"])
     ap.add_argument("--stalls", action="store_true")
+    ap.add_argument("--stop", type=float, default=None, help=argparse.SUPPRESS)
     ap.add_argument("--probe", nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.probe is not None:
-        probe(a.probe)
+        probe(a.probe, a.stop)
         return
     srv, _ = silent_robot()
     with tempfile.TemporaryDirectory(prefix="mdle-interrupts-") as tmp:
@@ -354,11 +362,13 @@ def main() -> None:
             phase.inputs(folder)
         for phase in chosen:
             if a.stalls:
-                if phase.name in ("idle", "robot-connect", "sweep", "experiment"):
-                    continue  # waits (on a robot, on workers), or runs for hours to its end
+                if phase.name in ("idle", "robot-connect"):
+                    continue  # waits, on the clock or on a robot: nothing to measure
+                # a sweep and an experiment run for hours: stopped by a SIGINT after 20 s
+                stop = ["--stop", "20"] if phase.name in ("sweep", "experiment") else []
                 print(f"{phase.name:17} ", end="", flush=True)
-                subprocess.run([sys.executable, __file__, "--probe", *phase.argv], cwd=folder,
-                               env=dict(os.environ, MPLBACKEND="Agg"), check=False,
+                subprocess.run([sys.executable, __file__, *stop, "--probe", *phase.argv],
+                               cwd=folder, env=dict(os.environ, MPLBACKEND="Agg"), check=False,
                                stderr=subprocess.DEVNULL)
                 continue
             for name in a.signals:
