@@ -188,6 +188,8 @@ def phases(port: int) -> list[Phase]:
              "seeds: {count: 100000}\nduration: 5\n")
     return [
         Phase("idle", [sys.executable, "-c", "import time; time.sleep(30)"], None, 1.0),
+        # while Python starts and mdle is imported: the signal is held to the command's start
+        Phase("start-up", ["check", "p.mdle"], 0.08),
         Phase("check", ["check", "big.mdle"], 2.5,
               inputs=lambda f: big_plan(f / "big.mdle", 200_000)),
         Phase("world-circles", ["run", "p.mdle", "--world", "circles.yaml", "-q", "--trace",
@@ -195,7 +197,7 @@ def phases(port: int) -> list[Phase]:
               inputs=lambda f: circles_world(f / "circles.yaml", 200_000)),
         Phase("world-rectangles", ["run", "p.mdle", "--world", "rects.yaml", "-q"], 1.5,
               inputs=lambda f: rectangles_world(f / "rects.yaml", 20_000)),
-        Phase("world-map", ["run", "p.mdle", "--world", "map.world.yaml", "-q"], 0.6,
+        Phase("world-map", ["run", "p.mdle", "--world", "map.world.yaml", "-q"], 0.35,
               inputs=lambda f: map_world(f, 3000)),
         Phase("compile", ["run", "string.mdle", "--world", "empty", "-q", "--trace",
                           "t-string.jsonl"], 2.0,
@@ -208,7 +210,7 @@ def phases(port: int) -> list[Phase]:
                                 f"tcp://127.0.0.1:{port}", "-q"], None, 2.0),
         Phase("write-plot", ["plot", "t.jsonl", "-o", "t.png"], 1.5,
               inputs=lambda f: big_trace(f / "t.jsonl", 100_000)),
-        Phase("write-mcap", ["export", "t.jsonl", "-o", "t.mcap"], 1.5,
+        Phase("write-mcap", ["export", "t.jsonl", "-o", "t.mcap"], 0.8,
               inputs=lambda f: big_trace(f / "t.jsonl", 100_000)),
     ]
 
@@ -362,8 +364,8 @@ def main() -> None:
             phase.inputs(folder)
         for phase in chosen:
             if a.stalls:
-                if phase.name in ("idle", "robot-connect"):
-                    continue  # waits, on the clock or on a robot: nothing to measure
+                if phase.name in ("idle", "robot-connect", "start-up"):
+                    continue  # waits (on the clock, on a robot), or is over at once
                 # a sweep and an experiment run for hours: stopped by a SIGINT after 20 s
                 stop = ["--stop", "20"] if phase.name in ("sweep", "experiment") else []
                 print(f"{phase.name:17} ", end="", flush=True)
