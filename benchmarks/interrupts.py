@@ -16,9 +16,11 @@ from /proc, so a busy machine does not move the moment), or after a delay on the
 clock for the phases that wait (on a robot, on workers). Two times are measured from
 the signal on the wall clock (the only clock a user at the keyboard has): until mdle
 says ``interrupted`` (the answer: by then the robot is stopped and the trace ended) and
-until the process has exited. Prints, per phase and signal, the exit codes and the
-median and largest of each over the repeats. On a busy machine both include waiting for
-a core: compare them with the same run of the ``idle`` phase (a command that sleeps).
+until the process has exited; and the CPU time the process spent from the signal to
+its exit, which the machine's load does not change. Prints, per phase and signal, the
+exit codes and the median and largest of each over the repeats. On a busy machine the
+wall times include waiting for a core: compare them with the same run of the ``idle``
+phase (a command that sleeps).
 
 ``--stalls`` measures what no load changes instead: each phase runs to its end (the
 command's own end included: what it frees, the garbage collector's passes) in a
@@ -217,12 +219,17 @@ def phases(port: int) -> list[Phase]:
 
 @dataclass(frozen=True)
 class Outcome:
-    """One interruption: exit code, seconds to the message and to the exit (-1: none)."""
+    """One interruption: exit code, seconds to the message and to the exit (-1: none).
+
+    ``cpu``: the CPU seconds the process spent from the signal to its exit (the
+    signal-to-exit delay on a machine with a core to spare).
+    """
 
     code: int
     answered: float
     exited: float
     stderr: str
+    cpu: float = -1.0
 
 
 _TICK = os.sysconf("SC_CLK_TCK")
@@ -262,12 +269,18 @@ def interrupt(phase: Phase, signum: int, cwd: Path) -> Outcome:
     if proc.poll() is not None:  # the phase was over before the signal
         reader.join(5)
         return Outcome(proc.returncode, -1.0, -1.0, "".join(lines))
+    before = cpu_of(proc.pid)
     sent = time.monotonic()
     proc.send_signal(signum)
-    proc.wait(timeout=120)
+    hang = threading.Timer(120.0, proc.kill)
+    hang.start()
+    _, status, usage = os.wait4(proc.pid, 0)  # reaped here, for its CPU time
+    hang.cancel()
     exited = time.monotonic() - sent
+    proc.returncode = os.waitstatus_to_exitcode(status)
     reader.join(5)
-    return Outcome(proc.returncode, said[0] - sent if said else -1.0, exited, "".join(lines))
+    return Outcome(proc.returncode, said[0] - sent if said else -1.0, exited, "".join(lines),
+                   usage.ru_utime + usage.ru_stime - before)
 
 
 def _spread(times: list[float]) -> str:
@@ -381,7 +394,9 @@ def main() -> None:
                         if runs[-1].stderr.strip() else "")
                 print(f"{phase.name:17} SIG{name:4} exit {codes}  answered "
                       f"{_spread([r.answered for r in runs])}  exited "
-                      f"{_spread([r.exited for r in runs])}  ({last[:60]})", flush=True)
+                      f"{_spread([r.exited for r in runs])}  CPU to exit "
+                      f"{_spread([r.cpu for r in runs if r.exited >= 0])}  ({last[:50]})",
+                      flush=True)
     srv.close()
 
 
