@@ -8,7 +8,10 @@ more on its first pass after the build. :func:`collector_paused` pauses it while
 data is built, then freezes everything alive (``gc.freeze``): frozen objects are never
 walked again. They are still freed as usual when the last reference to them goes
 (reference counting does not need the collector); only a cycle among them would wait
-for a ``gc.unfreeze()``, and a checked plan or a world leaves none.
+for a ``gc.unfreeze()``, and a checked plan or a world makes none. So that no garbage
+is frozen with them (a long-lived process, a sweep's worker or the REPL, loads plan
+after plan), a full pass collects what is not frozen yet first: the objects made since
+the last build, a few milliseconds.
 """
 
 from __future__ import annotations
@@ -26,21 +29,24 @@ RELEASE_SLICE = 20_000
 
 @contextlib.contextmanager
 def collector_paused() -> Iterator[None]:
-    """Pause the cycle collector in the block; freeze what is alive when it ends.
+    """Collect, pause the cycle collector in the block, and freeze what is alive after it.
 
     Freezing takes no walk (the collector's lists are moved as a whole). It is done on
     every way out of the block, an interruption included: the collector's first pass
     after it would otherwise walk everything the block built before the command can say
-    it was interrupted. Nested blocks pause and freeze once more, which costs nothing.
+    it was interrupted. A caller that paused the collector itself (an enclosing block)
+    keeps the choice: nothing is collected or frozen here.
     """
-    was_enabled = gc.isenabled()
+    if not gc.isenabled():
+        yield
+        return
+    gc.collect()
     gc.disable()
     try:
         yield
     finally:
         gc.freeze()
-        if was_enabled:
-            gc.enable()
+        gc.enable()
 
 
 def release_in_slices(items: list[Any] | dict[Any, Any]) -> None:
