@@ -31,6 +31,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+from mdle.core.collector import collector_paused, release_in_slices
 from mdle.core.errors import WorldError
 from mdle.core.pose import Pose
 from mdle.sim.world_obstacles import OBSTACLE_TYPES, _check_budget, _obstacle
@@ -50,6 +51,7 @@ _ROBOT_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 MAX_SEED = 2 ** 64 - 1
 
 
+@collector_paused()  # a world of 200,000 obstacles: no collector pass over them
 def parse_world(text: str, file: str = "<string>", default_name: str = "world") -> Any:
     """Parse and validate world YAML text into a :class:`sim.world.World`.
 
@@ -110,6 +112,8 @@ def parse_world(text: str, file: str = "<string>", default_name: str = "world") 
         for i, r in enumerate(team):
             _check_start(doc, f"robots[{i}].start", world, r.profile, r.start,
                          f"robot `{r.name}`")
+    release_in_slices(obs_raw)  # what the world was built from, without a long free
+    release_in_slices(doc.marks)
     return world
 
 

@@ -53,8 +53,9 @@ class Ending:
 
 
 def interrupt_inside(argv: list[str], cwd: Path, cpu: float = math.inf,
-                     ready: Callable[[], bool] | None = None) -> Ending:
-    """Run ``mdle argv``; SIGINT once it has used ``cpu`` s of CPU (or once ``ready()``)."""
+                     ready: Callable[[], bool] | None = None,
+                     signum: int = signal.SIGINT) -> Ending:
+    """Run ``mdle argv``; ``signum`` once it has used ``cpu`` s of CPU (or once ``ready()``)."""
     env = dict(os.environ, MPLBACKEND="Agg")
     proc = subprocess.Popen([sys.executable, "-m", "mdle", *argv], cwd=cwd, env=env,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -68,7 +69,7 @@ def interrupt_inside(argv: list[str], cwd: Path, cpu: float = math.inf,
         assert proc.poll() is None, f"the phase ended before the signal: {stderr.read()}"
         before = _cpu(proc.pid)
         sent = time.monotonic()
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(signum)
         hang = threading.Timer(60.0, proc.kill)
         hang.start()
         _, status, usage = os.wait4(proc.pid, 0)  # reaped here, for its CPU time
@@ -84,8 +85,8 @@ def interrupt_inside(argv: list[str], cwd: Path, cpu: float = math.inf,
         stderr.close()
 
 
-def _interrupted(end: Ending) -> None:
-    assert end.code == 130, end.stderr
+def _interrupted(end: Ending, signum: int = signal.SIGINT) -> None:
+    assert end.code == 128 + signum, end.stderr
     assert "interrupted" in end.stderr and "Traceback" not in end.stderr, end.stderr
     assert end.cpu < CPU_BOUND and end.wall < WALL_BOUND, (end.cpu, end.wall)
 
@@ -109,14 +110,22 @@ def folder(tmp_path: Path) -> Path:
     return tmp_path
 
 
-def test_checking_a_plan_of_60000_lines(folder: Path) -> None:
+#: The phases whose work between two looks at the signals was cut (issue 26) are
+#: interrupted by SIGTERM too.
+BOTH = pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+
+
+@BOTH
+def test_checking_a_plan_of_60000_lines(folder: Path, signum: int) -> None:
     body = "".join(f"atom a{i} = (go(0.3 m/s), range(0 deg) < {1 + i % 7} m, {1 + i % 5} s)\n"
                    for i in range(60_000))
     (folder / "big.mdle").write_text(body + "run a0\n")
-    _interrupted(interrupt_inside(["check", "big.mdle"], folder, cpu=1.5))
+    _interrupted(interrupt_inside(["check", "big.mdle"], folder, cpu=1.5, signum=signum),
+                 signum)
 
 
-def test_loading_a_world_of_60000_circles(folder: Path) -> None:
+@BOTH
+def test_loading_a_world_of_60000_circles(folder: Path, signum: int) -> None:
     rng = np.random.default_rng(0)
     xy = rng.uniform(-500.0, 500.0, size=(60_000, 2))
     xy = xy[np.hypot(xy[:, 0], xy[:, 1]) > 2.0]
@@ -124,7 +133,7 @@ def test_loading_a_world_of_60000_circles(folder: Path) -> None:
     lines += [f"  - {{type: circle, center: [{x:.3f}, {y:.3f}], radius: 0.2}}" for x, y in xy]
     (folder / "w.yaml").write_text("\n".join(lines) + "\n")
     _interrupted(interrupt_inside(["run", "p.mdle", "--world", "w.yaml", "-q", "--trace",
-                                    "t.jsonl"], folder, cpu=1.4))
+                                    "t.jsonl"], folder, cpu=1.4, signum=signum), signum)
     _whole_or_none(folder / "t.jsonl")
 
 
@@ -138,7 +147,8 @@ def test_loading_a_world_of_8000_rectangles(folder: Path) -> None:
     _whole_or_none(folder / "t.jsonl")
 
 
-def test_loading_a_map_of_4000_by_4000_cells(folder: Path) -> None:
+@BOTH
+def test_loading_a_map_of_4000_by_4000_cells(folder: Path, signum: int) -> None:
     rng = np.random.default_rng(1)
     img = np.full((4000, 4000), 254, dtype=np.uint8)
     for r, c, n, down in zip(rng.integers(0, 4000, 2000), rng.integers(0, 4000, 2000),
@@ -154,7 +164,7 @@ def test_loading_a_map_of_4000_by_4000_cells(folder: Path) -> None:
     (folder / "w.yaml").write_text("name: mapped\nstart: {x: 75, y: 75, theta: 0}\n"
                                    "map: m.yaml\n")
     _interrupted(interrupt_inside(["run", "p.mdle", "--world", "w.yaml", "-q", "--until",
-                                    "1000"], folder, cpu=0.7))
+                                    "1000"], folder, cpu=0.7, signum=signum), signum)
 
 
 def test_compiling_a_string_of_60000_atoms(folder: Path) -> None:

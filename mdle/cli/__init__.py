@@ -9,6 +9,7 @@ anything else, so a signal at any moment ends mdle with 128 + its number and a m
 
 from __future__ import annotations
 
+import atexit
 import importlib
 
 # Only what the signal handlers need is imported before they are installed.
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from mdle import __version__
+from mdle.console.ending import ProcessEnd
 from mdle.console.signals import SIGNALS, SignalGuard
 
 if TYPE_CHECKING:
@@ -78,17 +80,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     Python) the previous handlers are restored on return.
     """
     guard = SignalGuard().install(deferred=True)
+    ending = ProcessEnd()
+    if argv is None:  # the process ends with the command: it frees nothing at exit
+        atexit.register(ending.leave)  # the first hook registered is the last to run
     _closed_streams_to_null()
     try:
-        code = _main(argv, guard)
+        code = _main(argv, guard, ending)
         # The command has ended: a signal from here on is recorded, never raised. One
         # raised while the handlers were swapped to ignored escaped with a traceback (exit 1)
         guard.settle()
+        ending.code = code
         return code
     except KeyboardInterrupt as exc:  # a signal while the command line was read
         from mdle.console import output
 
-        return output.interrupted(exc, guard)
+        ending.keep(exc)
+        ending.code = output.interrupted(exc, guard)
+        return ending.code
     finally:
         if argv is not None:
             guard.restore()
@@ -133,7 +141,7 @@ def _closed_streams_to_null() -> None:
         setattr(sys, name, open(fd, mode, closefd=False))
 
 
-def _main(argv: Sequence[str] | None, guard: SignalGuard) -> int:
+def _main(argv: Sequence[str] | None, guard: SignalGuard, ending: ProcessEnd) -> int:
     from mdle.console import output
 
     parser = build_parser()
@@ -149,6 +157,7 @@ def _main(argv: Sequence[str] | None, guard: SignalGuard) -> int:
         parser.print_help(sys.stderr)
         return output.EXIT_USAGE
     args.signals = guard
+    args.ending = ending
     code = output.guarded(handler, args)
     if guard.pending:  # a signal the command deferred and never acted on
         return guard.exit_code

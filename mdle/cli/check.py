@@ -132,6 +132,7 @@ def _check_team(path: str, quiet: bool) -> int:
 def run(args: argparse.Namespace) -> int:
     """Check each file; returns the exit code."""
     from mdle.cli.frames import FRAME_NOTE, reads_pose
+    from mdle.console.ending import keep_to_the_end
     from mdle.console.output import EXIT_INPUT, EXIT_OK, print_diagnostics
     from mdle.core.errors import MdleError
     from mdle.lang import missing_entry
@@ -143,6 +144,7 @@ def run(args: argparse.Namespace) -> int:
     robots: dict[tuple[str, ...], KnownRobot] = {}  # each world or profile read once
     teams = (".yaml", ".yml")  # a team file (its plans are checked with it)
     results = {path: _load(path, args, robots) for path in files if not path.endswith(teams)}
+    keep_to_the_end(args, results)  # freed by the process's end, not one by one here
     imported = {os.path.realpath(name) for path, r in results.items()
                 if not isinstance(r, MdleError)
                 for name in r.sources if name != path and not name.startswith("<")}

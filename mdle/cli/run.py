@@ -37,6 +37,7 @@ from mdle.cli.options import (
 from mdle.cli.recorders import recorders
 from mdle.cli.ros2 import add_ros2_options, check_ros2_options, open_ros2_backend
 from mdle.console import output
+from mdle.console.ending import keep_to_the_end
 from mdle.console.signals import SignalGuard, interruption_of, signal_name
 from mdle.core.errors import Diagnostic, MdleError
 from mdle.core.ranges import COORDINATE, HEADING
@@ -210,6 +211,7 @@ def run(args: argparse.Namespace) -> int:
         return output.EXIT_USAGE
     guard: SignalGuard = getattr(args, "signals", None) or SignalGuard()
     parts = _Parts(_header(args))
+    keep_to_the_end(args, parts)  # the world, the program: freed by the process's end
     try:
         guard.arm()
         try:
@@ -220,6 +222,7 @@ def run(args: argparse.Namespace) -> int:
                 raise
             raise signal_exc from None
     except KeyboardInterrupt as exc:
+        keep_to_the_end(args, exc)  # what its frames built is freed by the process's end
         with guard.deferring():
             stopped = _end_interrupted(args, parts, exc)
         signum = guard.received if guard.received is not None else getattr(exc, "signum", 2)

@@ -12,6 +12,7 @@ import sys
 from collections.abc import Callable, Iterable, Mapping
 from typing import IO, TYPE_CHECKING
 
+from mdle.console.ending import keep_to_the_end
 from mdle.core.errors import Diagnostic, MdleError, Severity, render_diagnostic
 
 if TYPE_CHECKING:
@@ -91,9 +92,11 @@ def guarded(handler: Callable[[argparse.Namespace], int], args: argparse.Namespa
             guard.arm()
         return handler(args)
     except MdleError as err:
+        keep_to_the_end(args, err)
         print_diagnostics(err.diagnostics, getattr(err, "sources", None))
         return EXIT_INPUT
     except KeyboardInterrupt as exc:
+        keep_to_the_end(args, exc)  # its frames hold what the command built: not freed
         return interrupted(exc, guard)
     except BrokenPipeError:
         output_closed()
@@ -110,6 +113,7 @@ def guarded(handler: Callable[[argparse.Namespace], int], args: argparse.Namespa
 
         signal_exc = interruption_of(exc)
         if signal_exc is not None:  # a signal inside class creation, wrapped by Python
+            keep_to_the_end(args, exc)
             return interrupted(signal_exc, guard)
         return _internal(exc, args)
 

@@ -19,6 +19,7 @@ from collections.abc import Mapping, Sequence
 from types import MappingProxyType
 
 from mdle.atoms.registry import REQUIRED, Registry
+from mdle.core.collector import release_in_slices
 from mdle.core.errors import CheckError, Diagnostic, Severity, Span
 from mdle.core.motion_limits import KnownRobot
 from mdle.lang import syntax as st
@@ -53,6 +54,16 @@ class Checker(NameChecks, DimensionChecks, StructureChecks):
                 continue
             for where, message, hint in held:
                 self.warn(where, message, hint=hint)
+
+    def release(self) -> None:
+        """Empty the checker's tables a slice at a time; it is not used afterwards.
+
+        Freed with the checker in one go, the tables of a 200,000-line plan took 0.1 s
+        of CPU in which no signal was acted on.
+        """
+        for table in vars(self).values():  # its own tables (the registry is not one)
+            if isinstance(table, (list, dict)):
+                release_in_slices(table)
 
     def check_definition(self, d: st.Definition) -> Element | None:
         """Check a definition on its own; returns its element if it can run as it stands."""
@@ -138,10 +149,13 @@ def check_program(modules: Sequence[st.Module], registry: Registry, *,
     errors.extend(checker.errors)
     if errors:
         raise CheckError(_ordered(errors), srcs)
-    return Program(MappingProxyType(elements), entry, MappingProxyType(srcs),
-                   tuple(_ordered(checker.warnings)), tuple(dict.fromkeys(checker.uses)),
-                   MappingProxyType({n: u for n, u in checker.element_uses.items()
-                                     if n in elements}))
+    program = Program(MappingProxyType(elements), entry, MappingProxyType(srcs),
+                      tuple(_ordered(checker.warnings)), tuple(dict.fromkeys(checker.uses)),
+                      MappingProxyType({n: u for n, u in checker.element_uses.items()
+                                        if n in elements}))
+    checker.release()
+    release_in_slices(uses)
+    return program
 
 
 def _dependency_order(ns: Namespace, broken: set[str],

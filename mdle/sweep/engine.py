@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
+from mdle.core.collector import collector_paused, release_in_slices
 from mdle.sweep.executors import Executor, LocalExecutor, Task
 from mdle.sweep.spec import Study
 from mdle.sweep.table import ResultsTable, columns_for, write_parquet
@@ -84,12 +85,16 @@ def run_sweep(study: Study, out: str | os.PathLike[str], *, executor: Executor |
         The folder holds a table of another study, or random starts cannot be placed.
     """
     columns = columns_for(study.parameter_names, study.trace_fields)
-    tasks = list(expand(study))
+    with collector_paused():  # up to millions of tasks that live as long as the sweep
+        tasks = list(expand(study))
     if spec_text is not None:
         Path(out).mkdir(parents=True, exist_ok=True)
         (Path(out) / "spec.yaml").write_text(spec_text, encoding="utf-8")
-    return run_tasks(tasks, columns, out, executor=executor, jobs=jobs, progress=progress,
-                     on_row=on_row)
+    try:
+        return run_tasks(tasks, columns, out, executor=executor, jobs=jobs, progress=progress,
+                         on_row=on_row)
+    finally:
+        release_in_slices(tasks)  # freed at once, 600,000 tasks held signals for 70 ms
 
 
 def run_tasks(tasks: Sequence[Task], columns: Sequence[str],

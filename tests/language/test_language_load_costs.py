@@ -32,6 +32,20 @@ def test_collector_state_is_restored() -> None:
         gc.enable()
 
 
+def _walked() -> set[int]:
+    """The ids of the objects the cycle collector's passes walk (frozen ones are not)."""
+    return {id(o) for o in gc.get_objects()}
+
+
+def test_a_loaded_program_is_frozen_out_of_the_collectors_passes() -> None:
+    # A plan of 200,000 lines is millions of objects: walking them again on every full
+    # pass held Ctrl-C for a quarter of a second each time
+    program = load_text(PLAN)
+    walked = _walked()
+    nodes = [program, *program.elements.values()]
+    assert nodes and not [n for n in nodes if id(n) in walked]
+
+
 def test_checking_generates_no_interrupt_code() -> None:
     program = load_text(PLAN)
     xi = program.elements["a"].interrupt

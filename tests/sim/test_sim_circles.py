@@ -157,3 +157,14 @@ def test_the_values_not_built_are_still_checked_as_yaml(text: str, where: str, w
     with pytest.raises(WorldError) as err:
         world_yaml.parse_world_robot(text, file="w.yaml")
     assert str(err.value).startswith(where) and words in str(err.value)
+
+
+def test_a_world_read_is_frozen_out_of_the_collectors_passes() -> None:
+    # 200,000 circles are millions of objects: a full pass of the cycle collector over
+    # them held Ctrl-C for a quarter of a second, each time one came during the build
+    text = "obstacles:\n" + "".join(
+        f"  - {{type: circle, center: [{3 + i}, 5], radius: 0.2}}\n" for i in range(50))
+    world = parse_world(text, "w.yaml")
+    walked = {id(o) for o in gc.get_objects()}
+    assert len(world.obstacles) == 50
+    assert not [o for o in (world, *world.obstacles) if id(o) in walked]

@@ -291,3 +291,37 @@ def test_a_floor_plan_is_written_back_as_its_polygons(tmp_path: Path) -> None:
     rays = np.linspace(-math.pi, math.pi, 91)
     assert np.allclose(again.cast((1.0, 0.0), rays).ranges, world.cast((1.0, 0.0), rays).ranges,
                        rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("band", [1, 7, 64, 10_000])
+def test_a_map_read_in_bands_is_the_map_read_at_once(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, band: int) -> None:
+    # Large maps are read in bands of rows (a signal is acted on between them): any cut
+    # gives the same shades, cells and outline as one pass over the whole image.
+    from mdle.sim import maps
+    from mdle.sim.maps import MapInfo
+
+    rng = np.random.default_rng(band)
+    img = _room(60, 50)
+    img[rng.random(img.shape) < 0.05] = OCCUPIED
+    img[0, :] = OCCUPIED  # a run on the first row and on the last column
+    img[:, -1] = OCCUPIED
+    wide = img.astype(">u2") * 3  # maxval 765: the shades are scaled band by band too
+    (tmp_path / "w.pgm").write_bytes(b"P5 50 60 765\n" + wide.tobytes())
+    _save(tmp_path, img)
+    info = MapInfo("x.pgm", 0.05, (0.0, 0.0, 0.0))
+    whole_shades = read_image(tmp_path / "map.pgm")
+    whole_wide = read_image(tmp_path / "w.pgm")
+    whole_cells = occupied_cells(whole_shades, info)
+    whole = outline(whole_cells, 0.05, (1.0, 2.0, 0.0))
+    monkeypatch.setattr(maps, "BAND_CELLS", band)
+    assert np.array_equal(read_image(tmp_path / "map.pgm"), whole_shades)
+    assert np.array_equal(read_image(tmp_path / "w.pgm"), whole_wide)
+    assert np.array_equal(occupied_cells(whole_shades, info), whole_cells)
+    raw = MapInfo("x.pgm", 0.05, (0.0, 0.0, 0.0), mode="raw")
+    monkeypatch.setattr(maps, "BAND_CELLS", 1 << 20)
+    raw_whole = occupied_cells(whole_shades / 2.55, raw)
+    monkeypatch.setattr(maps, "BAND_CELLS", band)
+    assert np.array_equal(occupied_cells(whole_shades / 2.55, raw), raw_whole)
+    banded = outline(whole_cells, 0.05, (1.0, 2.0, 0.0))
+    assert banded.equals(whole) and banded.area == whole.area > 0
