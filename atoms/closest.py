@@ -90,10 +90,10 @@ def _compiled_searches() -> Any:
     :data:`AMBIGUOUS` where it cannot tell it for sure, so the numpy path runs there.
     """
     try:
-        from mdle.atoms import _scan
+        import mdle.atoms._scan as compiled
     except ImportError:
         return None
-    return _scan
+    return compiled
 
 
 #: The compiled searches (None: the numpy paths only).
