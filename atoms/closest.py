@@ -37,8 +37,9 @@ The pieces:
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from mdle.atoms import searches
 from mdle.atoms.steering import (
     CORNER,
     FOLLOW,
@@ -65,8 +66,7 @@ FIT_RADIUS = 0.5
 #: With nothing on the followed side, a point on the other side counts up to this many
 #: ``rc`` away (the two-ray law's front gate): anything the safety layer can swerve for.
 REACH = 3.0
-#: A point is the nearest of its face when no beam within this many on either side is nearer
-#: (the doubling in :func:`next_nearest` is written for 10).
+#: A point is the nearest of its face when no beam within this many on either side is nearer.
 WINDOW = 10
 #: Neighbouring points farther apart than this lie on different surfaces (m).
 JUMP = 0.2
@@ -78,26 +78,6 @@ FIT_TOLERANCE = 0.012
 #: A remembered point counts once it is within this of an edge of the ladar's 180 degrees or
 #: beyond it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind.
 FOV_EDGE = math.radians(2.0)
-#: What a compiled search answers when numpy's comparison could go the other way (or for an
-#: array in another form than it reads): the numpy path decides.
-AMBIGUOUS = -2
-
-
-def _compiled_searches() -> Any:
-    """Return the compiled searches (atoms/_scan.c), or None where they were not built.
-
-    They are an optional build (pyproject.toml); each gives its numpy path's answer, and
-    :data:`AMBIGUOUS` where it cannot tell it for sure, so the numpy path runs there.
-    """
-    try:
-        import mdle.atoms._scan as compiled
-    except ImportError:
-        return None
-    return compiled
-
-
-#: The compiled searches (None: the numpy paths only).
-_SCAN = _compiled_searches()
 
 
 def nearest_point(z: "np.ndarray", radius: float) -> Ray:
@@ -153,7 +133,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     if z.shape[0] == 0:
         return MISS, None
     # the followed (right) side only; squared ranges (a square root costs as much as a call)
-    k = _nearest_right(z, d2)
+    k = searches.nearest_right(z, d2)
     r2 = float(d2[k]) if k >= 0 else math.inf
     if not r2 < math.inf:
         # nothing on the followed side: something seen near on the other side is followed
@@ -168,7 +148,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     rq = math.sqrt(r2)
     n = q / rq  # unit line of sight, robot -> q
     t = complex(-n.imag, n.real)  # the tangent, obstacle on its right: i n
-    sel = _within(z, q, radius)
+    sel = searches.within(z, q, radius)
     near = z[sel]
     for _ in range(2):
         # a window across a vertex or a cusp is no circle: halve it, then take the point
@@ -178,44 +158,6 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
         radius *= 0.5
         near = near[abs(near - q) < radius]
     return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA), sel
-
-
-def _nearest_right(z: "np.ndarray", d2: "np.ndarray") -> int:
-    """Return the index of the nearest point (least ``d2``) with ``y < 0``; -1 for none.
-
-    The first of equals, as ``argmin`` gives it; compiled where the install has it.
-    """
-    if _SCAN is not None:
-        k: int = _SCAN.nearest_right(z, d2)
-        if k != AMBIGUOUS:
-            return k
-    return _nearest_right_numpy(z, d2)
-
-
-def _nearest_right_numpy(z: "np.ndarray", d2: "np.ndarray") -> int:
-    """Return :func:`_nearest_right` with numpy (the reference of the compiled search)."""
-    import numpy as np
-
-    right = np.where(z.imag < 0.0, d2, math.inf)
-    k = int(right.argmin())
-    return k if float(right[k]) < math.inf else -1
-
-
-def _within(z: "np.ndarray", q: complex, radius: float) -> "np.ndarray":
-    """Return the mask of the points ``z`` less than ``radius`` from ``q`` (``|z - q|``)."""
-    if _SCAN is not None:
-        import numpy as np
-
-        sel = np.empty(z.shape[0], dtype=bool)
-        if _SCAN.within(z, q, radius, sel) != AMBIGUOUS:
-            return sel
-    return _within_numpy(z, q, radius)
-
-
-def _within_numpy(z: "np.ndarray", q: complex, radius: float) -> "np.ndarray":
-    """Return :func:`_within` with numpy (the reference of the compiled search)."""
-    mask: np.ndarray = abs(z - q) < radius
-    return mask
 
 
 def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -> Ray | None:
@@ -281,48 +223,11 @@ def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray
     """
     if z.shape[0] == 0:
         return MISS
-    k: int = _SCAN.next_face(z, d2, fitted, WINDOW, JUMP) if _SCAN is not None else AMBIGUOUS
-    if k == AMBIGUOUS:
-        k = _next_face_numpy(z, d2, fitted)
+    k = searches.next_face(z, d2, fitted, WINDOW, JUMP)
     if k < 0:
         return MISS
     p = complex(z[k])
     return Ray(True, math.sqrt(float(d2[k])), math.atan2(p.real, -p.imag), POINT_KAPPA)
-
-
-def _next_face_numpy(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> int:
-    """Return the index of :func:`next_nearest`'s point, -1 for none, with numpy.
-
-    The reference of the compiled search (atoms/_scan.c), which gives the same index.
-    """
-    import numpy as np
-
-    m = z.shape[0]
-    w = WINDOW
-    pad = np.full(m + 2 * w, math.inf)
-    pad[w:w + m] = d2
-    # the least of 2 w + 1 neighbours by doubling: windows of 2, 4, 8, 16, then 21 beams
-    low = np.minimum(pad[:-1], pad[1:])
-    low = np.minimum(low[:-2], low[2:])
-    low = np.minimum(low[:-4], low[4:])
-    low = np.minimum(low[:-8], low[8:])
-    low = np.minimum(low[:-5], low[5:])
-    ok = d2 <= low
-    # points of other surfaces (beyond a depth jump) count too: in the list of valid points
-    # a surface's neighbours across a gap in the scan can hide its local minimum. The
-    # surface of the face followed runs between the jumps on either side of its first
-    # fitted point (found in the jumps' bytes: a cumulative sum of them costs more)
-    f = int(fitted.argmax())
-    cut = (abs(z[1:] - z[:-1]) > JUMP).tobytes()  # cut[i]: a jump between points i, i + 1
-    hi = cut.find(1, f)
-    ok[:cut.rfind(1, 0, f) + 1] = True
-    if hi >= 0:
-        ok[hi + 1:] = True
-    ok &= z.imag < z.real  # less than 45 deg left of the heading
-    ok = np.greater(ok, fitted)  # and not the face followed (ok and not fitted)
-    k = int(np.where(ok, d2, math.inf).argmin())
-    r2 = float(d2[k])
-    return k if ok[k] and 0.0 < r2 < math.inf else -1
 
 
 def _solve3(m: float, s1: float, u1: float, s2: float, su: float, u2: float, h0: float,
@@ -457,7 +362,7 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         mem.seen, mem.seen_at = foot, t
     u = closest_rate(near.r, near.beta, k, v, rc, g, umax)
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
-        fitted = _within(z, _point_of(near), FIT_RADIUS * rc)
+        fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
     if ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the

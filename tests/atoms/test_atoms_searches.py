@@ -1,4 +1,4 @@
-"""The compiled searches of the whole-scan model (atoms/_scan.c) give the numpy paths' answers.
+"""The compiled searches of the whole-scan model (atoms/_searches.c) give numpy's answers.
 
 The other tests run whichever path the install has; these put the two side by side: the
 nearest point on the followed side, the points around it and the next face's point on
@@ -20,18 +20,20 @@ import numpy as np
 import pytest
 
 from mdle.atoms import closest as C
+from mdle.atoms import searches as S
 
 PLANS = Path(__file__).resolve().parents[2] / "plans" / "paper"
 
 # Skips only on an install built without a C compiler: the first test below fails an
 # install that had one and did not build the searches, so these never skip unnoticed.
-needs_build = pytest.mark.skipif(C._SCAN is None, reason="this install has no compiled searches")
+needs_build = pytest.mark.skipif(S._COMPILED is None,
+                                 reason="this install has no compiled searches")
 
 
 def test_an_install_built_with_a_c_compiler_has_the_compiled_searches() -> None:
     # The build is optional (pyproject.toml): this pins that it really happens where it can.
     if shutil.which("cc") or shutil.which("gcc"):
-        assert C._SCAN is not None
+        assert S._COMPILED is not None and S.COMPILED
 
 
 def _scene(seed: int) -> np.ndarray:
@@ -78,22 +80,22 @@ def _d2(z: np.ndarray) -> np.ndarray:
 def test_the_compiled_searches_answer_as_numpy(seed: int) -> None:
     z = _scene(seed)
     d2 = _d2(z)
-    k = C._SCAN.nearest_right(z, d2)
-    assert k != C.AMBIGUOUS
-    assert k == C._nearest_right_numpy(z, d2)
+    k = S._COMPILED.nearest_right(z, d2)
+    assert k != S.AMBIGUOUS
+    assert k == S.nearest_right_numpy(z, d2)
     if z.size == 0:
         return
     rng = np.random.default_rng(1000 + seed)
     for q, radius in ((complex(z[max(k, 0)]), 0.25), (complex(z[0]), 0.125),
                       (complex(rng.normal(), rng.normal()), 0.7)):
         sel = np.empty(z.size, dtype=bool)
-        assert C._SCAN.within(z, q, radius, sel) == int(C._within_numpy(z, q, radius).sum())
-        assert np.array_equal(sel, C._within_numpy(z, q, radius))
-    for fitted in (C._within(z, complex(z[max(k, 0)]), 0.25), rng.random(z.size) < 0.1,
+        assert S._COMPILED.within(z, q, radius, sel) == int(S.within_numpy(z, q, radius).sum())
+        assert np.array_equal(sel, S.within_numpy(z, q, radius))
+    for fitted in (S.within(z, complex(z[max(k, 0)]), 0.25), rng.random(z.size) < 0.1,
                    np.zeros(z.size, dtype=bool)):
-        got = C._SCAN.next_face(z, d2, fitted, C.WINDOW, C.JUMP)
-        assert got != C.AMBIGUOUS
-        assert got == C._next_face_numpy(z, d2, fitted)
+        got = S._COMPILED.next_face(z, d2, fitted, C.WINDOW, C.JUMP)
+        assert got != S.AMBIGUOUS
+        assert got == S.next_face_numpy(z, d2, fitted, C.WINDOW, C.JUMP)
 
 
 @needs_build
@@ -103,13 +105,13 @@ def test_a_distance_at_the_limit_is_left_to_numpy(monkeypatch: pytest.MonkeyPatc
     z = np.array([0.5 - 0.5j, 0.75 - 0.5j, 0.95 - 0.5j, 1.0 + 0.0j])
     d2 = _d2(z)
     sel = np.empty(4, dtype=bool)
-    assert C._SCAN.within(z, complex(z[0]), 0.25, sel) == C.AMBIGUOUS
-    assert np.array_equal(C._within(z, complex(z[0]), 0.25), C._within_numpy(z, z[0], 0.25))
+    assert S._COMPILED.within(z, complex(z[0]), 0.25, sel) == S.AMBIGUOUS
+    assert np.array_equal(S.within(z, complex(z[0]), 0.25), S.within_numpy(z, z[0], 0.25))
     fitted = np.array([False, True, False, False])
-    assert C._SCAN.next_face(z, d2, fitted, C.WINDOW, 0.2) == C.AMBIGUOUS
-    assert C._SCAN.next_face(z, d2, fitted, C.WINDOW, 0.25) == C.AMBIGUOUS
+    assert S._COMPILED.next_face(z, d2, fitted, C.WINDOW, 0.2) == S.AMBIGUOUS
+    assert S._COMPILED.next_face(z, d2, fitted, C.WINDOW, 0.25) == S.AMBIGUOUS
     got = C.next_nearest(z, d2, fitted)
-    monkeypatch.setattr(C, "_SCAN", None)
+    monkeypatch.setattr(S, "_COMPILED", None)
     assert got == C.next_nearest(z, d2, fitted)
 
 
@@ -117,34 +119,34 @@ def test_a_distance_at_the_limit_is_left_to_numpy(monkeypatch: pytest.MonkeyPatc
 def test_nan_and_other_forms_are_left_to_numpy() -> None:
     z = _scene(4)
     d2 = _d2(z)
-    fitted = C._within(z, complex(z[3]), 0.25)
+    fitted = S.within(z, complex(z[3]), 0.25)
     bad = d2.copy()
     bad[5] = math.nan
     zbad = z.copy()
     zbad[5] = complex(math.nan, -1.0)
-    assert C._SCAN.nearest_right(zbad, _d2(zbad)) == C.AMBIGUOUS
-    assert C._SCAN.next_face(z, bad, fitted, C.WINDOW, C.JUMP) == C.AMBIGUOUS
-    assert C._SCAN.within(zbad, complex(z[3]), 0.25, np.empty(z.size, bool)) == C.AMBIGUOUS
+    assert S._COMPILED.nearest_right(zbad, _d2(zbad)) == S.AMBIGUOUS
+    assert S._COMPILED.next_face(z, bad, fitted, C.WINDOW, C.JUMP) == S.AMBIGUOUS
+    assert S._COMPILED.within(zbad, complex(z[3]), 0.25, np.empty(z.size, bool)) == S.AMBIGUOUS
     # strided, another dtype, a read-only mask to write, another length, no limit
-    assert C._SCAN.nearest_right(z[::2], d2[::2]) == C.AMBIGUOUS
-    assert C._SCAN.nearest_right(z.astype(np.complex64), d2) == C.AMBIGUOUS
+    assert S._COMPILED.nearest_right(z[::2], d2[::2]) == S.AMBIGUOUS
+    assert S._COMPILED.nearest_right(z.astype(np.complex64), d2) == S.AMBIGUOUS
     ro = np.empty(z.size, dtype=bool)
     ro.setflags(write=False)
-    assert C._SCAN.within(z, 0j, 0.25, ro) == C.AMBIGUOUS
-    assert C._SCAN.next_face(z, d2[1:], fitted, C.WINDOW, C.JUMP) == C.AMBIGUOUS
-    assert C._SCAN.within(z, 0j, 0.0, np.empty(z.size, bool)) == C.AMBIGUOUS
-    assert C._SCAN.next_face(z, d2, fitted, C.WINDOW, -1.0) == C.AMBIGUOUS
+    assert S._COMPILED.within(z, 0j, 0.25, ro) == S.AMBIGUOUS
+    assert S._COMPILED.next_face(z, d2[1:], fitted, C.WINDOW, C.JUMP) == S.AMBIGUOUS
+    assert S._COMPILED.within(z, 0j, 0.0, np.empty(z.size, bool)) == S.AMBIGUOUS
+    assert S._COMPILED.next_face(z, d2, fitted, C.WINDOW, -1.0) == S.AMBIGUOUS
     # and the wrappers answer as numpy there
-    assert C._nearest_right(zbad, _d2(zbad)) == C._nearest_right_numpy(zbad, _d2(zbad))
-    assert np.array_equal(C._within(z, 0j, 0.0), np.zeros(z.size, dtype=bool))
+    assert S.nearest_right(zbad, _d2(zbad)) == S.nearest_right_numpy(zbad, _d2(zbad))
+    assert np.array_equal(S.within(z, 0j, 0.0), np.zeros(z.size, dtype=bool))
     with pytest.raises(TypeError, match="takes 5 arguments"):
-        C._SCAN.next_face(z, d2, fitted)
+        S._COMPILED.next_face(z, d2, fitted)
 
 
 def _runs(monkeypatch: pytest.MonkeyPatch, fn: Any) -> tuple[Any, Any]:
     """Run ``fn()`` with the compiled searches, then with numpy's only."""
     compiled = fn()
-    monkeypatch.setattr(C, "_SCAN", None)
+    monkeypatch.setattr(S, "_COMPILED", None)
     return compiled, fn()
 
 

@@ -1,11 +1,11 @@
-/* The whole-scan boundary model's per-tick searches, compiled (atoms/closest.py): the
+/* The whole-scan boundary model's per-tick searches, compiled (atoms/searches.py): the
  * nearest point on the followed side, the points around it, and the next face's nearest
  * point.
  *
  * Their numpy paths spend most of their time on the fixed cost of some thirty calls on
  * arrays of a few dozen to a few hundred points; these do the same comparisons in one
  * call each. They are an optional build: without a C compiler mdle installs without them
- * and closest.py uses numpy (the same answers).
+ * and searches.py uses numpy (the same answers).
  *
  * Every answer is numpy's, exactly: the searches only compare numbers numpy computes the
  * same way (differences of two doubles, the squared ranges given). A distance compared
@@ -164,7 +164,7 @@ static PyObject *within(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 PyDoc_STRVAR(next_face_doc,
 "next_face(z, d2, fitted, window, jump)\n"
 "--\n\n"
-"Index of the next face's nearest point (closest.next_nearest's numpy path, which says\n"
+"Index of the next face's nearest point (searches.next_face_numpy, which says\n"
 "what that is), -1 for none, -2 when a distance lies within rounding of jump or a NaN\n"
 "appears (the numpy path decides).");
 
@@ -279,13 +279,13 @@ static PyMethodDef methods[] = {
 };
 
 static struct PyModuleDef module = {
-    PyModuleDef_HEAD_INIT, "_scan",
+    PyModuleDef_HEAD_INIT, "_searches",
     "The whole-scan boundary model's per-tick searches, compiled (an optional build: "
-    "atoms/closest.py falls back to numpy).",
+    "atoms/searches.py falls back to numpy).",
     0, methods, NULL, NULL, NULL, NULL,
 };
 
-PyMODINIT_FUNC PyInit__scan(void)
+PyMODINIT_FUNC PyInit__searches(void)
 {
     return PyModuleDef_Init(&module);
 }
