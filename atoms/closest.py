@@ -28,6 +28,9 @@ The pieces:
   robot turns around has left the ladar's field of view, the front ray's anticipation of a
   concave corner ahead, and the search for a boundary that was lost.
 
+The searches over the scan points (the nearest point, the fit's window, the next face) are
+:mod:`atoms.searches`'s, compiled where the install built them (the same answers).
+
 >>> g = Gains()
 >>> near = Ray(True, 0.5, 0.0, -1.0)       # on a circle of radius 1, rc = 0.5 away
 >>> round(closest_law(near, 1.0, 0.5, g, 3.0), 6)  # the offset-curve rate v k / (1 - k rc)
