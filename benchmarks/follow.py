@@ -25,10 +25,11 @@ share), the atom's step, and the rest (the scheduler).
     python benchmarks/follow.py --instructions
 
 counts instructions instead (valgrind's callgrind, repeatable whatever else the machine
-does; ``PYTHONHASHSEED=0``): the recorded observations are saved once, then each part is
-replayed under callgrind with 0 and with ``--rounds`` passes, and the controlled run with
-0 and ``--controlled`` ticks; the difference per tick is the part's own count. The replayed
-scans share one read-only bearing array, as the simulator's and the drivers' do.
+does; ``PYTHONHASHSEED=0``, ``OPENBLAS_NUM_THREADS=1``): the recorded observations are
+saved once, then each part is replayed under callgrind with 0 and with ``--rounds``
+passes, and the controlled run with 0 and ``--controlled`` ticks; the difference per tick
+is the part's own count. The replayed scans share one read-only bearing array, as the
+simulator's and the drivers' do.
 
 Figures (Python 3.11, numpy 2.4, the compiled searches of ``atoms/_searches.c`` and the
 simulator's compiled loops; callgrind with ``OPENBLAS_NUM_THREADS=1`` so that idle BLAS
@@ -215,7 +216,8 @@ def _instructions(saved: str, part: str, rounds: int) -> int:
     out = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
                           sys.executable, __file__, "--replay", saved, part, str(rounds)],
                          capture_output=True, text=True, check=True,
-                         env={**os.environ, "PYTHONHASHSEED": "0"}).stderr
+                         env={**os.environ, "PYTHONHASHSEED": "0",
+                              "OPENBLAS_NUM_THREADS": "1"}).stderr  # idle BLAS threads count
     found = re.search(r"Collected : (\d+)", out)
     if found is None:
         raise SystemExit(f"callgrind gave no count:\n{out[-2000:]}")
