@@ -241,10 +241,13 @@ def _view_of(scan: "Scan | None", left: bool, windows: Sequence[int], side_span:
     else:
         beams = cached_beams(ctx)  # type: ignore[assignment]  # a scan is there
     z_all, _, r_all = beams
+    ns, cl = lay.n_side, lay.cl
+    if not with_side and not (lay.c_ok and math.isfinite(r_all.item(lay.take.item(cl)))):
+        # the front ray alone, and its own beam saw nothing: no beam to gather (most ticks)
+        return BoundaryView(MISS, MISS, False, scan.max_range)
     # NaN where a beam saw no surface: never linked to a neighbour (NaN compares False
     # below) nor taken as a ray's own beam (checked here)
     r = r_all[lay.take]
-    ns, cl = lay.n_side, lay.cl
     r0 = r.item(0) if ns else math.nan
     rc = r.item(cl) if lay.c_ok else math.nan
     side_hit, front_hit = with_side and math.isfinite(r0), math.isfinite(rc)

@@ -28,6 +28,9 @@ The pieces:
   robot turns around has left the ladar's field of view, the front ray's anticipation of a
   concave corner ahead, and the search for a boundary that was lost.
 
+The searches over the scan points (the nearest point, the fit's window, the next face) are
+:mod:`atoms.searches`'s, compiled where the install built them (the same answers).
+
 >>> g = Gains()
 >>> near = Ray(True, 0.5, 0.0, -1.0)       # on a circle of radius 1, rc = 0.5 away
 >>> round(closest_law(near, 1.0, 0.5, g, 3.0), 6)  # the offset-curve rate v k / (1 - k rc)
@@ -39,6 +42,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from mdle.atoms import searches
 from mdle.atoms.steering import (
     CORNER,
     FOLLOW,
@@ -65,8 +69,7 @@ FIT_RADIUS = 0.5
 #: With nothing on the followed side, a point on the other side counts up to this many
 #: ``rc`` away (the two-ray law's front gate): anything the safety layer can swerve for.
 REACH = 3.0
-#: A point is the nearest of its face when no beam within this many on either side is nearer
-#: (the doubling in :func:`next_nearest` is written for 10).
+#: A point is the nearest of its face when no beam within this many on either side is nearer.
 WINDOW = 10
 #: Neighbouring points farther apart than this lie on different surfaces (m).
 JUMP = 0.2
@@ -130,14 +133,11 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     With nothing on the right, the nearest point on the left counts if it lies within
     :data:`REACH` x ``reach_rc``.
     """
-    import numpy as np
-
     if z.shape[0] == 0:
         return MISS, None
     # the followed (right) side only; squared ranges (a square root costs as much as a call)
-    right = np.where(z.imag < 0.0, d2, math.inf)
-    k = int(right.argmin())
-    r2 = float(right[k])
+    k = searches.nearest_right(z, d2)
+    r2 = float(d2[k]) if k >= 0 else math.inf
     if not r2 < math.inf:
         # nothing on the followed side: something seen near on the other side is followed
         # too (the law turns to put it on the followed side), up to the reach
@@ -151,7 +151,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     rq = math.sqrt(r2)
     n = q / rq  # unit line of sight, robot -> q
     t = complex(-n.imag, n.real)  # the tangent, obstacle on its right: i n
-    sel = abs(z - q) < radius
+    sel = searches.within(z, q, radius)
     near = z[sel]
     for _ in range(2):
         # a window across a vertex or a cusp is no circle: halve it, then take the point
@@ -224,39 +224,13 @@ def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray
     wall of a concave corner. Returned with the tangent perpendicular to the line of sight
     and the curvature of a point; :data:`MISS` when there is none.
     """
-    import numpy as np
-
-    m = z.shape[0]
-    if m == 0:
+    if z.shape[0] == 0:
         return MISS
-    w = WINDOW
-    pad = np.full(m + 2 * w, math.inf)
-    pad[w:w + m] = d2
-    # the least of 2 w + 1 neighbours by doubling: windows of 2, 4, 8, 16, then 21 beams
-    low = np.minimum(pad[:-1], pad[1:])
-    low = np.minimum(low[:-2], low[2:])
-    low = np.minimum(low[:-4], low[4:])
-    low = np.minimum(low[:-8], low[8:])
-    low = np.minimum(low[:-5], low[5:])
-    ok = d2 <= low
-    # points of other surfaces (beyond a depth jump) count too: in the list of valid points
-    # a surface's neighbours across a gap in the scan can hide its local minimum. The
-    # surface of the face followed runs between the jumps on either side of its first
-    # fitted point (found in the jumps' bytes: a cumulative sum of them costs more)
-    f = int(fitted.argmax())
-    cut = (abs(z[1:] - z[:-1]) > JUMP).tobytes()  # cut[i]: a jump between points i, i + 1
-    hi = cut.find(1, f)
-    ok[:cut.rfind(1, 0, f) + 1] = True
-    if hi >= 0:
-        ok[hi + 1:] = True
-    ok &= z.imag < z.real  # less than 45 deg left of the heading
-    ok = np.greater(ok, fitted)  # and not the face followed (ok and not fitted)
-    k = int(np.where(ok, d2, math.inf).argmin())
-    r2 = float(d2[k])
-    if not (ok[k] and 0.0 < r2 < math.inf):
+    k = searches.next_face(z, d2, fitted, WINDOW, JUMP)
+    if k < 0:
         return MISS
     p = complex(z[k])
-    return Ray(True, math.sqrt(r2), math.atan2(p.real, -p.imag), POINT_KAPPA)
+    return Ray(True, math.sqrt(float(d2[k])), math.atan2(p.real, -p.imag), POINT_KAPPA)
 
 
 def _solve3(m: float, s1: float, u1: float, s2: float, su: float, u2: float, h0: float,
@@ -391,7 +365,7 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         mem.seen, mem.seen_at = foot, t
     u = closest_rate(near.r, near.beta, k, v, rc, g, umax)
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
-        fitted = abs(z - _point_of(near)) < FIT_RADIUS * rc
+        fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
     if ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the

@@ -25,23 +25,26 @@ share), the atom's step, and the rest (the scheduler).
     python benchmarks/follow.py --instructions
 
 counts instructions instead (valgrind's callgrind, repeatable whatever else the machine
-does; ``PYTHONHASHSEED=0``): the recorded observations are saved once, then each part is
-replayed under callgrind with 0 and with ``--rounds`` passes, and the controlled run with
-0 and ``--controlled`` ticks; the difference per tick is the part's own count. The replayed
-scans share one read-only bearing array, as the simulator's and the drivers' do.
+does; ``PYTHONHASHSEED=0``, ``OPENBLAS_NUM_THREADS=1``): the recorded observations are
+saved once, then each part is replayed under callgrind with 0 and with ``--rounds``
+passes, and the controlled run with 0 and ``--controlled`` ticks; the difference per tick
+is the part's own count. The replayed scans share one read-only bearing array, as the
+simulator's and the drivers' do.
 
-Figures (Python 3.11, numpy 2.4; callgrind with ``OPENBLAS_NUM_THREADS=1`` so that idle
-BLAS threads add no count; wall time on a quiet machine, load 0.2, best of 5):
+Figures (Python 3.11, numpy 2.4, the compiled searches of ``atoms/_searches.c`` and the
+simulator's compiled loops; callgrind with ``OPENBLAS_NUM_THREADS=1`` so that idle BLAS
+threads add no count, 2 rounds, repeated runs within about 2 %; wall time best of 20
+rounds on a shared 2-core machine at a load average of about 5, where the absolute times
+drift with the load and only the ratios taken within one run mean much):
 
-    per tick                              wall      callgrind   last release
-    step (replay)                         37.6 us   295 k       66 us, 444 k
-      view + scan points                  21.4 us   178 k       30 us, 250 k
-      law + latency + safety layer        16.2 us   117 k       32 us, 193 k
-    controlled tick (500 ticks)           101 us    642 k       197 us, 1.07 M
-      with numpy's simulator loops        132 us    808 k
-      simulator (--split, median of 5)    38.5 us               75-89 us
-      the atom's step                     60 us                 99-126 us
-      the scheduler                       6.7 us                7-9 us
+    per tick                              callgrind   wall       before the compiled searches
+    whole-scan step (replay)              360 k       71.5 us    478 k, 90.0 us
+    the same, two rays (model = rays)     297 k       57.6 us    297 k, 53.2 us
+      ratio (target 1.3x)                 1.21x       1.24x      1.61x, 1.69x
+      view + scan points                  172 k       26.6 us    172 k
+      law + latency + safety layer        188 k       44.9 us    306 k
+    controlled tick (500 ticks)           757 k       163 us     885 k
+      with numpy's simulator loops                    198 us
 
 The step costs more in the controlled run than in the replay: the room returns a point on
 most beams, the front ray hits in 74 % of the ticks and corner mode runs in 38 %
@@ -213,7 +216,8 @@ def _instructions(saved: str, part: str, rounds: int) -> int:
     out = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null",
                           sys.executable, __file__, "--replay", saved, part, str(rounds)],
                          capture_output=True, text=True, check=True,
-                         env={**os.environ, "PYTHONHASHSEED": "0"}).stderr
+                         env={**os.environ, "PYTHONHASHSEED": "0",
+                              "OPENBLAS_NUM_THREADS": "1"}).stderr  # idle BLAS threads count
     found = re.search(r"Collected : (\d+)", out)
     if found is None:
         raise SystemExit(f"callgrind gave no count:\n{out[-2000:]}")
