@@ -8,6 +8,7 @@ discs, found and applied, and a whole team run; and bad buffers.
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import shutil
 from collections.abc import Callable
@@ -66,7 +67,9 @@ def test_the_version_says_whether_the_loops_are_compiled(
     assert main(["--version"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("mdle ")
-    assert ("compiled loops" in out) == (raycast._KERNEL is not None), out
+    assert ("simulator: compiled loops" in out) == (raycast._KERNEL is not None), out
+    searches_built = importlib.util.find_spec("mdle.atoms._searches") is not None
+    assert ("whole-scan model: compiled loops" in out) == searches_built, out
 
 
 @needs_kernel
