@@ -19,6 +19,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from mdle.core.errors import Diagnostic, MdleError
+from mdle.core.ranges import COORDINATE
 from mdle.record.load import read_trace
 from mdle.record.trace import Trace
 from mdle.runtime.events import Cause, ended_how
@@ -78,8 +79,21 @@ def run_pose(trace: Trace, world: Any = None) -> "tuple[np.ndarray, np.ndarray, 
         th = trace.column("true_theta")
         if not np.isfinite(th).all():
             th = trace.column("theta")
-        return tx, trace.column("true_y"), th, True
-    return trace.column("x"), trace.column("y"), trace.column("theta"), False
+        return *_placeable(tx, trace.column("true_y")), th, True
+    return *_placeable(trace.column("x"), trace.column("y")), trace.column("theta"), False
+
+
+def _placeable(x: "np.ndarray", y: "np.ndarray") -> "tuple[np.ndarray, np.ndarray]":
+    """Return ``x, y`` with NaN where a position lies beyond any world's coordinates.
+
+    A damaged trace's 1e308 m would overflow the figure's arithmetic (a NaN extent, numpy
+    warnings on the user's terminal); such a sample is drawn as one with no position.
+    """
+    import numpy as np
+
+    with np.errstate(invalid="ignore"):  # NaN compares False, and stays NaN
+        far = (np.abs(x) > COORDINATE.high) | (np.abs(y) > COORDINATE.high)
+    return np.where(far, np.nan, x), np.where(far, np.nan, y)
 
 
 def robot_radius(trace: Trace, world: Any = None) -> float:

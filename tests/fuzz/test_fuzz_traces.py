@@ -117,11 +117,14 @@ def test_mutated_traces_plot_or_fail_with_a_message(
 
 @pytest.mark.parametrize("path", sorted(CORPUS.glob("*.jsonl")), ids=lambda p: p.name)
 def test_the_corpus_of_damaged_traces(path: Path, tmp_path: Path,
-                                      capsys: pytest.CaptureFixture[str]) -> None:
+                                      capsys: pytest.CaptureFixture[str],
+                                      recwarn: pytest.WarningsRecorder) -> None:
     code = main(["plot", str(path), "-o", str(tmp_path / "p.png")])
     err = capsys.readouterr().err
     assert code in (0, 1), err
     assert "internal error" not in err
+    # a library's warning would reach the user's terminal with its source line
+    assert not [str(w.message) for w in recwarn], path.name
     if code == 1:
         assert str(path) in err  # the message names the file
 
