@@ -192,10 +192,17 @@ class _RichProgress:
             print(f"sweep: {self.done}/{self.total} runs, {self.failed} failed, "
                   f"{now - self._t0:.0f} s, ETA {eta:.0f} s", file=sys.stderr, flush=True)
 
+    def interrupted(self) -> None:
+        """Say at once that the runs stop (ending the workers and the table takes longer)."""
+        self.stop()
+        print("interrupted: stopping the workers; every finished run is kept", file=sys.stderr,
+              flush=True)
+
     def stop(self) -> None:
         """Leave the final bar on screen."""
         if self._bar is not None:
             self._bar.stop()
+            self._bar = None
 
 
 def progress_bar(where: str) -> _RichProgress:

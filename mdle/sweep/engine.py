@@ -38,6 +38,9 @@ class Progress(Protocol):
     def advance(self, row: dict[str, Any]) -> None:
         """Handle a finished run's row."""
 
+    def interrupted(self) -> None:
+        """Handle Ctrl-C or a signal, at once: the workers are stopped and the table closed next."""
+
     def stop(self) -> None:
         """Handle the end of the sweep (also after Ctrl-C)."""
 
@@ -141,6 +144,8 @@ def run_tasks(tasks: Sequence[Task], columns: Sequence[str],
                 on_row(row)
     except KeyboardInterrupt:
         summary.interrupted = True
+        if progress is not None:  # the user hears now, not after the workers have ended
+            progress.interrupted()
     finally:
         close = getattr(stream, "close", None)
         if close is not None:

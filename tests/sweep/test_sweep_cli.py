@@ -59,6 +59,9 @@ def test_a_killed_sweep_resumes_without_losing_or_repeating_rows(
     if sig == signal.SIGINT:
         assert proc.returncode == 130, err
         assert "interrupted" in err and "resume" in err
+        # said at once, before the workers have ended and the table is closed
+        said = err.index("interrupted: stopping the workers")
+        assert said < err.index("runs done"), err
     else:
         assert proc.returncode == -signal.SIGKILL
     before = _lines(table)
