@@ -25,6 +25,7 @@ from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_si
 from mdle.atoms.latency import STILL, Predictor, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.atoms.steering import Gains, Memory
+from mdle.atoms.turn_shaping import limit_turn_away
 from mdle.core.backend import Command
 from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
@@ -52,6 +53,8 @@ class FollowState:
     latency: float | None = None
     """Command latency predicted over (s); None: no prediction (``latency = 0 s``)."""
     predictor: "Predictor | None" = None
+    last_u: float | None = None
+    """The turn rate last commanded, law frame (rad/s); None before the first command."""
     scan_model: bool = True
     """Follow the nearest boundary point of the whole scan (:mod:`atoms.closest`); False: the
     paper's two rays."""
@@ -201,11 +204,16 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                           g.umax, filter_kappa=not view.exact,
                           near=lambda: _nearest_on_side(zl))
     u_law, v_law = sgn * u, v
+    # a turn away is ramped here, not left to the firmware: one that takes it at once turns
+    # a one-tick spike into seconds of spinning off the boundary (atoms/turn_shaping.py)
+    u = limit_turn_away(u, state.last_u, sgn * obs.omega, ctx.limits.max_turn_accel, ctx.dt)
+    u_shaped = u
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
         v, u, clearance = safety.filter_complex(zl, v, u, g.umax, ctx.limits.radius, margin,
                                                 float(args["lookahead"]), side=-1)
+    state.last_u = u
     u *= sgn
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
@@ -230,7 +238,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "mode": _MODE_CODES[mem.mode],
         "lost": mem.lost_for(ctx.t),
         "u_law": u_law,
-        "safety": float(u != u_law or v != v_law),
+        "safety": float(sgn * u != u_shaped or v != v_law),
         "predicted_clearance": clearance if clearance < math.inf else -1.0,
     }
     return Command(v, u)
