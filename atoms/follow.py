@@ -17,7 +17,7 @@ the predicted clearance.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from mdle.atoms import closest, safety, steering
@@ -25,7 +25,7 @@ from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_si
 from mdle.atoms.latency import STILL, Predictor, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.atoms.steering import Gains, Memory
-from mdle.atoms.turn_shaping import TurnShaper
+from mdle.atoms.turn_shaping import limit_turn_away
 from mdle.core.backend import Command
 from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
@@ -56,8 +56,6 @@ class FollowState:
     scan_model: bool = True
     """Follow the nearest boundary point of the whole scan (:mod:`atoms.closest`); False: the
     paper's two rays."""
-    shaper: TurnShaper = field(default_factory=TurnShaper)
-    """What the atom has seen of the robot's turn-rate response (turns away it jumps to)."""
 
 
 def start_follow(args: Args, ctx: Context) -> FollowState:
@@ -204,18 +202,18 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                           g.umax, filter_kappa=not view.exact,
                           near=lambda: _nearest_on_side(zl))
     u_law, v_law = sgn * u, v
-    # on a robot seen to jump to turns away, they are ramped here: a firmware that takes one
-    # at once turns a one-tick spike into seconds of spinning off (atoms/turn_shaping.py)
-    shaper, turn_accel = state.shaper, ctx.limits.max_turn_accel
-    shaper.observe(obs.time, sgn * obs.omega, turn_accel)
-    u = shaper.limit(u, sgn * obs.omega, turn_accel, ctx.dt)
+    turn_accel = ctx.limits.max_turn_accel
+    if pred is not None and state.latency is not None and turn_accel < math.inf:
+        # a turn away no faster than the robot ramps one: a firmware that jumps to it turns a
+        # one-tick spike into seconds of spinning off the boundary (atoms/turn_shaping.py)
+        rate = pred.rate_when_acting(obs.time, sgn * obs.omega, state.latency, turn_accel)
+        u = limit_turn_away(u, rate, turn_accel, ctx.dt)
     u_shaped = u
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
         v, u, clearance = safety.filter_complex(zl, v, u, g.umax, ctx.limits.radius, margin,
                                                 float(args["lookahead"]), side=-1)
-    shaper.sent(u)
     u *= sgn
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
