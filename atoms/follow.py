@@ -17,7 +17,7 @@ the predicted clearance.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from mdle.atoms import closest, safety, steering
@@ -25,7 +25,7 @@ from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_si
 from mdle.atoms.latency import STILL, Predictor, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.atoms.steering import Gains, Memory
-from mdle.atoms.turn_shaping import limit_turn_away
+from mdle.atoms.turn_shaping import TurnShaper
 from mdle.core.backend import Command
 from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
@@ -56,6 +56,8 @@ class FollowState:
     scan_model: bool = True
     """Follow the nearest boundary point of the whole scan (:mod:`atoms.closest`); False: the
     paper's two rays."""
+    shaper: TurnShaper = field(default_factory=TurnShaper)
+    """What the atom has seen of the robot's answer to turns away (:mod:`atoms.turn_shaping`)."""
 
 
 def start_follow(args: Args, ctx: Context) -> FollowState:
@@ -202,18 +204,19 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                           g.umax, filter_kappa=not view.exact,
                           near=lambda: _nearest_on_side(zl))
     u_law, v_law = sgn * u, v
-    turn_accel = ctx.limits.max_turn_accel
-    if pred is not None and state.latency is not None and turn_accel < math.inf:
-        # a turn away no faster than the robot ramps one: a firmware that jumps to it turns a
-        # one-tick spike into seconds of spinning off the boundary (atoms/turn_shaping.py)
-        rate = pred.rate_when_acting(obs.time, sgn * obs.omega, state.latency, turn_accel)
-        u = limit_turn_away(u, rate, turn_accel, ctx.dt)
-    u_shaped = u
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
         v, u, clearance = safety.filter_complex(zl, v, u, g.umax, ctx.limits.radius, margin,
                                                 float(args["lookahead"]), side=-1)
+    u_safe = sgn * u  # what the safety layer let through (robot frame)
+    turn_accel = ctx.limits.max_turn_accel
+    if pred is not None and state.latency is not None and turn_accel < math.inf:
+        # a turn away no faster than the robot ramps one: a firmware that jumps to it turns a
+        # one-tick spike into seconds of spinning off the boundary (atoms/turn_shaping.py)
+        state.shaper.observe(obs.time, sgn * obs.omega, turn_accel)
+        rate = pred.rate_when_acting(obs.time, sgn * obs.omega, state.latency, turn_accel)
+        u = state.shaper.limit(u, rate, turn_accel, ctx.dt)
     u *= sgn
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
@@ -238,7 +241,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "mode": _MODE_CODES[mem.mode],
         "lost": mem.lost_for(ctx.t),
         "u_law": u_law,
-        "safety": float(sgn * u != u_shaped or v != v_law),
+        "safety": float(u_safe != u_law or v != v_law),
         "predicted_clearance": clearance if clearance < math.inf else -1.0,
     }
     return Command(v, u)

@@ -31,12 +31,24 @@ turn rate turns away from the boundary.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
-__all__ = ["limit_turn_away"]
+__all__ = ["TurnShaper", "limit_turn_away", "JUMP_MIN", "JUMP_FACTOR", "UNWIND"]
+
+#: A rise of the measured turn rate smaller than this is never taken for a jump (rad/s):
+#: odometry's rounding and a report's timing jitter stay below it.
+JUMP_MIN = 0.2
+#: A rise faster than this many times the robot's turn acceleration is a jump (a report that
+#: slipped lets one tick see two cycles' ramp at once; the right side of the lab study, whose
+#: firmware ramps every turn away, shows rises of up to twice the ramp's rate).
+JUMP_FACTOR = 3.0
+#: Before the robot has shown a jump, a turn away is capped only where it would take longer
+#: than this to unwind at the robot's turn acceleration (s): a spin, not a swerve.
+UNWIND = 1.0
 
 
 def limit_turn_away(u: float, rate: float, accel: float, dt: float) -> float:
-    """Return the turn rate ``u`` with its turn away capped at one tick of the robot's ramp.
+    """Return the turn rate ``u`` with its turn away capped at ``dt`` of the robot's ramp.
 
     Parameters
     ----------
@@ -48,15 +60,52 @@ def limit_turn_away(u: float, rate: float, accel: float, dt: float) -> float:
     accel : float, rad/s^2
         The robot's turn acceleration limit (``inf``: none).
     dt : float, s
-        The tick's length: how long the command holds.
+        How long the robot may ramp towards the command: the tick's length.
 
     Returns
     -------
     float
         ``min(u, rate + accel dt)``; ``u`` itself without a finite positive acceleration
-        limit or a positive tick.
+        limit or a positive ``dt``.
     """
     if not (0.0 < accel < math.inf) or not dt > 0.0:
         return u
     top = rate + accel * dt
     return top if u > top else u
+
+
+@dataclass
+class TurnShaper:
+    """What one ``follow_boundary`` atom has seen of its robot's answer to turns away.
+
+    Rates in the law's frame (rad/s, positive away from the boundary), times on the
+    backend's clock (s).
+    """
+
+    report: tuple[float, float] | None = None
+    """When the measured turn rate last changed, and to what."""
+    jumps: bool = False
+    """The measured rate has risen away from the boundary faster than the robot's ramp."""
+
+    def observe(self, time: float, measured: float, accel: float) -> None:
+        """Take this tick's measured turn rate (once per tick, before :meth:`limit`)."""
+        if not 0.0 < accel < math.inf:
+            return
+        prev = self.report
+        if prev is not None and measured == prev[1]:
+            return  # the same report again: nothing new about the robot
+        self.report = (time, measured)
+        if prev is None or self.jumps:
+            return
+        rise = measured - prev[1]
+        if rise > JUMP_MIN and rise > JUMP_FACTOR * accel * (time - prev[0]):
+            self.jumps = True
+
+    def limit(self, u: float, rate: float, accel: float, dt: float) -> float:
+        """Return ``u`` with its turn away capped (law frame, rad/s).
+
+        At one tick (``dt``) of the ramp beyond the predicted ``rate`` once the robot has
+        jumped to a turn away; before that, only at :data:`UNWIND` of it (a firmware that
+        ramps never gets that far in a tick, so it is left as it was).
+        """
+        return limit_turn_away(u, rate, accel, dt if self.jumps else UNWIND)
