@@ -1,4 +1,4 @@
-"""Turn-away shaping: the law never asks for a turn away faster than the robot ramps one.
+"""Turn-away shaping: on a robot that jumps to turns away, the law ramps them itself.
 
 The steering law's reflexes turn away from the boundary for a tick or two: the front floor
 asks for the full turn rate (8.7 rad/s on a Pioneer) when a face comes up ahead; the front
@@ -10,15 +10,21 @@ away (the left), a one-tick spike becomes a full turn rate that takes seconds to
 (8.7 rad/s at 1.74 rad/s^2: 5 s), and every swing back towards the boundary, round a tip,
 starts from further away and late.
 
-:func:`limit_turn_away` caps the turn away of each command at one tick of the robot's turn
-acceleration beyond the rate the robot is predicted to turn at when the command starts to
-act (the measured rate ramped through the commands still in flight:
-:meth:`atoms.latency.Predictor.rate_when_acting`). A firmware that ramps would go no further
-in that tick, so for it the cap changes nothing; one that would jump is held to the ramp.
-Turns towards the boundary pass as the law asks: a firmware that jumps to them rounds a tip
-sooner, and the safety layer guards them. Without a turn-acceleration limit (the ideal
-unicycle) nothing is shaped. Everything is in the law's (right-hand) frame, where a positive
-turn rate turns away from the boundary.
+:class:`TurnShaper` shapes the command the safety layer let through. It watches the measured
+turn rate: once that has risen away from the boundary faster than the robot's turn
+acceleration allows (:data:`JUMP_FACTOR` times it, and by more than :data:`JUMP_MIN`), the
+robot is known to jump to turns away, and from then on :func:`limit_turn_away` caps each
+command's turn away at one tick of the ramp beyond the rate the robot is predicted to turn at
+when the command starts to act (the measured rate ramped through the commands still in
+flight: :meth:`atoms.latency.Predictor.rate_when_acting`). Until then only a spin is capped:
+a turn away more than :data:`UNWIND` of the ramp beyond that rate, which a ramping firmware
+never reaches within a tick, so for it nothing changes (the P3-DX following on the right, as
+before, bit for bit); a jumping one takes its first spike only that far (a second to
+unwind, not five), and shows by it that it jumps. Turns towards the boundary pass as the law asks: a
+firmware that jumps to them rounds a tip sooner (the P3-DX on the right), and the safety
+layer guards them. Without a turn-acceleration limit (the ideal unicycle) nothing is shaped.
+Everything is in the law's (right-hand) frame, where a positive turn rate turns away from
+the boundary.
 
 >>> round(limit_turn_away(8.7, rate=0.5, accel=1.74, dt=0.1), 6)  # the floor's spike, ramped
 0.674
@@ -26,6 +32,13 @@ turn rate turns away from the boundary.
 -2.0
 >>> limit_turn_away(8.7, rate=0.5, accel=math.inf, dt=0.1)         # an ideal robot
 8.7
+>>> s = TurnShaper()
+>>> s.observe(0.0, -0.5, accel=1.74)
+>>> round(s.limit(8.7, rate=-0.5, accel=1.74, dt=0.1), 6)  # not seen to jump: a spin is capped
+1.24
+>>> s.observe(0.1, 0.3, accel=1.74)        # +0.8 rad/s in 0.1 s: the ramp allows 0.174
+>>> s.jumps, round(s.limit(8.7, rate=0.3, accel=1.74, dt=0.1), 6)
+(True, 0.474)
 """
 
 from __future__ import annotations

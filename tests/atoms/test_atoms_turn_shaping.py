@@ -9,13 +9,12 @@ and one spike star of the lab suite was never engaged from any start on the left
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from mdle.atoms.latency import Predictor
-from mdle.atoms.turn_shaping import limit_turn_away
+from mdle.atoms.turn_shaping import UNWIND, TurnShaper, limit_turn_away
 from mdle.core.pose import Pose
 from mdle.experiments.generated import RunSpec, StudyConfig, plan_text, study_specs
 from mdle.lang import load_text
@@ -36,6 +35,27 @@ def test_a_turn_away_is_capped_at_one_tick_of_the_ramp_and_a_turn_towards_is_not
     assert limit_turn_away(-8.7, 0.2, ACCEL, DT) == -8.7  # towards the boundary: as asked
     assert limit_turn_away(8.7, 0.2, math.inf, DT) == 8.7  # no acceleration limit
     assert limit_turn_away(8.7, 0.2, ACCEL, 0.0) == 8.7
+
+
+def test_a_jump_away_is_told_from_a_ramp_seen_through_late_reports() -> None:
+    s = TurnShaper()
+    t, rate = 0.0, -0.5
+    s.observe(t, rate, ACCEL)
+    for step in (1, 1, 2, 1):  # the ramp's rise per cycle; a slipped report shows two at once
+        t, rate = t + DT, rate + step * ACCEL * DT
+        s.observe(t, rate, ACCEL)
+        s.observe(t + 0.5 * DT, rate, ACCEL)  # the same report read again, later
+    assert not s.jumps
+    # not seen to jump: only a spin is capped
+    assert s.limit(8.7, rate, ACCEL, DT) == pytest.approx(rate + ACCEL * UNWIND)
+    assert s.limit(rate + 0.5, rate, ACCEL, DT) == rate + 0.5
+    s.observe(t + DT, rate + 0.8, ACCEL)  # 0.8 rad/s in one tick: the firmware jumped
+    assert s.jumps
+    assert s.limit(8.7, rate + 0.8, ACCEL, DT) == pytest.approx(rate + 0.8 + ACCEL * DT)
+    ideal = TurnShaper()
+    for k, r in enumerate((0.0, 5.0, -5.0, 5.0)):
+        ideal.observe(k * DT, r, math.inf)
+    assert not ideal.jumps
 
 
 def _actuate(commands: list[float], ramp: str, shaped: bool, left: bool = False
@@ -92,7 +112,6 @@ def _lab_run(side: str, index: int, start: int) -> tuple[RunSpec, np.ndarray, bo
     cfg = StudyConfig(shapes=index + 1, starts=start + 1, suite="lab", robot="pioneer-p3dx",
                       v=0.3, rc=0.55, kf=2.0, rate=10.0, side=side)
     spec = next(s for s in study_specs(cfg) if s.shape_index == index and s.start == start)
-    spec = replace(spec, duration=60.0)
     shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
     world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
     program = load_text(plan_text(spec.side, spec.rc, spec.v, spec.kf, spec.duration))
