@@ -160,7 +160,7 @@ REPORTS = {
     Param("lookahead", TIME, 0.8, doc="how far ahead the safety layer checks the arc", low=0.0),
     Param("latency", TIME, math.inf,
           doc="command latency to predict over (default: the robot's; 0 s: no prediction, "
-              "not even of the scan's age)", low=0.0, finite=False),
+              "not even of the scan's age, and no turn-away shaping)", low=0.0, finite=False),
     start=start_follow,
     reports=REPORTS,
 )
