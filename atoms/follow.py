@@ -17,7 +17,7 @@ the predicted clearance.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from mdle.atoms import closest, safety, steering
@@ -25,6 +25,7 @@ from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_si
 from mdle.atoms.latency import STILL, Predictor, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.atoms.steering import Gains, Memory
+from mdle.atoms.turn_shaping import TurnShaper
 from mdle.core.backend import Command
 from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
@@ -55,6 +56,8 @@ class FollowState:
     scan_model: bool = True
     """Follow the nearest boundary point of the whole scan (:mod:`atoms.closest`); False: the
     paper's two rays."""
+    shaper: TurnShaper = field(default_factory=TurnShaper)
+    """What the atom has seen of the robot's answer to turns away (:mod:`atoms.turn_shaping`)."""
 
 
 def start_follow(args: Args, ctx: Context) -> FollowState:
@@ -157,7 +160,7 @@ REPORTS = {
     Param("lookahead", TIME, 0.8, doc="how far ahead the safety layer checks the arc", low=0.0),
     Param("latency", TIME, math.inf,
           doc="command latency to predict over (default: the robot's; 0 s: no prediction, "
-              "not even of the scan's age)", low=0.0, finite=False),
+              "not even of the scan's age, and no turn-away shaping)", low=0.0, finite=False),
     start=start_follow,
     reports=REPORTS,
 )
@@ -206,6 +209,14 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     if margin > 0 and v > 0:
         v, u, clearance = safety.filter_complex(zl, v, u, g.umax, ctx.limits.radius, margin,
                                                 float(args["lookahead"]), side=-1)
+    u_safe = sgn * u  # what the safety layer let through (robot frame)
+    turn_accel = ctx.limits.max_turn_accel
+    if pred is not None and state.latency is not None and turn_accel < math.inf:
+        # a turn away no faster than the robot ramps one: a firmware that jumps to it turns a
+        # one-tick spike into seconds of spinning off the boundary (atoms/turn_shaping.py)
+        state.shaper.observe(obs.time, sgn * obs.omega, turn_accel)
+        rate = pred.rate_when_acting(obs.time, sgn * obs.omega, state.latency, turn_accel)
+        u = state.shaper.limit(u, rate, turn_accel, ctx.dt)
     u *= sgn
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)
@@ -230,7 +241,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "mode": _MODE_CODES[mem.mode],
         "lost": mem.lost_for(ctx.t),
         "u_law": u_law,
-        "safety": float(u != u_law or v != v_law),
+        "safety": float(u_safe != u_law or v != v_law),
         "predicted_clearance": clearance if clearance < math.inf else -1.0,
     }
     return Command(v, u)

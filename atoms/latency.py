@@ -175,6 +175,23 @@ class Predictor:
         return compose(start, (x, y, th)), compose(pose, (x, y, th))
 
 
+    def rate_when_acting(self, now: float, omega: float, latency: float,
+                         turn_accel: float) -> float:
+        """Return the turn rate predicted for the moment a command sent now starts to act.
+
+        The measured rate ``omega`` (rad/s) ramped at ``turn_accel`` (rad/s^2) through the
+        commands still in flight over ``latency`` (s), as :meth:`predict` integrates them.
+        """
+        if latency <= 0:
+            return omega
+        n = max(1, math.ceil(latency / _STEP))
+        h = latency / n
+        for i in range(n):
+            _, tu = self._command_at(now + (i + 0.5) * h - latency, (0.0, omega))
+            omega = _ramp(omega, tu, turn_accel, h)
+        return omega
+
+
 def _moved(r_point: tuple[float, float], beta: float, d: Pose3) -> tuple[float, float, float]:
     """Return a boundary point and tangent angle (robot frame at the scan) in the frame ``d``."""
     c, s = math.cos(d[2]), math.sin(d[2])
