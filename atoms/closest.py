@@ -75,6 +75,14 @@ POINT_KAPPA = -100.0
 #: A fit whose residuals exceed this fraction of the range (plus 3 mm) is no circle: the
 #: nearest point is taken as a point (1.5 times the LMS-200's 0.8 % range noise).
 FIT_TOLERANCE = 0.012
+#: The LMS-200's range noise, a fraction of the range (its data sheet's 0.8 %).
+RANGE_NOISE = 0.008
+#: The scan between the point followed and the next face counts as recessed (a concave
+#: corner of the level set between them) beyond this distance from their chord (m).
+CHORD_TOLERANCE = 0.05
+#: A remembered point stands while the scan does not see through a disc of this radius
+#: round it (m): the fitted point of a sharp tip lies 2-3 cm off the outline.
+MEMORY_TOLERANCE = 0.04
 #: A remembered point counts once it is within this of an edge of the ladar's 180 degrees or
 #: beyond it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind.
 FOV_EDGE = math.radians(2.0)
@@ -396,13 +404,68 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     if ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)
-        w = (near.r + rc - ahead.r) / rc
+        w = _next_face_weight(z, near, ahead, v, rc, umax)
         if w > 0.0:
             u_next = closest_rate(ahead.r, ahead.beta, _offset_curvature(POINT_KAPPA, ahead.r, g),
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
     return _with_front(front, near, u, v, rc, g, umax), near
+
+
+def _next_face_weight(z: "np.ndarray", near: Ray, ahead: Ray, v: float, rc: float,
+                      umax: float) -> float:
+    """Return the weight of the next face's law against the nearest point's (unclipped).
+
+    The weight is ``(r + rc - r_next) / rc``: 0 until the next face comes within ``rc`` of
+    the distance kept now, 1 when it is as near. Where the scan between the point followed
+    ``q`` and the next face ``p`` lies beyond their chord (:func:`_recessed`: a gap between
+    two things, a notch, a room's corner), their ``rc`` level sets are
+
+    * one curve with a concave corner when ``p`` and ``q`` are closer than ``2 rc``: the
+      weight is then at least ``1 - m / rc``, where ``m`` is how far outside ``rc`` the next
+      face stays on a full left turn from here (the margin to the turning circle of radius
+      ``v / umax``). At 1 m/s the nearest point jumps to a table's next leg when that leg is
+      already at ``rc``: too late to turn without it;
+    * two closed curves when they are farther apart: the robot circles the one it follows,
+      and the next face has no weight.
+
+    Where the scan runs along the chord (one face, the far face of a convex corner seen edge
+    on) the weight is as above, without the floor.
+    """
+    w = (near.r + rc - ahead.r) / rc
+    p, q = _point_of(ahead), _point_of(near)
+    if not _recessed(z, q, p):
+        return w
+    if not abs(p - q) < 2.0 * rc:
+        return 0.0
+    radius = v / umax if umax > 0.0 else math.inf
+    if math.isfinite(radius):
+        m = abs(abs(p - complex(0.0, radius)) - radius) - rc
+        w = max(w, 1.0 - m / rc)
+    return w
+
+
+def _recessed(z: "np.ndarray", q: complex, p: complex) -> bool:
+    """Tell whether the scan between bearings of ``q`` and ``p`` lies beyond the chord ``q p``.
+
+    True when a point seen between them lies more than :data:`CHORD_TOLERANCE` (plus three
+    times the range noise) beyond the chord, on the side away from the robot, or when none
+    is seen there (a gap).
+    """
+    import numpy as np
+
+    a, b = math.atan2(q.imag, q.real), math.atan2(p.imag, p.real)
+    ang = np.angle(z)
+    between = z[(ang > min(a, b)) & (ang < max(a, b))]
+    if between.shape[0] == 0:
+        return True
+    chord = p - q
+    # the cross product with the chord, positive beyond it (the robot at 0 on the other side)
+    side = -1.0 if (chord.conjugate() * -q).imag > 0.0 else 1.0
+    beyond = side * (chord.conjugate() * (between - q)).imag / abs(chord)
+    # three times the LMS-200's range noise on top: a far wall seen end to end is no notch
+    return bool((beyond > CHORD_TOLERANCE + 3.0 * RANGE_NOISE * abs(between)).any())
 
 
 def _point_of(ray: Ray) -> complex:
@@ -424,7 +487,10 @@ def _unseen(z: "np.ndarray", kept: Ray) -> bool:
     if abs(bearing) > math.pi / 2.0 - FOV_EDGE:  # at the edge of the field of view or behind
         return True
     ang = np.angle(z)
-    at = z[abs(ang - bearing) < math.radians(1.0)]
+    # the beams through a disc of the fit's offset round it: a point remembered off a sharp
+    # tip lies a few cm in front of it, where the beams pass beside the tip
+    half = max(math.radians(1.0), math.asin(min(1.0, MEMORY_TOLERANCE / kept.r)))
+    at = z[abs(ang - bearing) < half]
     return at.shape[0] > 0 and float(abs(at).min()) <= kept.r + 0.05
 
 
