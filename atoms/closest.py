@@ -450,16 +450,26 @@ def _recessed(z: "np.ndarray", q: complex, p: complex) -> bool:
     """Tell whether the scan between bearings of ``q`` and ``p`` lies beyond the chord ``q p``.
 
     True when a point seen between them lies more than :data:`CHORD_TOLERANCE` (plus three
-    times the range noise) beyond the chord, on the side away from the robot, or when none
-    is seen there (a gap).
+    times the range noise) beyond the chord, on the side away from the robot, or when beams
+    between them returned nothing (a gap: two valid points farther apart in bearing than 1.5
+    times the scan's beam spacing). Bearings beyond the ladar's field of view are unknown,
+    not a gap: the far face of a convex corner behind the robot runs on along the chord.
     """
     import numpy as np
 
-    a, b = math.atan2(q.imag, q.real), math.atan2(p.imag, p.real)
     ang = np.angle(z)
-    between = z[(ang > min(a, b)) & (ang < max(a, b))]
+    first, last = float(ang[0]), float(ang[-1])
+    a, b = math.atan2(q.imag, q.real), math.atan2(p.imag, p.real)
+    a, b = max(min(a, b), first), min(max(a, b), last)
+    inside = (ang > a) & (ang < b)
+    between = z[inside]
+    if ang.shape[0] > 1:
+        spacing = float(np.diff(ang).min())
+        edges = np.concatenate(([a], ang[inside], [b]))
+        if float(np.diff(edges).max()) > 1.5 * spacing:
+            return True
     if between.shape[0] == 0:
-        return True
+        return False
     chord = p - q
     # the cross product with the chord, positive beyond it (the robot at 0 on the other side)
     side = -1.0 if (chord.conjugate() * -q).imag > 0.0 else 1.0
