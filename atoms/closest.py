@@ -435,9 +435,10 @@ def _next_face_weight(z: "np.ndarray", near: Ray, ahead: Ray, v: float, rc: floa
     """
     w = (near.r + rc - ahead.r) / rc
     p, q = _point_of(ahead), _point_of(near)
-    if not _recessed(z, q, p):
-        return w
-    if not abs(p - q) < 2.0 * rc:
+    close = abs(p - q) < 2.0 * rc
+    if not (close or near.r < 2.0 * rc) or not _recessed(z, q, p, rc):
+        return w  # one face, or still approaching both (farther than 2 rc from the one)
+    if not close:
         return 0.0
     radius = v / umax if umax > 0.0 else math.inf
     if math.isfinite(radius):
@@ -446,36 +447,46 @@ def _next_face_weight(z: "np.ndarray", near: Ray, ahead: Ray, v: float, rc: floa
     return w
 
 
-def _recessed(z: "np.ndarray", q: complex, p: complex) -> bool:
+def _recessed(z: "np.ndarray", q: complex, p: complex, rc: float) -> bool:
     """Tell whether the scan between bearings of ``q`` and ``p`` lies beyond the chord ``q p``.
 
-    True when a point seen between them lies more than :data:`CHORD_TOLERANCE` (plus three
-    times the range noise) beyond the chord, on the side away from the robot, or when beams
-    between them returned nothing (a gap: two valid points farther apart in bearing than 1.5
-    times the scan's beam spacing). Bearings beyond the ladar's field of view are unknown,
-    not a gap: the far face of a convex corner behind the robot runs on along the chord.
+    True when a point seen between them lies more than :data:`CHORD_TOLERANCE` (plus five
+    times the range noise) beyond the chord, on the side away from the robot, or when the
+    scan leaves a gap in the chord: more than ``rc / 2`` of it uncovered (the level set of
+    points along it dips by less than 4 cm at rc 0.5 m for less) between two points that
+    beams without a return separate (more than 1.75 times the scan's median beam spacing
+    apart in bearing: a face seen at grazing incidence is sampled sparsely too, but by
+    neighbouring beams).
     """
     import numpy as np
 
     ang = np.angle(z)
-    first, last = float(ang[0]), float(ang[-1])
     a, b = math.atan2(q.imag, q.real), math.atan2(p.imag, p.real)
-    a, b = max(min(a, b), first), min(max(a, b), last)
-    inside = (ang > a) & (ang < b)
+    inside = (ang > min(a, b)) & (ang < max(a, b))
     between = z[inside]
-    if ang.shape[0] > 1:
-        spacing = float(np.diff(ang).min())
-        edges = np.concatenate(([a], ang[inside], [b]))
-        if float(np.diff(edges).max()) > 1.5 * spacing:
-            return True
-    if between.shape[0] == 0:
-        return False
     chord = p - q
-    # the cross product with the chord, positive beyond it (the robot at 0 on the other side)
-    side = -1.0 if (chord.conjugate() * -q).imag > 0.0 else 1.0
-    beyond = side * (chord.conjugate() * (between - q)).imag / abs(chord)
-    # three times the LMS-200's range noise on top: a far wall seen end to end is no notch
-    return bool((beyond > CHORD_TOLERANCE + 3.0 * RANGE_NOISE * abs(between)).any())
+    length = abs(chord)
+    # each point's place along the chord and its distance beyond it (the robot at 0 lies on
+    # the other side), from one complex product
+    w = (between - q) * (chord.conjugate() / length)
+    if (chord.conjugate() * -q).imag > 0.0:
+        w = w.conjugate()
+    # five times the range noise on top: the chord's ends are noisy minima (about two sigma
+    # nearer than the face) and the farthest of some fifty noisy points lies about 2.5 sigma
+    # beyond it, so a far wall seen end to end is no notch
+    if bool((w.imag > CHORD_TOLERANCE + 5.0 * RANGE_NOISE * abs(between)).any()):
+        return True
+    along = np.concatenate(([0.0], w.real, [length]))
+    # bearings beyond the field of view are unknown, not a gap: the far face of a convex
+    # corner behind the robot runs on along the chord
+    first, last = float(ang[0]), float(ang[-1])
+    bearing = np.concatenate(([min(max(a, first), last)], ang[inside],
+                              [min(max(b, first), last)]))
+    order = np.argsort(along)
+    stretch = np.diff(along[order])
+    turn = np.abs(np.diff(bearing[order]))
+    spacing = float(np.median(np.diff(ang))) if ang.shape[0] > 1 else math.inf
+    return bool(((stretch > 0.5 * rc) & (turn > 1.75 * spacing)).any())
 
 
 def _point_of(ray: Ray) -> complex:
