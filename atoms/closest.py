@@ -80,9 +80,6 @@ RANGE_NOISE = 0.008
 #: The scan between the point followed and the next face counts as recessed (a concave
 #: corner of the level set between them) beyond this distance from their chord (m).
 CHORD_TOLERANCE = 0.05
-#: A remembered point stands while the scan does not see through a disc of this radius
-#: round it (m): the fitted point of a sharp tip lies 2-3 cm off the outline.
-MEMORY_TOLERANCE = 0.04
 #: A remembered point counts once it is within this of an edge of the ladar's 180 degrees or
 #: beyond it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind.
 FOV_EDGE = math.radians(2.0)
@@ -508,10 +505,7 @@ def _unseen(z: "np.ndarray", kept: Ray) -> bool:
     if abs(bearing) > math.pi / 2.0 - FOV_EDGE:  # at the edge of the field of view or behind
         return True
     ang = np.angle(z)
-    # the beams through a disc of the fit's offset round it: a point remembered off a sharp
-    # tip lies a few cm in front of it, where the beams pass beside the tip
-    half = max(math.radians(1.0), math.asin(min(1.0, MEMORY_TOLERANCE / kept.r)))
-    at = z[abs(ang - bearing) < half]
+    at = z[abs(ang - bearing) < math.radians(1.0)]
     return at.shape[0] > 0 and float(abs(at).min()) <= kept.r + 0.05
 
 
