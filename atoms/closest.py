@@ -482,7 +482,11 @@ def _recessed(z: "np.ndarray", q: complex, p: complex, rc: float) -> bool:
     order = np.argsort(along)
     stretch = np.diff(along[order])
     turn = np.abs(np.diff(bearing[order]))
-    spacing = float(np.median(np.diff(ang))) if ang.shape[0] > 1 else math.inf
+    spacing = math.inf
+    if ang.shape[0] > 1:
+        # the median beam spacing (np.median would import numpy.ma in the middle of a run)
+        steps = np.diff(ang)
+        spacing = float(np.partition(steps, steps.shape[0] // 2)[steps.shape[0] // 2])
     return bool(((stretch > 0.5 * rc) & (turn > 1.75 * spacing)).any())
 
 
