@@ -16,6 +16,7 @@ import pytest
 
 from mdle import sim
 from mdle.atoms import closest as C
+from mdle.atoms import corners
 from mdle.atoms import steering as S
 from mdle.core.pose import Pose
 from mdle.lang import load_text
@@ -58,20 +59,20 @@ def _segments(points: list[complex]) -> np.ndarray:
 def test_a_gap_between_two_poles_is_recessed() -> None:
     q, p = complex(0.0, -0.45), complex(0.9, -0.45)  # their near sides, 0.9 m apart
     z = _discs([(q - 0.02j, 0.02), (p - 0.02j, 0.02)])
-    assert C._recessed(z, q, p, 0.5)
+    assert corners.recessed(z, q, p, 0.5)
 
 
 def test_a_wall_between_two_points_is_not_recessed() -> None:
     q, p = complex(0.0, -0.5), complex(0.8, -0.5)
     z = _segments([complex(-3.0, -0.5), complex(3.0, -0.5)])
-    assert not C._recessed(z, q, p, 0.5)
+    assert not corners.recessed(z, q, p, 0.5)
 
 
 def test_a_notch_between_two_tips_is_recessed() -> None:
     # two tips 0.8 m apart and a notch 0.6 m deep between them
     q, p = complex(0.0, -0.5), complex(0.8, -0.5)
     z = _segments([complex(-0.3, -1.2), q, complex(0.4, -1.1), p, complex(1.1, -1.2)])
-    assert C._recessed(z, q, p, 0.5)
+    assert corners.recessed(z, q, p, 0.5)
 
 
 def test_the_far_face_of_a_convex_corner_seen_edge_on_is_not_recessed() -> None:
@@ -82,7 +83,7 @@ def test_the_far_face_of_a_convex_corner_seen_edge_on_is_not_recessed() -> None:
     z = _segments([q, q + 5.0 * complex(0.15, -0.51)])
     p = complex(z[np.argmin(np.abs(z - complex(0.05, -0.98)))])
     assert abs(p - q) < 1.0 and np.abs(np.diff(z)).max() > C.JUMP  # split by depth jumps
-    assert not C._recessed(z, q, p, 0.5)
+    assert not corners.recessed(z, q, p, 0.5)
 
 
 def _ray(point: complex) -> S.Ray:
@@ -97,7 +98,7 @@ def test_a_pole_farther_than_2rc_from_the_one_followed_has_no_weight() -> None:
     z = _discs([(a - 0.03j, 0.03), (b - 0.03j, 0.03)])
     near, ahead = _ray(a), _ray(b)
     assert (near.r + 0.5 - ahead.r) / 0.5 > 0.0  # the plain weight would blend it in
-    assert C._next_face_weight(z, near, ahead, 1.0, 0.5, 3.0) == 0.0
+    assert corners.next_face_weight(z, a, b, near.r, ahead.r, 1.0, 0.5, 3.0) == 0.0
 
 
 def test_the_next_leg_of_a_table_is_weighed_in_while_a_full_turn_still_clears_it() -> None:
@@ -110,7 +111,7 @@ def test_the_next_leg_of_a_table_is_weighed_in_while_a_full_turn_still_clears_it
     near, ahead = _ray(a), _ray(b)
     assert abs(b - a) < 1.0
     assert (near.r + 0.5 - ahead.r) / 0.5 == pytest.approx(0.7)
-    assert C._next_face_weight(z, near, ahead, 1.0, 0.5, 3.0) > 0.95
+    assert corners.next_face_weight(z, a, b, near.r, ahead.r, 1.0, 0.5, 3.0) > 0.95
 
 
 def _follow(world: sim.World, seconds: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -156,19 +157,19 @@ def test_the_noisy_square_is_not_changed_by_the_corner_rules(side: str) -> None:
     program = load_text(f"atom f = (follow_boundary(side = {side}, rc = 0.5 m, v = 1 m/s),"
                         " never, 30 s)\nrun f\n")
     traces = []
-    for rule in (C._next_face_weight, _plain_weight):
+    for rule in (corners.next_face_weight, _plain_weight):
         rec = Recorder()
         world = sim.World("square", obstacles=(square,), start_pose=Pose(-6.0, y0, 0.0),
                           robot=IDEAL)
         with pytest.MonkeyPatch.context() as mp:
-            mp.setattr(C, "_next_face_weight", rule)
+            mp.setattr(corners, "next_face_weight", rule)
             run(program.elements["f"], sim.SimBackend(world, seed=2, sensing="scan"),
                 rate=50.0, observers=[rec])
         traces.append(np.array([(s.true_x, s.true_y) for s in rec.samples]))
     assert np.array_equal(traces[0], traces[1])
 
 
-def _plain_weight(z: np.ndarray, near: S.Ray, ahead: S.Ray, v: float, rc: float,
-                  umax: float) -> float:
+def _plain_weight(z: np.ndarray, q: complex, p: complex, r: float, r_next: float, v: float,
+                  rc: float, umax: float) -> float:
     """The next face's weight without the corner rules: ``(r + rc - r_next) / rc``."""
-    return (near.r + rc - ahead.r) / rc
+    return (r + rc - r_next) / rc
