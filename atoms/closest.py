@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from mdle.atoms import searches
+from mdle.atoms import corners, searches
 from mdle.atoms.steering import (
     CORNER,
     FOLLOW,
@@ -370,7 +370,8 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     if ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)
-        w = (near.r + rc - ahead.r) / rc
+        w = corners.next_face_weight(z, _point_of(near), _point_of(ahead), near.r, ahead.r,
+                                     v, rc, umax)
         if w > 0.0:
             u_next = closest_rate(ahead.r, ahead.beta, _offset_curvature(POINT_KAPPA, ahead.r, g),
                                   v, rc, g, umax)
