@@ -57,18 +57,26 @@ def next_face_weight(z: "np.ndarray", q: complex, p: complex, r: float, r_next: 
 
     Where the scan runs along the chord (one face, the far face of a convex corner seen edge
     on) the weight is as above, without the floor.
+
+    The law uses the weight clipped to ``[0, 1]``. The scan is looked at (:func:`recessed`,
+    a dozen numpy calls) only where its answer changes that: not when the floor is no more
+    than the plain weight or the plain weight is 1 or more, nor when the plain weight is 0
+    or less for two things apart.
     """
     w = (r + rc - r_next) / rc
     close = abs(p - q) < 2.0 * rc
-    if not (close or r < 2.0 * rc) or not recessed(z, q, p, rc):
-        return w  # one face, or still approaching both (farther than 2 rc from the one)
-    if not close:
-        return 0.0
+    if not (close or r < 2.0 * rc):
+        return w  # still approaching both (farther than 2 rc from the one)
+    if not close:  # two closed level sets if recessed: no weight
+        return w if w <= 0.0 or not recessed(z, q, p, rc) else 0.0
     radius = v / umax if umax > 0.0 else math.inf
-    if math.isfinite(radius):
-        m = abs(abs(p - complex(0.0, radius)) - radius) - rc
-        w = max(w, 1.0 - m / rc)
-    return w
+    if not math.isfinite(radius) or w >= 1.0:
+        return w
+    m = abs(abs(p - complex(0.0, radius)) - radius) - rc
+    floor = 1.0 - m / rc
+    if floor <= w or not recessed(z, q, p, rc):
+        return w
+    return floor
 
 
 def recessed(z: "np.ndarray", q: complex, p: complex, rc: float) -> bool:
