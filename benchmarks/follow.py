@@ -43,6 +43,10 @@ drift with the load and only the ratios taken within one run mean much):
       ratio (target 1.3x)                 1.21x       1.24x      1.61x, 1.69x
       view + scan points                  172 k       26.6 us    172 k
       law + latency + safety layer        188 k       44.9 us    306 k
+
+With the next face's corner rules and the turn-away shaping (1 callgrind round; wall best
+of 10 at a load average of 1): the whole-scan step 369 k and 37.1 us, the two rays' 298 k
+and 28.6 us, ratios 1.24x and 1.30x.
     controlled tick (500 ticks)           757 k       163 us     885 k
       with numpy's simulator loops                    198 us
 
