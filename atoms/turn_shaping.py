@@ -95,8 +95,10 @@ class TurnShaper:
     backend's clock (s).
     """
 
-    report: tuple[float, float] | None = None
-    """When the measured turn rate last changed, and to what."""
+    reported: float | None = None
+    """The measured turn rate as last changed (None: no report yet)."""
+    reported_at: float = 0.0
+    """When it last changed."""
     jumps: bool = False
     """The measured rate has risen away from the boundary faster than the robot's ramp."""
 
@@ -104,14 +106,14 @@ class TurnShaper:
         """Take this tick's measured turn rate (once per tick, before :meth:`limit`)."""
         if not 0.0 < accel < math.inf:
             return
-        prev = self.report
-        if prev is not None and measured == prev[1]:
+        before, before_at = self.reported, self.reported_at
+        if before is not None and measured == before:
             return  # the same report again: nothing new about the robot
-        self.report = (time, measured)
-        if prev is None or self.jumps:
+        self.reported, self.reported_at = measured, time
+        if before is None or self.jumps:
             return
-        rise = measured - prev[1]
-        if rise > JUMP_MIN and rise > JUMP_FACTOR * accel * (time - prev[0]):
+        rise = measured - before
+        if rise > JUMP_MIN and rise > JUMP_FACTOR * accel * (time - before_at):
             self.jumps = True
 
     def limit(self, u: float, rate: float, accel: float, dt: float) -> float:
