@@ -13,7 +13,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from mdle import sim
 from mdle.core.backend import Scan
+from mdle.lang import load_text
+from mdle.runtime import Recorder, run
 
 MAX_RANGE = 10.0
 BEARINGS: np.ndarray = np.radians(np.arange(-90.0, 90.5, 1.0))
@@ -242,3 +245,21 @@ class World2D:
 def world2d() -> World2D:
     """Provide exact shapes and the closed-loop runner for law tests."""
     return World2D()
+
+
+def follow_run(world: Any, seconds: float, rate: float = 50.0, extra: str = ""
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Follow ``world``'s obstacle on the right (rc 0.5 m, 1 m/s, noisy scan, seed 2).
+
+    ``extra``: more ``follow_boundary`` arguments (", model = rays"). Returns the samples'
+    times, true positions and clearances.
+    """
+    program = load_text(f"atom f = (follow_boundary(side = right, rc = 0.5 m, v = 1 m/s{extra}),"
+                        f" never, {seconds} s)\nrun f\n")
+    rec = Recorder()
+    run(program.elements["f"], sim.SimBackend(world, seed=2, sensing="scan"), rate=rate,
+        observers=[rec])
+    t = np.array([s.time for s in rec.samples])
+    xy = np.array([(s.true_x, s.true_y) for s in rec.samples])
+    d = np.array([s.clearance for s in rec.samples], dtype=float)
+    return t, xy, d

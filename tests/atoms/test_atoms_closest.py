@@ -12,9 +12,10 @@ from mdle.atoms import closest as C
 from mdle.atoms import steering as S
 from mdle.core.pose import Pose
 from mdle.lang import load_text
-from mdle.runtime import Recorder, run
+from mdle.runtime import run
 from mdle.sim.profiles import robot_profile
 from mdle.sim.shapes import Circle
+from tests.atoms.conftest import follow_run
 
 IDEAL = robot_profile("ideal")
 
@@ -112,25 +113,12 @@ def test_the_clf_decreases_along_the_closest_point_law() -> None:
         assert dv == pytest.approx(-g.mu * math.sin(beta / 2) ** 2, abs=1e-9)
 
 
-def _follow(world: sim.World, seconds: float, rate: float = 50.0, extra: str = ""
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    program = load_text(f"atom f = (follow_boundary(side = right, rc = 0.5 m, v = 1 m/s{extra}),"
-                        f" never, {seconds} s)\nrun f\n")
-    rec = Recorder()
-    run(program.elements["f"], sim.SimBackend(world, seed=2, sensing="scan"), rate=rate,
-        observers=[rec])
-    t = np.array([s.time for s in rec.samples])
-    xy = np.array([(s.true_x, s.true_y) for s in rec.samples])
-    d = np.array([s.clearance for s in rec.samples], dtype=float)
-    return t, xy, d
-
-
 def test_passing_a_thin_pole_tangentially_engages_it() -> None:
     # a 5 cm pole exactly abeam at the start, 0.8 m off: nothing ahead, nothing at the side
     # ray's 0 deg and -90 deg beams but the pole itself; the robot circles it at rc
     world = sim.World("pole", obstacles=(Circle((0.0, 0.0), 0.05),),
                       start_pose=Pose(0.0, 0.85, 0.0), robot=IDEAL)
-    t, _, d = _follow(world, 30.0)
+    t, _, d = follow_run(world, 30.0)
     late = t > 15.0
     assert np.abs(d[late] - 0.5).mean() < 0.03  # a point robot: clearance is d
     assert d.max() < 1.0  # it never drives away
@@ -140,7 +128,7 @@ def test_a_pillar_row_with_gaps_narrower_than_2rc_is_followed_round_not_through(
     # seven pillars, gaps of 0.85 m (0.85 x 2 rc): their rc level set is one curve
     pillars = tuple(Circle((1.15 * i, 0.0), 0.15) for i in range(-3, 4))
     world = sim.World("row", obstacles=pillars, start_pose=Pose(-6.0, 0.3, 0.0), robot=IDEAL)
-    t, xy, d = _follow(world, 40.0)
+    t, xy, d = follow_run(world, 40.0)
     assert d.min() > 0.2
     between = (np.abs(xy[:, 1]) < 0.15) & (np.abs(xy[:, 0]) < 3.5)
     assert not between.any()  # never squeezes in between two pillars

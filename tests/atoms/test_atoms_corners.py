@@ -23,6 +23,7 @@ from mdle.lang import load_text
 from mdle.runtime import Recorder, run
 from mdle.sim.profiles import robot_profile
 from mdle.sim.shapes import Circle, Polygon
+from tests.atoms.conftest import follow_run
 
 IDEAL = robot_profile("ideal")
 FAN = np.exp(1j * np.radians(np.arange(-90.0, 90.5, 1.0)))  # the LMS-200's 181 beams
@@ -114,24 +115,12 @@ def test_the_next_leg_of_a_table_is_weighed_in_while_a_full_turn_still_clears_it
     assert corners.next_face_weight(z, a, b, near.r, ahead.r, 1.0, 0.5, 3.0) > 0.95
 
 
-def _follow(world: sim.World, seconds: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    program = load_text("atom f = (follow_boundary(side = right, rc = 0.5 m, v = 1 m/s),"
-                        f" never, {seconds} s)\nrun f\n")
-    rec = Recorder()
-    run(program.elements["f"], sim.SimBackend(world, seed=2, sensing="scan"), rate=50.0,
-        observers=[rec])
-    t = np.array([s.time for s in rec.samples])
-    xy = np.array([(s.true_x, s.true_y) for s in rec.samples])
-    d = np.array([s.clearance for s in rec.samples], dtype=float)
-    return t, xy, d
-
-
 def test_a_table_is_followed_at_rc_at_one_metre_a_second() -> None:
     # four 2.4 cm legs 0.88 m and 1.06 m apart (gaps narrower than 2 rc): one level set with
     # four concave corners; the nearest point jumps to each next leg when it is already at rc
     legs = tuple(Circle((x, y), 0.012) for x in (-0.44, 0.44) for y in (-0.53, 0.53))
     world = sim.World("table", obstacles=legs, start_pose=Pose(-4.0, 0.2, 0.0), robot=IDEAL)
-    t, _, d = _follow(world, 40.0)
+    t, _, d = follow_run(world, 40.0)
     late = t > 20.0
     assert d.min() > 0.3
     assert np.abs(d[late] - 0.5).mean() < 0.06
@@ -143,7 +132,7 @@ def test_poles_farther_apart_than_2rc_are_circled_not_blended() -> None:
     # on average: the weight, near 1 each time it passed the other pole, pulled it outwards)
     poles = (Circle((0.0, 0.0), 0.035), Circle((1.17, 0.0), 0.035))
     world = sim.World("pair", obstacles=poles, start_pose=Pose(-4.0, 0.3, 0.0), robot=IDEAL)
-    t, _, d = _follow(world, 40.0)
+    t, _, d = follow_run(world, 40.0)
     late = t > 20.0
     assert np.abs(d[late] - 0.5).mean() < 0.045
 
