@@ -180,14 +180,15 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     law_pose = (pose.x, sgn * pose.y, sgn * pose.theta)
     front, side = view.front, view.side
     moved = STILL
+    acting_rate: float | None = None  # the turn rate when this command acts (law frame)
     pred = state.predictor
     if pred is not None and state.latency is not None:
         # answer the boundary as it will be when this command acts, not as it was scanned
         pred.record_pose(obs.time, law_pose)
         stamp = obs.scan.stamp if obs.scan is not None else obs.time
-        moved, law_pose = pred.predict(obs.time, stamp, law_pose, obs.v, sgn * obs.omega,
-                                       state.latency, ctx.limits.max_accel,
-                                       ctx.limits.max_turn_accel)
+        ahead = pred.predict(obs.time, stamp, law_pose, obs.v, sgn * obs.omega,
+                             state.latency, ctx.limits.max_accel, ctx.limits.max_turn_accel)
+        moved, law_pose, acting_rate = ahead.moved, ahead.pose, ahead.omega
         if moved != STILL:
             front, side = shift_front(front, moved), shift_side(side, moved)
     z = scan_points_complex(ctx)  # the safety layer and the corner search read complex points
@@ -211,12 +212,11 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
                                                 float(args["lookahead"]), side=-1)
     u_safe = sgn * u  # what the safety layer let through (robot frame)
     turn_accel = ctx.limits.max_turn_accel
-    if pred is not None and state.latency is not None and turn_accel < math.inf:
+    if acting_rate is not None and turn_accel < math.inf:
         # a turn away no faster than the robot ramps one: a firmware that jumps to it turns a
         # one-tick spike into seconds of spinning off the boundary (atoms/turn_shaping.py)
         state.shaper.observe(obs.time, sgn * obs.omega, turn_accel)
-        rate = pred.rate_when_acting(obs.time, sgn * obs.omega, state.latency, turn_accel)
-        u = state.shaper.limit(u, rate, turn_accel, ctx.dt)
+        u = state.shaper.limit(u, acting_rate, turn_accel, ctx.dt)
     u *= sgn
     if pred is not None:
         pred.record_command(obs.time, v, sgn * u)

@@ -16,7 +16,7 @@ law answers the geometry it will meet. Everything is in the law's (right-hand) f
 >>> p = Predictor()
 >>> p.record_pose(0.0, (0.0, 0.0, 0.0))
 >>> p.record_command(0.0, 1.0, 0.0)
->>> (dx, dy, dth), _ = p.predict(0.0, 0.0, (0.0, 0.0, 0.0), 1.0, 0.0, 0.5, math.inf, math.inf)
+>>> (dx, dy, dth) = p.predict(0.0, 0.0, (0.0, 0.0, 0.0), 1.0, 0.0, 0.5, math.inf, math.inf).moved
 >>> round(dx, 6), round(dy, 6), round(dth, 6)
 (0.5, 0.0, 0.0)
 """
@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 
 from mdle.atoms.steering import MISS, Ray, wrap
 
-__all__ = ["Predictor", "PoseAt", "CommandSent", "shift_front", "shift_side", "compose",
-           "STILL"]
+__all__ = ["Predictor", "Prediction", "PoseAt", "CommandSent", "shift_front", "shift_side",
+           "compose", "STILL"]
 
 Pose3 = tuple[float, float, float]
 
@@ -63,6 +63,19 @@ def _relative(a: Pose3, b: Pose3) -> Pose3:
 def _ramp(cur: float, target: float, rate: float, dt: float) -> float:
     step = rate * dt
     return target if abs(target - cur) <= step else cur + math.copysign(step, target - cur)
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Where the robot is predicted to be when a command sent now starts to act."""
+
+    moved: Pose3
+    """The motion from the pose at the scan to that moment, in the frame of the former."""
+    pose: Pose3
+    """The pose at that moment (odometry frame)."""
+    omega: float
+    """The turn rate at that moment: the measured one ramped through the commands in flight
+    (rad/s)."""
 
 
 @dataclass(frozen=True)
@@ -134,11 +147,11 @@ class Predictor:
         return default
 
     def predict(self, now: float, stamp: float, pose: Pose3, v: float, omega: float,
-                latency: float, accel: float, turn_accel: float) -> tuple[Pose3, Pose3]:
+                latency: float, accel: float, turn_accel: float) -> Prediction:
         """Return the motion from the pose at ``stamp`` to the one ``latency`` after now.
 
-        Returns that motion (in the frame of the pose at ``stamp``) and the predicted pose
-        itself (odometry frame).
+        Returns that motion (in the frame of the pose at ``stamp``), the predicted pose
+        itself (odometry frame) and the turn rate predicted for that moment.
 
         Parameters
         ----------
@@ -159,7 +172,7 @@ class Predictor:
         seen = self.pose_at(stamp) if stamp < now - _SAME_TIME else None
         start = STILL if seen is None else _relative(seen, pose)
         if latency <= 0:
-            return start, pose
+            return Prediction(start, pose, omega)
         n = max(1, math.ceil(latency / _STEP))
         h = latency / n
         x = y = th = 0.0
@@ -172,24 +185,7 @@ class Predictor:
             x += v * h * math.cos(mid)
             y += v * h * math.sin(mid)
             th += omega * h
-        return compose(start, (x, y, th)), compose(pose, (x, y, th))
-
-
-    def rate_when_acting(self, now: float, omega: float, latency: float,
-                         turn_accel: float) -> float:
-        """Return the turn rate predicted for the moment a command sent now starts to act.
-
-        The measured rate ``omega`` (rad/s) ramped at ``turn_accel`` (rad/s^2) through the
-        commands still in flight over ``latency`` (s), as :meth:`predict` integrates them.
-        """
-        if latency <= 0:
-            return omega
-        n = max(1, math.ceil(latency / _STEP))
-        h = latency / n
-        for i in range(n):
-            _, tu = self._command_at(now + (i + 0.5) * h - latency, (0.0, omega))
-            omega = _ramp(omega, tu, turn_accel, h)
-        return omega
+        return Prediction(compose(start, (x, y, th)), compose(pose, (x, y, th)), omega)
 
 
 def _moved(r_point: tuple[float, float], beta: float, d: Pose3) -> tuple[float, float, float]:

@@ -16,7 +16,7 @@ acceleration allows (:data:`JUMP_FACTOR` times it, and by more than :data:`JUMP_
 robot is known to jump to turns away, and from then on :func:`limit_turn_away` caps each
 command's turn away at one tick of the ramp beyond the rate the robot is predicted to turn at
 when the command starts to act (the measured rate ramped through the commands still in
-flight: :meth:`atoms.latency.Predictor.rate_when_acting`). Until then only a spin is capped:
+flight: :attr:`atoms.latency.Prediction.omega`). Until then only a spin is capped:
 a turn away more than :data:`UNWIND` of the ramp beyond that rate, which a ramping firmware
 never reaches within a tick, so for it nothing changes (the P3-DX following on the right, as
 before, bit for bit); a jumping one takes its first spike only that far (a second to

@@ -15,7 +15,8 @@ def test_motion_since_the_scan_comes_from_the_odometry_history() -> None:
     p = Predictor()
     for k in range(11):  # 1 m/s straight ahead, 10 Hz
         p.record_pose(0.1 * k, (0.1 * k, 0.0, 0.0))
-    moved, pose = p.predict(1.0, 0.75, (1.0, 0.0, 0.0), 1.0, 0.0, 0.0, math.inf, math.inf)
+    ahead = p.predict(1.0, 0.75, (1.0, 0.0, 0.0), 1.0, 0.0, 0.0, math.inf, math.inf)
+    moved, pose = ahead.moved, ahead.pose
     assert moved == pytest.approx((0.25, 0.0, 0.0))
     assert pose == (1.0, 0.0, 0.0)
 
@@ -28,7 +29,8 @@ def test_a_scan_stamped_now_to_the_clocks_rounding_means_no_motion() -> None:
     assert now != 46.5 and abs(now - 46.5) < 1e-9
     p.record_pose(46.4, (13.9, 4.6, 9.2))
     p.record_pose(now, (13.93, 4.61, 9.22))
-    moved, pose = p.predict(now, 46.5, p.poses[-1].pose, 0.3, 0.2, 0.0, math.inf, math.inf)
+    ahead = p.predict(now, 46.5, p.poses[-1].pose, 0.3, 0.2, 0.0, math.inf, math.inf)
+    moved, pose = ahead.moved, ahead.pose
     assert moved == (0.0, 0.0, 0.0)
     assert pose == p.poses[-1].pose
 
@@ -38,10 +40,10 @@ def test_commands_in_flight_act_after_the_latency_with_the_ramp() -> None:
     p.record_pose(0.0, (0.0, 0.0, 0.0))
     p.record_command(-0.3, 0.0, 1.0)  # a 1 rad/s turn sent 0.3 s ago, latency 0.4 s
     # the next 0.1 s still carry the old turn rate (0), then 1 rad/s ramps in at 2 rad/s^2
-    (_, _, dth), _ = p.predict(0.0, 0.0, (0.0, 0.0, 0.0), 0.0, 0.0, 0.4, math.inf, 2.0)
+    (_, _, dth) = p.predict(0.0, 0.0, (0.0, 0.0, 0.0), 0.0, 0.0, 0.4, math.inf, 2.0).moved
     # 0.1 s at 0, then 0.3 s ramping 0 -> 0.6 rad/s: 0.09 rad
     assert dth == pytest.approx(0.09, abs=0.01)
-    (_, _, dth), _ = p.predict(0.0, 0.0, (0.0, 0.0, 0.0), 0.0, 0.0, 0.4, math.inf, math.inf)
+    (_, _, dth) = p.predict(0.0, 0.0, (0.0, 0.0, 0.0), 0.0, 0.0, 0.4, math.inf, math.inf).moved
     assert dth == pytest.approx(0.3, abs=0.02)
 
 

@@ -102,9 +102,14 @@ def test_a_firmware_that_jumps_is_held_to_its_ramp_away_from_the_boundary() -> N
 def test_the_rate_when_a_command_acts_ramps_through_the_commands_in_flight() -> None:
     p = Predictor()
     p.record_command(-0.1, 0.3, 1.0)  # sent 0.1 s ago; latency 0.2 s: acts from 0.1 s on
-    assert p.rate_when_acting(0.0, 0.0, 0.2, 2.0) == pytest.approx(0.2)  # 0.1 s at 2 rad/s^2
-    assert p.rate_when_acting(0.0, 0.4, 0.0, 2.0) == 0.4  # no latency: the rate measured
-    assert p.rate_when_acting(0.0, 0.0, 0.2, math.inf) == pytest.approx(1.0)
+
+    def rate_when_acting(omega: float, latency: float, turn_accel: float) -> float:
+        return p.predict(0.0, 0.0, (0.0, 0.0, 0.0), 0.3, omega, latency, math.inf,
+                         turn_accel).omega
+
+    assert rate_when_acting(0.0, 0.2, 2.0) == pytest.approx(0.2)  # 0.1 s at 2 rad/s^2
+    assert rate_when_acting(0.4, 0.0, 2.0) == 0.4  # no latency: the rate measured
+    assert rate_when_acting(0.0, 0.2, math.inf) == pytest.approx(1.0)
 
 
 def _lab_run(side: str, index: int, start: int) -> tuple[RunSpec, np.ndarray, bool, float]:
