@@ -1,7 +1,8 @@
 /* The simulator's per-tick loops, compiled: the fan cast's faces (sim/raycast.py,
  * FanCaster._faces), the same walked through a grid of the faces in big worlds
- * (GridWalk, over sim/faceindex.py's FaceGrid), and a team's occlusions of the scans by
- * the robots' discs (sim/crowd.py, occlusions).
+ * (GridWalk, over sim/faceindex.py's FaceGrid), the fan's ellipses
+ * (FanCaster._ellipses), and a team's occlusions of the scans by the robots' discs
+ * (sim/crowd.py, occlusions).
  *
  * The numpy paths spend most of their time on the fixed cost of ~25-40 calls on arrays of
  * a few hundred numbers; these do the same arithmetic in one call each. They are an
@@ -17,7 +18,13 @@
  * interval (widened by 1e-10 rad) holds, so a difference matters only for a beam within
  * an ulp of a widened end, which meets the face's line within 1e-10 rad of the end.
  *
- * Built with -ffp-contract=off: every product is rounded where the numpy path rounds it.
+ * ellipses: numpy's complex absolute value (its own SIMD algorithm, not hypot), its
+ * in-place products of a single number (a plain scalar loop) and its matmul of the beams
+ * (OpenBLAS's zgemv for one ellipse), each reproduced and checked by a probe before use.
+ *
+ * Built with -ffp-contract=off and without GCC's vectoriser (which fuses a complex
+ * product's plain multiplies and add/subtract in the FMA clones, whatever the contract
+ * flag says): every product is rounded where the numpy path rounds it.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -412,6 +419,121 @@ static void release_all(Py_buffer *views, int n)
         PyBuffer_Release(&views[i]);
 }
 
+/* numpy's complex absolute value (np.abs of complex128) as its SIMD loop computes it on
+ * x86-64 with AVX2 or AVX-512 (loops_unary_complex.dispatch.c.src): the larger magnitude
+ * times sqrt(1 + ratio^2), ratio = smaller / larger, the square added with a fused
+ * multiply-add (`fused`; a plain product and sum where numpy's baseline has no FMA). It
+ * differs from libm's hypot in the last bit for about a third of values. An infinite part
+ * gives inf, else a NaN part NaN; 0/0 and inf/inf are never divided. */
+static inline double np_cabs(double re, double im, int fused)
+{
+    re = fabs(re);
+    im = fabs(im);
+    int re_inf = re == INFINITY, im_inf = im == INFINITY;
+    if (re_inf)
+        im = INFINITY;
+    if (im_inf)
+        re = INFINITY;
+    int re_nan = isnan(re), im_nan = isnan(im);
+    if (re_nan)
+        im = NAN;
+    if (im_nan)
+        re = NAN;
+    double larger = re > im ? re : im;
+    double smaller = im < re ? im : re;
+    double ratio = (larger == 0.0 || smaller == INFINITY) ? 0.0 : smaller / larger;
+    double root = sqrt(fused ? fma(ratio, ratio, 1.0) : ratio * ratio + 1.0);
+    return root * larger;
+}
+
+/* One element of numpy's matmul (B, 2) @ (2, E) of complex128 for E = 1, as it reaches
+ * OpenBLAS's zgemv (the transposed kernel's tail of two rows, in plain products, then
+ * y = 0 + (1 temp - 0 temp'), alpha = 1 and beta = 0): the row (a0, a1) times the
+ * column (x0, x1). The fan's ellipses check at construction that this is numpy's
+ * number for their shapes (raycast.FanCaster), and keep numpy's product otherwise. */
+static inline cplx gemv_2(cplx a0, cplx a1, cplx x0, cplx x1)
+{
+    double tr = a0.re * x0.re - a0.im * x0.im;
+    double ti = a0.re * x0.im + a0.im * x0.re;
+    tr += a1.re * x1.re - a1.im * x1.im;
+    ti += a1.re * x1.im + a1.im * x1.re;
+    cplx r;
+    r.re = 0.0 + (1.0 * tr - 0.0 * ti);
+    r.im = 0.0 + (1.0 * ti + 0.0 * tr);
+    return r;
+}
+
+/* What the ellipses do to one scan (FanCaster._ellipses, its arithmetic in its order):
+ * lower t[k] to the nearest entry (from outside) or exit (from inside) of beam k into
+ * each of the E ellipses. dd: (B, 2) beams [dirs, conj(dirs)]; rows: (2, E) the
+ * ellipses' [alpha conj(u), beta u]; centre, uconj: (E,) complex; alpha, beta: (E,);
+ * o: the ladar's place; turn: the fan's turn, conjugated. Returns 0, or -1 when out of
+ * memory. */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("fma", "default")))
+#endif
+static int
+cast_ellipses(double *t, const cplx *dd, Py_ssize_t n, const cplx *rows, const cplx *centre,
+              const cplx *uconj, const double *alpha, const double *beta, Py_ssize_t e,
+              cplx o, cplx turn, double t_min, int fused, int abs_fused, int inplace_fused)
+{
+    /* Per ellipse: conj(alpha v + beta conj(v)) (v the origin in its frame), |.|^2 - 1,
+     * its sign, and the two coefficients of the beams' product (rows times the turns). */
+    cplx *oc = malloc((size_t)(e > 0 ? e : 1) * 3 * sizeof(cplx));
+    double *cs = malloc((size_t)(e > 0 ? e : 1) * 2 * sizeof(double));
+    if (oc == NULL || cs == NULL) {
+        free(oc);
+        free(cs);
+        return -1;
+    }
+    cplx *coef = oc + e; /* coef[2 j], coef[2 j + 1] */
+    double *sign = cs + e;
+    cplx turn_c = {turn.re, -turn.im};
+    for (Py_ssize_t j = 0; j < e; j++) {
+        cplx v = {o.re - centre[j].re, o.im - centre[j].im};
+        /* numpy's in-place products of E numbers (v *= uconj ...): rounded as its loop
+         * for that length does (a single number takes its plain scalar loop). */
+        v = cmul(v, uconj[j], inplace_fused);
+        cplx w = {v.re, -v.im};
+        cplx a = {alpha[j], 0.0}, b = {beta[j], 0.0}; /* numpy casts the reals to complex */
+        w = cmul(w, a, inplace_fused);
+        v = cmul(v, b, inplace_fused);
+        w.re += v.re;
+        w.im += v.im;
+        oc[j] = w;
+        double c = np_cabs(w.re, w.im, abs_fused);
+        c *= c;
+        c -= 1.0; /* > 0: the origin is outside */
+        cs[j] = c;
+        sign[j] = c > 0.0 ? 1.0 : c < 0.0 ? -1.0 : c == 0.0 ? 0.0 : c; /* np.sign */
+        coef[2 * j] = cmul(rows[j], turn, fused);
+        coef[2 * j + 1] = cmul(rows[e + j], turn_c, fused);
+    }
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double low = INFINITY;
+        for (Py_ssize_t j = 0; j < e; j++) {
+            cplx m = gemv_2(dd[2 * k], dd[2 * k + 1], coef[2 * j], coef[2 * j + 1]);
+            double a = np_cabs(m.re, m.im, abs_fused);
+            a *= a; /* |m|^2 */
+            cplx q = cmul(m, oc[j], fused); /* real: m . o, imaginary: cross(o, m) */
+            double disc = a - q.im * q.im;
+            double root = sqrt(disc); /* NaN for a miss */
+            root *= sign[j];
+            root -= q.re;
+            double hit = cs[j] / root;
+            if (!(hit > t_min))
+                hit = INFINITY; /* behind, grazing at the origin, missed */
+            if (hit < low)
+                low = hit;
+        }
+        if (low < t[k]) /* np.minimum: a NaN in t stays */
+            t[k] = low;
+    }
+    free(oc);
+    free(cs);
+    return 0;
+}
+
 PyDoc_STRVAR(faces_doc,
 "faces(zw, front_min, best, rel_s, dconj, rot, c, kc, eps, wrap_hi, may_wrap, fused)\n"
 "--\n\n"
@@ -777,7 +899,149 @@ static PyObject *occlude(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     return disc_entry(args, nargs, 1);
 }
 
+PyDoc_STRVAR(absolute_doc,
+"absolute(z, out, fused)\n"
+"--\n\n"
+"out = |z| for z (n,) complex, as numpy's SIMD loop rounds it (fused: with a fused\n"
+"multiply-add): the import-time probe of sim/raycast.py and the tests compare it with\n"
+"np.abs.");
+
+static PyObject *absolute(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "absolute() takes 3 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    int fused = PyObject_IsTrue(args[2]);
+    if (fused < 0)
+        return NULL;
+    Py_buffer v[2];
+    Py_ssize_t two_n;
+    if (get_buf(args[0], &v[0], 'Z', -1, &two_n, 0, "z") < 0)
+        return NULL;
+    if (get_buf(args[1], &v[1], 'd', two_n / 2, NULL, 1, "out") < 0) {
+        release_all(v, 1);
+        return NULL;
+    }
+    const double *z = v[0].buf;
+    double *out = v[1].buf;
+    for (Py_ssize_t k = 0; k < two_n / 2; k++)
+        out[k] = np_cabs(z[2 * k], z[2 * k + 1], fused);
+    release_all(v, 2);
+    Py_RETURN_NONE;
+}
+
+PyDoc_STRVAR(beam_product_doc,
+"beam_product(dd, coef, out)\n"
+"--\n\n"
+"out = dd @ coef for dd (B, 2) and coef (2, E) complex, as numpy's matmul gives it for\n"
+"E = 1 (OpenBLAS's zgemv): the number the compiled ellipses use, which a fan checks\n"
+"against numpy's own product before it uses them.");
+
+static PyObject *beam_product(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "beam_product() takes 3 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    Py_buffer v[3];
+    Py_ssize_t two_b, two_2e;
+    int got = 0;
+    if (get_buf(args[0], &v[got], 'Z', -1, &two_b, 0, "dd") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[1], &v[got], 'Z', -1, &two_2e, 0, "coef") < 0)
+        goto fail;
+    got++;
+    Py_ssize_t b = two_b / 4, e = two_2e / 4;
+    if (two_b % 4 || two_2e % 4) {
+        PyErr_SetString(PyExc_ValueError, "beam_product: dd is (B, 2) and coef (2, E)");
+        goto fail;
+    }
+    if (get_buf(args[2], &v[got], 'Z', 2 * b * e, NULL, 1, "out") < 0)
+        goto fail;
+    got++;
+    const cplx *dd = v[0].buf, *coef = v[1].buf;
+    cplx *out = v[2].buf;
+    for (Py_ssize_t k = 0; k < b; k++)
+        for (Py_ssize_t j = 0; j < e; j++)
+            out[k * e + j] = gemv_2(dd[2 * k], dd[2 * k + 1], coef[j], coef[e + j]);
+    release_all(v, got);
+    Py_RETURN_NONE;
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
+PyDoc_STRVAR(ellipses_doc,
+"ellipses(t, dd, rows, centre, uconj, alpha, beta, o, turn, t_min, fused, abs_fused,\n"
+"         inplace_fused)\n"
+"--\n\n"
+"Lower t (B,) in place to each beam's nearest ellipse hit: FanCaster._ellipses, compiled.\n"
+"dd: (B, 2) complex; rows: (2, E) complex; centre, uconj: (E,) complex; alpha, beta:\n"
+"(E,) float; o, turn: complex; t_min: float; fused, abs_fused, inplace_fused: how numpy\n"
+"rounds its complex products, absolute values and in-place products of E numbers here.");
+
+static PyObject *ellipses(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 13) {
+        PyErr_Format(PyExc_TypeError, "ellipses() takes 13 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    cplx o, turn;
+    if (get_complex(args[7], &o) < 0 || get_complex(args[8], &turn) < 0)
+        return NULL;
+    double t_min = PyFloat_AsDouble(args[9]);
+    int fused = PyObject_IsTrue(args[10]);
+    int abs_fused = PyObject_IsTrue(args[11]);
+    int inplace_fused = PyObject_IsTrue(args[12]);
+    if (PyErr_Occurred() || fused < 0 || abs_fused < 0 || inplace_fused < 0)
+        return NULL;
+    Py_buffer v[7];
+    Py_ssize_t n, two_e;
+    int got = 0;
+    if (get_buf(args[3], &v[got], 'Z', -1, &two_e, 0, "centre") < 0)
+        goto fail;
+    got++;
+    Py_ssize_t e = two_e / 2;
+    if (get_buf(args[0], &v[got], 'd', -1, &n, 1, "t") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[1], &v[got], 'Z', 4 * n, NULL, 0, "dd") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[2], &v[got], 'Z', 4 * e, NULL, 0, "rows") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[4], &v[got], 'Z', 2 * e, NULL, 0, "uconj") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[5], &v[got], 'd', e, NULL, 0, "alpha") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[6], &v[got], 'd', e, NULL, 0, "beta") < 0)
+        goto fail;
+    got++;
+    int status = cast_ellipses(v[1].buf, v[2].buf, n, v[3].buf, v[0].buf, v[4].buf,
+                               v[5].buf, v[6].buf, e, o, turn, t_min, fused, abs_fused,
+                               inplace_fused);
+    release_all(v, got);
+    if (status < 0)
+        return PyErr_NoMemory();
+    Py_RETURN_NONE;
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
 static PyMethodDef methods[] = {
+    {"absolute", (PyCFunction)(void (*)(void))absolute, METH_FASTCALL, absolute_doc},
+    {"beam_product", (PyCFunction)(void (*)(void))beam_product, METH_FASTCALL,
+     beam_product_doc},
+    {"ellipses", (PyCFunction)(void (*)(void))ellipses, METH_FASTCALL, ellipses_doc},
     {"faces", (PyCFunction)(void (*)(void))faces, METH_FASTCALL, faces_doc},
     {"occlusions", (PyCFunction)(void (*)(void))occlusions, METH_FASTCALL, occlusions_doc},
     {"occlude", (PyCFunction)(void (*)(void))occlude, METH_FASTCALL, occlude_doc},
