@@ -899,6 +899,120 @@ static PyObject *occlude(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     return disc_entry(args, nargs, 1);
 }
 
+/* libm's pow, reached through a pointer the compiler cannot see through: GCC turns a
+ * direct pow(v, 2.0) into v * v, and glibc's pow rounds a square otherwise for about one
+ * value in a thousand. Python's ** calls libm's pow. */
+static double (*const volatile libm_pow)(double, double) = pow;
+
+/* sim/distance.py's ellipse_nearest_point, in the same double operations in the same
+ * order (Python's floats are these doubles; ** 2 is libm's pow, as Python calls it):
+ * the nearest point (x, y) of the axis-aligned ellipse of semi-axes a, b to (y0, y1). */
+static void ellipse_nearest_point(double a, double b, double y0, double y1, double *x_out,
+                                  double *y_out)
+{
+    int swap = a < b;
+    if (swap) {
+        double t;
+        t = a, a = b, b = t;
+        t = y0, y0 = y1, y1 = t;
+    }
+    double z0 = fabs(y0), z1 = fabs(y1);
+    double a2 = a * a, b2 = b * b;
+    double x, y;
+    if (z1 == 0.0) {
+        if (z0 < (a2 - b2) / a) { /* inside, near the centre: off the axis */
+            x = a2 * z0 / (a2 - b2);
+            double v = 1.0 - libm_pow(x / a, 2.0);
+            y = b * sqrt(v > 0.0 ? v : 0.0);        /* max(0.0, v): 0.0 unless v > 0 */
+        } else {
+            x = a;
+            y = 0.0;
+        }
+    } else {
+        double az = a * z0, bz = b * z1;
+        double t = bz - b2 > az - a2 ? bz - b2 : az - a2; /* Python's max */
+        for (int i = 0; i < 60; i++) {              /* distance.py's _NEWTON_STEPS */
+            double ta = t + a2, tb = t + b2;
+            double p = az / ta, q = bz / tb;
+            p = p * p;
+            q = q * q;
+            double step = 0.5 * (p + q - 1.0) / (p / ta + q / tb);
+            t += step;
+            if (step <= 1e-14 * (fabs(t) + a2))
+                break;
+        }
+        x = a2 * z0 / (t + a2);
+        y = b2 * z1 / (t + b2);
+    }
+    if (y0 < 0)
+        x = -x;
+    if (y1 < 0)
+        y = -y;
+    *x_out = swap ? y : x;
+    *y_out = swap ? x : y;
+}
+
+PyDoc_STRVAR(ellipse_near_doc,
+"ellipse_near(x, y, best, centre, uconj, bound, axes, fused, abs_fused)\n"
+"--\n\n"
+"The ellipses a clearance query from (x, y) must measure, and their nearest points:\n"
+"Collider.distance's few-ellipses branch, compiled. centre, uconj: (E,) complex; bound:\n"
+"(E,) float; axes: (E, 2) float. Each ellipse whose |(x, y) - centre| - bound is below\n"
+"best gives (the query in its frame: re, im; its nearest point: x, y; its index), in\n"
+"order; the caller measures the distances with Python's math.hypot.");
+
+static PyObject *ellipse_near(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 9) {
+        PyErr_Format(PyExc_TypeError, "ellipse_near() takes 9 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    double x = PyFloat_AsDouble(args[0]);
+    double y = PyFloat_AsDouble(args[1]);
+    double best = PyFloat_AsDouble(args[2]);
+    int fused = PyObject_IsTrue(args[7]);
+    int abs_fused = PyObject_IsTrue(args[8]);
+    if (PyErr_Occurred() || fused < 0 || abs_fused < 0)
+        return NULL;
+    Py_buffer v[4];
+    Py_ssize_t two_e;
+    int got = 0;
+    PyObject *out = NULL;
+    if (get_buf(args[3], &v[got], 'Z', -1, &two_e, 0, "centre") < 0)
+        goto done;
+    got++;
+    Py_ssize_t e = two_e / 2;
+    if (get_buf(args[4], &v[got], 'Z', 2 * e, NULL, 0, "uconj") < 0)
+        goto done;
+    got++;
+    if (get_buf(args[5], &v[got], 'd', e, NULL, 0, "bound") < 0)
+        goto done;
+    got++;
+    if (get_buf(args[6], &v[got], 'd', 2 * e, NULL, 0, "axes") < 0)
+        goto done;
+    got++;
+    const cplx *centre = v[0].buf, *uconj = v[1].buf;
+    const double *bound = v[2].buf, *axes = v[3].buf;
+    out = PyList_New(0);
+    for (Py_ssize_t j = 0; out != NULL && j < e; j++) {
+        cplx w = {x - centre[j].re, y - centre[j].im};  /* q - c */
+        double lower = np_cabs(w.re, w.im, abs_fused) - bound[j];
+        if (!(lower < best))
+            continue;
+        cplx l = cmul(w, uconj[j], fused);             /* the query in the ellipse's frame */
+        double ex, ey;
+        ellipse_nearest_point(axes[2 * j], axes[2 * j + 1], l.re, l.im, &ex, &ey);
+        PyObject *item = Py_BuildValue("(ddddn)", l.re, l.im, ex, ey, j);
+        if (item == NULL || PyList_Append(out, item) < 0)
+            Py_CLEAR(out);
+        Py_XDECREF(item);
+    }
+done:
+    release_all(v, got);
+    return out;
+}
+
 PyDoc_STRVAR(absolute_doc,
 "absolute(z, out, fused)\n"
 "--\n\n"
@@ -1042,6 +1156,8 @@ static PyMethodDef methods[] = {
     {"beam_product", (PyCFunction)(void (*)(void))beam_product, METH_FASTCALL,
      beam_product_doc},
     {"ellipses", (PyCFunction)(void (*)(void))ellipses, METH_FASTCALL, ellipses_doc},
+    {"ellipse_near", (PyCFunction)(void (*)(void))ellipse_near, METH_FASTCALL,
+     ellipse_near_doc},
     {"faces", (PyCFunction)(void (*)(void))faces, METH_FASTCALL, faces_doc},
     {"occlusions", (PyCFunction)(void (*)(void))occlusions, METH_FASTCALL, occlusions_doc},
     {"occlude", (PyCFunction)(void (*)(void))occlude, METH_FASTCALL, occlude_doc},

@@ -1,11 +1,12 @@
-"""The compiled ellipse cast (sim/_kernels.c, ``ellipses``) gives numpy's numbers, bit for bit.
+"""The compiled ellipses (sim/_kernels.c: the fan's cast, the clearance) give numpy's numbers.
 
 Its two delicate parts each against numpy on millions of values: the complex absolute
 value (numpy's own vectorised algorithm, not libm's ``hypot``) and the product of the
 beams with the ellipses' coefficients (numpy's matmul, which BLAS rounds). Then whole
 scans of many ellipse worlds and fans on both paths, the probe's fallback where BLAS
-rounds otherwise, and the paper's Figure 1 run end to end with and without the
-compiled ellipses: the same trace, byte for byte.
+rounds otherwise; the clearance query's nearest points (Python's floats, to the bit);
+and the paper's Figure 1 run end to end with and without the compiled ellipses: the
+same trace, byte for byte.
 """
 
 from __future__ import annotations
@@ -18,8 +19,10 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle.sim import raycast
+from mdle.sim import collision, raycast
 from mdle.sim.catalog import load_world
+from mdle.sim.collision import Collider
+from mdle.sim.distance import ellipse_nearest_point
 from mdle.sim.shapes import Arc, Ellipse, Rectangle, Wall
 from mdle.sim.world import World
 
@@ -215,6 +218,56 @@ def test_the_ellipse_kernel_refuses_arrays_that_do_not_fit() -> None:
         ellipses(*good[:7], "here", *good[8:])
 
 
+@needs_ellipses
+def test_the_compiled_nearest_point_is_pythons_to_the_bit() -> None:
+    near = collision._ELLIPSE_NEAR
+    assert near is not None
+    rng = np.random.default_rng(31)
+    n = 200_000
+    a, b = 10.0 ** rng.uniform(-2, 1, n), 10.0 ** rng.uniform(-2, 1, n)
+    b[::7] = a[::7]                               # circles
+    y0, y1 = rng.standard_normal(n) * a * 2, rng.standard_normal(n) * b * 2
+    y1[::5] = 0.0                                 # on the major or minor axis
+    y0[::11] = 0.0
+    y0[::13] *= 1e-9                              # near the centre
+    y1[::17] = -0.0
+    for k in range(n):
+        # one ellipse at the origin, unturned: the query is the point itself
+        got = near(float(y0[k]), float(y1[k]), math.inf, np.zeros(1, complex),
+                   np.ones(1, complex), np.zeros(1), np.array([a[k], b[k]]), True, True)
+        (lx, ly, ex, ey, i), = got
+        assert (lx, ly, i) == (y0[k], y1[k], 0)
+        want = ellipse_nearest_point(float(a[k]), float(b[k]), lx, ly)
+        assert (ex, ey) == want and math.copysign(1.0, ex) == math.copysign(1.0, want[0])
+
+
+@needs_ellipses
+def test_compiled_and_numpy_clearances_are_the_same() -> None:
+    rng = np.random.default_rng(12)
+    queries = 0
+    for w in range(30):
+        world = _ellipse_world(rng, int(rng.integers(1, 9)), bool(w % 2))
+        fast, ref = Collider(world.parts, 0.2), Collider(world.parts, 0.2, compiled=False)
+        assert fast._ell_near is not None and ref._ell_near is None
+        P = world.parts
+        for k in range(600):
+            if k % 3 == 0:          # on an ellipse, inside it, at its centre, just outside
+                j = int(rng.integers(0, P.ell_angle.shape[0]))
+                s, r = float(rng.uniform(-4, 4)), float(rng.choice([0.0, 0.3, 1.0, 1.2]))
+                lx, ly = r * P.ell_axes[j, 0] * math.cos(s), r * P.ell_axes[j, 1] * math.sin(s)
+                turn = complex(math.cos(P.ell_angle[j]), math.sin(P.ell_angle[j]))
+                z = complex(*P.ell_center[j]) + complex(lx, ly) * turn
+                x, y = z.real, z.imag
+            else:
+                x, y = (float(v) for v in rng.uniform(-10, 10, 2))
+            assert fast.distance(x, y) == ref.distance(x, y)
+            queries += 1
+    assert queries == 18_000
+    # nine ellipses and more: the vectorised branch, never the compiled one
+    many = _ellipse_world(rng, 9, False)
+    assert Collider(many.parts, 0.2)._ell_near is None
+
+
 def _fig1_trace(tmp_path: Path, name: str) -> bytes:
     from mdle.cli import main
 
@@ -242,6 +295,7 @@ def test_figure_1_runs_to_the_same_trace_with_and_without_the_compiled_ellipses(
     assert calls[0] >= 3000        # every scan of the 60 s at 50 Hz went through C
     before = calls[0]
     monkeypatch.setattr(raycast, "_ELL", None)
+    monkeypatch.setattr(collision, "_ELLIPSE_NEAR", None)
     slow = _fig1_trace(tmp_path, "numpy")
     assert calls[0] == before      # ... and none of the second run's
     assert fast == slow
