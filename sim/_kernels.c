@@ -1013,6 +1013,79 @@ done:
     return out;
 }
 
+/* numpy's maximum and minimum: a NaN of either operand (the first's first), else the
+ * larger (smaller), the second where they are equal (which decides a zero's sign). */
+static inline double np_maximum(double a, double b)
+{
+    return isnan(a) ? a : isnan(b) ? b : a > b ? a : b;
+}
+
+static inline double np_minimum(double a, double b)
+{
+    return isnan(a) ? a : isnan(b) ? b : a < b ? a : b;
+}
+
+PyDoc_STRVAR(settle_doc,
+"settle(ranges, valid, noise, sigma, relative, resolution, max_range)\n"
+"--\n\n"
+"A ladar's noise, quantum and clipping, in place: sim/ladar.py's _Settling.settle,\n"
+"compiled. ranges, noise: (n,) float (noise: standard normal draws, scaled in place as\n"
+"numpy scales them; None: no noise); valid: (n,) bool; resolution 0: no quantum.");
+
+static PyObject *settle(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 7) {
+        PyErr_Format(PyExc_TypeError, "settle() takes 7 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    double sigma = PyFloat_AsDouble(args[3]);
+    int relative = PyObject_IsTrue(args[4]);
+    double res = PyFloat_AsDouble(args[5]);
+    double top = PyFloat_AsDouble(args[6]);
+    if (PyErr_Occurred() || relative < 0)
+        return NULL;
+    Py_buffer v[3];
+    Py_ssize_t n;
+    int got = 0;
+    if (get_buf(args[0], &v[got], 'd', -1, &n, 1, "ranges") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[1], &v[got], '?', n, NULL, 0, "valid") < 0)
+        goto fail;
+    got++;
+    int noisy = args[2] != Py_None;
+    if (noisy && get_buf(args[2], &v[got++], 'd', n, NULL, 1, "noise") < 0) {
+        got--;
+        goto fail;
+    }
+    double *r = v[0].buf;
+    const char *ok = v[1].buf;
+    double *noise = noisy ? v[2].buf : NULL;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double x = r[k];
+        if (noisy) {
+            double e = noise[k] * sigma;
+            if (relative)
+                e *= x;
+            e *= ok[k] ? 1.0 : 0.0;         /* numpy casts the bools to 1.0 and 0.0 */
+            noise[k] = e;
+            x += e;
+        }
+        if (res != 0.0) {
+            x /= res;
+            x = rint(x);                    /* to even, as np.rint */
+            x *= res;
+        }
+        r[k] = np_minimum(np_maximum(x, 0.0), top);
+    }
+    release_all(v, got);
+    Py_RETURN_NONE;
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
 PyDoc_STRVAR(absolute_doc,
 "absolute(z, out, fused)\n"
 "--\n\n"
@@ -1156,6 +1229,7 @@ static PyMethodDef methods[] = {
     {"beam_product", (PyCFunction)(void (*)(void))beam_product, METH_FASTCALL,
      beam_product_doc},
     {"ellipses", (PyCFunction)(void (*)(void))ellipses, METH_FASTCALL, ellipses_doc},
+    {"settle", (PyCFunction)(void (*)(void))settle, METH_FASTCALL, settle_doc},
     {"ellipse_near", (PyCFunction)(void (*)(void))ellipse_near, METH_FASTCALL,
      ellipse_near_doc},
     {"faces", (PyCFunction)(void (*)(void))faces, METH_FASTCALL, faces_doc},
