@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from mdle.sim import collision, raycast
+from mdle.sim import collision, ladar, raycast
 from mdle.sim.catalog import load_world
 from mdle.sim.collision import Collider
 from mdle.sim.distance import ellipse_nearest_point
@@ -281,7 +281,7 @@ def _fig1_trace(tmp_path: Path, name: str) -> bytes:
 
 
 @needs_ellipses
-def test_figure_1_runs_to_the_same_trace_with_and_without_the_compiled_ellipses(
+def test_figure_1_runs_to_the_same_trace_with_and_without_the_compiled_loops(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     ellipses, absolute, product = _kernels()
     calls = [0]
@@ -296,6 +296,7 @@ def test_figure_1_runs_to_the_same_trace_with_and_without_the_compiled_ellipses(
     before = calls[0]
     monkeypatch.setattr(raycast, "_ELL", None)
     monkeypatch.setattr(collision, "_ELLIPSE_NEAR", None)
+    monkeypatch.setattr(ladar, "_SETTLE", None)
     slow = _fig1_trace(tmp_path, "numpy")
     assert calls[0] == before      # ... and none of the second run's
     assert fast == slow
