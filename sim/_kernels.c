@@ -1171,50 +1171,78 @@ PyDoc_STRVAR(ellipses_doc,
 "(E,) float; o, turn: complex; t_min: float; fused, abs_fused, inplace_fused: how numpy\n"
 "rounds its complex products, absolute values and in-place products of E numbers here.");
 
-static PyObject *ellipses(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+PyDoc_STRVAR(ellipse_scan_doc,
+"ellipse_scan(t, hit, t_none, t_hit, max_range, dd, rows, centre, uconj, alpha, beta, o,\n"
+"             turn, t_min, fused, abs_fused, inplace_fused)\n"
+"--\n\n"
+"A whole scan of a world of ellipses only (FanCaster.cast): t (B,) filled with t_none\n"
+"and lowered (ellipses), then hit (B,) bool = t <= t_hit and t = min(t, max_range).");
+
+/* ellipses (scan = 0: args[0] is t) and ellipse_scan (scan = 1: t, hit, t_none, t_hit,
+ * max_range first): the same ellipses, and a whole scan's start and finish. */
+static PyObject *ellipse_entry(PyObject *const *args, Py_ssize_t nargs, int scan)
 {
-    (void)self;
-    if (nargs != 13) {
-        PyErr_Format(PyExc_TypeError, "ellipses() takes 13 arguments (%zd given)", nargs);
+    const char *name = scan ? "ellipse_scan" : "ellipses";
+    Py_ssize_t want = scan ? 17 : 13;
+    if (nargs != want) {
+        PyErr_Format(PyExc_TypeError, "%s() takes %zd arguments (%zd given)", name, want,
+                     nargs);
         return NULL;
     }
+    PyObject *const *a = args + (scan ? 4 : 0); /* a[0] is t, a[1..12] as in ellipses() */
     cplx o, turn;
-    if (get_complex(args[7], &o) < 0 || get_complex(args[8], &turn) < 0)
+    if (get_complex(a[7], &o) < 0 || get_complex(a[8], &turn) < 0)
         return NULL;
-    double t_min = PyFloat_AsDouble(args[9]);
-    int fused = PyObject_IsTrue(args[10]);
-    int abs_fused = PyObject_IsTrue(args[11]);
-    int inplace_fused = PyObject_IsTrue(args[12]);
+    double t_min = PyFloat_AsDouble(a[9]);
+    int fused = PyObject_IsTrue(a[10]);
+    int abs_fused = PyObject_IsTrue(a[11]);
+    int inplace_fused = PyObject_IsTrue(a[12]);
+    double t_none = scan ? PyFloat_AsDouble(args[2]) : 0.0;
+    double t_hit = scan ? PyFloat_AsDouble(args[3]) : 0.0;
+    double top = scan ? PyFloat_AsDouble(args[4]) : 0.0;
     if (PyErr_Occurred() || fused < 0 || abs_fused < 0 || inplace_fused < 0)
         return NULL;
-    Py_buffer v[7];
+    Py_buffer v[8];
     Py_ssize_t n, two_e;
     int got = 0;
-    if (get_buf(args[3], &v[got], 'Z', -1, &two_e, 0, "centre") < 0)
+    if (get_buf(a[3], &v[got], 'Z', -1, &two_e, 0, "centre") < 0)
         goto fail;
     got++;
     Py_ssize_t e = two_e / 2;
     if (get_buf(args[0], &v[got], 'd', -1, &n, 1, "t") < 0)
         goto fail;
     got++;
-    if (get_buf(args[1], &v[got], 'Z', 4 * n, NULL, 0, "dd") < 0)
+    if (get_buf(a[1], &v[got], 'Z', 4 * n, NULL, 0, "dd") < 0)
         goto fail;
     got++;
-    if (get_buf(args[2], &v[got], 'Z', 4 * e, NULL, 0, "rows") < 0)
+    if (get_buf(a[2], &v[got], 'Z', 4 * e, NULL, 0, "rows") < 0)
         goto fail;
     got++;
-    if (get_buf(args[4], &v[got], 'Z', 2 * e, NULL, 0, "uconj") < 0)
+    if (get_buf(a[4], &v[got], 'Z', 2 * e, NULL, 0, "uconj") < 0)
         goto fail;
     got++;
-    if (get_buf(args[5], &v[got], 'd', e, NULL, 0, "alpha") < 0)
+    if (get_buf(a[5], &v[got], 'd', e, NULL, 0, "alpha") < 0)
         goto fail;
     got++;
-    if (get_buf(args[6], &v[got], 'd', e, NULL, 0, "beta") < 0)
+    if (get_buf(a[6], &v[got], 'd', e, NULL, 0, "beta") < 0)
         goto fail;
     got++;
-    int status = cast_ellipses(v[1].buf, v[2].buf, n, v[3].buf, v[0].buf, v[4].buf,
-                               v[5].buf, v[6].buf, e, o, turn, t_min, fused, abs_fused,
-                               inplace_fused);
+    if (scan && get_buf(args[1], &v[got++], '?', n, NULL, 1, "hit") < 0) {
+        got--;
+        goto fail;
+    }
+    double *t = v[1].buf;
+    for (Py_ssize_t k = 0; scan && k < n; k++)
+        t[k] = t_none;
+    int status = cast_ellipses(t, v[2].buf, n, v[3].buf, v[0].buf, v[4].buf, v[5].buf,
+                               v[6].buf, e, o, turn, t_min, fused, abs_fused, inplace_fused);
+    if (scan && status == 0) {
+        char *hit = v[7].buf;
+        for (Py_ssize_t k = 0; k < n; k++) {
+            hit[k] = t[k] <= t_hit;
+            t[k] = np_minimum(t[k], top);
+        }
+    }
     release_all(v, got);
     if (status < 0)
         return PyErr_NoMemory();
@@ -1224,11 +1252,25 @@ fail:
     return NULL;
 }
 
+static PyObject *ellipses(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    return ellipse_entry(args, nargs, 0);
+}
+
+static PyObject *ellipse_scan(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    return ellipse_entry(args, nargs, 1);
+}
+
 static PyMethodDef methods[] = {
     {"absolute", (PyCFunction)(void (*)(void))absolute, METH_FASTCALL, absolute_doc},
     {"beam_product", (PyCFunction)(void (*)(void))beam_product, METH_FASTCALL,
      beam_product_doc},
     {"ellipses", (PyCFunction)(void (*)(void))ellipses, METH_FASTCALL, ellipses_doc},
+    {"ellipse_scan", (PyCFunction)(void (*)(void))ellipse_scan, METH_FASTCALL,
+     ellipse_scan_doc},
     {"settle", (PyCFunction)(void (*)(void))settle, METH_FASTCALL, settle_doc},
     {"ellipse_near", (PyCFunction)(void (*)(void))ellipse_near, METH_FASTCALL,
      ellipse_near_doc},

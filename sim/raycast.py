@@ -100,17 +100,23 @@ def _numpy_complex_rounding() -> bool | None:
     return verdicts.pop() if len(verdicts) == 1 else None
 
 
-def _compiled_ellipses() -> tuple[Callable[..., None], Callable[..., None],
-                                    Callable[..., None]] | None:
-    """Return the compiled ellipse cast, its absolute value and its beams' product, or None.
+@dataclass(frozen=True)
+class _EllipseKernels:
+    """The compiled ellipses of sim/_kernels.c: what a fan and the probes call."""
 
-    ``ellipses``, ``absolute`` and ``beam_product`` of sim/_kernels.c, where it was built.
-    """
+    cast: Callable[..., None]       #: ``ellipses``: lower a scan's ranges to the hits
+    scan: Callable[..., None]       #: ``ellipse_scan``: a whole scan of ellipses only
+    absolute: Callable[..., None]   #: numpy's complex absolute value
+    product: Callable[..., None]    #: numpy's matmul of the beams and the ellipses
+
+
+def _compiled_ellipses() -> _EllipseKernels | None:
+    """Return the compiled ellipse cast and its parts (sim/_kernels.c), or None."""
     try:
-        from mdle.sim._kernels import absolute, beam_product, ellipses
+        from mdle.sim._kernels import absolute, beam_product, ellipse_scan, ellipses
     except ImportError:
         return None
-    return ellipses, absolute, beam_product
+    return _EllipseKernels(ellipses, ellipse_scan, absolute, beam_product)
 
 
 def _numpy_abs_rounding(absolute: Callable[..., None]) -> bool | None:
@@ -191,7 +197,7 @@ _FUSED = _numpy_complex_rounding() if _KERNEL is not None else None
 #: Whether scans use the compiled face loop (False: the numpy path, the same numbers).
 COMPILED = _FUSED is not None
 _ELL = _compiled_ellipses() if COMPILED else None
-_ABS_FUSED = _numpy_abs_rounding(_ELL[1]) if _ELL is not None else None
+_ABS_FUSED = _numpy_abs_rounding(_ELL.absolute) if _ELL is not None else None
 #: Whether a fan's ellipses may use the compiled cast (each fan also checks the product of
 #: its beams; :attr:`FanCaster.compiled_ellipses`). False: numpy, the same numbers.
 COMPILED_ELLIPSES = _ELL is not None and _ABS_FUSED is not None
@@ -690,12 +696,16 @@ class FanCaster:
         self._ell_turn = np.empty((2, 1), dtype=complex)
         self._ell_coef = np.empty_like(self._ell_k)
         self._dd = np.column_stack([self._dirs, self._dirs.conjugate()])
-        self._ell_kernel: Callable[..., None] | None = None
+        self._ell_kernel: _EllipseKernels | None = None
         self._ell_inplace = False
         if self._kernel is not None and _ELL is not None:
-            inplace = self._ell_check(_ELL[0])
+            inplace = self._ell_check(_ELL)
             if inplace is not None:
-                self._ell_kernel, self._ell_inplace = _ELL[0], inplace
+                self._ell_kernel, self._ell_inplace = _ELL, inplace
+        # A world of ellipses only, compiled: a whole scan is one call.
+        self._ellipses_only = self._ell_kernel is not None and not (
+            caster._s0.shape[0] or len(caster.parts.arc_radius))
+        self._t_none = 1.0 / self._inv_none     # a beam's t before anything is met
         # The grid walk (compiled only): the world's grid, and this fan's walker, which
         # holds the arrays above and its own per-face scratch.
         self._grid: FaceGrid | None = None
@@ -718,7 +728,7 @@ class FanCaster:
         """Whether this fan's ellipses go through the compiled cast (the same numbers)."""
         return self._ell_kernel is not None
 
-    def _ell_check(self, kernel: Callable[..., None]) -> bool | None:
+    def _ell_check(self, kernels: _EllipseKernels) -> bool | None:
         """Check the compiled ellipse cast against numpy's for this fan and world.
 
         Returns how numpy rounds the in-place products of the ellipses' numbers (fused
@@ -732,14 +742,14 @@ class FanCaster:
         """
         P = self.caster.parts
         e = P.ell_angle.shape[0]
-        if e == 0 or _ABS_FUSED is None or _ELL is None or self.caster.ellipse_grid is not None:
+        if e == 0 or _ABS_FUSED is None or self.caster.ellipse_grid is not None:
             return None
         rng = np.random.default_rng(e)
         for scale in (1e-6, 1e-2, 1.0, 1e2, 1e6):
             coef = (rng.standard_normal((2, e)) + 1j * rng.standard_normal((2, e))) * scale
             want = self._dd @ coef
             got = np.empty_like(want)
-            _ELL[2](self._dd, coef, got)
+            kernels.product(self._dd, coef, got)
             if not np.array_equal(got.view(float), want.view(float)):
                 return None
         inplace = _numpy_inplace_rounding(e)
@@ -756,8 +766,9 @@ class FanCaster:
             want = np.full(self._best.shape[0], self.max_range)
             self._ellipses_numpy(o, turn, want)
             got = np.full(self._best.shape[0], self.max_range)
-            kernel(got, self._dd, self._ell_k, self._ell_c, self._ell_uconj, self._ell_alpha,
-                   self._ell_beta, o, turn, _T_MIN, bool(_FUSED), bool(_ABS_FUSED), inplace)
+            kernels.cast(got, self._dd, self._ell_k, self._ell_c, self._ell_uconj,
+                         self._ell_alpha, self._ell_beta, o, turn, _T_MIN, bool(_FUSED),
+                         bool(_ABS_FUSED), inplace)
             if got.tobytes() != want.tobytes():
                 return None
         return inplace
@@ -778,6 +789,17 @@ class FanCaster:
             # Straight faces only, through the grid: the whole scan in one compiled call.
             self._walker.scan(ox, oy, rot, complex(ox, oy) * rot)
             return self._ranges.copy(), self._hit.copy()
+        if self._ellipses_only and self._ell_kernel is not None:
+            # Ellipses only: the ranges' start, the ellipses and the finish in one call,
+            # the steps below in their order.
+            n = self._best.shape[0]
+            t, hit = np.empty(n), np.empty(n, dtype=bool)
+            self._ell_kernel.scan(t, hit, self._t_none, self._t_hit, self.max_range,
+                                  self._dd, self._ell_k, self._ell_c, self._ell_uconj,
+                                  self._ell_alpha, self._ell_beta, complex(ox, oy),
+                                  rot.conjugate(), _T_MIN, bool(_FUSED), bool(_ABS_FUSED),
+                                  self._ell_inplace)
+            return t, hit
         caster = self.caster
         P = caster.parts
         best = self._best
@@ -947,9 +969,9 @@ class FanCaster:
         code below is its reference.
         """
         if self._ell_kernel is not None:
-            self._ell_kernel(t, self._dd, self._ell_k, self._ell_c, self._ell_uconj,
-                             self._ell_alpha, self._ell_beta, o, turn, _T_MIN, bool(_FUSED),
-                             bool(_ABS_FUSED), self._ell_inplace)
+            self._ell_kernel.cast(t, self._dd, self._ell_k, self._ell_c, self._ell_uconj,
+                                  self._ell_alpha, self._ell_beta, o, turn, _T_MIN,
+                                  bool(_FUSED), bool(_ABS_FUSED), self._ell_inplace)
         else:
             self._ellipses_numpy(o, turn, t)
 

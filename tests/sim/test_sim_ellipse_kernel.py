@@ -11,6 +11,7 @@ same trace, byte for byte.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -33,8 +34,10 @@ needs_ellipses = pytest.mark.skipif(not raycast.COMPILED_ELLIPSES,
 
 
 def _kernels() -> tuple[Callable[..., None], Callable[..., None], Callable[..., None]]:
-    assert raycast._ELL is not None
-    return raycast._ELL
+    """The compiled ellipse cast, absolute value and product of the beams."""
+    kernels = raycast._ELL
+    assert kernels is not None
+    return kernels.cast, kernels.absolute, kernels.product
 
 
 def test_an_install_with_the_compiled_fan_cast_has_the_compiled_ellipses() -> None:
@@ -144,6 +147,7 @@ def test_compiled_and_numpy_ellipse_scans_are_equal_bit_for_bit(
         world = _ellipse_world(rng, 1, walls)
         fast, ref = world.caster.fan(rel, 8.0, True), world.caster.fan(rel, 8.0, False)
         assert fast.compiled_ellipses and not ref.compiled_ellipses
+        assert fast._ellipses_only == (not walls)     # a whole scan in one call, or not
         P = world.caster.parts
         centre, axes, angle = P.ell_center[0], P.ell_axes[0], float(P.ell_angle[0])
         for k in range(250):
@@ -183,13 +187,14 @@ def test_several_ellipses_keep_numpys_cast_where_blas_rounds_otherwise() -> None
 @needs_ellipses
 def test_the_probe_refuses_a_product_that_is_not_numpys(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    ellipses, absolute, product = _kernels()
+    product = _kernels()[2]
 
     def off_by_an_ulp(dd: np.ndarray, coef: np.ndarray, out: np.ndarray) -> None:
         product(dd, coef, out)
         out.real = np.nextafter(out.real, math.inf)
 
-    monkeypatch.setattr(raycast, "_ELL", (ellipses, absolute, off_by_an_ulp))
+    assert raycast._ELL is not None
+    monkeypatch.setattr(raycast, "_ELL", dataclasses.replace(raycast._ELL, product=off_by_an_ulp))
     fan = load_world("ellipse").caster.fan(np.linspace(0.0, math.pi, 181), 8.0)
     assert not fan.compiled_ellipses
 
@@ -283,14 +288,15 @@ def _fig1_trace(tmp_path: Path, name: str) -> bytes:
 @needs_ellipses
 def test_figure_1_runs_to_the_same_trace_with_and_without_the_compiled_loops(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    ellipses, absolute, product = _kernels()
+    kernels = raycast._ELL
+    assert kernels is not None
     calls = [0]
 
     def counted(*args: Any) -> None:
         calls[0] += 1
-        ellipses(*args)
+        kernels.scan(*args)
 
-    monkeypatch.setattr(raycast, "_ELL", (counted, absolute, product))
+    monkeypatch.setattr(raycast, "_ELL", dataclasses.replace(kernels, scan=counted))
     fast = _fig1_trace(tmp_path, "compiled")
     assert calls[0] >= 3000        # every scan of the 60 s at 50 Hz went through C
     before = calls[0]
