@@ -922,7 +922,13 @@ class FanCaster:
         ``z`` is overwritten. For a batch (:meth:`cast_many`), face ``j`` belongs to scan
         ``j // m``, whose beams are ``n_beam`` apart in ``best`` (``m`` = 0: one scan).
         """
-        np.multiply(z[1], z[0], z[1])               # conj(p) q = (p . q) + i cross(p, e)
+        # conj(p) q = (p . q) + i cross(p, e). numpy multiplies a single number in place in
+        # its plain scalar loop, and everything else (a single number into a new array too)
+        # in its SIMD loop, with the fused multiply-add the compiled loops follow.
+        if z.shape[1] == 1:
+            z[1] = np.multiply(z[1], z[0])
+        else:
+            np.multiply(z[1], z[0], z[1])
         # Only front faces (the solid on the far side, the origin off the face's line) can
         # be hit first: the rest is dropped here.
         ids = np.greater(z[1].imag, front_min).nonzero()[0]
