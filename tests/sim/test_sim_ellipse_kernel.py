@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+from mdle.atoms import estimators
 from mdle.sim import collision, ladar, raycast
 from mdle.sim.catalog import load_world
 from mdle.sim.collision import Collider
@@ -303,6 +304,7 @@ def test_figure_1_runs_to_the_same_trace_with_and_without_the_compiled_loops(
     monkeypatch.setattr(raycast, "_ELL", None)
     monkeypatch.setattr(collision, "_ELLIPSE_NEAR", None)
     monkeypatch.setattr(ladar, "_SETTLE", None)
+    monkeypatch.setattr(estimators, "_POINTS", None)
     slow = _fig1_trace(tmp_path, "numpy")
     assert calls[0] == before      # ... and none of the second run's
     assert fast == slow
