@@ -23,7 +23,10 @@ gives the same numbers bit for bit. At 100 segments (benchmarks/sim.py's world) 
 costs about 64,000 instructions compiled and 224,000 in numpy. In a world of more than
 256 faces the compiled fan walks each beam through a grid of the faces
 (:mod:`sim.faceindex`, the C ``GridWalk``) up to its first hit, so a scan's cost follows
-what the ladar sees, not the size of the map (docs/performance.md).
+what the ladar sees, not the size of the map (docs/performance.md). A fan's ellipses go
+through one compiled call too, where probes find that it gives numpy's numbers (its own
+complex absolute value, its BLAS product of the beams, its in-place products): 2.8 us a
+scan of Figure 1's world against 17.9 us in numpy.
 
 All angles are in the world frame (radians, counter-clockwise); ranges in metres.
 
@@ -165,9 +168,9 @@ def _exact_product(a: complex, b: complex, fused: bool) -> complex:
 def _numpy_inplace_rounding(n: int) -> bool | None:
     """How numpy rounds ``a *= b`` for complex arrays of ``n`` numbers: fused, plain or neither.
 
-    Its loop picks a path by the arrays' length and overlap: on this machine, a single
-    number in place takes a plain scalar loop, longer arrays the fused SIMD one. Checked
-    against exact products on random numbers (32 at least).
+    Its loop picks a path by the arrays' length and overlap: with numpy 2.4 on x86-64, a
+    single number in place takes a plain scalar loop, longer arrays the fused SIMD one.
+    Checked against exact products on random numbers (32 at least).
     """
     rng = np.random.default_rng(n)
     left = {True, False}                        # the roundings every product agrees with
