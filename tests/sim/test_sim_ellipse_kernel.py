@@ -122,6 +122,23 @@ def test_the_beams_product_is_numpys_matmul_for_one_ellipse() -> None:
             assert _same_bits(got.view(float), want.view(float))
 
 
+@needs_ellipses
+def test_the_in_place_probe_predicts_numpys_in_place_products() -> None:
+    # Whatever it finds for a length (a plain scalar loop, the fused SIMD one), numpy's
+    # in-place products of that length round so on fresh numbers too.
+    rng = np.random.default_rng(44)
+    for n in (1, 2, 3, 5, 8, 9):
+        fused = raycast._numpy_inplace_rounding(n)
+        assert fused is not None
+        for _ in range(20):
+            a = rng.standard_normal(n) + 1j * rng.standard_normal(n)
+            b = rng.standard_normal(n) + 1j * rng.standard_normal(n)
+            got = a.copy()
+            got *= b
+            assert [raycast._exact_product(complex(x), complex(y), fused)
+                    for x, y in zip(a, b, strict=True)] == got.tolist()
+
+
 def _ellipse_world(rng: np.random.Generator, count: int, walls: bool) -> World:
     shapes: list[Any] = [
         Ellipse((float(rng.uniform(-5, 5)), float(rng.uniform(-5, 5))),
