@@ -45,7 +45,8 @@ Example: five beams on a wall 1 m ahead (x = 1), seen from -20 to +20 degrees.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -170,6 +171,71 @@ def _unit_directions(a: np.ndarray, gap_factor: float = DEFAULT_GAP_FACTOR
     return _terms_by_array(a, gap_factor)
 
 
+def _compiled_points() -> Callable[..., None] | None:
+    """Return :func:`beam_points` in C (atoms/_points.c), or None where it was not built."""
+    try:
+        from mdle.atoms._points import beam_points as compiled
+    except ImportError:
+        return None
+    return compiled
+
+
+@dataclass(frozen=True)
+class _CompiledPoints:
+    """The compiled :func:`beam_points`, and how numpy's complex product rounds here."""
+
+    kernel: Callable[..., None]
+    fused: bool
+
+
+def _checked_points() -> _CompiledPoints | None:
+    """Return the compiled :func:`beam_points` where it gives numpy's numbers, else None.
+
+    A point is a range times a unit direction, which numpy multiplies as complex numbers
+    (with a fused multiply-add in its SIMD loop, or plainly): the rounding that matches
+    numpy on awkward ranges (signed zeros, subnormals whose products underflow, NaN,
+    infinities, negatives), in every quadrant, with and without a valid mask, is kept;
+    with none, numpy finds the points.
+    """
+    kernel = _compiled_points()
+    if kernel is None:
+        return None
+    ranges, bearings, valid = _probe_scan()
+    unit = _terms_of(bearings, DEFAULT_GAP_FACTOR)[0]
+    for fused in (True, False):
+        if all(_same_points(_points_numpy(ranges, bearings, mask),
+                            _points_compiled(kernel, fused, ranges, unit, mask))
+               for mask in (None, valid)):
+            return _CompiledPoints(kernel, fused)
+    return None
+
+
+def _probe_scan() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Return the ranges, bearings and valid mask :func:`_checked_points` compares on.
+
+    The roundings differ only in the sign of a product that underflows to zero: the
+    smallest subnormal range in every direction shows it.
+    """
+    odd = [0.0, -0.0, 5e-324, 1e-320, 2.2e-308, 1e-300, math.nan, math.inf, -math.inf, -1.0,
+           1.0, 3.7, 9.999, 1e300]
+    ranges = np.array(odd * 4 + [5e-324] * 72)
+    bearings = np.linspace(-3.1, 3.1, ranges.shape[0])
+    return ranges, bearings, np.arange(ranges.shape[0]) % 3 != 1
+
+
+def _same_points(a: tuple[np.ndarray, ...], b: tuple[np.ndarray, ...]) -> bool:
+    return all(x.tobytes() == y.tobytes() for x, y in zip(a, b, strict=True))
+
+
+def _points_compiled(kernel: Callable[..., None], fused: bool, r: np.ndarray,
+                     unit: np.ndarray, valid: np.ndarray | None
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    n = r.shape[0]
+    z, ok, rr = np.empty(n, dtype=complex), np.empty(n, dtype=bool), np.empty(n)
+    kernel(r, unit, valid, z, ok, rr, fused)
+    return z, ok, rr
+
+
 def beam_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None = None
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Return the points of a 1-D scan as complex ``x + iy``, NaN where a beam saw no surface.
@@ -185,6 +251,19 @@ def beam_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | No
     # np.asarray costs as much as a small ufunc: skipped for the arrays a scan holds
     r = ranges if type(ranges) is np.ndarray and ranges.dtype.char == "d" \
         else np.asarray(ranges, dtype=float)
+    compiled = _POINTS
+    if compiled is not None and r.ndim == 1 and r.flags.c_contiguous and (
+            valid is None or (type(valid) is np.ndarray and valid.dtype.char == "?"
+                              and valid.shape == r.shape and valid.flags.c_contiguous)):
+        unit = _unit_directions(bearings)[0]
+        if unit.shape == r.shape:    # (else numpy says what does not fit)
+            return _points_compiled(compiled.kernel, compiled.fused, r, unit, valid)
+    return _points_numpy(r, bearings, valid)
+
+
+def _points_numpy(r: np.ndarray, bearings: np.ndarray, valid: np.ndarray | None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`beam_points` in numpy (``r`` a float array): the compiled loop's reference."""
     unit, _, zero, nan = _unit_directions(bearings)
     ok = np.isfinite(r)
     ok &= r > zero
@@ -194,6 +273,9 @@ def beam_points(ranges: np.ndarray, bearings: np.ndarray, valid: np.ndarray | No
     r = np.where(ok, r, nan)
     return r * unit, ok, r
 
+
+#: The compiled :func:`beam_points`, checked against numpy (None: numpy's).
+_POINTS = _checked_points()
 
 #: A complex array viewed as rows of (x, y) floats in one call.
 _XY = np.dtype((np.float64, (2,)))

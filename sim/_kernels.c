@@ -1,7 +1,8 @@
 /* The simulator's per-tick loops, compiled: the fan cast's faces (sim/raycast.py,
  * FanCaster._faces), the same walked through a grid of the faces in big worlds
- * (GridWalk, over sim/faceindex.py's FaceGrid), and a team's occlusions of the scans by
- * the robots' discs (sim/crowd.py, occlusions).
+ * (GridWalk, over sim/faceindex.py's FaceGrid), the fan's ellipses
+ * (FanCaster._ellipses), and a team's occlusions of the scans by the robots' discs
+ * (sim/crowd.py, occlusions).
  *
  * The numpy paths spend most of their time on the fixed cost of ~25-40 calls on arrays of
  * a few hundred numbers; these do the same arithmetic in one call each. They are an
@@ -17,7 +18,13 @@
  * interval (widened by 1e-10 rad) holds, so a difference matters only for a beam within
  * an ulp of a widened end, which meets the face's line within 1e-10 rad of the end.
  *
- * Built with -ffp-contract=off: every product is rounded where the numpy path rounds it.
+ * ellipses: numpy's complex absolute value (its own SIMD algorithm, not hypot), its
+ * in-place products of a single number (a plain scalar loop) and its matmul of the beams
+ * (OpenBLAS's zgemv for one ellipse), each reproduced and checked by a probe before use.
+ *
+ * Built with -ffp-contract=off and without GCC's vectoriser (which fuses a complex
+ * product's plain multiplies and add/subtract in the FMA clones, whatever the contract
+ * flag says): every product is rounded where the numpy path rounds it.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -412,6 +419,121 @@ static void release_all(Py_buffer *views, int n)
         PyBuffer_Release(&views[i]);
 }
 
+/* numpy's complex absolute value (np.abs of complex128) as its SIMD loop computes it on
+ * x86-64 with AVX2 or AVX-512 (loops_unary_complex.dispatch.c.src): the larger magnitude
+ * times sqrt(1 + ratio^2), ratio = smaller / larger, the square added with a fused
+ * multiply-add (`fused`; a plain product and sum where numpy's baseline has no FMA). It
+ * differs from libm's hypot in the last bit for about a third of values. An infinite part
+ * gives inf, else a NaN part NaN; 0/0 and inf/inf are never divided. */
+static inline double np_cabs(double re, double im, int fused)
+{
+    re = fabs(re);
+    im = fabs(im);
+    int re_inf = re == INFINITY, im_inf = im == INFINITY;
+    if (re_inf)
+        im = INFINITY;
+    if (im_inf)
+        re = INFINITY;
+    int re_nan = isnan(re), im_nan = isnan(im);
+    if (re_nan)
+        im = NAN;
+    if (im_nan)
+        re = NAN;
+    double larger = re > im ? re : im;
+    double smaller = im < re ? im : re;
+    double ratio = (larger == 0.0 || smaller == INFINITY) ? 0.0 : smaller / larger;
+    double root = sqrt(fused ? fma(ratio, ratio, 1.0) : ratio * ratio + 1.0);
+    return root * larger;
+}
+
+/* One element of numpy's matmul (B, 2) @ (2, E) of complex128 for E = 1, as it reaches
+ * OpenBLAS's zgemv (the transposed kernel's tail of two rows, in plain products, then
+ * y = 0 + (1 temp - 0 temp'), alpha = 1 and beta = 0): the row (a0, a1) times the
+ * column (x0, x1). The fan's ellipses check at construction that this is numpy's
+ * number for their shapes (raycast.FanCaster), and keep numpy's product otherwise. */
+static inline cplx gemv_2(cplx a0, cplx a1, cplx x0, cplx x1)
+{
+    double tr = a0.re * x0.re - a0.im * x0.im;
+    double ti = a0.re * x0.im + a0.im * x0.re;
+    tr += a1.re * x1.re - a1.im * x1.im;
+    ti += a1.re * x1.im + a1.im * x1.re;
+    cplx r;
+    r.re = 0.0 + (1.0 * tr - 0.0 * ti);
+    r.im = 0.0 + (1.0 * ti + 0.0 * tr);
+    return r;
+}
+
+/* What the ellipses do to one scan (FanCaster._ellipses, its arithmetic in its order):
+ * lower t[k] to the nearest entry (from outside) or exit (from inside) of beam k into
+ * each of the E ellipses. dd: (B, 2) beams [dirs, conj(dirs)]; rows: (2, E) the
+ * ellipses' [alpha conj(u), beta u]; centre, uconj: (E,) complex; alpha, beta: (E,);
+ * o: the ladar's place; turn: the fan's turn, conjugated. Returns 0, or -1 when out of
+ * memory. */
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("fma", "default")))
+#endif
+static int
+cast_ellipses(double *t, const cplx *dd, Py_ssize_t n, const cplx *rows, const cplx *centre,
+              const cplx *uconj, const double *alpha, const double *beta, Py_ssize_t e,
+              cplx o, cplx turn, double t_min, int fused, int abs_fused, int inplace_fused)
+{
+    /* Per ellipse: conj(alpha v + beta conj(v)) (v the origin in its frame), |.|^2 - 1,
+     * its sign, and the two coefficients of the beams' product (rows times the turns). */
+    cplx *oc = malloc((size_t)(e > 0 ? e : 1) * 3 * sizeof(cplx));
+    double *cs = malloc((size_t)(e > 0 ? e : 1) * 2 * sizeof(double));
+    if (oc == NULL || cs == NULL) {
+        free(oc);
+        free(cs);
+        return -1;
+    }
+    cplx *coef = oc + e; /* coef[2 j], coef[2 j + 1] */
+    double *sign = cs + e;
+    cplx turn_c = {turn.re, -turn.im};
+    for (Py_ssize_t j = 0; j < e; j++) {
+        cplx v = {o.re - centre[j].re, o.im - centre[j].im};
+        /* numpy's in-place products of E numbers (v *= uconj ...): rounded as its loop
+         * for that length does (a single number takes its plain scalar loop). */
+        v = cmul(v, uconj[j], inplace_fused);
+        cplx w = {v.re, -v.im};
+        cplx a = {alpha[j], 0.0}, b = {beta[j], 0.0}; /* numpy casts the reals to complex */
+        w = cmul(w, a, inplace_fused);
+        v = cmul(v, b, inplace_fused);
+        w.re += v.re;
+        w.im += v.im;
+        oc[j] = w;
+        double c = np_cabs(w.re, w.im, abs_fused);
+        c *= c;
+        c -= 1.0; /* > 0: the origin is outside */
+        cs[j] = c;
+        sign[j] = c > 0.0 ? 1.0 : c < 0.0 ? -1.0 : c == 0.0 ? 0.0 : c; /* np.sign */
+        coef[2 * j] = cmul(rows[j], turn, fused);
+        coef[2 * j + 1] = cmul(rows[e + j], turn_c, fused);
+    }
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double low = INFINITY;
+        for (Py_ssize_t j = 0; j < e; j++) {
+            cplx m = gemv_2(dd[2 * k], dd[2 * k + 1], coef[2 * j], coef[2 * j + 1]);
+            double a = np_cabs(m.re, m.im, abs_fused);
+            a *= a; /* |m|^2 */
+            cplx q = cmul(m, oc[j], fused); /* real: m . o, imaginary: cross(o, m) */
+            double disc = a - q.im * q.im;
+            double root = sqrt(disc); /* NaN for a miss */
+            root *= sign[j];
+            root -= q.re;
+            double hit = cs[j] / root;
+            if (!(hit > t_min))
+                hit = INFINITY; /* behind, grazing at the origin, missed */
+            if (hit < low)
+                low = hit;
+        }
+        if (low < t[k]) /* np.minimum: a NaN in t stays */
+            t[k] = low;
+    }
+    free(oc);
+    free(cs);
+    return 0;
+}
+
 PyDoc_STRVAR(faces_doc,
 "faces(zw, front_min, best, rel_s, dconj, rot, c, kc, eps, wrap_hi, may_wrap, fused)\n"
 "--\n\n"
@@ -777,7 +899,381 @@ static PyObject *occlude(PyObject *self, PyObject *const *args, Py_ssize_t nargs
     return disc_entry(args, nargs, 1);
 }
 
+/* libm's pow, reached through a pointer the compiler cannot see through: GCC turns a
+ * direct pow(v, 2.0) into v * v, and glibc's pow rounds a square otherwise for about one
+ * value in a thousand. Python's ** calls libm's pow. */
+static double (*const volatile libm_pow)(double, double) = pow;
+
+/* sim/distance.py's ellipse_nearest_point, in the same double operations in the same
+ * order (Python's floats are these doubles; ** 2 is libm's pow, as Python calls it):
+ * the nearest point (x, y) of the axis-aligned ellipse of semi-axes a, b to (y0, y1). */
+static void ellipse_nearest_point(double a, double b, double y0, double y1, double *x_out,
+                                  double *y_out)
+{
+    int swap = a < b;
+    if (swap) {
+        double t;
+        t = a, a = b, b = t;
+        t = y0, y0 = y1, y1 = t;
+    }
+    double z0 = fabs(y0), z1 = fabs(y1);
+    double a2 = a * a, b2 = b * b;
+    double x, y;
+    if (z1 == 0.0) {
+        if (z0 < (a2 - b2) / a) { /* inside, near the centre: off the axis */
+            x = a2 * z0 / (a2 - b2);
+            double v = 1.0 - libm_pow(x / a, 2.0);
+            y = b * sqrt(v > 0.0 ? v : 0.0);        /* max(0.0, v): 0.0 unless v > 0 */
+        } else {
+            x = a;
+            y = 0.0;
+        }
+    } else {
+        double az = a * z0, bz = b * z1;
+        double t = bz - b2 > az - a2 ? bz - b2 : az - a2; /* Python's max */
+        for (int i = 0; i < 60; i++) {              /* distance.py's _NEWTON_STEPS */
+            double ta = t + a2, tb = t + b2;
+            double p = az / ta, q = bz / tb;
+            p = p * p;
+            q = q * q;
+            double step = 0.5 * (p + q - 1.0) / (p / ta + q / tb);
+            t += step;
+            if (step <= 1e-14 * (fabs(t) + a2))
+                break;
+        }
+        x = a2 * z0 / (t + a2);
+        y = b2 * z1 / (t + b2);
+    }
+    if (y0 < 0)
+        x = -x;
+    if (y1 < 0)
+        y = -y;
+    *x_out = swap ? y : x;
+    *y_out = swap ? x : y;
+}
+
+PyDoc_STRVAR(ellipse_near_doc,
+"ellipse_near(x, y, best, centre, uconj, bound, axes, fused, abs_fused)\n"
+"--\n\n"
+"The ellipses a clearance query from (x, y) must measure, and their nearest points:\n"
+"Collider.distance's few-ellipses branch, compiled. centre, uconj: (E,) complex; bound:\n"
+"(E,) float; axes: (E, 2) float. Each ellipse whose |(x, y) - centre| - bound is below\n"
+"best gives (the query in its frame: re, im; its nearest point: x, y; its index), in\n"
+"order; the caller measures the distances with Python's math.hypot.");
+
+static PyObject *ellipse_near(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 9) {
+        PyErr_Format(PyExc_TypeError, "ellipse_near() takes 9 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    double x = PyFloat_AsDouble(args[0]);
+    double y = PyFloat_AsDouble(args[1]);
+    double best = PyFloat_AsDouble(args[2]);
+    int fused = PyObject_IsTrue(args[7]);
+    int abs_fused = PyObject_IsTrue(args[8]);
+    if (PyErr_Occurred() || fused < 0 || abs_fused < 0)
+        return NULL;
+    Py_buffer v[4];
+    Py_ssize_t two_e;
+    int got = 0;
+    PyObject *out = NULL;
+    if (get_buf(args[3], &v[got], 'Z', -1, &two_e, 0, "centre") < 0)
+        goto done;
+    got++;
+    Py_ssize_t e = two_e / 2;
+    if (get_buf(args[4], &v[got], 'Z', 2 * e, NULL, 0, "uconj") < 0)
+        goto done;
+    got++;
+    if (get_buf(args[5], &v[got], 'd', e, NULL, 0, "bound") < 0)
+        goto done;
+    got++;
+    if (get_buf(args[6], &v[got], 'd', 2 * e, NULL, 0, "axes") < 0)
+        goto done;
+    got++;
+    const cplx *centre = v[0].buf, *uconj = v[1].buf;
+    const double *bound = v[2].buf, *axes = v[3].buf;
+    out = PyList_New(0);
+    for (Py_ssize_t j = 0; out != NULL && j < e; j++) {
+        cplx w = {x - centre[j].re, y - centre[j].im};  /* q - c */
+        double lower = np_cabs(w.re, w.im, abs_fused) - bound[j];
+        if (!(lower < best))
+            continue;
+        cplx l = cmul(w, uconj[j], fused);             /* the query in the ellipse's frame */
+        double ex, ey;
+        ellipse_nearest_point(axes[2 * j], axes[2 * j + 1], l.re, l.im, &ex, &ey);
+        PyObject *item = Py_BuildValue("(ddddn)", l.re, l.im, ex, ey, j);
+        if (item == NULL || PyList_Append(out, item) < 0)
+            Py_CLEAR(out);
+        Py_XDECREF(item);
+    }
+done:
+    release_all(v, got);
+    return out;
+}
+
+/* numpy's maximum and minimum: a NaN of either operand (the first's first), else the
+ * larger (smaller), the second where they are equal (which decides a zero's sign). */
+static inline double np_maximum(double a, double b)
+{
+    return isnan(a) ? a : isnan(b) ? b : a > b ? a : b;
+}
+
+static inline double np_minimum(double a, double b)
+{
+    return isnan(a) ? a : isnan(b) ? b : a < b ? a : b;
+}
+
+PyDoc_STRVAR(settle_doc,
+"settle(ranges, valid, noise, sigma, relative, resolution, max_range)\n"
+"--\n\n"
+"A ladar's noise, quantum and clipping, in place: sim/ladar.py's _Settling.settle,\n"
+"compiled. ranges, noise: (n,) float (noise: standard normal draws, scaled in place as\n"
+"numpy scales them; None: no noise); valid: (n,) bool; resolution 0: no quantum.");
+
+static PyObject *settle(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 7) {
+        PyErr_Format(PyExc_TypeError, "settle() takes 7 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    double sigma = PyFloat_AsDouble(args[3]);
+    int relative = PyObject_IsTrue(args[4]);
+    double res = PyFloat_AsDouble(args[5]);
+    double top = PyFloat_AsDouble(args[6]);
+    if (PyErr_Occurred() || relative < 0)
+        return NULL;
+    Py_buffer v[3];
+    Py_ssize_t n;
+    int got = 0;
+    if (get_buf(args[0], &v[got], 'd', -1, &n, 1, "ranges") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[1], &v[got], '?', n, NULL, 0, "valid") < 0)
+        goto fail;
+    got++;
+    int noisy = args[2] != Py_None;
+    if (noisy && get_buf(args[2], &v[got++], 'd', n, NULL, 1, "noise") < 0) {
+        got--;
+        goto fail;
+    }
+    double *r = v[0].buf;
+    const char *ok = v[1].buf;
+    double *noise = noisy ? v[2].buf : NULL;
+    for (Py_ssize_t k = 0; k < n; k++) {
+        double x = r[k];
+        if (noisy) {
+            double e = noise[k] * sigma;
+            if (relative)
+                e *= x;
+            e *= ok[k] ? 1.0 : 0.0;         /* numpy casts the bools to 1.0 and 0.0 */
+            noise[k] = e;
+            x += e;
+        }
+        if (res != 0.0) {
+            x /= res;
+            x = rint(x);                    /* to even, as np.rint */
+            x *= res;
+        }
+        r[k] = np_minimum(np_maximum(x, 0.0), top);
+    }
+    release_all(v, got);
+    Py_RETURN_NONE;
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
+PyDoc_STRVAR(absolute_doc,
+"absolute(z, out, fused)\n"
+"--\n\n"
+"out = |z| for z (n,) complex, as numpy's SIMD loop rounds it (fused: with a fused\n"
+"multiply-add): the import-time probe of sim/raycast.py and the tests compare it with\n"
+"np.abs.");
+
+static PyObject *absolute(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "absolute() takes 3 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    int fused = PyObject_IsTrue(args[2]);
+    if (fused < 0)
+        return NULL;
+    Py_buffer v[2];
+    Py_ssize_t two_n;
+    if (get_buf(args[0], &v[0], 'Z', -1, &two_n, 0, "z") < 0)
+        return NULL;
+    if (get_buf(args[1], &v[1], 'd', two_n / 2, NULL, 1, "out") < 0) {
+        release_all(v, 1);
+        return NULL;
+    }
+    const double *z = v[0].buf;
+    double *out = v[1].buf;
+    for (Py_ssize_t k = 0; k < two_n / 2; k++)
+        out[k] = np_cabs(z[2 * k], z[2 * k + 1], fused);
+    release_all(v, 2);
+    Py_RETURN_NONE;
+}
+
+PyDoc_STRVAR(beam_product_doc,
+"beam_product(dd, coef, out)\n"
+"--\n\n"
+"out = dd @ coef for dd (B, 2) and coef (2, E) complex, as numpy's matmul gives it for\n"
+"E = 1 (OpenBLAS's zgemv): the number the compiled ellipses use, which a fan checks\n"
+"against numpy's own product before it uses them.");
+
+static PyObject *beam_product(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 3) {
+        PyErr_Format(PyExc_TypeError, "beam_product() takes 3 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    Py_buffer v[3];
+    Py_ssize_t two_b, two_2e;
+    int got = 0;
+    if (get_buf(args[0], &v[got], 'Z', -1, &two_b, 0, "dd") < 0)
+        goto fail;
+    got++;
+    if (get_buf(args[1], &v[got], 'Z', -1, &two_2e, 0, "coef") < 0)
+        goto fail;
+    got++;
+    Py_ssize_t b = two_b / 4, e = two_2e / 4;
+    if (two_b % 4 || two_2e % 4) {
+        PyErr_SetString(PyExc_ValueError, "beam_product: dd is (B, 2) and coef (2, E)");
+        goto fail;
+    }
+    if (get_buf(args[2], &v[got], 'Z', 2 * b * e, NULL, 1, "out") < 0)
+        goto fail;
+    got++;
+    const cplx *dd = v[0].buf, *coef = v[1].buf;
+    cplx *out = v[2].buf;
+    for (Py_ssize_t k = 0; k < b; k++)
+        for (Py_ssize_t j = 0; j < e; j++)
+            out[k * e + j] = gemv_2(dd[2 * k], dd[2 * k + 1], coef[j], coef[e + j]);
+    release_all(v, got);
+    Py_RETURN_NONE;
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
+PyDoc_STRVAR(ellipses_doc,
+"ellipses(t, dd, rows, centre, uconj, alpha, beta, o, turn, t_min, fused, abs_fused,\n"
+"         inplace_fused)\n"
+"--\n\n"
+"Lower t (B,) in place to each beam's nearest ellipse hit: FanCaster._ellipses, compiled.\n"
+"dd: (B, 2) complex; rows: (2, E) complex; centre, uconj: (E,) complex; alpha, beta:\n"
+"(E,) float; o, turn: complex; t_min: float; fused, abs_fused, inplace_fused: how numpy\n"
+"rounds its complex products, absolute values and in-place products of E numbers here.");
+
+PyDoc_STRVAR(ellipse_scan_doc,
+"ellipse_scan(t, hit, t_none, t_hit, max_range, dd, rows, centre, uconj, alpha, beta, o,\n"
+"             turn, t_min, fused, abs_fused, inplace_fused)\n"
+"--\n\n"
+"A whole scan of a world of ellipses only (FanCaster.cast): t (B,) filled with t_none\n"
+"and lowered (ellipses), then hit (B,) bool = t <= t_hit and t = min(t, max_range).");
+
+/* ellipses (scan = 0: args[0] is t) and ellipse_scan (scan = 1: t, hit, t_none, t_hit,
+ * max_range first): the same ellipses, and a whole scan's start and finish. */
+static PyObject *ellipse_entry(PyObject *const *args, Py_ssize_t nargs, int scan)
+{
+    const char *name = scan ? "ellipse_scan" : "ellipses";
+    Py_ssize_t want = scan ? 17 : 13;
+    if (nargs != want) {
+        PyErr_Format(PyExc_TypeError, "%s() takes %zd arguments (%zd given)", name, want,
+                     nargs);
+        return NULL;
+    }
+    PyObject *const *a = args + (scan ? 4 : 0); /* a[0] is t, a[1..12] as in ellipses() */
+    cplx o, turn;
+    if (get_complex(a[7], &o) < 0 || get_complex(a[8], &turn) < 0)
+        return NULL;
+    double t_min = PyFloat_AsDouble(a[9]);
+    int fused = PyObject_IsTrue(a[10]);
+    int abs_fused = PyObject_IsTrue(a[11]);
+    int inplace_fused = PyObject_IsTrue(a[12]);
+    double t_none = scan ? PyFloat_AsDouble(args[2]) : 0.0;
+    double t_hit = scan ? PyFloat_AsDouble(args[3]) : 0.0;
+    double top = scan ? PyFloat_AsDouble(args[4]) : 0.0;
+    if (PyErr_Occurred() || fused < 0 || abs_fused < 0 || inplace_fused < 0)
+        return NULL;
+    Py_buffer v[8];
+    Py_ssize_t n, two_e;
+    int got = 0;
+    if (get_buf(a[3], &v[got], 'Z', -1, &two_e, 0, "centre") < 0)
+        goto fail;
+    got++;
+    Py_ssize_t e = two_e / 2;
+    if (get_buf(args[0], &v[got], 'd', -1, &n, 1, "t") < 0)
+        goto fail;
+    got++;
+    if (get_buf(a[1], &v[got], 'Z', 4 * n, NULL, 0, "dd") < 0)
+        goto fail;
+    got++;
+    if (get_buf(a[2], &v[got], 'Z', 4 * e, NULL, 0, "rows") < 0)
+        goto fail;
+    got++;
+    if (get_buf(a[4], &v[got], 'Z', 2 * e, NULL, 0, "uconj") < 0)
+        goto fail;
+    got++;
+    if (get_buf(a[5], &v[got], 'd', e, NULL, 0, "alpha") < 0)
+        goto fail;
+    got++;
+    if (get_buf(a[6], &v[got], 'd', e, NULL, 0, "beta") < 0)
+        goto fail;
+    got++;
+    if (scan && get_buf(args[1], &v[got++], '?', n, NULL, 1, "hit") < 0) {
+        got--;
+        goto fail;
+    }
+    double *t = v[1].buf;
+    for (Py_ssize_t k = 0; scan && k < n; k++)
+        t[k] = t_none;
+    int status = cast_ellipses(t, v[2].buf, n, v[3].buf, v[0].buf, v[4].buf, v[5].buf,
+                               v[6].buf, e, o, turn, t_min, fused, abs_fused, inplace_fused);
+    if (scan && status == 0) {
+        char *hit = v[7].buf;
+        for (Py_ssize_t k = 0; k < n; k++) {
+            hit[k] = t[k] <= t_hit;
+            t[k] = np_minimum(t[k], top);
+        }
+    }
+    release_all(v, got);
+    if (status < 0)
+        return PyErr_NoMemory();
+    Py_RETURN_NONE;
+fail:
+    release_all(v, got);
+    return NULL;
+}
+
+static PyObject *ellipses(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    return ellipse_entry(args, nargs, 0);
+}
+
+static PyObject *ellipse_scan(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    return ellipse_entry(args, nargs, 1);
+}
+
 static PyMethodDef methods[] = {
+    {"absolute", (PyCFunction)(void (*)(void))absolute, METH_FASTCALL, absolute_doc},
+    {"beam_product", (PyCFunction)(void (*)(void))beam_product, METH_FASTCALL,
+     beam_product_doc},
+    {"ellipses", (PyCFunction)(void (*)(void))ellipses, METH_FASTCALL, ellipses_doc},
+    {"ellipse_scan", (PyCFunction)(void (*)(void))ellipse_scan, METH_FASTCALL,
+     ellipse_scan_doc},
+    {"settle", (PyCFunction)(void (*)(void))settle, METH_FASTCALL, settle_doc},
+    {"ellipse_near", (PyCFunction)(void (*)(void))ellipse_near, METH_FASTCALL,
+     ellipse_near_doc},
     {"faces", (PyCFunction)(void (*)(void))faces, METH_FASTCALL, faces_doc},
     {"occlusions", (PyCFunction)(void (*)(void))occlusions, METH_FASTCALL, occlusions_doc},
     {"occlude", (PyCFunction)(void (*)(void))occlude, METH_FASTCALL, occlude_doc},

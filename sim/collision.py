@@ -27,12 +27,14 @@ gives those near the query.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
 
+from mdle.sim import raycast
 from mdle.sim.distance import ellipse_nearest, ellipse_nearest_point, nearest_boundary
 from mdle.sim.faceindex import BoxGrid
 from mdle.sim.robot import Phase, integrate
@@ -50,6 +52,24 @@ _CULL_ABOVE = 256  # segments: larger worlds keep a list of the candidates near 
 _NEAR_SLACK = 0.5  # m: the list stays valid while the robot is this close to where it was made
 # 0 and 1 as 0-d arrays: a ufunc takes them far faster than Python floats
 _ZERO, _ONE = np.array(0.0), np.array(1.0)
+
+
+def _compiled_ellipse_near() -> Callable[..., list[tuple[float, float, float, float, int]]] | None:
+    """Return the few-ellipses query in C (sim/_kernels.c, ``ellipse_near``), or None.
+
+    Only where the fan's compiled ellipses are (:data:`sim.raycast.COMPILED_ELLIPSES`):
+    the same probes of how numpy rounds its complex products and absolute values.
+    """
+    if not raycast.COMPILED_ELLIPSES:
+        return None
+    try:
+        from mdle.sim._kernels import ellipse_near
+    except ImportError:
+        return None
+    return ellipse_near
+
+
+_ELLIPSE_NEAR = _compiled_ellipse_near()
 
 
 def _reach(distance: float) -> float:
@@ -98,9 +118,14 @@ class Collider:
     curve_grids : bool
         Where there are more than 256 arcs (or ellipses), find those near a query in a
         grid of their boxes: the same numbers (False: measure to every one).
+    compiled : bool, optional
+        In a world of at most 8 ellipses, find the ones to measure and their nearest
+        points in one compiled call where the install has it (None, the default, or
+        True) or in numpy and Python floats (False): the same numbers.
     """
 
-    def __init__(self, parts: Parts, radius: float, curve_grids: bool = True) -> None:
+    def __init__(self, parts: Parts, radius: float, curve_grids: bool = True,
+                 compiled: bool | None = None) -> None:
         self.parts = parts
         self.radius = float(radius)
         self.curve_grids = curve_grids
@@ -130,6 +155,9 @@ class Collider:
                            else np.zeros(0))
         self._ell_axes = parts.ell_axes.tolist()
         self._ell_owner = parts.ell_owner.tolist()
+        self._ell_axes_c = np.ascontiguousarray(parts.ell_axes, dtype=float)
+        few = 0 < len(self._ell_owner) <= _FEW_ELLIPSES      # never the grid, never vectorised
+        self._ell_near = _ELLIPSE_NEAR if few and compiled is not False else None
 
     def distance(self, x: float, y: float) -> tuple[float, int]:
         """Return the distance from the point to the nearest boundary, and that obstacle's index."""
@@ -155,7 +183,16 @@ class Collider:
                 j = int(d.argmin())
                 if d[j] < best:
                     best, owner = float(d[j]), int(P.arc_owner[j if idx is None else idx[j]])
-        if len(P.ell_angle):
+        if self._ell_near is not None:
+            # A few ellipses: which to measure and their nearest points in one C call
+            # (the branch below, the same numbers); the distances with Python's hypot.
+            for lx, ly, ex, ey, i in self._ell_near(
+                    x, y, best, self._ell_c, self._ell_uconj, self._ell_bound,
+                    self._ell_axes_c, bool(raycast._FUSED), bool(raycast._ABS_FUSED)):
+                de = math.hypot(lx - ex, ly - ey)
+                if de < best:
+                    best, owner = de, self._ell_owner[i]
+        elif len(P.ell_angle):
             # Many ellipses, and a nearest obstacle already: only those of the cells
             # within its distance (a superset of the ones that can be nearer).
             grid = self._ellipse_grid if math.isfinite(best) else None

@@ -26,7 +26,7 @@ clipped to ``[0, max_range]``.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -40,6 +40,22 @@ __all__ = ["LADAR_PROFILES", "NOISE_MODELS", "Ladar", "LadarProfile", "ladar_pro
            "settle_rows"]
 
 NOISE_MODELS = ("relative", "absolute", "none")
+
+
+def _compiled_settle() -> Callable[..., None] | None:
+    """Return the scans' noise, quantum and clipping in C (sim/_kernels.c), or None.
+
+    An optional build; without it numpy settles the scans, with the same numbers (only
+    products, sums, quotients, rounding to even and comparisons, each rounded once).
+    """
+    try:
+        from mdle.sim._kernels import settle
+    except ImportError:
+        return None
+    return settle
+
+
+_SETTLE = _compiled_settle()
 
 
 @dataclass(frozen=True)
@@ -265,7 +281,24 @@ class _Settling:
 
     def settle(self, ranges: np.ndarray, valid: np.ndarray, noise: np.ndarray | None
                ) -> None:
-        """Add the standard normal draws ``noise`` (scaled here), quantise, clip, freeze."""
+        """Add the standard normal draws ``noise`` (scaled here), quantise, clip, freeze.
+
+        In one compiled call where the install has it (:data:`_SETTLE`): the same
+        operations on each number, so the same numbers.
+        """
+        if (_SETTLE is not None and ranges.flags.c_contiguous and valid.flags.c_contiguous
+                and (noise is None or noise.flags.c_contiguous)):
+            _SETTLE(ranges, valid, noise, float(self.sigma), self.relative,
+                    0.0 if self.resolution is None else float(self.resolution),
+                    float(self.max_range))
+            ranges.setflags(write=False)
+            valid.setflags(write=False)
+            return
+        self.settle_numpy(ranges, valid, noise)
+
+    def settle_numpy(self, ranges: np.ndarray, valid: np.ndarray, noise: np.ndarray | None
+                     ) -> None:
+        """:meth:`settle` in numpy: the compiled loop's reference."""
         if noise is not None:
             noise *= self.sigma
             if self.relative:

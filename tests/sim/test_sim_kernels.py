@@ -345,3 +345,27 @@ def test_hostile_numbers_never_take_the_loops_outside_their_arrays() -> None:
             assert ranges.shape == hit.shape == (181,)
     many = fan.cast_many(np.array(odd), np.zeros(len(odd)), np.resize(headings, len(odd)))
     assert many[0].shape == (len(odd), 181)
+
+
+@needs_kernel
+@pytest.mark.parametrize("indexed", [False, True])
+def test_a_single_face_in_range_casts_the_same_on_both_paths(indexed: bool) -> None:
+    # A world of more than 256 faces where the bounding boxes in range hold one face
+    # alone: numpy multiplies a single number in place in its plain scalar loop, which the
+    # numpy path avoids for that face (tests/sim/test_sim_ellipse_kernel.py checks the
+    # same quirk for the ellipses' numbers).
+    block = Rectangle((0.0, -12.0), (30.0, 20.0), 0.0)       # its near face at y = -2
+    far = [Rectangle((100.0 + 2 * i, 100.0), (0.5, 0.5), 0.0) for i in range(80)]
+    world = World("one face", obstacles=(block, *far))
+    rel = np.linspace(0.0, math.pi, 181)
+    fast = world.caster.fan(rel, 8.0, True, indexed=indexed)
+    ref = world.caster.fan(rel, 8.0, False)
+    rng = np.random.default_rng(17)
+    hits = 0
+    for _ in range(400):
+        x, y, first = rng.uniform(-5, 5), rng.uniform(-1.5, 4.0), rng.uniform(-7, 7)
+        r1, h1 = fast.cast(float(x), float(y), float(first))
+        r2, h2 = ref.cast(float(x), float(y), float(first))
+        assert r1.tobytes() == r2.tobytes() and np.array_equal(h1, h2)
+        hits += int(h1.sum())
+    assert hits > 400 * 20
