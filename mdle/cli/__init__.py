@@ -50,19 +50,20 @@ def build_parser() -> argparse.ArgumentParser:
                      values: object, option_string: str | None = None) -> None:
             from importlib.util import find_spec
 
-            # Both C extensions are optional builds: without a C compiler their numpy
+            # The C extensions are optional builds: without a C compiler their numpy
             # references run, with the same numbers and a higher cost.
             def how(module: str) -> str:
                 return ("compiled loops" if find_spec(module) is not None
                         else "numpy loops; its C extension was not built (no C compiler)")
 
             print(f"mdle {__version__} (simulator: {how('mdle.sim._kernels')}; "
-                  f"whole-scan model: {how('mdle.atoms._searches')})")
+                  f"whole-scan model: {how('mdle.atoms._searches')}; "
+                  f"scan points: {how('mdle.atoms._points')})")
             parser.exit()
 
     parser.add_argument("--version", action=Version, nargs=0,
-                        help="show the version and whether the simulator's and the "
-                             "whole-scan model's loops are compiled, then exit")
+                        help="show the version and whether the simulator's, the whole-scan "
+                             "model's and the scan points' loops are compiled, then exit")
     parser.add_argument("--debug", action="store_true",
                         help="show Python tracebacks for internal errors")
     sub = parser.add_subparsers(title="commands", metavar="COMMAND")

@@ -70,6 +70,8 @@ def test_the_version_says_whether_the_loops_are_compiled(
     assert ("simulator: compiled loops" in out) == (raycast._KERNEL is not None), out
     searches_built = importlib.util.find_spec("mdle.atoms._searches") is not None
     assert ("whole-scan model: compiled loops" in out) == searches_built, out
+    points_built = importlib.util.find_spec("mdle.atoms._points") is not None
+    assert ("scan points: compiled loops" in out) == points_built, out
 
 
 @needs_kernel
