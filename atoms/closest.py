@@ -60,7 +60,8 @@ from mdle.atoms.steering import (
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["nearest_point", "closest_law", "step", "FIT_RADIUS", "REACH", "FOV_EDGE"]
+__all__ = ["nearest_point", "closest_law", "step", "ends_at_nearest", "FIT_RADIUS", "REACH",
+           "FOV_EDGE", "END_MARGIN"]
 
 
 #: Points within this many ``rc`` of the nearest point are fitted (0.25 m at rc 0.5: about
@@ -78,6 +79,11 @@ POINT_KAPPA = -100.0
 #: A fit whose residuals exceed this fraction of the range (plus 3 mm) is no circle: the
 #: nearest point is taken as a point (1.5 times the LMS-200's 0.8 % range noise).
 FIT_TOLERANCE = 0.012
+#: A fit's nearest point farther than this angle (times the range) past the end of the fitted
+#: points is off the boundary: three LMS-200 beams, where one more beam would have seen a
+#: boundary that went on (a tip lies within one beam of the last point on its flank, and on a
+#: noisy scan the fit's nearest point scatters by about as much again).
+END_MARGIN = math.radians(3.0)
 #: A remembered point counts once it is within this of an edge of the ladar's 180 degrees or
 #: beyond it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind.
 FOV_EDGE = math.radians(2.0)
@@ -204,12 +210,64 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     foot = complex(0.0, rq) + r * nl  # the fitted nearest point, local frame
     if not (r > 0.0 and abs(foot) <= radius):
         return None  # no extrapolation beyond the fitted points
+    if ends_at_nearest(w, foot, q + foot * t, rq):
+        # a tip, a plate's end or a vertex seen from one side: the boundary ends at q, and
+        # the level set turns round it as round a point
+        return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)
     tan_ = complex(-nl.imag, nl.real) * t  # back into the law's frame
     kappa = c / math.sqrt(root2)
     beta = math.atan2(tan_.imag, tan_.real)
     if not (math.isfinite(beta) and math.isfinite(kappa)):
         return None
     return Ray(True, r, beta, kappa)
+
+
+def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> bool:
+    """Tell whether a fit's nearest point lies past the end of its points, where the scan saw none.
+
+    Parameters
+    ----------
+    w : complex array (M,)
+        The fitted points in the nearest point's frame (``s + i h``: ``s`` across the line of
+        sight, ``h`` towards the robot; the nearest scan point ``q`` at 0).
+    foot : complex
+        The fitted boundary's point nearest to the robot, in the same frame.
+    at : complex
+        The same point in the law's frame.
+    rq : float, m
+        The range of ``q``.
+
+    Returns
+    -------
+    bool
+        True when ``foot`` lies beyond the last fitted point on its side by more than
+        :data:`END_MARGIN` times the range and inside the ladar's field of view: the beams
+        there saw past it (nothing nearer, or nothing at all), so the boundary ends at ``q``.
+
+    A circle fitted to one flank of a tip (the other is hidden behind it), to a plate's end
+    or to the face behind a vertex carries on past the end of what was seen. Its nearest
+    point then lies on the flank's extension: a straight face beside the robot, where the
+    boundary is a point it should turn round. Measured on spike stars whose tips are closer
+    than ``2 rc``, at 1 m/s: a third of the ticks on the scan followed such a line (curvature about
+    -0.8 1/m instead of the point's -1.6 1/m), and the robot circled each tip about 0.1 m
+    outside ``rc``. Beyond the edge of the field of view the boundary is unseen, and the fit
+    still carries a pole on along its circle there.
+
+    >>> import numpy as np
+    >>> flank = np.linspace(0.0, -0.2, 11) + 0.0j      # seen on one side of q only
+    >>> ends_at_nearest(flank, complex(0.1, 0.0), complex(0.3, -0.5), 0.6)
+    True
+    >>> ends_at_nearest(flank, complex(-0.05, 0.0), complex(0.3, -0.5), 0.6)
+    False
+    """
+    margin = END_MARGIN * rq
+    s = foot.real
+    if -margin <= s <= margin:
+        return False  # at q (the common case: one comparison, no numpy call)
+    end = float(w.real.max()) if s > 0.0 else float(w.real.min())
+    if abs(s) <= abs(end) + margin:
+        return False  # among the points fitted
+    return abs(math.atan2(at.imag, at.real)) <= math.pi / 2.0 - FOV_EDGE
 
 
 def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray:
