@@ -18,10 +18,10 @@ from mdle.atoms import closest as C
 from mdle.core.pose import Pose
 from mdle.sim.profiles import robot_profile
 from mdle.sim.shapes import Polygon
-from tests.atoms.conftest import BEARINGS, World2D, follow_run
+from tests.atoms.conftest import BEARINGS, Shape, World2D, follow_run
 
 
-def _points(shape: World2D.Shape) -> np.ndarray:
+def _points(shape: Shape) -> np.ndarray:
     """Scan ``shape`` from the origin, heading +x, with 1-degree beams: the points hit."""
     r, _, _ = shape.cast(0.0, 0.0, 0.0, BEARINGS)
     hit = np.isfinite(r)
