@@ -23,6 +23,8 @@ The pieces:
 
 * :func:`nearest_point`: the nearest followed-side scan point and a local quadratic fit of the
   points around it (range, tangent, curvature);
+* :func:`ends_at_nearest`: whether that fit runs on past the end of what the scan saw (a tip
+  seen from one flank), where the nearest point is a point;
 * :func:`closest_law`: the closest-point CLF law, with ``V = 4 sin^2(beta/4) + g(r)``;
 * :func:`step`: one tick: the nearest point of the scan, or of the memory when the point the
   robot turns around has left the ladar's field of view, the front ray's anticipation of a
