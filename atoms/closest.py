@@ -163,7 +163,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     near = z[sel]
     for _ in range(2):
         # a window across a vertex or a cusp is no circle: halve it, then take the point
-        ray = _fit(near, q, rq, t, radius)
+        ray = _fit(near, q, rq, t, radius, z)
         if ray is not None:
             return ray, sel
         radius *= 0.5
@@ -171,10 +171,12 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA), sel
 
 
-def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -> Ray | None:
+def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float,
+         z: "np.ndarray") -> Ray | None:
     """Fit a circle to the points ``near`` around ``q``; None if they are not on one.
 
-    See :func:`nearest_point`; ``t`` is the unit tangent at ``q`` (``i q / |q|``).
+    See :func:`nearest_point`; ``t`` is the unit tangent at ``q`` (``i q / |q|``), ``z``
+    every scan point (:func:`ends_at_nearest` asks where the ladar looked).
     """
     import numpy as np
 
@@ -212,7 +214,7 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     foot = complex(0.0, rq) + r * nl  # the fitted nearest point, local frame
     if not (r > 0.0 and abs(foot) <= radius):
         return None  # no extrapolation beyond the fitted points
-    if ends_at_nearest(w, foot, q + foot * t, rq):
+    if ends_at_nearest(w, foot, q + foot * t, rq, z):
         # a tip, a plate's end or a vertex seen from one side: the boundary ends at q, and
         # the level set turns round it as round a point
         return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)
@@ -224,7 +226,8 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     return Ray(True, r, beta, kappa)
 
 
-def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> bool:
+def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float, z: "np.ndarray"
+                    ) -> bool:
     """Tell whether a fit's nearest point lies past the end of its points, where the scan saw none.
 
     Parameters
@@ -238,30 +241,38 @@ def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> b
         The same point in the law's frame.
     rq : float, m
         The range of ``q``.
+    z : complex array
+        Every scan point, in the law's frame.
 
     Returns
     -------
     bool
         True when ``foot`` lies beyond the last fitted point on its side by more than
-        :data:`END_MARGIN` times the range and inside the ladar's field of view: the beams
-        there saw past it (nothing nearer, or nothing at all), so the boundary ends at ``q``.
+        :data:`END_MARGIN` times the range, at a bearing the ladar looked along: some scan
+        point lies farther round than it. The beams there saw past it (nothing nearer, or
+        nothing at all), so the boundary ends at ``q``.
 
     A circle fitted to one flank of a tip (the other is hidden behind it), to a plate's end
     or to the face behind a vertex carries on past the end of what was seen. Its nearest
     point then lies on the flank's extension: a straight face beside the robot, where the
     boundary is a point it should turn round. Measured on spike stars whose tips are closer
-    than ``2 rc``, at 1 m/s: a third of the ticks on the scan followed such a line (curvature about
-    -0.8 1/m instead of the point's -1.6 1/m), and the robot circled each tip about 0.1 m
-    outside ``rc``. Beyond the edge of the field of view the boundary is unseen, and the fit
-    still carries a pole on along its circle there.
+    than ``2 rc``, at 1 m/s: a third of the ticks on the scan followed such a line (curvature
+    about -0.8 1/m instead of the point's -1.6 1/m), and the robot circled each tip about
+    0.1 m outside ``rc``. Where no scan point lies farther round than the foot, the boundary
+    there may be unseen (beyond the edge of the field of view, which the latency prediction
+    turns by the turn made meanwhile, or on beams that returned nothing): the fit still
+    carries a pole on along its circle there.
 
     >>> import numpy as np
     >>> flank = np.linspace(0.0, -0.2, 11) + 0.0j      # seen on one side of q only
-    >>> ends_at_nearest(flank, complex(0.1, 0.0), complex(0.3, -0.5), 0.6)
+    >>> scan = np.array([0.5 - 0.8j, 0.3 - 0.5j, 1.0 + 0.2j])
+    >>> ends_at_nearest(flank, complex(0.1, 0.0), complex(0.3, -0.45), 0.6, scan)
     True
-    >>> ends_at_nearest(flank, complex(-0.05, 0.0), complex(0.3, -0.5), 0.6)
+    >>> ends_at_nearest(flank, complex(-0.05, 0.0), complex(0.3, -0.45), 0.6, scan)
     False
     """
+    import numpy as np
+
     margin = END_MARGIN * rq
     s = foot.real
     if -margin <= s <= margin:
@@ -269,7 +280,9 @@ def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> b
     end = float(w.real.max()) if s > 0.0 else float(w.real.min())
     if abs(s) <= abs(end) + margin:
         return False  # among the points fitted
-    return abs(math.atan2(at.imag, at.real)) <= math.pi / 2.0 - FOV_EDGE
+    bearing = math.atan2(at.imag, at.real)
+    ang = np.angle(z)
+    return float(ang.min()) < bearing if bearing < 0.0 else float(ang.max()) > bearing
 
 
 def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray:
