@@ -23,8 +23,8 @@ The pieces:
 
 * :func:`nearest_point`: the nearest followed-side scan point and a local quadratic fit of the
   points around it (range, tangent, curvature);
-* :func:`ends_at_nearest`: whether that fit runs on past the end of what the scan saw (a tip
-  seen from one flank), where the nearest point is a point;
+* :func:`atoms.tips.ends_at_nearest`: whether that fit runs on past the end of what the scan
+  saw (a tip seen from one flank), where the nearest point is a point;
 * :func:`closest_law`: the closest-point CLF law, with ``V = 4 sin^2(beta/4) + g(r)``;
 * :func:`step`: one tick: the nearest point of the scan, or of the memory when the point the
   robot turns around has left the ladar's field of view, the front ray's anticipation of a
@@ -58,12 +58,12 @@ from mdle.atoms.steering import (
     f_gain,
     wrap,
 )
+from mdle.atoms.tips import ends_at_nearest
 
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["nearest_point", "closest_law", "step", "ends_at_nearest", "FIT_RADIUS", "REACH",
-           "FOV_EDGE", "END_MARGIN"]
+__all__ = ["nearest_point", "closest_law", "step", "FIT_RADIUS", "REACH", "FOV_EDGE"]
 
 
 #: Points within this many ``rc`` of the nearest point are fitted (0.25 m at rc 0.5: about
@@ -81,11 +81,6 @@ POINT_KAPPA = -100.0
 #: A fit whose residuals exceed this fraction of the range (plus 3 mm) is no circle: the
 #: nearest point is taken as a point (1.5 times the LMS-200's 0.8 % range noise).
 FIT_TOLERANCE = 0.012
-#: A fit's nearest point farther than this angle (times the range) past the end of the fitted
-#: points is off the boundary: three LMS-200 beams, where one more beam would have seen a
-#: boundary that went on (a tip lies within one beam of the last point on its flank, and on a
-#: noisy scan the fit's nearest point scatters by about as much again).
-END_MARGIN = math.radians(3.0)
 #: A remembered point counts once it is within this of an edge of the ladar's 180 degrees or
 #: beyond it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind.
 FOV_EDGE = math.radians(2.0)
@@ -224,65 +219,6 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float,
     if not (math.isfinite(beta) and math.isfinite(kappa)):
         return None
     return Ray(True, r, beta, kappa)
-
-
-def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float, z: "np.ndarray"
-                    ) -> bool:
-    """Tell whether a fit's nearest point lies past the end of its points, where the scan saw none.
-
-    Parameters
-    ----------
-    w : complex array (M,)
-        The fitted points in the nearest point's frame (``s + i h``: ``s`` across the line of
-        sight, ``h`` towards the robot; the nearest scan point ``q`` at 0).
-    foot : complex
-        The fitted boundary's point nearest to the robot, in the same frame.
-    at : complex
-        The same point in the law's frame.
-    rq : float, m
-        The range of ``q``.
-    z : complex array
-        Every scan point, in the law's frame.
-
-    Returns
-    -------
-    bool
-        True when ``foot`` lies beyond the last fitted point on its side by more than
-        :data:`END_MARGIN` times the range, at a bearing the ladar looked along: some scan
-        point lies farther round than it. The beams there saw past it (nothing nearer, or
-        nothing at all), so the boundary ends at ``q``.
-
-    A circle fitted to one flank of a tip (the other is hidden behind it), to a plate's end
-    or to the face behind a vertex carries on past the end of what was seen. Its nearest
-    point then lies on the flank's extension: a straight face beside the robot, where the
-    boundary is a point it should turn round. Measured on spike stars whose tips are closer
-    than ``2 rc``, at 1 m/s: a third of the ticks on the scan followed such a line (curvature
-    about -0.8 1/m instead of the point's -1.6 1/m), and the robot circled each tip about
-    0.1 m outside ``rc``. Where no scan point lies farther round than the foot, the boundary
-    there may be unseen (beyond the edge of the field of view, which the latency prediction
-    turns by the turn made meanwhile, or on beams that returned nothing): the fit still
-    carries a pole on along its circle there.
-
-    >>> import numpy as np
-    >>> flank = np.linspace(0.0, -0.2, 11) + 0.0j      # seen on one side of q only
-    >>> scan = np.array([0.5 - 0.8j, 0.3 - 0.5j, 1.0 + 0.2j])
-    >>> ends_at_nearest(flank, complex(0.1, 0.0), complex(0.3, -0.45), 0.6, scan)
-    True
-    >>> ends_at_nearest(flank, complex(-0.05, 0.0), complex(0.3, -0.45), 0.6, scan)
-    False
-    """
-    import numpy as np
-
-    margin = END_MARGIN * rq
-    s = foot.real
-    if -margin <= s <= margin:
-        return False  # at q (the common case: one comparison, no numpy call)
-    end = float(w.real.max()) if s > 0.0 else float(w.real.min())
-    if abs(s) <= abs(end) + margin:
-        return False  # among the points fitted
-    bearing = math.atan2(at.imag, at.real)
-    ang = np.angle(z)
-    return float(ang.min()) < bearing if bearing < 0.0 else float(ang.max()) > bearing
 
 
 def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray:

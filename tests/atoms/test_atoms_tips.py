@@ -1,4 +1,4 @@
-"""A tip seen from one flank is a point (atoms/closest.py, ``ends_at_nearest``).
+"""A tip seen from one flank is a point (atoms/tips.py, ``ends_at_nearest``).
 
 A circle fitted to the one flank of a sharp tip that the robot sees carries on past the tip:
 its nearest point lies on the flank's extension, a straight face where the boundary is a
@@ -15,6 +15,7 @@ import pytest
 
 from mdle import sim
 from mdle.atoms import closest as C
+from mdle.atoms import tips as T
 from mdle.core.pose import Pose
 from mdle.sim.profiles import robot_profile
 from mdle.sim.shapes import Polygon
@@ -79,10 +80,10 @@ def test_a_foot_past_the_end_of_the_points_where_the_ladar_looked_means_the_boun
     flank = np.linspace(0.0, -0.2, 11) + 0.0j  # the points, all on one side of q
     foot = complex(0.3, -0.45)                  # where the fit's nearest point lies
     looked = np.array([0.5 - 0.8j, 0.4 - 0.2j, 1.0 + 0.2j])  # one point farther round than it
-    assert C.ends_at_nearest(flank, complex(s, 0.0), foot, 0.6, looked) is expected
+    assert T.ends_at_nearest(flank, complex(s, 0.0), foot, 0.6, looked) is expected
     # no scan point farther round than the foot (the edge of the field of view, turned by
     # the latency prediction, or beams that returned nothing): unseen there, not ended
-    assert C.ends_at_nearest(flank, complex(s, 0.0), foot, 0.6, looked[1:]) is False
+    assert T.ends_at_nearest(flank, complex(s, 0.0), foot, 0.6, looked[1:]) is False
 
 
 def _star(n: int, outer: float, tip_deg: float) -> Polygon:
