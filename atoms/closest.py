@@ -158,7 +158,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     near = z[sel]
     for _ in range(2):
         # a window across a vertex or a cusp is no circle: halve it, then take the point
-        ray = _fit(near, q, rq, t, radius, z)
+        ray = _fit(near, q, rq, t, radius)
         if ray is not None:
             return ray, sel
         radius *= 0.5
@@ -166,12 +166,10 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
     return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA), sel
 
 
-def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float,
-         z: "np.ndarray") -> Ray | None:
+def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -> Ray | None:
     """Fit a circle to the points ``near`` around ``q``; None if they are not on one.
 
-    See :func:`nearest_point`; ``t`` is the unit tangent at ``q`` (``i q / |q|``), ``z``
-    every scan point (:func:`ends_at_nearest` asks where the ladar looked).
+    See :func:`nearest_point`; ``t`` is the unit tangent at ``q`` (``i q / |q|``).
     """
     import numpy as np
 
@@ -209,7 +207,7 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float,
     foot = complex(0.0, rq) + r * nl  # the fitted nearest point, local frame
     if not (r > 0.0 and abs(foot) <= radius):
         return None  # no extrapolation beyond the fitted points
-    if ends_at_nearest(w, foot, q + foot * t, rq, z):
+    if ends_at_nearest(w, foot, q + foot * t, rq):
         # a tip, a plate's end or a vertex seen from one side: the boundary ends at q, and
         # the level set turns round it as round a point
         return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)

@@ -22,17 +22,19 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["ends_at_nearest", "END_MARGIN"]
+__all__ = ["ends_at_nearest", "END_MARGIN", "FOV_MARGIN"]
 
 #: A fit's nearest point farther than this angle (times the range) past the end of the fitted
 #: points is off the boundary: three LMS-200 beams, where one more beam would have seen a
 #: boundary that went on (a tip lies within one beam of the last point on its flank, and on a
 #: noisy scan the fit's nearest point scatters by about as much again).
 END_MARGIN = math.radians(3.0)
+#: A fit's nearest point within this of an edge of the ladar's 180 degrees (or beyond it) may
+#: lie where the ladar did not look: the same margin as the memory's ``closest.FOV_EDGE``.
+FOV_MARGIN = math.radians(2.0)
 
 
-def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float, z: "np.ndarray"
-                    ) -> bool:
+def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> bool:
     """Tell whether a fit's nearest point lies past the end of its points, where the scan saw none.
 
     Parameters
@@ -46,15 +48,13 @@ def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float, z: "
         The same point in the law's frame.
     rq : float, m
         The range of ``q``.
-    z : complex array
-        Every scan point, in the law's frame.
 
     Returns
     -------
     bool
         True when ``foot`` lies beyond the last fitted point on its side by more than
-        :data:`END_MARGIN` times the range, at a bearing the ladar looked along: some scan
-        point lies farther round than it. The beams there saw past it (nothing nearer, or
+        :data:`END_MARGIN` times the range and inside the ladar's field of view (within
+        :data:`FOV_MARGIN` of its 180 deg): the beams there saw past it (nothing nearer, or
         nothing at all), so the boundary ends at ``q``.
 
     A circle fitted to one flank of a tip (the other is hidden behind it), to a plate's end
@@ -63,21 +63,16 @@ def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float, z: "
     boundary is a point it should turn round. Measured on spike stars whose tips are closer
     than ``2 rc``, at 1 m/s: a third of the ticks on the scan followed such a line (curvature
     about -0.8 1/m instead of the point's -1.6 1/m), and the robot circled each tip about
-    0.1 m outside ``rc``. Where no scan point lies farther round than the foot, the boundary
-    there may be unseen (beyond the edge of the field of view, which the latency prediction
-    turns by the turn made meanwhile, or on beams that returned nothing): the fit still
-    carries a pole on along its circle there.
+    0.1 m outside ``rc``. Beyond the edge of the field of view the boundary is unseen, and the
+    fit still carries a pole on along its circle there.
 
     >>> import numpy as np
     >>> flank = np.linspace(0.0, -0.2, 11) + 0.0j      # seen on one side of q only
-    >>> scan = np.array([0.5 - 0.8j, 0.3 - 0.5j, 1.0 + 0.2j])
-    >>> ends_at_nearest(flank, complex(0.1, 0.0), complex(0.3, -0.45), 0.6, scan)
+    >>> ends_at_nearest(flank, complex(0.1, 0.0), complex(0.3, -0.45), 0.6)
     True
-    >>> ends_at_nearest(flank, complex(-0.05, 0.0), complex(0.3, -0.45), 0.6, scan)
+    >>> ends_at_nearest(flank, complex(-0.05, 0.0), complex(0.3, -0.45), 0.6)
     False
     """
-    import numpy as np
-
     margin = END_MARGIN * rq
     s = foot.real
     if -margin <= s <= margin:
@@ -85,6 +80,4 @@ def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float, z: "
     end = float(w.real.max()) if s > 0.0 else float(w.real.min())
     if abs(s) <= abs(end) + margin:
         return False  # among the points fitted
-    bearing = math.atan2(at.imag, at.real)
-    ang = np.angle(z)
-    return float(ang.min()) < bearing if bearing < 0.0 else float(ang.max()) > bearing
+    return abs(math.atan2(at.imag, at.real)) <= math.pi / 2.0 - FOV_MARGIN

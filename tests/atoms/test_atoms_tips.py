@@ -71,19 +71,16 @@ def test_a_pole_beyond_the_field_of_view_is_still_carried_on_along_its_circle() 
 
 
 @pytest.mark.parametrize(("s", "expected"), [
-    (0.1, True),     # 10 cm past the last point on that side, where beams looked: it ends
+    (0.1, True),     # 10 cm past the last point on that side, in view: the tip ends there
     (0.02, False),   # within three beams of the last point: at it
     (-0.05, False),  # among the points fitted
 ])
-def test_a_foot_past_the_end_of_the_points_where_the_ladar_looked_means_the_boundary_ends(
+def test_a_foot_past_the_end_of_the_points_in_view_means_the_boundary_ends(
         s: float, expected: bool) -> None:
     flank = np.linspace(0.0, -0.2, 11) + 0.0j  # the points, all on one side of q
-    foot = complex(0.3, -0.45)                  # where the fit's nearest point lies
-    looked = np.array([0.5 - 0.8j, 0.4 - 0.2j, 1.0 + 0.2j])  # one point farther round than it
-    assert T.ends_at_nearest(flank, complex(s, 0.0), foot, 0.6, looked) is expected
-    # no scan point farther round than the foot (the edge of the field of view, turned by
-    # the latency prediction, or beams that returned nothing): unseen there, not ended
-    assert T.ends_at_nearest(flank, complex(s, 0.0), foot, 0.6, looked[1:]) is False
+    assert T.ends_at_nearest(flank, complex(s, 0.0), complex(0.3, -0.45), 0.6) is expected
+    # the same foot at the edge of the field of view: unseen there, not ended
+    assert T.ends_at_nearest(flank, complex(s, 0.0), complex(-0.01, -0.6), 0.6) is False
 
 
 def _star(n: int, outer: float, tip_deg: float) -> Polygon:
