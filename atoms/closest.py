@@ -23,6 +23,8 @@ The pieces:
 
 * :func:`nearest_point`: the nearest followed-side scan point and a local quadratic fit of the
   points around it (range, tangent, curvature);
+* :func:`atoms.tips.ends_at_nearest`: whether that fit runs on past the end of what the scan
+  saw (a tip seen from one flank), where the nearest point is a point;
 * :func:`closest_law`: the closest-point CLF law, with ``V = 4 sin^2(beta/4) + g(r)``;
 * :func:`step`: one tick: the nearest point of the scan, or of the memory when the point the
   robot turns around has left the ladar's field of view, the front ray's anticipation of a
@@ -56,6 +58,7 @@ from mdle.atoms.steering import (
     f_gain,
     wrap,
 )
+from mdle.atoms.tips import ends_at_nearest
 
 if TYPE_CHECKING:
     import numpy as np
@@ -204,6 +207,10 @@ def _fit(near: "np.ndarray", q: complex, rq: float, t: complex, radius: float) -
     foot = complex(0.0, rq) + r * nl  # the fitted nearest point, local frame
     if not (r > 0.0 and abs(foot) <= radius):
         return None  # no extrapolation beyond the fitted points
+    if ends_at_nearest(w, foot, q + foot * t, rq):
+        # a tip, a plate's end or a vertex seen from one side: the boundary ends at q, and
+        # the level set turns round it as round a point
+        return Ray(True, rq, math.atan2(t.imag, t.real), POINT_KAPPA)
     tan_ = complex(-nl.imag, nl.real) * t  # back into the law's frame
     kappa = c / math.sqrt(root2)
     beta = math.atan2(tan_.imag, tan_.real)

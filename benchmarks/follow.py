@@ -47,6 +47,9 @@ drift with the load and only the ratios taken within one run mean much):
 With the next face's corner rules and the turn-away shaping (1 callgrind round; wall best
 of 10 at a load average of 1): the whole-scan step 369 k and 37.1 us, the two rays' 298 k
 and 28.6 us, ratios 1.24x and 1.30x.
+With a tip seen from one flank taken as a point (1 callgrind round): the whole-scan step
+382 k, the two rays' 305 k, 1.25x (main's code counted in the same session: 375 k and
+305 k, 1.23x).
     controlled tick (500 ticks)           757 k       163 us     885 k
       with numpy's simulator loops                    198 us
 
