@@ -294,7 +294,7 @@ def closest_rate(r: float, beta: float, k: float, v: float, rc: float, g: Gains,
 
 def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float, dt: float,
          mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
-         filter_kappa: bool = True) -> tuple[float, Ray]:
+         filter_kappa: bool = True, turn_accel: float = math.inf) -> tuple[float, Ray]:
     """Run one tick of right-hand following on the nearest boundary point.
 
     Parameters
@@ -318,6 +318,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     umax : float, rad/s, optional
     filter_kappa : bool
         Low-pass the level set's curvature (for estimates from a noisy scan).
+    turn_accel : float, rad/s^2
+        The robot's turn acceleration limit (a sharp kink's fillet needs the full rate at
+        once: :mod:`atoms.fillet`).
 
     Returns
     -------
@@ -368,7 +371,8 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
     turn = None
-    if (ahead.hit or mem.fillet is not None) and mode != SEARCH:
+    if (ahead.hit or mem.fillet is not None) and mode != SEARCH \
+            and fillet.full_rate_at_once(u, umax, turn_accel):
         # a sharp concave kink of the level set ahead, followed on: the fillet decides
         turn, onto = fillet.fillet_rate(
             z, _point_of(near), _point_of(ahead) if ahead.hit else None, near.r, near.beta,

@@ -42,7 +42,8 @@ from mdle.atoms import corners
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["fillet_rate", "kink_angle", "turn_margin", "on_level_set", "ENGAGED", "ALONG", "SHARP"]
+__all__ = ["fillet_rate", "full_rate_at_once", "kink_angle", "turn_margin", "ENGAGED", "ALONG",
+           "SHARP"]
 
 #: The robot counts as engaged on the point followed within this many ``rc`` of ``rc``.
 ENGAGED = 0.3
@@ -50,14 +51,11 @@ ENGAGED = 0.3
 ALONG = math.radians(35.0)
 #: The fillet is used at kinks of the level set at least this sharp (rad).
 SHARP = math.radians(60.0)
+#: The ramp to the full rate may take at most this share of the sharpest fillet's arc.
+RAMP_SHARE = 0.1
 #: A fillet under way goes on while a full-rate turn passes the point turned onto within
 #: this many ``rc`` of ``rc`` (the tick's step and the point's noise).
 ONTO_SLACK = 0.1
-#: The fillet's end counts as on the level set when no scan point is nearer to it than
-#: ``rc`` by more than this many ``rc``.
-LEVEL_SLACK = 0.1
-#: A fillet under way ends when the robot comes this many ``rc`` inside the point's circle.
-INSIDE = 0.2
 #: The point followed is the one turned onto when within this many ``rc`` of it (the fit's
 #: window, :data:`atoms.closest.FIT_RADIUS`).
 FIT = 0.5
@@ -83,6 +81,20 @@ def turn_margin(p: complex, rc: float, radius: float) -> float:
     even a full turn comes inside it.
     """
     return abs(abs(p - complex(0.0, radius)) - radius) - rc
+
+
+def full_rate_at_once(u: float, umax: float, turn_accel: float) -> bool:
+    """Tell whether the robot reaches a full-rate left turn from ``u`` fast enough to fillet.
+
+    The fillet is an arc at the full rate, started at the last moment: it holds for a robot
+    whose ramp from the rate now to ``umax`` takes no more than :data:`RAMP_SHARE` of the
+    time the arc takes at the sharpest kink it is used for (:data:`SHARP`), ``SHARP /
+    umax``. The ideal unicycle (no limit) turns at once; the Pioneer 3-DX (8.7 rad/s, at most
+    1.7 rad/s^2) would need about five seconds, and keeps the blend.
+    """
+    if not turn_accel < math.inf:
+        return True
+    return (umax - u) / turn_accel <= RAMP_SHARE * SHARP / umax
 
 
 def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: float,
@@ -143,33 +155,13 @@ def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: 
 def _under_way(q: complex, beta: float, target: complex, rc: float, radius: float) -> bool:
     """Tell whether a fillet onto ``target`` goes on: until the path is tangent to its circle.
 
-    It is over once ``target`` is abeam or behind, once the robot is well inside ``rc`` of it
-    (by :data:`INSIDE` x ``rc``: the turn started late, or on a point that moved), once
-    the point followed is the one turned onto and the robot heads along its circle or out
-    (``beta <= 0``), or once even a full turn would pass it well outside ``rc``
-    (:data:`ONTO_SLACK`: the fillet was started on a point that moved).
+    It is over once ``target`` is abeam or behind, once the point followed is the one turned
+    onto and the robot heads along its circle or out (``beta <= 0``), or once even a full
+    turn would pass it well outside ``rc`` (:data:`ONTO_SLACK`: the fillet was started on a
+    point that moved).
     """
     if target.real <= 0.0:
         return False
     if abs(q - target) < FIT * rc and beta <= 0.0:
         return False
     return turn_margin(target, rc, radius) <= ONTO_SLACK * rc
-
-
-def on_level_set(z: "np.ndarray", p: complex, rc: float, radius: float) -> bool:
-    """Tell whether the fillet onto ``p`` ends on the ``rc`` level set of everything seen.
-
-    The fillet ends where the full-rate turning circle (centre ``i radius``) touches ``p``'s
-    ``rc`` circle: at ``e``, the point of that circle nearest the turning circle's centre.
-    That is a point of the level set when no scan point lies nearer than ``rc`` to it (by
-    :data:`LEVEL_SLACK` x ``rc``: the points' noise). Otherwise ``p`` lies inside the level
-    set (a table's far leg, behind the near ones): its circle is no part of the path, and
-    turning onto it would take the robot in among the legs.
-    """
-    centre = complex(0.0, radius)
-    away = centre - p
-    length = abs(away)
-    if not length > 0.0:
-        return False
-    e = p + (rc / length) * away
-    return bool(abs(z - e).min() >= (1.0 - LEVEL_SLACK) * rc)
