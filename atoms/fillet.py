@@ -149,6 +149,10 @@ def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: 
         return None, None
     if not corners.recessed(z, q, p, rc):
         return None, None
+    if margin < -ONTO_SLACK * rc:
+        # already well past the tick where the turn should have started (a next face seen
+        # late, or the robot off its circle): no fillet fits; the blend decides
+        return None, None
     return (umax, p) if margin <= 0.0 else (u, None)
 
 
