@@ -84,6 +84,22 @@ def test_the_own_law_is_kept_until_the_turn_then_the_full_rate() -> None:
         assert onto == (p if expected == UMAX else None)
 
 
+def test_no_fillet_starts_once_the_turn_is_well_overdue() -> None:
+    # a next leg seen late: even a full turn now passes 0.2 m inside its rc circle; the arc
+    # would not end tangent to it, and turning onto it took the robot in among a table's legs
+    q, p = complex(0.0, -RC), _ahead(-0.2)
+    rate = fillet.fillet_rate(_notch(q, p), q, p, RC, 0.0, -1.0, V, RC, UMAX)
+    assert rate == (None, None)
+
+
+def test_the_fillet_needs_a_robot_that_turns_at_full_rate_at_once() -> None:
+    assert fillet.full_rate_at_once(-2.0, UMAX, math.inf)  # the ideal unicycle
+    # the Pioneer 3-DX: 8.7 rad/s at most, reached at 1.7 rad/s^2 (five seconds from -0.55)
+    assert not fillet.full_rate_at_once(-0.55, math.radians(500.0), math.radians(97.8))
+    # a robot reaching 3 rad/s from -2 rad/s within 0.03 s (a tenth of the 60-deg arc's 0.35 s)
+    assert fillet.full_rate_at_once(-2.0, UMAX, 200.0)
+
+
 @pytest.mark.parametrize("case", ["capturing", "apart", "one face", "shallow"])
 def test_the_fillet_is_not_used_where_its_construction_does_not_hold(case: str) -> None:
     q, p, r, beta = complex(0.0, -RC), _ahead(-0.01), RC, 0.0
