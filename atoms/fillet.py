@@ -3,7 +3,7 @@
 Where two things (a star's neighbouring tips, two legs) are closer than ``2 rc`` their
 ``rc`` level set is one curve with a concave kink between them: the arc round the point
 followed ``q`` meets the arc round the next one ``p`` at an angle ``2 asin(|p - q| / 2 rc)``
-(74-104 deg for tips 0.6-0.8 m apart at rc 0.5). A robot that turns at most ``umax`` cannot
+(74-106 deg for tips 0.6-0.8 m apart at rc 0.5). A robot that turns at most ``umax`` cannot
 follow a kink; the path nearest to it is the **fillet**: the arc of the least turning radius
 ``R = v / umax`` tangent to both ``rc`` circles. The robot circles ``q`` on its own law until
 its full-rate left turning circle (for the boundary on the right: centre ``i R`` in the law's
@@ -21,7 +21,14 @@ construction holds:
 * ``p`` and ``q`` are closer than ``2 rc`` and a recess lies between them
   (:func:`atoms.corners.recessed`): one level set with a concave kink;
 * the kink is **sharp**: at least :data:`SHARP`. A shallower kink (a wide gap in a pole row)
-  is rounded well enough by the blend.
+  is rounded well enough by the blend;
+* the turn is **not overdue**: it starts where the turning circle touches ``p``'s circle, not
+  once it lies well inside it (a next leg seen late: the arc would not end tangent);
+* the robot reaches the full rate **at once** (:func:`full_rate_at_once`): a robot whose turn
+  rate ramps for seconds keeps the blend.
+
+Once started, the turn goes on, ``p`` remembered by the caller, until ``p`` is abeam or is
+the point followed with the robot heading along its circle (:func:`fillet_rate`).
 
 Points are complex numbers ``x + iy`` in the law's frame (right-hand following; the caller
 mirrors the left side).
