@@ -364,7 +364,7 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         if filter_kappa and g.tau > 0 and not jump and mem.kappa is not None:
             k = mem.kappa + (k - mem.kappa) * min(1.0, dt / g.tau)
         mem.kappa = k
-        mem.near = foot
+        mem.near, mem.tip = fillet.remembered(foot, mem.tip, (x, y, theta), rc, FOV_EDGE)
         mem.seen, mem.seen_at = foot, t
     u = closest_rate(near.r, near.beta, k, v, rc, g, umax)
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
@@ -377,6 +377,8 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         turn, onto = fillet.fillet_rate(
             z, _point_of(near), _point_of(ahead) if ahead.hit else None, near.r, near.beta,
             u, v, rc, umax, _local(mem.fillet, x, y, theta))
+        if onto is None and mem.fillet is not None:
+            mem.tip = mem.fillet  # the point turned onto, as measured: circled next
         mem.fillet = _odometry(onto, x, y, theta)
     if turn is not None:
         u = turn

@@ -176,3 +176,25 @@ def _under_way(q: complex, beta: float, target: complex, rc: float, radius: floa
     if abs(q - target) < FIT * rc and beta <= 0.0:
         return False
     return turn_margin(target, rc, radius) <= ONTO_SLACK * rc
+
+
+def remembered(foot: tuple[float, float], tip: tuple[float, float] | None,
+               pose: tuple[float, float, float], rc: float,
+               edge: float) -> tuple[tuple[float, float], tuple[float, float] | None]:
+    """Return the point to remember as followed: the fillet's tip once it leaves the view.
+
+    Round a sharp tip seen on one side the fit carries its circle on past the tip's end, and
+    its nearest point (``foot``) lies ahead of the tip's last scan points. When the tip
+    comes abeam and passes the edge of the ladar's 180 degrees (within ``edge``, rad), the
+    next scan's beams at the foot's bearing return nothing, and the foot would be dropped as
+    seen through. The point the last fillet turned onto is a scan point of the tip itself:
+    it is remembered instead once it lies at that edge or beyond, while the foot lies within
+    :data:`FIT` x ``rc`` of it. Returns the point to remember and the tip still kept (None
+    once the foot has moved on to another face).
+    """
+    if tip is None or math.hypot(foot[0] - tip[0], foot[1] - tip[1]) >= FIT * rc:
+        return foot, None
+    x, y, theta = pose
+    bearing = math.atan2(tip[1] - y, tip[0] - x) - theta
+    bearing = math.atan2(math.sin(bearing), math.cos(bearing))
+    return (tip if abs(bearing) > 0.5 * math.pi - edge else foot), tip
