@@ -155,3 +155,18 @@ def test_a_star_whose_tips_are_closer_than_2rc_is_followed_at_rc() -> None:
     late = t > 20.0
     assert d.min() > 0.4
     assert np.abs(d[late] - RC).mean() < 0.04
+
+
+def test_the_tip_turned_onto_is_remembered_once_it_leaves_the_view() -> None:
+    edge = math.radians(2.0)
+    tip = (1.0, -0.5)  # a scan point of the tip turned onto (odometry frame)
+    foot = (1.08, -0.49)  # the fit's nearest point, carried on past the tip's end
+    # the tip still in view, ahead of abeam: the fit's foot is remembered, the tip kept
+    assert fillet.remembered(foot, tip, (0.7, 0.0, 0.0), RC, edge) == (foot, tip)
+    # the tip abeam or behind, at the edge of the ladar's 180 degrees: the tip itself
+    assert fillet.remembered(foot, tip, (1.0, 0.0, 0.0), RC, edge) == (tip, tip)
+    assert fillet.remembered(foot, tip, (1.2, 0.0, 0.0), RC, edge) == (tip, tip)
+    # the foot moved on to another face: the tip is let go
+    far = (1.6, -0.2)
+    assert fillet.remembered(far, tip, (1.2, 0.0, 0.0), RC, edge) == (far, None)
+    assert fillet.remembered(foot, None, (1.2, 0.0, 0.0), RC, edge) == (foot, None)
