@@ -44,7 +44,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from mdle.atoms import corners, searches
+from mdle.atoms import corners, fillet, searches
 from mdle.atoms.steering import (
     CORNER,
     FOLLOW,
@@ -301,7 +301,7 @@ def closest_rate(r: float, beta: float, k: float, v: float, rc: float, g: Gains,
 
 def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float, dt: float,
          mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
-         filter_kappa: bool = True) -> tuple[float, Ray]:
+         filter_kappa: bool = True, turn_accel: float = math.inf) -> tuple[float, Ray]:
     """Run one tick of right-hand following on the nearest boundary point.
 
     Parameters
@@ -325,6 +325,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     umax : float, rad/s, optional
     filter_kappa : bool
         Low-pass the level set's curvature (for estimates from a noisy scan).
+    turn_accel : float, rad/s^2
+        The robot's turn acceleration limit (a sharp kink's fillet needs the full rate at
+        once: :mod:`atoms.fillet`).
 
     Returns
     -------
@@ -374,7 +377,17 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
         fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
-    if ahead.hit:
+    turn = None
+    if (ahead.hit or mem.fillet is not None) and mode != SEARCH \
+            and fillet.full_rate_at_once(u, umax, turn_accel):
+        # a sharp concave kink of the level set ahead, followed on: the fillet decides
+        turn, onto = fillet.fillet_rate(
+            z, _point_of(near), _point_of(ahead) if ahead.hit else None, near.r, near.beta,
+            u, v, rc, umax, _local(mem.fillet, x, y, theta))
+        mem.fillet = _odometry(onto, x, y, theta)
+    if turn is not None:
+        u = turn
+    elif ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)
         w = corners.next_face_weight(z, _point_of(near), _point_of(ahead), near.r, ahead.r,
@@ -385,6 +398,23 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
     return _with_front(front, near, u, v, rc, g, umax), near
+
+
+def _local(point: tuple[float, float] | None, x: float, y: float, theta: float
+           ) -> complex | None:
+    """Return an odometry-frame point in the law's frame at pose ``(x, y, theta)``."""
+    if point is None:
+        return None
+    return complex(point[0] - x, point[1] - y) * complex(math.cos(theta), -math.sin(theta))
+
+
+def _odometry(point: complex | None, x: float, y: float, theta: float
+              ) -> tuple[float, float] | None:
+    """Return a law-frame point in the odometry frame (the inverse of :func:`_local`)."""
+    if point is None:
+        return None
+    w = point * complex(math.cos(theta), math.sin(theta))
+    return (x + w.real, y + w.imag)
 
 
 def _point_of(ray: Ray) -> complex:

@@ -199,7 +199,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     zl = z if sgn > 0 else _mirrored(z)
     if state.scan_model:
         u, side = closest.step(front, zl, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
-                               g.umax, filter_kappa=not view.exact)
+                               g.umax, filter_kappa=not view.exact,
+                               turn_accel=ctx.limits.max_turn_accel)
     else:
         u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                           g.umax, filter_kappa=not view.exact,

@@ -206,6 +206,8 @@ class Memory:
     """Local time (s) at which a valid ray last saw the boundary (NaN: never)."""
     near: tuple[float, float] | None = None
     """The whole-scan model's nearest boundary point last seen (odometry frame, m)."""
+    fillet: tuple[float, float] | None = None
+    """The point a fillet turns onto while it is under way (odometry frame, m; None: none)."""
 
     def lost_for(self, t: float) -> float:
         """Return how long (s) the boundary has been lost at local time ``t``.
