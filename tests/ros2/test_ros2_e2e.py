@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 import signal
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -130,6 +131,18 @@ _TWIST = re.compile(r"Twist_\(\s*linear=Vector3_\(x=([-\d.e]+), y=[-\d.e]+, z=[-
                     r"\s*angular=Vector3_\(x=[-\d.e]+, y=[-\d.e]+, z=([-\d.e]+)\)\s*\)")
 
 
+def _twists_until_stopped(path: Path, timeout: float, listener: subprocess.Popen[str]
+                          ) -> list[tuple[float, float]]:
+    """The (v, omega) the tool printed, once the last is a zero command or ``timeout`` is up."""
+    end = time.monotonic() + timeout
+    while True:
+        twists = [(float(v), float(w)) for v, w in _TWIST.findall(path.read_text())]
+        if (twists and twists[-1] == (0.0, 0.0)) or time.monotonic() > end \
+                or listener.poll() is not None:
+            return twists
+        time.sleep(0.1)
+
+
 @pytest.mark.parametrize("how", ["SIGINT", "SIGTERM", "killed simulator"])
 def test_an_independent_dds_tool_sees_ros2_names_and_the_final_zero_command(
         procs: Procs, tmp_path: Path, how: str) -> None:
@@ -180,10 +193,10 @@ def test_an_independent_dds_tool_sees_ros2_names_and_the_final_zero_command(
         # whichever went stale first: the robot is lost either way
         assert re.search(r"no (odometry on /robot1/odom|scan on /robot1/scan) for",
                          run_out.read_text()), run_out.read_text()
-    wait_for_text(sub_out, "x=0.0,", 10, listener)
+    # (every message's angular part reads "x=0.0,": wait for the commands to end at zero)
+    twists = _twists_until_stopped(sub_out, 10.0, listener)
     listener.terminate()
     listener.wait(timeout=30)
-    twists = [(float(v), float(w)) for v, w in _TWIST.findall(sub_out.read_text())]
     assert any(v == pytest.approx(0.2) for v, _ in twists), twists[:3]
     assert twists[-1] == (0.0, 0.0), twists[-5:]
     if server.poll() is None:
