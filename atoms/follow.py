@@ -22,16 +22,17 @@ from typing import TYPE_CHECKING, Any
 
 from mdle.atoms import closest, safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
-from mdle.atoms.latency import STILL, Predictor, shift_front, shift_side
+from mdle.atoms.latency import STILL, Predictor, compose, shift_front, shift_side
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.atoms.steering import Gains, Memory
 from mdle.atoms.turn_shaping import TurnShaper
+from mdle.atoms.unwind import unwind_motion
 from mdle.core.backend import Command
 from mdle.core.units import ANGLE, CURVATURE, LENGTH, NONE, SPEED, TIME, TURN_RATE
 
 if TYPE_CHECKING:
     from mdle.atoms.latency import Predictor
-    from mdle.atoms.steering import Gains, Memory
+    from mdle.atoms.steering import Gains, Memory, Ray
 
 __all__ = ["follow_boundary", "lost", "FollowState", "start_follow", "scan_points_cached",
            "scan_points_complex"]
@@ -197,6 +198,10 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     # the law and the safety layer read the scan in the law's frame, so the left side is the
     # right side's exact mirror image (ties included)
     zl = z if sgn > 0 else _mirrored(z)
+    zs = zl  # what the safety layer reads: the scan as when the command acts
+    if state.scan_model and acting_rate is not None and state.shaper.jumps:
+        front, zl, law_pose = _past_unwind(front, zl, law_pose, acting_rate, v,
+                                           ctx.limits.max_turn_accel)
     if state.scan_model:
         u, side = closest.step(front, zl, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                                g.umax, filter_kappa=not view.exact,
@@ -209,7 +214,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     clearance = math.inf
     margin = float(args["margin"])
     if margin > 0 and v > 0:
-        v, u, clearance = safety.filter_complex(zl, v, u, g.umax, ctx.limits.radius, margin,
+        v, u, clearance = safety.filter_complex(zs, v, u, g.umax, ctx.limits.radius, margin,
                                                 float(args["lookahead"]), side=-1)
     u_safe = sgn * u  # what the safety layer let through (robot frame)
     turn_accel = ctx.limits.max_turn_accel
@@ -246,6 +251,20 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "predicted_clearance": clearance if clearance < math.inf else -1.0,
     }
     return Command(v, u)
+
+
+def _past_unwind(front: Ray, z: Any, pose: tuple[float, float, float], rate: float, v: float,
+                 accel: float) -> tuple[Ray, Any, tuple[float, float, float]]:
+    """Return the front ray, scan points and pose seen from where a turn away winds down.
+
+    On a robot known to jump to turns away (:mod:`atoms.turn_shaping`), hence one that ramps
+    its way back, a turn away at ``rate`` (law frame) goes on for ``rate / accel`` whatever
+    is commanded: the law answers the boundary as seen from its end (:mod:`atoms.unwind`).
+    """
+    d = unwind_motion(rate, v, accel)
+    if d == STILL:
+        return front, z, pose
+    return shift_front(front, d), _into(z, d[0], d[1], d[2]), compose(pose, d)
 
 
 def _nearest_on_side(z: Any) -> tuple[float, float] | None:
