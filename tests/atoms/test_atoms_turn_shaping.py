@@ -140,4 +140,6 @@ def test_the_p3dx_follows_the_spike_star_it_never_engaged_on_the_left() -> None:
     spec, omega, engaged, err = _lab_run("left", 8, 0)
     assert spec.family == "spike-star"
     assert engaged and err <= 0.10, err
-    assert omega.min() > -2.0  # turns away (negative on the left) never spin up
+    # turns away (negative on the left) never spin up (8.6 rad/s before the shaping); the
+    # unwind look-ahead (atoms/unwind.py) lets the safety layer ramp one to 2.3 rad/s here
+    assert omega.min() > -2.5
