@@ -259,7 +259,8 @@ def _past_unwind(front: Ray, z: Any, pose: tuple[float, float, float], rate: flo
 
     On a robot known to jump to turns away (:mod:`atoms.turn_shaping`), hence one that ramps
     its way back, a turn away at ``rate`` (law frame) goes on for ``rate / accel`` whatever
-    is commanded: the law answers the boundary as seen from its end (:mod:`atoms.unwind`).
+    is commanded: the law answers the boundary as seen from where most of it
+    (:data:`atoms.unwind.SHARE`) has wound down (:mod:`atoms.unwind`).
     """
     d = unwind_motion(rate, v, accel)
     if d == STILL:
