@@ -15,8 +15,13 @@ import pytest
 
 from mdle import sim
 from mdle.core.backend import Scan
+from mdle.core.pose import Pose
+from mdle.experiments.generated import RunSpec, StudyConfig, plan_text, study_specs
 from mdle.lang import load_text
-from mdle.runtime import Recorder, run
+from mdle.runtime import Recorder, run, run_named
+from mdle.sim.generated import generate_shape
+from mdle.sim.profiles import robot_profile
+from mdle.sweep.engagement import follow_metrics
 
 MAX_RANGE = 10.0
 BEARINGS: np.ndarray = np.radians(np.arange(-90.0, 90.5, 1.0))
@@ -263,3 +268,29 @@ def follow_run(world: Any, seconds: float, rate: float = 50.0, extra: str = ""
     xy = np.array([(s.true_x, s.true_y) for s in rec.samples])
     d = np.array([s.clearance for s in rec.samples], dtype=float)
     return t, xy, d
+
+
+def p3dx_lab_run(side: str, index: int, start: int) -> tuple[RunSpec, np.ndarray, bool, float]:
+    """Run one collision-course start of the P3-DX lab study (seed 0, shape ``index``).
+
+    Returns the run's spec, its measured turn rates, whether it engaged and its
+    second-half mean |d - rc|.
+    """
+    cfg = StudyConfig(shapes=index + 1, starts=start + 1, suite="lab", robot="pioneer-p3dx",
+                      v=0.3, rc=0.55, kf=2.0, rate=10.0, side=side)
+    spec = next(s for s in study_specs(cfg) if s.shape_index == index and s.start == start)
+    shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
+    world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
+    program = load_text(plan_text(spec.side, spec.rc, spec.v, spec.kf, spec.duration))
+    backend = sim.SimBackend(world, seed=spec.sim_seed, robot=spec.robot, sensing=spec.sensing)
+    rec = Recorder()
+    result = run_named(program, "f", backend, rate=spec.rate, observers=[rec])
+    assert not result.collided
+    s = rec.samples
+    pose = np.array([(x.true_x, x.true_y, x.true_theta) for x in s])
+    near = world.nearest_boundary(pose[:, :2])
+    m = follow_metrics(np.array([x.time for x in s]), pose[:, 0], pose[:, 1], pose[:, 2],
+                       np.asarray(near.distance), np.asarray(near.point),
+                       np.array([x.clearance for x in s]), collided=False, side=side,
+                       rc=spec.rc)
+    return spec, np.array([x.omega for x in s]), m.engaged, m.mean_err

@@ -15,15 +15,8 @@ import pytest
 
 from mdle.atoms.latency import Predictor
 from mdle.atoms.turn_shaping import UNWIND, TurnShaper, limit_turn_away
-from mdle.core.pose import Pose
-from mdle.experiments.generated import RunSpec, StudyConfig, plan_text, study_specs
-from mdle.lang import load_text
-from mdle.runtime import Recorder, run_named
-from mdle.sim import SimBackend
-from mdle.sim.generated import generate_shape
-from mdle.sim.profiles import robot_profile
 from mdle.sim.robot import ramp_step
-from mdle.sweep.engagement import follow_metrics
+from tests.atoms.conftest import p3dx_lab_run
 
 ACCEL = math.radians(100.0)  # rad/s^2
 DT = 0.1
@@ -112,32 +105,10 @@ def test_the_rate_when_a_command_acts_ramps_through_the_commands_in_flight() -> 
     assert rate_when_acting(0.0, 0.2, math.inf) == pytest.approx(1.0)
 
 
-def _lab_run(side: str, index: int, start: int) -> tuple[RunSpec, np.ndarray, bool, float]:
-    """Run one collision-course start of the P3-DX lab study; return omegas, engaged, error."""
-    cfg = StudyConfig(shapes=index + 1, starts=start + 1, suite="lab", robot="pioneer-p3dx",
-                      v=0.3, rc=0.55, kf=2.0, rate=10.0, side=side)
-    spec = next(s for s in study_specs(cfg) if s.shape_index == index and s.start == start)
-    shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
-    world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
-    program = load_text(plan_text(spec.side, spec.rc, spec.v, spec.kf, spec.duration))
-    backend = SimBackend(world, seed=spec.sim_seed, robot=spec.robot, sensing=spec.sensing)
-    rec = Recorder()
-    result = run_named(program, "f", backend, rate=spec.rate, observers=[rec])
-    assert not result.collided
-    s = rec.samples
-    pose = np.array([(x.true_x, x.true_y, x.true_theta) for x in s])
-    near = world.nearest_boundary(pose[:, :2])
-    m = follow_metrics(np.array([x.time for x in s]), pose[:, 0], pose[:, 1], pose[:, 2],
-                       np.asarray(near.distance), np.asarray(near.point),
-                       np.array([x.clearance for x in s]), collided=False, side=side,
-                       rc=spec.rc)
-    return spec, np.array([x.omega for x in s]), m.engaged, m.mean_err
-
-
 def test_the_p3dx_follows_the_spike_star_it_never_engaged_on_the_left() -> None:
     """Lab suite, seed 0, shape 8 (a spike star): before the shaping no start engaged it on
     the left (the robot spun at up to 8.6 rad/s after each floor spike); on the right all did."""
-    spec, omega, engaged, err = _lab_run("left", 8, 0)
+    spec, omega, engaged, err = p3dx_lab_run("left", 8, 0)
     assert spec.family == "spike-star"
     assert engaged and err <= 0.10, err
     # turns away (negative on the left) never spin up (8.6 rad/s before the shaping); the

@@ -10,18 +10,10 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 import pytest
 
 from mdle.atoms.unwind import SHARE, unwind_motion
-from mdle.core.pose import Pose
-from mdle.experiments.generated import StudyConfig, plan_text, study_specs
-from mdle.lang import load_text
-from mdle.runtime import Recorder, run_named
-from mdle.sim import SimBackend
-from mdle.sim.generated import generate_shape
-from mdle.sim.profiles import robot_profile
-from mdle.sweep.engagement import follow_metrics
+from tests.atoms.conftest import p3dx_lab_run
 
 ACCEL = 1.74  # rad/s^2, the P3-DX profile's turn acceleration
 
@@ -41,38 +33,16 @@ def test_nothing_is_looked_past_for_a_turn_towards_or_a_robot_that_turns_at_once
     assert unwind_motion(1.0, 0.3, math.inf) == (0.0, 0.0, 0.0)
 
 
-def _left_run(index: int, start: int) -> tuple[str, bool, float]:
-    """Run one collision-course start of the P3-DX lab study on the left: family, engaged, error."""
-    cfg = StudyConfig(shapes=index + 1, starts=start + 1, suite="lab", robot="pioneer-p3dx",
-                      v=0.3, rc=0.55, kf=2.0, rate=10.0, side="left")
-    spec = next(s for s in study_specs(cfg) if s.shape_index == index and s.start == start)
-    shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
-    world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))
-    program = load_text(plan_text(spec.side, spec.rc, spec.v, spec.kf, spec.duration))
-    backend = SimBackend(world, seed=spec.sim_seed, robot=spec.robot, sensing=spec.sensing)
-    rec = Recorder()
-    result = run_named(program, "f", backend, rate=spec.rate, observers=[rec])
-    assert not result.collided
-    s = rec.samples
-    pose = np.array([(x.true_x, x.true_y, x.true_theta) for x in s])
-    near = world.nearest_boundary(pose[:, :2])
-    m = follow_metrics(np.array([x.time for x in s]), pose[:, 0], pose[:, 1], pose[:, 2],
-                       np.asarray(near.distance), np.asarray(near.point),
-                       np.array([x.clearance for x in s]), collided=False, side="left",
-                       rc=spec.rc)
-    return spec.family, m.engaged, m.mean_err
-
-
 def test_the_p3dx_on_the_left_turns_back_round_the_tips_of_a_wide_star_in_time() -> None:
     """Lab suite, seed 0, shape 26: tips 1.7 m apart, deep notches. Without the look-ahead the
     robot swung out of each notch and never engaged from this start."""
-    family, engaged, err = _left_run(26, 3)
-    assert family == "spike-star"
+    spec, _, engaged, err = p3dx_lab_run("left", 26, 3)
+    assert spec.family == "spike-star"
     assert engaged and err <= 0.10, err
 
 
 def test_the_p3dx_on_the_left_follows_a_star_it_followed_0_107_m_off() -> None:
     """Lab suite, seed 0, shape 32, start 3: 0.107 m without the look-ahead (0.051 with it)."""
-    family, engaged, err = _left_run(32, 3)
-    assert family == "spike-star"
+    spec, _, engaged, err = p3dx_lab_run("left", 32, 3)
+    assert spec.family == "spike-star"
     assert engaged and err <= 0.08, err
