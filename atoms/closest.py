@@ -48,6 +48,7 @@ from mdle.atoms import corners, fillet, searches
 from mdle.atoms.steering import (
     CORNER,
     FOLLOW,
+    FOV_EDGE,
     MISS,
     SEARCH,
     Gains,
@@ -63,7 +64,7 @@ from mdle.atoms.tips import ends_at_nearest
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["nearest_point", "closest_law", "step", "FIT_RADIUS", "REACH", "FOV_EDGE"]
+__all__ = ["nearest_point", "closest_law", "step", "FIT_RADIUS", "REACH"]
 
 
 #: Points within this many ``rc`` of the nearest point are fitted (0.25 m at rc 0.5: about
@@ -81,9 +82,6 @@ POINT_KAPPA = -100.0
 #: A fit whose residuals exceed this fraction of the range (plus 3 mm) is no circle: the
 #: nearest point is taken as a point (1.5 times the LMS-200's 0.8 % range noise).
 FIT_TOLERANCE = 0.012
-#: A remembered point counts once it is within this of an edge of the ladar's 180 degrees or
-#: beyond it (rad): circling a vertex keeps it at -90 deg, where the beam passes just behind.
-FOV_EDGE = math.radians(2.0)
 
 
 def nearest_point(z: "np.ndarray", radius: float) -> Ray:
@@ -426,9 +424,9 @@ def _unseen(z: "np.ndarray", kept: Ray) -> bool:
     """Tell whether the scan leaves a remembered point standing (it may be out of view).
 
     True when the point lies at or beyond an edge of the ladar's 180 degrees (within
-    :data:`FOV_EDGE`: behind the robot, on either side), or when the beams at its bearing
-    (within 1 deg) returned a point no farther than it (by 5 cm): the scan did not see
-    through it.
+    :data:`atoms.steering.FOV_EDGE`: behind the robot, on either side), or when the beams at
+    its bearing (within 1 deg) returned a point no farther than it (by 5 cm): the scan did
+    not see through it.
     """
     import numpy as np
 

@@ -53,11 +53,18 @@ __all__ = [
     "FOLLOW",
     "CORNER",
     "SEARCH",
+    "FOV_EDGE",
 ]
 
 FOLLOW = "follow"
 CORNER = "corner"
 SEARCH = "search"
+
+#: The margin (rad) within which a point at or beyond an edge of the ladar's 180 degrees may
+#: lie where the ladar did not look: the whole-scan model's memory counts a remembered point
+#: there (circling a vertex keeps it at -90 deg, where the beam passes just behind), and a
+#: fit's nearest point there may be a boundary that goes on unseen (:mod:`atoms.tips`).
+FOV_EDGE = math.radians(2.0)
 
 
 def wrap(a: float) -> float:

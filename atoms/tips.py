@@ -19,19 +19,18 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from mdle.atoms.steering import FOV_EDGE
+
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["ends_at_nearest", "END_MARGIN", "FOV_MARGIN"]
+__all__ = ["ends_at_nearest", "END_MARGIN"]
 
 #: A fit's nearest point farther than this angle (times the range) past the end of the fitted
 #: points is off the boundary: three LMS-200 beams, where one more beam would have seen a
 #: boundary that went on (a tip lies within one beam of the last point on its flank, and on a
 #: noisy scan the fit's nearest point scatters by about as much again).
 END_MARGIN = math.radians(3.0)
-#: A fit's nearest point within this of an edge of the ladar's 180 degrees (or beyond it) may
-#: lie where the ladar did not look: the same margin as the memory's ``closest.FOV_EDGE``.
-FOV_MARGIN = math.radians(2.0)
 
 
 def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> bool:
@@ -54,8 +53,8 @@ def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> b
     bool
         True when ``foot`` lies beyond the last fitted point on its side by more than
         :data:`END_MARGIN` times the range and inside the ladar's field of view (within
-        :data:`FOV_MARGIN` of its 180 deg): the beams there saw past it (nothing nearer, or
-        nothing at all), so the boundary ends at ``q``.
+        :data:`atoms.steering.FOV_EDGE` of its 180 deg): the beams there saw past it (nothing
+        nearer, or nothing at all), so the boundary ends at ``q``.
 
     A circle fitted to one flank of a tip (the other is hidden behind it), to a plate's end
     or to the face behind a vertex carries on past the end of what was seen. Its nearest
@@ -80,4 +79,4 @@ def ends_at_nearest(w: "np.ndarray", foot: complex, at: complex, rq: float) -> b
     end = float(w.real.max()) if s > 0.0 else float(w.real.min())
     if abs(s) <= abs(end) + margin:
         return False  # among the points fitted
-    return abs(math.atan2(at.imag, at.real)) <= math.pi / 2.0 - FOV_MARGIN
+    return abs(math.atan2(at.imag, at.real)) <= math.pi / 2.0 - FOV_EDGE
