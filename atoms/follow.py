@@ -206,7 +206,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     if state.scan_model:
         u, side = closest.step(front, zl, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                                g.umax, filter_kappa=not view.exact,
-                               turn_accel=ctx.limits.max_turn_accel)
+                               turn_accel=ctx.limits.max_turn_accel, turn_rate=acting_rate)
     else:
         u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                           g.umax, filter_kappa=not view.exact,

@@ -26,7 +26,7 @@ import cmath
 import math
 from dataclasses import dataclass
 
-__all__ = ["Ramp", "ramped_arc", "heading_at", "SUBSTEPS"]
+__all__ = ["Ramp", "ramped_arc", "heading_at", "ramped_turn_margin", "SUBSTEPS"]
 
 #: Midpoint steps per sample interval (the heading is exact; the position is its integral).
 SUBSTEPS = 4
@@ -92,3 +92,24 @@ def ramped_arc(speed: float, rate0: float, rate: float, accel: float, lookahead:
         points.append(p)
         headings.append(heading_at((k + 1) * SUBSTEPS * h, rate0, rate, accel))
     return points, headings
+
+
+def ramped_turn_margin(p: complex, rc: float, v: float, ramp: Ramp, umax: float,
+                       samples: int = 16) -> float:
+    """Return how far outside ``rc`` a full left turn started now passes ``p``, on a ramp.
+
+    :func:`atoms.fillet.turn_margin` for a robot whose turn rate ramps: the left turn's rate
+    climbs from ``ramp.rate`` to ``umax`` at ``ramp.accel`` instead of jumping to it, so its
+    path is no circle of radius ``v / umax`` but a wider spiral. The distance from ``p`` to
+    that path (sampled until the heading has turned half round, and the robot's place
+    now), less ``rc``: negative when even the fastest turn the robot can make from here
+    comes inside ``p``'s ``rc`` circle.
+    """
+    w0, a = ramp.rate, ramp.accel
+    # when the heading has turned by pi: within the ramp (a quadratic), or after it
+    t = (-w0 + math.sqrt(w0 * w0 + 2.0 * a * math.pi)) / a
+    ramp_end = (umax - w0) / a
+    if t > ramp_end:
+        t = ramp_end + (math.pi - heading_at(ramp_end, w0, umax, a)) / umax
+    points, _ = ramped_arc(v, w0, umax, a, t, samples)
+    return min(abs(p), min(abs(q - p) for q in points)) - rc
