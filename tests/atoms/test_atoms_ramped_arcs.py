@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from mdle.atoms import safety
-from mdle.atoms.ramped_arcs import Ramp, heading_at, ramped_arc
+from mdle.atoms.fillet import turn_margin
+from mdle.atoms.ramped_arcs import Ramp, heading_at, ramped_arc, ramped_turn_margin
 from tests.atoms.conftest import p3dx_lab_run
 
 ACCEL = 1.74  # rad/s^2, the P3-DX profile's turn acceleration
@@ -102,3 +103,42 @@ def test_the_p3dx_on_the_left_engages_the_wide_star_it_never_engaged() -> None:
     spec, _, engaged, err = p3dx_lab_run("left", 26, 2)
     assert spec.family == "spike-star"
     assert engaged and err <= 0.08, err
+
+
+def test_a_ramp_without_limit_turns_on_the_circle_of_the_full_rate() -> None:
+    v, umax, rc = 0.3, 1.5, 0.55
+    for p in (complex(0.6, 0.5), complex(0.3, 0.9), complex(1.2, -0.2)):
+        circle = turn_margin(p, rc, v / umax)
+        assert ramped_turn_margin(p, rc, v, Ramp(0.0, 1e9), umax, samples=400) == \
+            pytest.approx(circle, abs=2e-3)
+
+
+def test_a_ramped_turn_passes_a_face_ahead_closer_than_the_turning_circle() -> None:
+    """The Pioneer (8.7 rad/s at 1.74 rad/s^2) turning towards its boundary at 0.5 rad/s: the
+    circle of its full rate (3 cm) passes the next leg 0.7 m ahead and 0.3 m left 0.16 m
+    outside rc; the turn it can make, the rate ramping through zero, comes 0.24 m inside."""
+    p, v, rc, umax = complex(0.7, 0.3), 0.3, 0.55, 8.7
+    circle = turn_margin(p, rc, v / umax)
+    ramped = ramped_turn_margin(p, rc, v, Ramp(-0.5, ACCEL), umax)
+    assert circle == pytest.approx(0.164, abs=0.005)
+    assert ramped == pytest.approx(-0.239, abs=0.01)
+    # already turning left fast, the ramped turn is nearly the circle again
+    assert ramped_turn_margin(p, rc, v, Ramp(6.0, ACCEL), umax) > ramped
+
+
+def test_the_p3dx_on_the_right_rounds_a_tight_stars_kinks_without_cutting_in() -> None:
+    """Lab suite, seed 0, shape 2 (tips 0.6-0.8 m apart), collision start 3, on the right:
+    0.087 m before, the robot 0.08 m inside rc on average (its turn away from the boundary
+    at each kink ramps, and came late); 0.040 m with the ramped corner floor."""
+    spec, _, engaged, err = p3dx_lab_run("right", 2, 3)
+    assert spec.family == "spike-star"
+    assert engaged and err <= 0.06, err
+
+
+def test_the_p3dx_on_the_left_follows_a_disc_chain_it_followed_0_085_m_off() -> None:
+    """Lab suite, seed 0, shape 27 (a chain of discs), collision start 2, on the left:
+    0.085 m before (a late turn at a cusp, then the robot's first jump to a turn away,
+    1.8 rad/s, unwound over a second: out to 1.07 m); 0.039 m with the ramped corner floor."""
+    spec, _, engaged, err = p3dx_lab_run("left", 27, 2)
+    assert spec.family == "disc-chain"
+    assert engaged and err <= 0.06, err
