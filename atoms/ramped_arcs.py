@@ -12,6 +12,12 @@ away grew to 2 rad/s and took over a second to unwind, and the robot swung out t
 at rc 0.55. The arc the robot will really drive shows that the turn away under way already
 clears the face.
 
+The same holds for the next face's corner floor (:func:`atoms.corners.next_face_weight`),
+which asks how far outside ``rc`` a full left turn from here passes the next face: for a
+robot whose rate ramps, that turn is :func:`ramped_turn_margin`'s spiral, not the circle of
+radius ``v / umax`` (3 cm on the Pioneer, so the floor never acted there and each turn at a
+concave kink of the level set, ramped, came late).
+
 >>> pts, heads = ramped_arc(0.3, 0.0, 1.0, math.inf, 0.8, 4)   # no limit: the plain arc
 >>> [round(h, 3) for h in heads]
 [0.2, 0.4, 0.6, 0.8]
