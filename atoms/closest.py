@@ -45,6 +45,7 @@ import math
 from typing import TYPE_CHECKING
 
 from mdle.atoms import corners, fillet, searches
+from mdle.atoms.ramped_arcs import Ramp
 from mdle.atoms.steering import (
     CORNER,
     FOLLOW,
@@ -299,7 +300,8 @@ def closest_rate(r: float, beta: float, k: float, v: float, rc: float, g: Gains,
 
 def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float, dt: float,
          mem: Memory, v: float, rc: float, g: Gains, umax: float | None = None,
-         filter_kappa: bool = True, turn_accel: float = math.inf) -> tuple[float, Ray]:
+         filter_kappa: bool = True, turn_accel: float = math.inf,
+         turn_rate: float | None = None) -> tuple[float, Ray]:
     """Run one tick of right-hand following on the nearest boundary point.
 
     Parameters
@@ -326,6 +328,10 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     turn_accel : float, rad/s^2
         The robot's turn acceleration limit (a sharp kink's fillet needs the full rate at
         once: :mod:`atoms.fillet`).
+    turn_rate : float or None, rad/s
+        The turn rate the robot is predicted to have when this command acts (law frame;
+        None: unknown). With a finite ``turn_accel`` the next face's corner floor turns on
+        the ramp from it (:func:`atoms.corners.next_face_weight`).
 
     Returns
     -------
@@ -388,8 +394,10 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     elif ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)
+        ramp = Ramp(turn_rate, turn_accel) if turn_rate is not None \
+            and turn_accel < math.inf else None
         w = corners.next_face_weight(z, _point_of(near), _point_of(ahead), near.r, ahead.r,
-                                     v, rc, umax)
+                                     v, rc, umax, ramp)
         if w > 0.0:
             u_next = closest_rate(ahead.r, ahead.beta, _offset_curvature(POINT_KAPPA, ahead.r, g),
                                   v, rc, g, umax)

@@ -26,6 +26,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from mdle.atoms.ramped_arcs import Ramp, ramped_turn_margin
+
 if TYPE_CHECKING:
     import numpy as np
 
@@ -39,7 +41,7 @@ CHORD_TOLERANCE = 0.05
 
 
 def next_face_weight(z: "np.ndarray", q: complex, p: complex, r: float, r_next: float,
-                     v: float, rc: float, umax: float) -> float:
+                     v: float, rc: float, umax: float, ramp: Ramp | None = None) -> float:
     """Return the weight of the next face's law against the nearest point's (unclipped).
 
     The weight is ``(r + rc - r_next) / rc``: 0 until the next face comes within ``rc`` of
@@ -51,7 +53,10 @@ def next_face_weight(z: "np.ndarray", q: complex, p: complex, r: float, r_next: 
       weight is then at least ``1 - m / rc``, where ``m`` is how far outside ``rc`` the next
       face stays on a full left turn from here (the margin to the turning circle of radius
       ``v / umax``). At 1 m/s the nearest point jumps to a table's next leg when that leg is
-      already at ``rc``: too late to turn without it;
+      already at ``rc``: too late to turn without it. With ``ramp`` (a robot whose turn
+      rate ramps, :mod:`atoms.ramped_arcs`) the full left turn is the ramped one, whose
+      path is wider: on the Pioneer (8.7 rad/s) the circle of radius ``v / umax`` is 3 cm
+      and the floor never rose above the plain weight;
     * two closed curves when they are farther apart: the robot circles the one it follows,
       and the next face has no weight.
 
@@ -72,7 +77,11 @@ def next_face_weight(z: "np.ndarray", q: complex, p: complex, r: float, r_next: 
     radius = v / umax if umax > 0.0 else math.inf
     if not math.isfinite(radius) or w >= 1.0:
         return w
-    m = abs(abs(p - complex(0.0, radius)) - radius) - rc
+    if ramp is None:
+        m = abs(abs(p - complex(0.0, radius)) - radius) - rc
+    else:
+        # a robot whose rate ramps turns on a wider path than the circle of radius v / umax
+        m = ramped_turn_margin(p, rc, v, ramp, umax)
     floor = 1.0 - m / rc
     if floor <= w or not recessed(z, q, p, rc):
         return w

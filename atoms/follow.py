@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any
 from mdle.atoms import closest, safety, steering
 from mdle.atoms.boundary import SIDES, Side, cached_beams, cached_view, parse_side
 from mdle.atoms.latency import STILL, Predictor, compose, shift_front, shift_side
+from mdle.atoms.ramped_arcs import Ramp
 from mdle.atoms.registry import Args, Context, Param, Report, control_law, sensor
 from mdle.atoms.steering import Gains, Memory
 from mdle.atoms.turn_shaping import TurnShaper
@@ -205,7 +206,7 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     if state.scan_model:
         u, side = closest.step(front, zl, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                                g.umax, filter_kappa=not view.exact,
-                               turn_accel=ctx.limits.max_turn_accel)
+                               turn_accel=ctx.limits.max_turn_accel, turn_rate=acting_rate)
     else:
         u = steering.step(front, side, law_pose, ctx.t, ctx.dt, state.memory, v, rc, g,
                           g.umax, filter_kappa=not view.exact,
@@ -215,7 +216,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
     margin = float(args["margin"])
     if margin > 0 and v > 0:
         v, u, clearance = safety.filter_complex(zs, v, u, g.umax, ctx.limits.radius, margin,
-                                                float(args["lookahead"]), side=-1)
+                                                float(args["lookahead"]), side=-1,
+                                                ramp=_ramp_back(state, acting_rate, ctx))
     u_safe = sgn * u  # what the safety layer let through (robot frame)
     turn_accel = ctx.limits.max_turn_accel
     if acting_rate is not None and turn_accel < math.inf:
@@ -251,6 +253,21 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         "predicted_clearance": clearance if clearance < math.inf else -1.0,
     }
     return Command(v, u)
+
+
+def _ramp_back(state: FollowState, rate: float | None, ctx: Context) -> Ramp | None:
+    """Return how the robot's turn rate reaches a command, for the safety layer's arcs.
+
+    On a robot known to jump to turns away (:mod:`atoms.turn_shaping`), hence to ramp its
+    way back, whose turns away the shaper ramps too: every change of rate ramps at the
+    robot's turn acceleration, from the rate predicted for when the command acts. Checked as
+    if the command took at once, a turn back looked like a swing into the face the robot is
+    still turning away from, and the layer wound the turn away up instead
+    (:mod:`atoms.ramped_arcs`). None elsewhere (the arcs as always).
+    """
+    if rate is None or not state.shaper.jumps:
+        return None
+    return Ramp(rate, ctx.limits.max_turn_accel)
 
 
 def _past_unwind(front: Ray, z: Any, pose: tuple[float, float, float], rate: float, v: float,

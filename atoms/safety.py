@@ -17,6 +17,8 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from mdle.atoms.ramped_arcs import Ramp, ramped_arc
+
 if TYPE_CHECKING:
     import numpy as np
 
@@ -46,7 +48,7 @@ def _arc(speed: float, rate: float, lookahead: float, samples: int) -> list[comp
 
 
 def _own_clearance(near: "np.ndarray", speed: float, rate: float, lookahead: float,
-                   samples: int) -> float:
+                   samples: int, ramp: Ramp | None = None) -> float:
     """Return the clearance (m, before the body radius) of the one arc at ``(speed, rate)``.
 
     ``near``: the scan points (complex, (M,)). The common case of every tick (the law's own
@@ -55,12 +57,14 @@ def _own_clearance(near: "np.ndarray", speed: float, rate: float, lookahead: flo
     """
     import numpy as np
 
-    d = np.abs(np.subtract(np.array(_arc(speed, rate, lookahead, samples))[:, None], near))
+    arc = _arc(speed, rate, lookahead, samples) if ramp is None else \
+        ramped_arc(speed, ramp.rate, rate, ramp.accel, lookahead, samples)[0]
+    d = np.abs(np.subtract(np.array(arc)[:, None], near))
     return float(d.item(d.argmin()))
 
 
 def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookahead: float,
-                   samples: int) -> tuple["np.ndarray", "np.ndarray"]:
+                   samples: int, ramp: Ramp | None = None) -> tuple["np.ndarray", "np.ndarray"]:
     """Compute the clearance (m, before the body radius) of arcs at ``speed`` and ``rates``.
 
     ``near``: the scan points (complex, (M,)); the arcs are :func:`_arc`'s. Returns the
@@ -71,9 +75,15 @@ def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookah
     import numpy as np
 
     # the few candidate arcs of a tick whose own arc failed: one arc at a time is cheap enough
-    arc = np.array([_arc(speed, float(u), lookahead, samples) for u in rates])   # (K, S)
-    s = np.arange(1, samples + 1) * (speed * lookahead / samples)  # arc lengths (S,)
-    th = np.multiply.outer(rates / speed, s)                       # headings there (K, S)
+    if ramp is None:
+        arc = np.array([_arc(speed, float(u), lookahead, samples) for u in rates])  # (K, S)
+        s = np.arange(1, samples + 1) * (speed * lookahead / samples)  # arc lengths (S,)
+        th = np.multiply.outer(rates / speed, s)                       # headings there (K, S)
+    else:
+        ramped = [ramped_arc(speed, ramp.rate, float(u), ramp.accel, lookahead, samples)
+                  for u in rates]
+        arc = np.array([a for a, _ in ramped])
+        th = np.array([h for _, h in ramped])
     d = np.subtract(near, arc.reshape(-1, 1)).reshape(rates.size, -1)  # (K, S * M): to points
     re, im = d.real, d.imag
     d2 = re * re
@@ -87,7 +97,7 @@ def _arc_clearance(near: "np.ndarray", speed: float, rates: "np.ndarray", lookah
 
 def _admissible(near: "np.ndarray", speed: float, rates: "np.ndarray", u: float,
                 lookahead: float, samples: int, radius: float, need: float,
-                side: int) -> float | None:
+                side: int, ramp: Ramp | None = None) -> float | None:
     """Return the rate nearest to ``u`` whose arc clears ``need`` on the followed side.
 
     None if there is none. The rates are tried nearest to ``u`` first (ties: the lower),
@@ -100,7 +110,7 @@ def _admissible(near: "np.ndarray", speed: float, rates: "np.ndarray", u: float,
     for part in (order[:_FEW], order[_FEW:]):
         if part.size == 0:
             break
-        clear, cross = _arc_clearance(near, speed, rates[part], lookahead, samples)
+        clear, cross = _arc_clearance(near, speed, rates[part], lookahead, samples, ramp)
         ok = np.flatnonzero((clear - radius >= need) & (cross * side > 0))
         if ok.size:
             return float(rates[part[ok[0]]])
@@ -113,7 +123,7 @@ _FEW = 8
 
 def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: float,
                    margin: float, lookahead: float, candidates: int = 25, samples: int = 8,
-                   side: int = -1) -> tuple[float, float, float]:
+                   side: int = -1, ramp: Ramp | None = None) -> tuple[float, float, float]:
     """Apply the full-scan safety layer: keep ``(v, u)`` unless its arc nears the scan.
 
     The arc the robot drives at ``(v, u)`` over ``lookahead`` seconds is sampled and its
@@ -143,6 +153,10 @@ def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: flo
     candidates, samples : int
     side : int
         The followed side: -1 right, +1 left.
+    ramp : Ramp or None
+        How the robot's turn rate reaches a command (:mod:`atoms.ramped_arcs`): every arc
+        is then the one driven while the rate ramps from ``ramp.rate``. None: the rate is
+        the command's from the start (the ideal unicycle; the arcs as always).
 
     Returns
     -------
@@ -157,7 +171,7 @@ def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: flo
     near = z.compress(dist < v * lookahead + radius + margin + 0.05)
     if near.shape[0] == 0:
         return v, u, math.inf
-    own = _own_clearance(near, v, u, lookahead, samples) - radius
+    own = _own_clearance(near, v, u, lookahead, samples, ramp) - radius
     if own >= margin:  # admissible whatever the robot's distance now (need <= margin)
         return v, u, own
     now = float(np.fmin.reduce(dist)) - radius  # the nearest of all (NaN aside) is near
@@ -166,7 +180,8 @@ def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: flo
         return v, u, own
     rates = np.linspace(-umax, umax, candidates)
     for factor in (1.0, 0.5, 0.25):
-        pick = _admissible(near, v * factor, rates, u, lookahead, samples, radius, need, side)
+        pick = _admissible(near, v * factor, rates, u, lookahead, samples, radius, need, side,
+                           ramp)
         if pick is not None:
             return v * factor, pick, own
     return 0.0, -side * umax, own  # turn on the spot towards the followed side

@@ -18,6 +18,7 @@ from mdle import sim
 from mdle.atoms import closest as C
 from mdle.atoms import corners
 from mdle.atoms import steering as S
+from mdle.atoms.ramped_arcs import Ramp
 from mdle.core.pose import Pose
 from mdle.lang import load_text
 from mdle.runtime import Recorder, run
@@ -159,6 +160,9 @@ def test_the_noisy_square_is_not_changed_by_the_corner_rules(side: str) -> None:
 
 
 def _plain_weight(z: np.ndarray, q: complex, p: complex, r: float, r_next: float, v: float,
-                  rc: float, umax: float) -> float:
-    """The next face's weight without the corner rules: ``(r + rc - r_next) / rc``."""
+                  rc: float, umax: float, ramp: Ramp | None = None) -> float:
+    """The next face's weight without the corner rules: ``(r + rc - r_next) / rc``.
+
+    ``ramp`` (a ramping robot's turn, which the corner floor reads) changes nothing here.
+    """
     return (r + rc - r_next) / rc

@@ -8,7 +8,7 @@ import importlib
 import pytest
 
 MODULES = ["mdle.atoms.estimators", "mdle.atoms.boundary", "mdle.atoms.steering",
-           "mdle.atoms.memo"]
+           "mdle.atoms.memo", "mdle.atoms.ramped_arcs"]
 
 
 @pytest.mark.parametrize("name", MODULES)
