@@ -108,13 +108,14 @@ def turn_margin_on(p: complex, rc: float, v: float, umax: float, ramp: Ramp | No
 
 
 def full_rate_at_once(u: float, umax: float, turn_accel: float) -> bool:
-    """Tell whether the robot reaches a full-rate left turn from ``u`` fast enough to fillet.
+    """Tell whether the robot reaches a full-rate left turn from ``u`` fast enough for an arc.
 
-    The fillet is an arc at the full rate, started at the last moment: it holds for a robot
+    The plain fillet is an arc at the full rate, started at the last moment: it holds for a robot
     whose ramp from the rate now to ``umax`` takes no more than :data:`RAMP_SHARE` of the
     time the arc takes at the sharpest kink it is used for (:data:`SHARP`), ``SHARP /
     umax``. The ideal unicycle (no limit) turns at once; the Pioneer 3-DX (8.7 rad/s, at most
-    1.7 rad/s^2) would need about five seconds, and keeps the blend.
+    1.7 rad/s^2) would need about five seconds, and fillets on its ramped turn instead
+    (:func:`turn_margin_on`).
     """
     if not turn_accel < math.inf:
         return True
