@@ -382,20 +382,22 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
     turn = None
+    # how the robot's turn rate climbs, where it does not jump (None: at once, or unknown)
+    ramp = Ramp(turn_rate, turn_accel) if turn_rate is not None \
+        and turn_accel < math.inf else None
+    at_once = fillet.full_rate_at_once(u, umax, turn_accel)
     if (ahead.hit or mem.fillet is not None) and mode != SEARCH \
-            and fillet.full_rate_at_once(u, umax, turn_accel):
+            and (at_once or ramp is not None):
         # a sharp concave kink of the level set ahead, followed on: the fillet decides
         turn, onto = fillet.fillet_rate(
             z, _point_of(near), _point_of(ahead) if ahead.hit else None, near.r, near.beta,
-            u, v, rc, umax, _local(mem.fillet, x, y, theta))
+            u, v, rc, umax, _local(mem.fillet, x, y, theta), None if at_once else ramp)
         mem.fillet = _odometry(onto, x, y, theta)
     if turn is not None:
         u = turn
     elif ahead.hit:
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)
-        ramp = Ramp(turn_rate, turn_accel) if turn_rate is not None \
-            and turn_accel < math.inf else None
         w = corners.next_face_weight(z, _point_of(near), _point_of(ahead), near.r, ahead.r,
                                      v, rc, umax, ramp)
         if w > 0.0:

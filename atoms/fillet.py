@@ -24,8 +24,13 @@ construction holds:
   is rounded well enough by the blend;
 * the turn is **not overdue**: it starts where the turning circle touches ``p``'s circle, not
   once it lies well inside it (a next leg seen late: the arc would not end tangent);
-* the robot reaches the full rate **at once** (:func:`full_rate_at_once`): a robot whose turn
-  rate ramps for seconds keeps the blend.
+* the robot reaches the full rate **at once** (:func:`full_rate_at_once`), or its turn rate
+  is known to ramp at a known rate from a known rate (a :class:`~atoms.ramped_arcs.Ramp`):
+  then the full turn is the ramped one, a spiral wider than the circle, and the turn starts
+  where that spiral touches ``p``'s circle (:func:`turn_margin_on`). Without it, the
+  Pioneer cut each kink of a star whose tips are 0.92-1.0 x ``2 rc`` apart to 0.36 m at rc
+  0.55, then circled the next tip 0.15 m inside rc: its distance loop (0.6 rad/s at 0.3
+  m/s) had not recovered before the next kink.
 
 Once started, the turn goes on, ``p`` remembered by the caller, until ``p`` is abeam or is
 the point followed with the robot heading along its circle (:func:`fillet_rate`).
@@ -45,12 +50,13 @@ import math
 from typing import TYPE_CHECKING
 
 from mdle.atoms import corners
+from mdle.atoms.ramped_arcs import Ramp, ramped_turn_margin
 
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["fillet_rate", "full_rate_at_once", "kink_angle", "turn_margin", "ENGAGED", "ALONG",
-           "SHARP"]
+__all__ = ["fillet_rate", "full_rate_at_once", "kink_angle", "turn_margin", "turn_margin_on",
+           "ENGAGED", "ALONG", "SHARP"]
 
 #: The robot counts as engaged on the point followed within this many ``rc`` of ``rc``.
 ENGAGED = 0.3
@@ -90,14 +96,26 @@ def turn_margin(p: complex, rc: float, radius: float) -> float:
     return abs(abs(p - complex(0.0, radius)) - radius) - rc
 
 
-def full_rate_at_once(u: float, umax: float, turn_accel: float) -> bool:
-    """Tell whether the robot reaches a full-rate left turn from ``u`` fast enough to fillet.
+def turn_margin_on(p: complex, rc: float, v: float, umax: float, ramp: Ramp | None) -> float:
+    """Return :func:`turn_margin` for the robot's own full left turn.
 
-    The fillet is an arc at the full rate, started at the last moment: it holds for a robot
+    ``ramp`` None: the circle of radius ``v / umax``. Otherwise the rate climbs from
+    ``ramp.rate`` at ``ramp.accel`` (:func:`atoms.ramped_arcs.ramped_turn_margin`).
+    """
+    if ramp is None:
+        return turn_margin(p, rc, v / umax)
+    return ramped_turn_margin(p, rc, v, ramp, umax)
+
+
+def full_rate_at_once(u: float, umax: float, turn_accel: float) -> bool:
+    """Tell whether the robot reaches a full-rate left turn from ``u`` fast enough for an arc.
+
+    The plain fillet is an arc at the full rate, started at the last moment: it holds for a robot
     whose ramp from the rate now to ``umax`` takes no more than :data:`RAMP_SHARE` of the
     time the arc takes at the sharpest kink it is used for (:data:`SHARP`), ``SHARP /
     umax``. The ideal unicycle (no limit) turns at once; the Pioneer 3-DX (8.7 rad/s, at most
-    1.7 rad/s^2) would need about five seconds, and keeps the blend.
+    1.7 rad/s^2) would need about five seconds, and fillets on its ramped turn instead
+    (:func:`turn_margin_on`).
     """
     if not turn_accel < math.inf:
         return True
@@ -106,7 +124,8 @@ def full_rate_at_once(u: float, umax: float, turn_accel: float) -> bool:
 
 def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: float,
                 u: float, v: float, rc: float, umax: float,
-                target: complex | None = None) -> tuple[float | None, complex | None]:
+                target: complex | None = None, ramp: Ramp | None = None
+                ) -> tuple[float | None, complex | None]:
     """Return the turn rate at a sharp concave kink, and the point the fillet turns onto.
 
     Parameters
@@ -125,6 +144,8 @@ def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: 
         Speed (m/s), following distance (m), the largest turn rate (rad/s).
     target : complex or None
         The point a fillet under way turns onto, as seen now (None: no fillet under way).
+    ramp : Ramp or None
+        How the robot's turn rate climbs to ``umax`` (None: at once).
 
     Returns
     -------
@@ -137,8 +158,7 @@ def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: 
     """
     if not (umax > 0.0 and v > 0.0):
         return None, None
-    radius = v / umax
-    if target is not None and _under_way(q, beta, target, rc, radius):
+    if target is not None and _under_way(q, beta, target, rc, v, umax, ramp):
         # under way: the nearest point may already be the one turned onto, whose own law
         # (heading in by up to half the kink) would cut inside its rc circle
         return umax, target
@@ -149,7 +169,7 @@ def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: 
     gap = abs(p - q)
     if not gap < 2.0 * rc or kink_angle(gap, rc) < SHARP:
         return None, None
-    margin = turn_margin(p, rc, radius)
+    margin = turn_margin_on(p, rc, v, umax, ramp)
     # the recess test is a dozen numpy calls: asked last, and only where the answer matters
     # (the blend would weigh the next face in, or the turn is near)
     if margin > rc and abs(p) >= r + rc:
@@ -163,7 +183,8 @@ def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: 
     return (umax, p) if margin <= 0.0 else (u, None)
 
 
-def _under_way(q: complex, beta: float, target: complex, rc: float, radius: float) -> bool:
+def _under_way(q: complex, beta: float, target: complex, rc: float, v: float, umax: float,
+               ramp: Ramp | None) -> bool:
     """Tell whether a fillet onto ``target`` goes on: until the path is tangent to its circle.
 
     It is over once ``target`` is abeam or behind, once the point followed is the one turned
@@ -175,4 +196,4 @@ def _under_way(q: complex, beta: float, target: complex, rc: float, radius: floa
         return False
     if abs(q - target) < FIT * rc and beta <= 0.0:
         return False
-    return turn_margin(target, rc, radius) <= ONTO_SLACK * rc
+    return turn_margin_on(target, rc, v, umax, ramp) <= ONTO_SLACK * rc

@@ -270,14 +270,15 @@ def follow_run(world: Any, seconds: float, rate: float = 50.0, extra: str = ""
     return t, xy, d
 
 
-def p3dx_lab_run(side: str, index: int, start: int) -> tuple[RunSpec, np.ndarray, bool, float]:
-    """Run one collision-course start of the P3-DX lab study (seed 0, shape ``index``).
+def p3dx_lab_run(side: str, index: int, start: int, seed: int = 0
+                 ) -> tuple[RunSpec, np.ndarray, bool, float]:
+    """Run one collision-course start of the P3-DX lab study (shapes of ``seed``, ``index``).
 
     Returns the run's spec, its measured turn rates, whether it engaged and its
     second-half mean |d - rc|.
     """
-    cfg = StudyConfig(shapes=index + 1, starts=start + 1, suite="lab", robot="pioneer-p3dx",
-                      v=0.3, rc=0.55, kf=2.0, rate=10.0, side=side)
+    cfg = StudyConfig(shapes=index + 1, starts=start + 1, seed=seed, suite="lab",
+                      robot="pioneer-p3dx", v=0.3, rc=0.55, kf=2.0, rate=10.0, side=side)
     spec = next(s for s in study_specs(cfg) if s.shape_index == index and s.start == start)
     shape = generate_shape(spec.shape_seed, spec.shape_index, spec.family)
     world = shape.world(Pose(spec.x0, spec.y0, spec.theta0), robot_profile(spec.robot))

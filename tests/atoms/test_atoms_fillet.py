@@ -15,10 +15,11 @@ import pytest
 
 from mdle import sim
 from mdle.atoms import fillet
+from mdle.atoms.ramped_arcs import Ramp
 from mdle.core.pose import Pose
 from mdle.sim.profiles import robot_profile
 from mdle.sim.shapes import Polygon
-from tests.atoms.conftest import follow_run
+from tests.atoms.conftest import follow_run, p3dx_lab_run
 
 RC, V, UMAX = 0.5, 1.0, 3.0
 RADIUS = V / UMAX  # the least turning radius, 0.33 m
@@ -155,3 +156,56 @@ def test_a_star_whose_tips_are_closer_than_2rc_is_followed_at_rc() -> None:
     late = t > 20.0
     assert d.min() > 0.4
     assert np.abs(d[late] - RC).mean() < 0.04
+
+
+# the Pioneer 3-DX at 0.3 m/s: 8.7 rad/s at most, reached at 1.7 rad/s^2
+P3_V, P3_UMAX, P3_ACCEL = 0.3, math.radians(500.0), math.radians(97.8)
+
+
+def test_a_ramped_full_turn_is_wider_than_the_circle_of_the_full_rate() -> None:
+    p = complex(0.5, 0.35)  # ahead and to the left, past the 3 cm circle of the full rate
+    circle = fillet.turn_margin_on(p, 0.55, P3_V, P3_UMAX, None)
+    assert circle == fillet.turn_margin(p, 0.55, P3_V / P3_UMAX)
+    ramped = fillet.turn_margin_on(p, 0.55, P3_V, P3_UMAX, Ramp(-0.55, P3_ACCEL))
+    # the spiral from -0.55 rad/s runs on for about 0.3 m before it turns left at all
+    assert ramped < circle - 0.2
+    # from a turn already under way, the spiral is tighter: the margin grows back
+    assert fillet.turn_margin_on(p, 0.55, P3_V, P3_UMAX, Ramp(1.5, P3_ACCEL)) > ramped
+
+
+def test_a_ramping_robot_starts_its_fillet_where_its_spiral_touches_the_next_circle() -> None:
+    rc, u_own = 0.55, -0.55
+    q = complex(0.0, -rc)  # engaged on the tip followed
+    ramp = Ramp(u_own, P3_ACCEL)
+    # the next tip ahead, about 0.83 x 2 rc from q (a kink of 112 deg): where the spiral
+    # from here passes it at rc, along the bearing, and put it just outside or inside that
+    turning = []
+    for extra in (0.03, -0.01):
+        lo, hi = 0.3, 2.0
+        for _ in range(60):  # bisect the range at which the ramped margin is ``extra``
+            mid = 0.5 * (lo + hi)
+            p = q + mid * complex(math.cos(0.35), math.sin(0.35))
+            if fillet.turn_margin_on(p, rc, P3_V, P3_UMAX, ramp) > extra:
+                hi = mid
+            else:
+                lo = mid
+        p = q + 0.5 * (lo + hi) * complex(math.cos(0.35), math.sin(0.35))
+        assert abs(p - q) < 2.0 * rc and fillet.kink_angle(abs(p - q), rc) > fillet.SHARP
+        rate, onto = fillet.fillet_rate(_notch(q, p), q, p, rc, 0.0, u_own, P3_V, rc,
+                                        P3_UMAX, ramp=ramp)
+        turning.append(rate == P3_UMAX and onto == p)
+        # the circle of the full rate would not turn yet: that rule never turned in time
+        plain, _ = fillet.fillet_rate(_notch(q, p), q, p, rc, 0.0, u_own, P3_V, rc, P3_UMAX)
+        assert plain == u_own
+    assert turning == [False, True]
+
+
+def test_the_p3dx_fillets_each_kink_of_a_star_whose_tips_are_nearly_2rc_apart() -> None:
+    # shape 26 of seed 11: ten tips 1.01 m apart (0.92 x 2 rc at rc 0.55), kinks of 134 deg.
+    # Turning only at the kink, the ramp took the robot to 0.36 m there, and the next tip
+    # was circled 0.15 m inside rc until the next kink: a mean of 0.124 m
+    spec, _, engaged, err = p3dx_lab_run("right", 26, 6, seed=11)
+    assert spec.family == "spike-star"
+    assert engaged
+    assert err < 0.08
+
