@@ -44,7 +44,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from mdle.atoms import corners, fillet, searches
+from mdle.atoms import corners, fillet, pinch, searches
 from mdle.atoms.steering import (
     CORNER,
     FOLLOW,
@@ -395,6 +395,8 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
+    if front.hit and pinch.clear_ahead(front.r, _point_of(near), near.r, near.kappa, rc):
+        front = MISS  # the circle followed passes what lies ahead: no wall to turn from
     return _with_front(front, near, u, v, rc, g, umax), near
 
 
