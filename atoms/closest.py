@@ -375,6 +375,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
         fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
+    if ahead.hit and umax > 0.0 and pinch.circle_on(_point_of(ahead), _point_of(near), near.r,
+                                                    near.beta, near.kappa, rc, v / umax):
+        ahead = MISS  # near a pinch, going on round what is circled costs less than turning
     turn = None
     if (ahead.hit or mem.fillet is not None) and mode != SEARCH \
             and fillet.full_rate_at_once(u, umax, turn_accel):
@@ -395,7 +398,8 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
-    if front.hit and pinch.clear_ahead(front.r, _point_of(near), near.r, near.kappa, rc):
+    if front.hit and pinch.clear_ahead(front.r, _point_of(near), near.r, near.beta, near.kappa,
+                                          rc):
         front = MISS  # the circle followed passes what lies ahead: no wall to turn from
     return _with_front(front, near, u, v, rc, g, umax), near
 
