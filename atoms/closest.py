@@ -398,9 +398,11 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
-    if front.hit and pinch.clear_ahead(front.r, _point_of(near), near.r, near.beta, near.kappa,
-                                          rc):
-        front = MISS  # the circle followed passes what lies ahead: no wall to turn from
+    if front.hit and not ahead.hit and pinch.clear_ahead(front.r, _point_of(near), near.r,
+                                                         near.beta, near.kappa, rc):
+        # nothing ahead to turn onto, and the circle followed passes what the front ray
+        # hits: no wall to turn from
+        front = MISS
     return _with_front(front, near, u, v, rc, g, umax), near
 
 
