@@ -346,11 +346,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
             # nothing on the followed side: circle the boundary point seen last, until the
             # scan shows the boundary again (a deflection, a face ending, a start that grazed)
             near, mode = kept, SEARCH
-        elif kept.r < near.r - (0.005 if near.kappa == POINT_KAPPA else g.bridge) \
-                and _unseen(z, kept):
+        elif kept.r < near.r - _bridge(near, g) and _unseen(z, kept):
             # the point turned around (a vertex, the near side of a thin pole) is at the edge
-            # of the ladar's field of view or beyond it: the faces it still sees are farther.
-            # (A fitted face must be farther by the bridge margin: its estimate is sound.)
+            # of the ladar's field of view or beyond it: the faces it still sees are farther
             near, mode = kept, CORNER
     mem.mode = mode
     mem.time = t
@@ -404,6 +402,21 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         # hits: no wall to turn from
         front = MISS
     return _with_front(front, near, u, v, rc, g, umax), near
+
+
+def _bridge(near: Ray, g: Gains) -> float:
+    """Return how much nearer a remembered point must be than ``near`` to be circled on.
+
+    A fitted face on the followed side must be farther by the bridge margin (its estimate is
+    sound), a point by 5 mm. A point on the other side (nothing seen on the followed side:
+    the law would turn round to put it there) by nothing: going on round the point circled,
+    which has just left the ladar's view behind the robot, beats that reversal. (With the
+    margin, a table leg or pole circled from inside a gap near ``2 rc`` gave way to the next
+    one on the left, 0.5 m off, and the robot turned into it.)
+    """
+    if near.beta > 0.5 * math.pi:
+        return 0.0
+    return 0.005 if near.kappa == POINT_KAPPA else g.bridge
 
 
 def _local(point: tuple[float, float] | None, x: float, y: float, theta: float
