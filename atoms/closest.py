@@ -334,6 +334,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         (:data:`MISS` when none).
     """
     umax = g.umax if umax is None else umax
+    # the pinch rules (atoms/pinch.py) weigh a full-rate turn, as the fillet does: a robot
+    # that ramps to it for seconds keeps the rules as they were
+    quick = not turn_accel < math.inf or fillet.full_rate_at_once(0.0, umax, turn_accel)
     x, y, theta = pose
     front = _valid_front(front, rc, g)
     d2 = z.real * z.real  # squared ranges, shared by the nearest point and the next face
@@ -346,7 +349,7 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
             # nothing on the followed side: circle the boundary point seen last, until the
             # scan shows the boundary again (a deflection, a face ending, a start that grazed)
             near, mode = kept, SEARCH
-        elif kept.r < near.r - _bridge(near, g) and _unseen(z, kept):
+        elif kept.r < near.r - _bridge(near, g, quick) and _unseen(z, kept):
             # the point turned around (a vertex, the near side of a thin pole) is at the edge
             # of the ladar's field of view or beyond it: the faces it still sees are farther
             near, mode = kept, CORNER
@@ -373,8 +376,8 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
         fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
-    if ahead.hit and umax > 0.0 and pinch.circle_on(_point_of(ahead), _point_of(near), near.r,
-                                                    near.beta, near.kappa, rc, v / umax):
+    if quick and ahead.hit and umax > 0.0 and pinch.circle_on(
+            _point_of(ahead), _point_of(near), near.r, near.beta, near.kappa, rc, v / umax):
         ahead = MISS  # near a pinch, going on round what is circled costs less than turning
     turn = None
     if (ahead.hit or mem.fillet is not None) and mode != SEARCH \
@@ -396,15 +399,15 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
-    if front.hit and not ahead.hit and pinch.clear_ahead(front.r, _point_of(near), near.r,
-                                                         near.beta, near.kappa, rc):
+    if quick and front.hit and not ahead.hit and pinch.clear_ahead(
+            front.r, _point_of(near), near.r, near.beta, near.kappa, rc):
         # nothing ahead to turn onto, and the circle followed passes what the front ray
         # hits: no wall to turn from
         front = MISS
     return _with_front(front, near, u, v, rc, g, umax), near
 
 
-def _bridge(near: Ray, g: Gains) -> float:
+def _bridge(near: Ray, g: Gains, quick: bool) -> float:
     """Return how much nearer a remembered point must be than ``near`` to be circled on.
 
     A fitted face on the followed side must be farther by the bridge margin (its estimate is
@@ -412,9 +415,11 @@ def _bridge(near: Ray, g: Gains) -> float:
     the law would turn round to put it there) by nothing: going on round the point circled,
     which has just left the ladar's view behind the robot, beats that reversal. (With the
     margin, a table leg or pole circled from inside a gap near ``2 rc`` gave way to the next
-    one on the left, 0.5 m off, and the robot turned into it.)
+    one on the left, 0.5 m off, and the robot turned into it.) ``quick``: the robot turns at
+    full rate at once (:func:`atoms.fillet.full_rate_at_once`); one that ramps keeps the
+    margins.
     """
-    if near.beta > 0.5 * math.pi:
+    if quick and near.beta > 0.5 * math.pi:
         return 0.0
     return 0.005 if near.kappa == POINT_KAPPA else g.bridge
 
