@@ -373,34 +373,36 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         mem.near = foot
         mem.seen, mem.seen_at = foot, t
     u = closest_rate(near.r, near.beta, k, v, rc, g, umax)
+    q = _point_of(near)
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
-        fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
+        fitted = searches.within(z, q, FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
-    if quick and ahead.hit and umax > 0.0 and pinch.circle_on(
-            _point_of(ahead), _point_of(near), near.r, near.beta, near.kappa, rc, v / umax):
-        ahead = MISS  # near a pinch, going on round what is circled costs less than turning
+    p = _point_of(ahead) if ahead.hit else None
+    # the pinch rules (atoms/pinch.py) while a small convex thing is circled
+    circling = quick and near.kappa < 0.0 and -1.0 / near.kappa <= rc
+    if circling and p is not None and umax > 0.0 \
+            and pinch.circle_on(p, q, near.r, near.beta, near.kappa, rc, v / umax):
+        ahead, p = MISS, None  # near a pinch, going on round costs less than turning
     turn = None
-    if (ahead.hit or mem.fillet is not None) and mode != SEARCH \
+    if (p is not None or mem.fillet is not None) and mode != SEARCH \
             and fillet.full_rate_at_once(u, umax, turn_accel):
         # a sharp concave kink of the level set ahead, followed on: the fillet decides
-        turn, onto = fillet.fillet_rate(
-            z, _point_of(near), _point_of(ahead) if ahead.hit else None, near.r, near.beta,
-            u, v, rc, umax, _local(mem.fillet, x, y, theta))
+        turn, onto = fillet.fillet_rate(z, q, p, near.r, near.beta, u, v, rc, umax,
+                                        _local(mem.fillet, x, y, theta))
         mem.fillet = _odometry(onto, x, y, theta)
     if turn is not None:
         u = turn
-    elif ahead.hit:
+    elif p is not None and not (quick and pinch.apart_behind(q, p, near.r, rc)):
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)
-        w = corners.next_face_weight(z, _point_of(near), _point_of(ahead), near.r, ahead.r,
-                                     v, rc, umax)
+        w = corners.next_face_weight(z, q, p, near.r, ahead.r, v, rc, umax)
         if w > 0.0:
             u_next = closest_rate(ahead.r, ahead.beta, _offset_curvature(POINT_KAPPA, ahead.r, g),
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
-    if quick and front.hit and not ahead.hit and pinch.clear_ahead(
-            front.r, _point_of(near), near.r, near.beta, near.kappa, rc):
+    if circling and front.hit and p is None \
+            and pinch.clear_ahead(front.r, q, near.r, near.beta, near.kappa, rc):
         # nothing ahead to turn onto, and the circle followed passes what the front ray
         # hits: no wall to turn from
         front = MISS

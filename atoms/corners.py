@@ -26,8 +26,6 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from mdle.atoms.steering import FOV_EDGE
-
 if TYPE_CHECKING:
     import numpy as np
 
@@ -70,11 +68,7 @@ def next_face_weight(z: "np.ndarray", q: complex, p: complex, r: float, r_next: 
     if not (close or r < 2.0 * rc):
         return w  # still approaching both (farther than 2 rc from the one)
     if not close:  # two closed level sets if recessed: no weight
-        if w <= 0.0 or _out_of_view(q):
-            # a point followed beyond the field of view (a pole or vertex being rounded, from
-            # memory) is no face running on to p: one that did would pass nearer, in view
-            return min(w, 0.0)
-        return w if not recessed(z, q, p, rc) else 0.0
+        return w if w <= 0.0 or not recessed(z, q, p, rc) else 0.0
     radius = v / umax if umax > 0.0 else math.inf
     if not math.isfinite(radius) or w >= 1.0:
         return w
@@ -83,11 +77,6 @@ def next_face_weight(z: "np.ndarray", q: complex, p: complex, r: float, r_next: 
     if floor <= w or not recessed(z, q, p, rc):
         return w
     return floor
-
-
-def _out_of_view(q: complex) -> bool:
-    """Tell whether ``q`` lies at or beyond an edge of the ladar's 180 degrees."""
-    return abs(math.atan2(q.imag, q.real)) > math.pi / 2.0 - FOV_EDGE
 
 
 def recessed(z: "np.ndarray", q: complex, p: complex, rc: float) -> bool:

@@ -47,8 +47,9 @@ from __future__ import annotations
 import math
 
 from mdle.atoms import fillet
+from mdle.atoms.steering import FOV_EDGE
 
-__all__ = ["circle_on", "clear_ahead", "circle_clearance", "fillet_swing", "LENS"]
+__all__ = ["apart_behind", "circle_on", "clear_ahead", "circle_clearance", "fillet_swing", "LENS"]
 
 #: A hit ahead counts as clear of the circle followed when the circle passes it no nearer
 #: than ``(1 - LENS) rc``: the dip into a separate thing's ``rc`` band costs less than the
@@ -97,6 +98,29 @@ def clear_ahead(front_r: float, q: complex, r: float, beta: float, kappa: float,
     """
     clearance = circle_clearance(complex(front_r, 0.0), q, r, beta, kappa, rc)
     return clearance is not None and clearance >= -LENS * rc
+
+
+def apart_behind(q: complex, p: complex, r: float, rc: float) -> bool:
+    """Tell whether a point circled out of view and the next face ``2 rc`` apart are two things.
+
+    Two things ``2 rc`` or more apart have level sets of their own unless a face runs on
+    from the one to the other; :func:`atoms.corners.next_face_weight` asks the scan whether
+    one does (:func:`atoms.corners.recessed`). A point followed at or beyond an edge of the
+    ladar's 180 deg (a pole or a vertex rounded from memory) cannot be told that way: the
+    scan has no bearings there. But no face runs from it to ``p`` either: one that did would
+    pass the robot nearer than it, in view, and be followed instead. So the next face gets
+    no weight. (With the plain weight, 0.5-0.8, that the recess test left it, the robot
+    circling the last pole seen turned towards the next one, 2.2-2.4 rc away.) Only while
+    the robot is within ``2 rc`` of ``q``, as for the recess test.
+
+    >>> apart_behind(complex(-0.2, -0.45), complex(0.9, 0.1), 0.5, 0.5)
+    True
+    >>> apart_behind(complex(0.1, -0.5), complex(0.9, 0.5), 0.51, 0.5)   # in view
+    False
+    """
+    if not (r < 2.0 * rc and abs(p - q) >= 2.0 * rc):
+        return False
+    return abs(math.atan2(q.imag, q.real)) > 0.5 * math.pi - FOV_EDGE
 
 
 def fillet_swing(gap: float, rc: float, radius: float) -> float:
