@@ -110,3 +110,17 @@ def test_a_table_whose_gap_is_within_a_centimetre_of_2rc_is_followed_at_rc(
     late = t > 20.0
     assert d[late].min() > 0.38
     assert np.abs(d[late] - RC).mean() < 0.04
+
+
+def test_a_pole_circled_out_of_view_and_the_next_2rc_away_are_two_things() -> None:
+    # the pole circled has gone behind the robot (remembered, at -115 deg); the next pole is
+    # 1.1 m from it: no face runs between them, or it would be in view, nearer
+    behind = 0.5 * complex(math.cos(math.radians(-115.0)), math.sin(math.radians(-115.0)))
+    nxt = complex(0.85, 0.1)
+    assert abs(nxt - behind) > 1.0
+    assert pinch.apart_behind(behind, nxt, 0.5, RC)
+    # in view, the scan decides (atoms/corners.py); nearer than 2 rc, a kink; the robot
+    # still 2 rc or more from the one: approaching both
+    assert not pinch.apart_behind(complex(0.1, -0.5), nxt, 0.51, RC)
+    assert not pinch.apart_behind(behind, complex(0.3, -0.5), 0.5, RC)
+    assert not pinch.apart_behind(2.2 * behind, nxt + 1.0, 1.1, RC)
