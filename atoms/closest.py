@@ -44,7 +44,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from mdle.atoms import corners, fillet, searches
+from mdle.atoms import corners, fillet, pinch, searches
 from mdle.atoms.ramped_arcs import Ramp
 from mdle.atoms.steering import (
     CORNER,
@@ -340,6 +340,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         (:data:`MISS` when none).
     """
     umax = g.umax if umax is None else umax
+    # the pinch rules (atoms/pinch.py) weigh a full-rate turn, as the fillet does: a robot
+    # that ramps to it for seconds keeps the rules as they were
+    quick = not turn_accel < math.inf or fillet.full_rate_at_once(0.0, umax, turn_accel)
     x, y, theta = pose
     front = _valid_front(front, rc, g)
     d2 = z.real * z.real  # squared ranges, shared by the nearest point and the next face
@@ -352,11 +355,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
             # nothing on the followed side: circle the boundary point seen last, until the
             # scan shows the boundary again (a deflection, a face ending, a start that grazed)
             near, mode = kept, SEARCH
-        elif kept.r < near.r - (0.005 if near.kappa == POINT_KAPPA else g.bridge) \
-                and _unseen(z, kept):
+        elif kept.r < near.r - _bridge(near, g, quick) and _unseen(z, kept):
             # the point turned around (a vertex, the near side of a thin pole) is at the edge
-            # of the ladar's field of view or beyond it: the faces it still sees are farther.
-            # (A fitted face must be farther by the bridge margin: its estimate is sound.)
+            # of the ladar's field of view or beyond it: the faces it still sees are farther
             near, mode = kept, CORNER
     mem.mode = mode
     mem.time = t
@@ -378,34 +379,63 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         mem.near = foot
         mem.seen, mem.seen_at = foot, t
     u = closest_rate(near.r, near.beta, k, v, rc, g, umax)
+    q = _point_of(near)
     if mode != FOLLOW:  # the point followed is remembered: the faces seen are all ahead
-        fitted = searches.within(z, _point_of(near), FIT_RADIUS * rc)
+        fitted = searches.within(z, q, FIT_RADIUS * rc)
     ahead = next_nearest(z, d2, fitted) if fitted is not None else MISS
+    p = _point_of(ahead) if ahead.hit else None
+    # the pinch rules (atoms/pinch.py) while a small convex thing is circled
+    circling = quick and near.kappa < 0.0 and -1.0 / near.kappa <= rc
+    if circling and p is not None and umax > 0.0 \
+            and pinch.circle_on(p, q, near.r, near.beta, near.kappa, rc, v / umax):
+        ahead, p = MISS, None  # near a pinch, going on round costs less than turning
     turn = None
     # how the robot's turn rate climbs, where it does not jump (None: at once, or unknown)
     ramp = Ramp(turn_rate, turn_accel) if turn_rate is not None \
         and turn_accel < math.inf else None
-    at_once = fillet.full_rate_at_once(u, umax, turn_accel)
-    if (ahead.hit or mem.fillet is not None) and mode != SEARCH \
-            and (at_once or ramp is not None):
-        # a sharp concave kink of the level set ahead, followed on: the fillet decides
-        turn, onto = fillet.fillet_rate(
-            z, _point_of(near), _point_of(ahead) if ahead.hit else None, near.r, near.beta,
-            u, v, rc, umax, _local(mem.fillet, x, y, theta), None if at_once else ramp)
-        mem.fillet = _odometry(onto, x, y, theta)
+    if (p is not None or mem.fillet is not None) and mode != SEARCH:
+        # a sharp concave kink of the level set ahead, followed on: the fillet decides, on
+        # the full rate reached at once or on the robot's ramp to it
+        at_once = fillet.full_rate_at_once(u, umax, turn_accel)
+        if at_once or ramp is not None:
+            turn, onto = fillet.fillet_rate(z, q, p, near.r, near.beta, u, v, rc, umax,
+                                            _local(mem.fillet, x, y, theta),
+                                            None if at_once else ramp)
+            mem.fillet = _odometry(onto, x, y, theta)
     if turn is not None:
         u = turn
-    elif ahead.hit:
+    elif p is not None and not (quick and pinch.apart_behind(q, p, near.r, rc)):
         # the next face: its own law's turn rate, weighed in as it comes within rc of the
         # distance kept now (a concave corner of the rc level set ahead: turn before it)
-        w = corners.next_face_weight(z, _point_of(near), _point_of(ahead), near.r, ahead.r,
-                                     v, rc, umax, ramp)
+        w = corners.next_face_weight(z, q, p, near.r, ahead.r, v, rc, umax, ramp)
         if w > 0.0:
             u_next = closest_rate(ahead.r, ahead.beta, _offset_curvature(POINT_KAPPA, ahead.r, g),
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
+    if circling and front.hit and p is None \
+            and pinch.clear_ahead(front.r, q, near.r, near.beta, near.kappa, rc):
+        # nothing ahead to turn onto, and the circle followed passes what the front ray
+        # hits: no wall to turn from
+        front = MISS
     return _with_front(front, near, u, v, rc, g, umax), near
+
+
+def _bridge(near: Ray, g: Gains, quick: bool) -> float:
+    """Return how much nearer a remembered point must be than ``near`` to be circled on.
+
+    A fitted face on the followed side must be farther by the bridge margin (its estimate is
+    sound), a point by 5 mm. A point on the other side (nothing seen on the followed side:
+    the law would turn round to put it there) by nothing: going on round the point circled,
+    which has just left the ladar's view behind the robot, beats that reversal. (With the
+    margin, a table leg or pole circled from inside a gap near ``2 rc`` gave way to the next
+    one on the left, 0.5 m off, and the robot turned into it.) ``quick``: the robot turns at
+    full rate at once (:func:`atoms.fillet.full_rate_at_once`); one that ramps keeps the
+    margins.
+    """
+    if quick and near.beta > 0.5 * math.pi:
+        return 0.0
+    return 0.005 if near.kappa == POINT_KAPPA else g.bridge
 
 
 def _local(point: tuple[float, float] | None, x: float, y: float, theta: float
