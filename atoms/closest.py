@@ -148,7 +148,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
             return MISS, None
     if not r2 > 0.0:
         return MISS, None
-    q = complex(z[k])
+    q = z.item(k)  # a Python complex (complex(z[k]) makes a numpy scalar first)
     rq = math.sqrt(r2)
     n = q / rq  # unit line of sight, robot -> q
     t = complex(-n.imag, n.real)  # the tangent, obstacle on its right: i n
@@ -234,7 +234,7 @@ def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray
     k = searches.next_face(z, d2, fitted, WINDOW, JUMP)
     if k < 0:
         return MISS
-    p = complex(z[k])
+    p = z.item(k)
     return Ray(True, math.sqrt(float(d2[k])), math.atan2(p.real, -p.imag), POINT_KAPPA)
 
 
