@@ -336,8 +336,7 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     umax = g.umax if umax is None else umax
     x, y, theta = pose
     front = _valid_front(front, rc, g)
-    d2 = z.real * z.real  # squared ranges, shared by the nearest point and the next face
-    d2 += z.imag * z.imag
+    d2 = searches.squared_ranges(z)  # shared by the nearest point and the next face
     near, fitted = _nearest(z, d2, FIT_RADIUS * rc, rc)
     kept = _remembered(mem, x, y, theta)
     mode = FOLLOW

@@ -72,8 +72,8 @@ def wrap(a: float) -> float:
     return math.atan2(math.sin(a), math.cos(a))
 
 
-# A named tuple rather than a frozen dataclass (as mdle.runtime.events.Sample): a tick makes several,
-# and a frozen dataclass's __init__ costs about twice a named tuple's.
+# A named tuple rather than a frozen dataclass (as mdle.runtime.events.Sample): a tick
+# makes several, and a frozen dataclass's __init__ costs about twice a named tuple's.
 class Ray(NamedTuple):
     """What one ray of the law sees.
 
