@@ -117,6 +117,38 @@ static PyObject *nearest_right(PyObject *self, PyObject *const *args, Py_ssize_t
     return PyLong_FromSsize_t(k);
 }
 
+PyDoc_STRVAR(squared_ranges_doc,
+"squared_ranges(z, d2)\n"
+"--\n\n"
+"Write the points' squared ranges x x + y y into d2 (float64, in place), rounded as\n"
+"numpy's d2 = x * x; d2 += y * y rounds them; -2 for an array in another form.");
+
+static PyObject *squared_ranges(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)self;
+    if (nargs != 2) {
+        PyErr_Format(PyExc_TypeError, "squared_ranges() takes 2 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    Py_buffer zb, db;
+    Py_ssize_t m;
+    if (get_buf(args[0], &zb, 'Z', -1, &m, 0, "z") < 0)
+        return other_form();
+    if (get_buf(args[1], &db, 'd', m, NULL, 1, "d2") < 0) {
+        PyBuffer_Release(&zb);
+        return other_form();
+    }
+    const double *z = zb.buf;
+    double *d2 = db.buf;
+    for (Py_ssize_t i = 0; i < m; i++) {
+        double xx = z[2 * i] * z[2 * i], yy = z[2 * i + 1] * z[2 * i + 1];
+        d2[i] = xx + yy; /* two rounded products, then their rounded sum: numpy's */
+    }
+    PyBuffer_Release(&zb);
+    PyBuffer_Release(&db);
+    return PyLong_FromSsize_t(m);
+}
+
 PyDoc_STRVAR(within_doc,
 "within(z, q, radius, sel)\n"
 "--\n\n"
@@ -273,6 +305,8 @@ done:
 static PyMethodDef methods[] = {
     {"nearest_right", (PyCFunction)(void (*)(void))nearest_right, METH_FASTCALL,
      nearest_right_doc},
+    {"squared_ranges", (PyCFunction)(void (*)(void))squared_ranges, METH_FASTCALL,
+     squared_ranges_doc},
     {"within", (PyCFunction)(void (*)(void))within, METH_FASTCALL, within_doc},
     {"next_face", (PyCFunction)(void (*)(void))next_face, METH_FASTCALL, next_face_doc},
     {NULL, NULL, 0, NULL},

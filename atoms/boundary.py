@@ -32,7 +32,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from mdle.atoms.memo import ByIdentity
 from mdle.atoms.ray_fits import front_ray as _front_ray
@@ -80,8 +80,8 @@ def parse_side(value: Any) -> Side:
         raise ValueError(f"side must be one of {', '.join(SIDES)}, not {value!r}") from None
 
 
-@dataclass(frozen=True)
-class BoundaryView:
+# A named tuple rather than a frozen dataclass, as atoms.steering.Ray: one is made every tick.
+class BoundaryView(NamedTuple):
     """The rays the steering law reads, in the law's (right-hand, possibly mirrored) frame.
 
     Attributes

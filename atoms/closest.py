@@ -149,7 +149,7 @@ def _nearest(z: "np.ndarray", d2: "np.ndarray", radius: float, reach_rc: float =
             return MISS, None
     if not r2 > 0.0:
         return MISS, None
-    q = complex(z[k])
+    q = z.item(k)  # a Python complex (complex(z[k]) makes a numpy scalar first)
     rq = math.sqrt(r2)
     n = q / rq  # unit line of sight, robot -> q
     t = complex(-n.imag, n.real)  # the tangent, obstacle on its right: i n
@@ -235,7 +235,7 @@ def next_nearest(z: "np.ndarray", d2: "np.ndarray", fitted: "np.ndarray") -> Ray
     k = searches.next_face(z, d2, fitted, WINDOW, JUMP)
     if k < 0:
         return MISS
-    p = complex(z[k])
+    p = z.item(k)
     return Ray(True, math.sqrt(float(d2[k])), math.atan2(p.real, -p.imag), POINT_KAPPA)
 
 
@@ -345,8 +345,7 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
     quick = not turn_accel < math.inf or fillet.full_rate_at_once(0.0, umax, turn_accel)
     x, y, theta = pose
     front = _valid_front(front, rc, g)
-    d2 = z.real * z.real  # squared ranges, shared by the nearest point and the next face
-    d2 += z.imag * z.imag
+    d2 = searches.squared_ranges(z)  # shared by the nearest point and the next face
     near, fitted = _nearest(z, d2, FIT_RADIUS * rc, rc)
     kept = _remembered(mem, x, y, theta)
     mode = FOLLOW

@@ -226,7 +226,8 @@ def follow_boundary(args: Args, ctx: Context, state: FollowState | None) -> Comm
         state.shaper.observe(obs.time, sgn * obs.omega, turn_accel)
         u = state.shaper.limit(u, acting_rate, turn_accel, ctx.dt)
     u *= sgn
-    if pred is not None:
+    if pred is not None and state.latency is not None and state.latency > 0.0:
+        # the commands in flight are read only to predict over a latency (Predictor.predict)
         pred.record_command(obs.time, v, sgn * u)
     f = view.front  # the trace shows what was measured (the side: what the law followed)
     s = side if state.scan_model else view.side

@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from mdle.atoms.steering import MISS, Ray, wrap
 
@@ -65,8 +66,11 @@ def _ramp(cur: float, target: float, rate: float, dt: float) -> float:
     return target if abs(target - cur) <= step else cur + math.copysign(step, target - cur)
 
 
-@dataclass(frozen=True)
-class Prediction:
+# Prediction, PoseAt and CommandSent are named tuples rather than frozen dataclasses: each
+# tick makes one of each, and a frozen dataclass's __init__ costs twice a named tuple's.
+
+
+class Prediction(NamedTuple):
     """Where the robot is predicted to be when a command sent now starts to act."""
 
     moved: Pose3
@@ -78,8 +82,7 @@ class Prediction:
     (rad/s)."""
 
 
-@dataclass(frozen=True)
-class PoseAt:
+class PoseAt(NamedTuple):
     """An odometry pose and when it was read."""
 
     time: float
@@ -88,8 +91,7 @@ class PoseAt:
     """``(x, y, theta)`` in the law's frame (m, m, rad)."""
 
 
-@dataclass(frozen=True)
-class CommandSent:
+class CommandSent(NamedTuple):
     """A command and when it was sent."""
 
     time: float

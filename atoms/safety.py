@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from mdle.atoms import searches
 from mdle.atoms.ramped_arcs import Ramp, ramped_arc
 
 if TYPE_CHECKING:
@@ -167,14 +168,14 @@ def filter_complex(z: "np.ndarray", v: float, u: float, umax: float, radius: flo
 
     if z.shape[0] == 0 or v <= 0 or lookahead <= 0:
         return v, u, math.inf
-    dist = np.abs(z)
-    near = z.compress(dist < v * lookahead + radius + margin + 0.05)
+    # abs(z) < reach, as the whole-scan model's compiled search answers it (numpy's answer)
+    near = z[searches.within(z, 0j, v * lookahead + radius + margin + 0.05)]
     if near.shape[0] == 0:
         return v, u, math.inf
     own = _own_clearance(near, v, u, lookahead, samples, ramp) - radius
     if own >= margin:  # admissible whatever the robot's distance now (need <= margin)
         return v, u, own
-    now = float(np.fmin.reduce(dist)) - radius  # the nearest of all (NaN aside) is near
+    now = float(np.fmin.reduce(np.abs(z))) - radius  # the nearest of all (NaN aside) is near
     need = min(margin, now - 1e-3)
     if own >= need:
         return v, u, own

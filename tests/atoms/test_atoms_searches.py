@@ -99,6 +99,43 @@ def test_the_compiled_searches_answer_as_numpy(seed: int) -> None:
 
 
 @needs_build
+def test_the_compiled_squared_ranges_are_numpys_bit_for_bit() -> None:
+    # scans, and values at the ends of the doubles' range (squares that underflow to
+    # subnormals or zero, overflow to inf, signed zeros): the same bits as numpy's
+    rng = np.random.default_rng(11)
+    odd = np.array([0.0, -0.0, 5e-324, -5e-324, 1e-160, 2.2e-308, 1e154, -1e155, 1.7e308,
+                    math.inf, -math.inf, 3.7, -0.001, 9.999])
+    edges = np.empty(odd.size * odd.size, dtype=complex)
+    edges.real, edges.imag = np.repeat(odd, odd.size), np.tile(odd, odd.size)
+    wide = (rng.normal(size=4000) * 10.0 ** rng.integers(-170, 170, 4000)
+            + 1j * rng.normal(size=4000) * 10.0 ** rng.integers(-170, 170, 4000))
+    for z in [_scene(seed) for seed in range(60)] + [edges, wide, np.zeros(0, complex)]:
+        got = S.squared_ranges(z)
+        assert got.dtype == np.float64 and got.shape == z.shape
+        with np.errstate(over="ignore", under="ignore"):
+            assert got.tobytes() == S.squared_ranges_numpy(z).tobytes()
+    # NaN stays NaN; strided and single-precision points are left to numpy
+    nan = np.array([complex(math.nan, 1.0), complex(2.0, math.nan), 3.0 - 4.0j])
+    assert np.array_equal(S.squared_ranges(nan), [math.nan, math.nan, 25.0], equal_nan=True)
+    z = _scene(4)
+    assert S._COMPILED.squared_ranges(z[::2], np.empty(z[::2].size)) == S.AMBIGUOUS
+    assert S._COMPILED.squared_ranges(z, np.empty(z.size - 1)) == S.AMBIGUOUS
+    for other in (z[::2], z.astype(np.complex64)):
+        assert S.squared_ranges(other).tobytes() == S.squared_ranges_numpy(other).tobytes()
+
+
+@needs_build
+@pytest.mark.parametrize("seed", range(20))
+def test_points_within_reach_of_the_robot_are_numpys_modulus_below_it(seed: int) -> None:
+    # the safety layer reads the points within reach as within(z, 0, reach): numpy's
+    # abs(z) < reach, whichever path answers
+    z = _scene(seed)
+    for reach in np.random.default_rng(seed).uniform(0.1, 3.0, 25):
+        assert np.array_equal(S.within(z, 0j, float(reach)), np.abs(z) < reach)
+        assert np.array_equal(S.within_numpy(z, 0j, float(reach)), np.abs(z) < reach)
+
+
+@needs_build
 def test_a_distance_at_the_limit_is_left_to_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
     # points 0.25 m and (to rounding) 0.2 m apart: the compiled search cannot tell on which
     # side of the limit numpy's modulus falls, so numpy answers
