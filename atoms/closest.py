@@ -354,7 +354,8 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
             # nothing on the followed side: circle the boundary point seen last, until the
             # scan shows the boundary again (a deflection, a face ending, a start that grazed)
             near, mode = kept, SEARCH
-        elif kept.r < near.r - _bridge(near, g, quick) and _unseen(z, kept):
+        elif kept.r < near.r - pinch.bridge_margin(near.beta, near.kappa == POINT_KAPPA,
+                                                   g.bridge, quick) and _unseen(z, kept):
             # the point turned around (a vertex, the near side of a thin pole) is at the edge
             # of the ladar's field of view or beyond it: the faces it still sees are farther
             near, mode = kept, CORNER
@@ -418,23 +419,6 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
         # hits: no wall to turn from
         front = MISS
     return _with_front(front, near, u, v, rc, g, umax), near
-
-
-def _bridge(near: Ray, g: Gains, quick: bool) -> float:
-    """Return how much nearer a remembered point must be than ``near`` to be circled on.
-
-    A fitted face on the followed side must be farther by the bridge margin (its estimate is
-    sound), a point by 5 mm. A point on the other side (nothing seen on the followed side:
-    the law would turn round to put it there) by nothing: going on round the point circled,
-    which has just left the ladar's view behind the robot, beats that reversal. (With the
-    margin, a table leg or pole circled from inside a gap near ``2 rc`` gave way to the next
-    one on the left, 0.5 m off, and the robot turned into it.) ``quick``: the robot turns at
-    full rate at once (:func:`atoms.fillet.full_rate_at_once`); one that ramps keeps the
-    margins.
-    """
-    if quick and near.beta > 0.5 * math.pi:
-        return 0.0
-    return 0.005 if near.kappa == POINT_KAPPA else g.bridge
 
 
 def _local(point: tuple[float, float] | None, x: float, y: float, theta: float

@@ -49,7 +49,8 @@ import math
 from mdle.atoms import fillet
 from mdle.atoms.steering import FOV_EDGE
 
-__all__ = ["apart_behind", "circle_on", "clear_ahead", "circle_clearance", "fillet_swing", "LENS"]
+__all__ = ["apart_behind", "bridge_margin", "circle_on", "clear_ahead", "circle_clearance",
+           "fillet_swing", "LENS"]
 
 #: A hit ahead counts as clear of the circle followed when the circle passes it no nearer
 #: than ``(1 - LENS) rc``: the dip into a separate thing's ``rc`` band costs less than the
@@ -176,3 +177,20 @@ def circle_on(p: complex, q: complex, r: float, beta: float, kappa: float, rc: f
     late = fillet.turn_margin(p, rc, radius)
     turn = fillet_swing(abs(p - q), rc, radius) if late >= 0.0 else -late
     return -clearance <= turn
+
+
+def bridge_margin(beta: float, is_point: bool, fitted: float, quick: bool) -> float:
+    """Return how much nearer a remembered point must be than the nearest one to be circled on.
+
+    A fitted face on the followed side must be farther by the bridge margin ``fitted`` (its
+    estimate is sound), a point (``is_point``) by 5 mm. A point on the other side (its
+    tangent angle ``beta`` beyond a right angle: nothing seen on the followed side, the law
+    would turn round to put it there) by nothing: going on round the point circled, which has
+    just left the ladar's view behind the robot, beats that reversal. (With the margin, a
+    table leg or pole circled from inside a gap near ``2 rc`` gave way to the next one on
+    the left, 0.5 m off, and the robot turned into it.) ``quick``: the robot turns at full
+    rate at once (:func:`atoms.fillet.full_rate_at_once`); one that ramps keeps the margins.
+    """
+    if quick and beta > 0.5 * math.pi:
+        return 0.0
+    return 0.005 if is_point else fitted

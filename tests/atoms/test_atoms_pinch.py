@@ -124,3 +124,13 @@ def test_a_pole_circled_out_of_view_and_the_next_2rc_away_are_two_things() -> No
     assert not pinch.apart_behind(complex(0.1, -0.5), nxt, 0.51, RC)
     assert not pinch.apart_behind(behind, complex(0.3, -0.5), 0.5, RC)
     assert not pinch.apart_behind(2.2 * behind, nxt + 1.0, 1.1, RC)
+
+
+def test_a_point_circled_out_of_view_beats_one_on_the_other_side_on_a_quick_robot() -> None:
+    # the nearest point on the other side (tangent past a right angle): no margin at all
+    assert pinch.bridge_margin(0.6 * math.pi, True, 0.05, quick=True) == 0.0
+    # on the followed side: a point by 5 mm, a fitted face by the bridge margin
+    assert pinch.bridge_margin(0.2, True, 0.05, quick=True) == 0.005
+    assert pinch.bridge_margin(0.2, False, 0.05, quick=True) == 0.05
+    # a robot that ramps keeps the margins wherever the point is
+    assert pinch.bridge_margin(0.6 * math.pi, False, 0.05, quick=False) == 0.05
