@@ -16,7 +16,13 @@ import pytest
 
 from mdle.atoms import safety
 from mdle.atoms.fillet import turn_margin
-from mdle.atoms.ramped_arcs import Ramp, heading_at, ramped_arc, ramped_turn_margin
+from mdle.atoms.ramped_arcs import (
+    SUBSTEPS,
+    Ramp,
+    heading_at,
+    ramped_arc,
+    ramped_turn_margin,
+)
 from tests.atoms.conftest import p3dx_lab_run
 
 ACCEL = 1.74  # rad/s^2, the P3-DX profile's turn acceleration
@@ -142,3 +148,29 @@ def test_the_p3dx_on_the_left_follows_a_disc_chain_it_followed_0_085_m_off() -> 
     spec, _, engaged, err = p3dx_lab_run("left", 27, 2)
     assert spec.family == "disc-chain"
     assert engaged and err <= 0.06, err
+
+
+def _loop_arc(speed: float, rate0: float, rate: float, accel: float, lookahead: float,
+              samples: int) -> list[complex]:
+    """The ramped arc's reference: the midpoint rule one step at a time, in plain Python."""
+    h = lookahead / (samples * SUBSTEPS)
+    p, points = 0j, []
+    for k in range(samples):
+        for j in range(SUBSTEPS):
+            p += speed * h * cmath.exp(1j * heading_at((k * SUBSTEPS + j + 0.5) * h, rate0,
+                                                        rate, accel))
+        points.append(p)
+    return points
+
+
+def test_the_vectorised_ramped_arc_gives_the_step_by_step_sums_to_the_bit() -> None:
+    rng = np.random.default_rng(5)
+    for _ in range(500):
+        speed, rate0, rate = rng.uniform(0.0, 1.5), rng.uniform(-3, 3), rng.uniform(-9, 9)
+        accel = float(rng.choice([rng.uniform(0.5, 5.0), math.inf]))
+        lookahead, samples = rng.uniform(0.1, 3.0), int(rng.integers(1, 25))
+        points, headings = ramped_arc(speed, rate0, rate, accel, lookahead, samples)
+        assert points.tolist() == _loop_arc(speed, rate0, rate, accel, lookahead, samples)
+        h = lookahead / (samples * SUBSTEPS)
+        ends = [heading_at((k + 1) * SUBSTEPS * h, rate0, rate, accel) for k in range(samples)]
+        assert headings.tolist() == ends
