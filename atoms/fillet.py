@@ -35,6 +35,11 @@ construction holds:
 Once started, the turn goes on, ``p`` remembered by the caller, until ``p`` is abeam or is
 the point followed with the robot heading along its circle (:func:`fillet_rate`).
 
+Where the tips are a little more than ``2 rc`` apart (1.0-1.3 x) the level set runs into the
+notch and its kink lies between the two flanks' offsets, just past the tip's arc: the robot
+rounding the tip is ``2 rc`` or more from the next flank's point, and :func:`notch_turn`
+says when the full left turn is due there.
+
 Points are complex numbers ``x + iy`` in the law's frame (right-hand following; the caller
 mirrors the left side).
 
