@@ -202,8 +202,10 @@ def notch_turn(z: "np.ndarray", q: complex, p: complex, rc: float, v: float,
     nearest, then at 70-85 deg and ``rc`` + 0.1 m: even a full turn from there cut the next
     tip to 0.36 m. A full left turn is due from the tick it is the last that keeps ``p``
     outside ``rc`` (:func:`turn_margin` at most 0), ``p`` ahead, with a recess between
-    (:func:`atoms.corners.recessed`: a separate thing the robot passes on its circle
-    round ``q`` never comes that near). For a robot that turns at full rate at once.
+    (:func:`atoms.corners.recessed`). A robot on its circle round ``q`` passes a separate
+    thing ``2 rc`` or more from it at ``rc`` or more, so the turn is due there only at the
+    edge (a pole of a row, about 0.01 m of the mean |d - rc| at most in the lab suite).
+    For a robot that turns at full rate at once.
 
     >>> import numpy as np
     >>> notch_turn(np.array([0.7 - 0.3j]), -0.4 - 0.4j, 0.7 - 0.3j, 0.5, 1.0, 3.0)  # 0.11 m to go
