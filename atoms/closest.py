@@ -413,6 +413,9 @@ def step(front: Ray, z: "np.ndarray", pose: tuple[float, float, float], t: float
                                   v, rc, g, umax)
             if u_next > u:
                 u += (w if w < 1.0 else 1.0) * (u_next - u)
+    if turn is None and quick and p is not None and mode != SEARCH and u < umax \
+            and umax > 0.0 and fillet.notch_turn(z, q, p, rc, v, umax):
+        u = umax  # a notch's kink past the tip rounded: turn in time (atoms/fillet.py)
     if circling and front.hit and p is None \
             and pinch.clear_ahead(front.r, q, near.r, near.beta, near.kappa, rc):
         # nothing ahead to turn onto, and the circle followed passes what the front ray

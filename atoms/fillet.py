@@ -35,6 +35,11 @@ construction holds:
 Once started, the turn goes on, ``p`` remembered by the caller, until ``p`` is abeam or is
 the point followed with the robot heading along its circle (:func:`fillet_rate`).
 
+Where the tips are a little more than ``2 rc`` apart (1.0-1.3 x) the level set runs into the
+notch and its kink lies between the two flanks' offsets, just past the tip's arc: the robot
+rounding the tip is ``2 rc`` or more from the next flank's point, and :func:`notch_turn`
+says when the full left turn is due there.
+
 Points are complex numbers ``x + iy`` in the law's frame (right-hand following; the caller
 mirrors the left side).
 
@@ -55,7 +60,8 @@ from mdle.atoms.ramped_arcs import Ramp, ramped_turn_margin
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["fillet_rate", "full_rate_at_once", "kink_angle", "turn_margin", "turn_margin_on",
+__all__ = ["fillet_rate", "full_rate_at_once", "kink_angle", "notch_turn", "turn_margin",
+           "turn_margin_on",
            "ENGAGED", "ALONG", "SHARP"]
 
 #: The robot counts as engaged on the point followed within this many ``rc`` of ``rc``.
@@ -181,6 +187,37 @@ def fillet_rate(z: "np.ndarray", q: complex, p: complex | None, r: float, beta: 
         # late, or the robot off its circle): no fillet fits; the blend decides
         return None, None
     return (umax, p) if margin <= 0.0 else (u, None)
+
+
+def notch_turn(z: "np.ndarray", q: complex, p: complex, rc: float, v: float,
+               umax: float) -> bool:
+    """Tell whether a full left turn must start now onto a next face ``2 rc`` or more away.
+
+    Between two tips 1.0-1.3 x ``2 rc`` apart the ``rc`` level set runs into the notch: the
+    offsets of its two flanks meet at a concave kink of 110-130 deg, only 0.3-0.5 m past
+    the arc round the tip. The robot rounding the tip still follows the tip itself (or
+    remembers it), ``2 rc`` or more from the next flank's nearest point ``p``, so neither the
+    fillet nor the next face's weight applies (two things that far apart have level sets of
+    their own). Its own law went on turning right round the tip until the next flank was
+    nearest, then at 70-85 deg and ``rc`` + 0.1 m: even a full turn from there cut the next
+    tip to 0.36 m. A full left turn is due from the tick it is the last that keeps ``p``
+    outside ``rc`` (:func:`turn_margin` at most 0), ``p`` ahead, with a recess between
+    (:func:`atoms.corners.recessed`). A robot on its circle round ``q`` passes a separate
+    thing ``2 rc`` or more from it at ``rc`` or more, so the turn is due there only at the
+    edge (a pole of a row, a table's leg: in the lab suite some such runs moved by 0.01-0.03 m
+    of the mean |d - rc|, either way, all under 0.05 m).
+    For a robot that turns at full rate at once.
+
+    >>> import numpy as np
+    >>> notch_turn(np.array([0.7 - 0.3j]), -0.4 - 0.4j, 0.7 - 0.3j, 0.5, 1.0, 3.0)  # 0.11 m to go
+    False
+    """
+    if p.real <= 0.0 or abs(p - q) < 2.0 * rc:
+        return False  # behind, or near enough for the fillet and the weight to decide
+    if turn_margin(p, rc, v / umax) > 0.0:
+        return False
+    # the recess test (a dozen numpy calls) only where the turn is due
+    return corners.recessed(z, q, p, rc)
 
 
 def _under_way(q: complex, beta: float, target: complex, rc: float, v: float, umax: float,
