@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from mdle.atoms.ramped_arcs import Ramp, ramped_turn_margin
+from mdle.atoms.ramped_arcs import Ramp, turn_margin_on
 
 if TYPE_CHECKING:
     import numpy as np
@@ -77,11 +77,8 @@ def next_face_weight(z: "np.ndarray", q: complex, p: complex, r: float, r_next: 
     radius = v / umax if umax > 0.0 else math.inf
     if not math.isfinite(radius) or w >= 1.0:
         return w
-    if ramp is None:
-        m = abs(abs(p - complex(0.0, radius)) - radius) - rc
-    else:
-        # a robot whose rate ramps turns on a wider path than the circle of radius v / umax
-        m = ramped_turn_margin(p, rc, v, ramp, umax)
+    # a robot whose rate ramps turns on a wider path than the circle of radius v / umax
+    m = turn_margin_on(p, rc, v, umax, ramp)
     floor = 1.0 - m / rc
     if floor <= w or not recessed(z, q, p, rc):
         return w

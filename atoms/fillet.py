@@ -55,7 +55,7 @@ import math
 from typing import TYPE_CHECKING
 
 from mdle.atoms import corners
-from mdle.atoms.ramped_arcs import Ramp, ramped_turn_margin
+from mdle.atoms.ramped_arcs import Ramp, turn_margin, turn_margin_on
 
 if TYPE_CHECKING:
     import numpy as np
@@ -89,28 +89,6 @@ def kink_angle(gap: float, rc: float) -> float:
     where the circles only touch). NaN-free: a gap of ``2 rc`` or more gives ``pi``.
     """
     return 2.0 * math.asin(min(gap / (2.0 * rc), 1.0))
-
-
-def turn_margin(p: complex, rc: float, radius: float) -> float:
-    """Return how far outside ``rc`` a full-rate left turn from here passes the point ``p``.
-
-    The turning circle of radius ``radius`` has its centre at ``i radius`` in the law's frame;
-    ``p`` stays at ``|p - i radius| - radius`` from it, if outside (the distance to the circle
-    on either side). Zero when the turn ends tangent to ``p``'s ``rc`` circle; negative when
-    even a full turn comes inside it.
-    """
-    return abs(abs(p - complex(0.0, radius)) - radius) - rc
-
-
-def turn_margin_on(p: complex, rc: float, v: float, umax: float, ramp: Ramp | None) -> float:
-    """Return :func:`turn_margin` for the robot's own full left turn.
-
-    ``ramp`` None: the circle of radius ``v / umax``. Otherwise the rate climbs from
-    ``ramp.rate`` at ``ramp.accel`` (:func:`atoms.ramped_arcs.ramped_turn_margin`).
-    """
-    if ramp is None:
-        return turn_margin(p, rc, v / umax)
-    return ramped_turn_margin(p, rc, v, ramp, umax)
 
 
 def full_rate_at_once(u: float, umax: float, turn_accel: float) -> bool:

@@ -35,7 +35,8 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     import numpy as np
 
-__all__ = ["Ramp", "ramped_arc", "heading_at", "ramped_turn_margin", "SUBSTEPS"]
+__all__ = ["Ramp", "ramped_arc", "heading_at", "ramped_turn_margin", "turn_margin",
+           "turn_margin_on", "SUBSTEPS"]
 
 #: Midpoint steps per sample interval (the heading is exact; the position is its integral).
 SUBSTEPS = 4
@@ -116,7 +117,7 @@ def ramped_turn_margin(p: complex, rc: float, v: float, ramp: Ramp, umax: float,
                        samples: int = 16) -> float:
     """Return how far outside ``rc`` a full left turn started now passes ``p``, on a ramp.
 
-    :func:`atoms.fillet.turn_margin` for a robot whose turn rate ramps: the left turn's rate
+    :func:`turn_margin` for a robot whose turn rate ramps: the left turn's rate
     climbs from ``ramp.rate`` to ``umax`` at ``ramp.accel`` instead of jumping to it, so its
     path is no circle of radius ``v / umax`` but a wider spiral. The distance from ``p`` to
     that path (sampled until the heading has turned half round, and the robot's place
@@ -134,3 +135,25 @@ def ramped_turn_margin(p: complex, rc: float, v: float, ramp: Ramp, umax: float,
     points, _ = ramped_arc(v, w0, umax, a, t, samples)
     d = points - p  # hypot, as abs(complex) rounds (numpy's complex abs does not)
     return min(abs(p), float(np.hypot(d.real, d.imag).min())) - rc
+
+
+def turn_margin(p: complex, rc: float, radius: float) -> float:
+    """Return how far outside ``rc`` a full-rate left turn from here passes the point ``p``.
+
+    The turning circle of radius ``radius`` has its centre at ``i radius`` in the law's frame;
+    ``p`` stays at ``|p - i radius| - radius`` from it, if outside (the distance to the circle
+    on either side). Zero when the turn ends tangent to ``p``'s ``rc`` circle; negative when
+    even a full turn comes inside it.
+    """
+    return abs(abs(p - complex(0.0, radius)) - radius) - rc
+
+
+def turn_margin_on(p: complex, rc: float, v: float, umax: float, ramp: Ramp | None) -> float:
+    """Return :func:`turn_margin` for the robot's own full left turn.
+
+    ``ramp`` None: the circle of radius ``v / umax``. Otherwise the rate climbs from
+    ``ramp.rate`` at ``ramp.accel`` (:func:`ramped_turn_margin`).
+    """
+    if ramp is None:
+        return turn_margin(p, rc, v / umax)
+    return ramped_turn_margin(p, rc, v, ramp, umax)
